@@ -1,0 +1,1 @@
+//! Simulated power supplies and test harness for the plasma-bridge.

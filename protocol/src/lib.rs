@@ -1,0 +1,22 @@
+//! Wire formats spoken by the plasma-bridge.
+//!
+//! Bytes in, typed values out, and back. No I/O, no time, no allocation and no panics on
+//! any input: every decoder returns an [`Error`] for input it cannot accept.
+//!
+//! - [`modbus_ascii`]: Modbus ASCII framing (LRC, encoder, streaming decoder) and the PDUs the
+//!   Powermax units use.
+//! - [`powermax`]: register and coil map of legacy Powermax (0x2xxx) and Powermax SYNC (0x3xxx)
+//!   units, fixed-point scaling and the fault/model/cartridge tables.
+//! - [`hpr`]: the `>ID data CK<` protocol of HyPerformance HPR and MaxPro200 units.
+//! - [`cnc`]: what the CNC sends: Phoenix serial-messaging framing and the text commands.
+#![no_std]
+#![forbid(unsafe_code)]
+#![warn(missing_docs)]
+
+mod error;
+pub use error::{Error, Result};
+
+pub mod cnc;
+pub mod hpr;
+pub mod modbus_ascii;
+pub mod powermax;
