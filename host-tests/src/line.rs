@@ -435,8 +435,7 @@ impl Line {
     fn deliver(&mut self, p: Pending) -> Option<RxByte> {
         let span = (p.begin_ns, p.at_ns);
         let unit_involved = p.to == End::Unit || p.source == Source::Traffic;
-        if unit_involved && (!self.unit_powered_at(p.begin_ns) || !self.unit_powered_at(p.at_ns))
-        {
+        if unit_involved && (!self.unit_powered_at(p.begin_ns) || !self.unit_powered_at(p.at_ns)) {
             self.stats.dropped += 1;
             return None;
         }
@@ -658,9 +657,15 @@ mod tests {
         let mut line = clean(E1, Wiring::FourWire);
         line.transmit(End::Master, Instant::ZERO, b"xy");
         assert_eq!(line.next_delivery(), Some(Instant::from_micros(573)));
-        assert!(line.receive(End::Unit, Instant::from_micros(572)).is_empty());
+        assert!(
+            line.receive(End::Unit, Instant::from_micros(572))
+                .is_empty()
+        );
         assert_eq!(line.receive(End::Unit, Instant::from_micros(573)).len(), 1);
-        assert!(line.receive(End::Master, Instant::from_millis(5)).is_empty());
+        assert!(
+            line.receive(End::Master, Instant::from_millis(5))
+                .is_empty()
+        );
         assert_eq!(line.receive(End::Unit, Instant::from_millis(5)).len(), 1);
     }
 
@@ -696,7 +701,10 @@ mod tests {
         line.transmit(End::Master, Instant::ZERO, sent);
         let got = all(&mut line, End::Unit);
         let clean = got.len() == sent.len()
-            && got.iter().zip(sent).all(|(g, &s)| g.byte == s && g.error.is_none());
+            && got
+                .iter()
+                .zip(sent)
+                .all(|(g, &s)| g.byte == s && g.error.is_none());
         assert!(!clean, "{got:?}");
         assert!(got.iter().any(|b| b.error == Some(RxError::Framing)));
     }
@@ -706,9 +714,15 @@ mod tests {
         let mut line = Line::new(E2, E1, Wiring::FourWire, 1);
         line.transmit(End::Master, Instant::ZERO, b"AB");
         let got = all(&mut line, End::Unit);
-        assert_eq!(got.iter().map(|b| (b.byte, b.error)).collect::<Vec<_>>(), vec![(b'A', None), (b'B', None)]);
+        assert_eq!(
+            got.iter().map(|b| (b.byte, b.error)).collect::<Vec<_>>(),
+            vec![(b'A', None), (b'B', None)]
+        );
         // The second character starts 12 bit times after the first.
-        assert_eq!(got[1].at.as_micros(), (12 * 52_083 + 11 * 52_083) / 1000 + 1);
+        assert_eq!(
+            got[1].at.as_micros(),
+            (12 * 52_083 + 11 * 52_083) / 1000 + 1
+        );
     }
 
     #[test]
@@ -717,7 +731,11 @@ mod tests {
         let mut line = Line::new(E1, other, Wiring::FourWire, 1);
         line.transmit(End::Master, Instant::ZERO, b":010430000001CA\r\n");
         let got = all(&mut line, End::Unit);
-        let text: Vec<u8> = got.iter().filter(|b| b.error.is_none()).map(|b| b.byte).collect();
+        let text: Vec<u8> = got
+            .iter()
+            .filter(|b| b.error.is_none())
+            .map(|b| b.byte)
+            .collect();
         assert_ne!(text, b":010430000001CA\r\n");
     }
 
