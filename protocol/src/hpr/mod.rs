@@ -37,6 +37,8 @@ pub mod gas;
 mod identity;
 mod reply;
 mod request;
+#[cfg(test)]
+mod seed_frames;
 pub mod state;
 mod values;
 
