@@ -3,10 +3,10 @@
 
 use plasma_protocol::Error;
 use plasma_protocol::hpr::{
-    Acceptance, Decoder, ErrorCode, Frame, GasCode, GasConsole, GasFlows, GasPair, GasPressures,
-    HprParameters, HprRating, IoStatus, LeakCheckMode, MAX_DATA_LEN, MAX_FRAME_LEN,
+    ACK_COMMANDS, Acceptance, Decoder, ErrorCode, Frame, GasCode, GasConsole, GasFlows, GasPair,
+    GasPressures, HprParameters, HprRating, IoStatus, LeakCheckMode, MAX_DATA_LEN, MAX_FRAME_LEN,
     MaxProParameters, MaxProPressures, MaxProPsInfo, PsInfo, Reply, Request, StateCode, SystemId,
-    TestMode, TimerCounter, TorchId, Version, ACK_COMMANDS,
+    TestMode, TimerCounter, TorchId, Version,
 };
 use proptest::prelude::*;
 
@@ -19,9 +19,11 @@ fn gas_pair() -> impl Strategy<Value = GasPair> {
 }
 
 fn hpr_flows() -> impl Strategy<Value = GasFlows> {
-    (prop::array::uniform4(0u16..=99), prop::array::uniform2(0u16..=100)).prop_map(|(f, m)| {
-        GasFlows::from_array([f[0], f[1], f[2], f[3], m[0], m[1]])
-    })
+    (
+        prop::array::uniform4(0u16..=99),
+        prop::array::uniform2(0u16..=100),
+    )
+        .prop_map(|(f, m)| GasFlows::from_array([f[0], f[1], f[2], f[3], m[0], m[1]]))
 }
 
 fn maxpro_pressures() -> impl Strategy<Value = MaxProPressures> {
@@ -74,11 +76,20 @@ fn request() -> impl Strategy<Value = Request> {
         (0u8..=3).prop_map(|system_id| Request::Wake { system_id }),
         (5u16..=400, 50u8..=100, gas_pair(), hpr_flows()).prop_map(
             |(amps, corner_percent, gases, flows)| {
-                Request::SetAllParameters(HprParameters { amps, corner_percent, gases, flows })
+                Request::SetAllParameters(HprParameters {
+                    amps,
+                    corner_percent,
+                    gases,
+                    flows,
+                })
             }
         ),
         (0u16..=200, gas_pair(), maxpro_pressures()).prop_map(|(amps, gases, pressures)| {
-            Request::SetAllParametersMaxPro200(MaxProParameters { amps, gases, pressures })
+            Request::SetAllParametersMaxPro200(MaxProParameters {
+                amps,
+                gases,
+                pressures,
+            })
         }),
         gas_pair().prop_map(Request::SetInletGases),
         leak_mode().prop_map(Request::LeakCheckMode),
@@ -89,7 +100,11 @@ fn request() -> impl Strategy<Value = Request> {
 }
 
 fn system_id() -> impl Strategy<Value = SystemId> {
-    let rating = prop::sample::select(vec![HprRating::Hpr130, HprRating::Hpr260, HprRating::Hpr400]);
+    let rating = prop::sample::select(vec![
+        HprRating::Hpr130,
+        HprRating::Hpr260,
+        HprRating::Hpr400,
+    ]);
     let console = prop::option::of(prop::sample::select(vec![
         GasConsole::Manual,
         GasConsole::Auto,
@@ -123,7 +138,10 @@ fn pressures() -> impl Strategy<Value = GasPressures> {
 }
 
 fn four_digit_pair() -> impl Strategy<Value = GasPair> {
-    (psi4(), psi4()).prop_map(|(p, s)| GasPair { plasma: GasCode(p), shield: GasCode(s) })
+    (psi4(), psi4()).prop_map(|(p, s)| GasPair {
+        plasma: GasCode(p),
+        shield: GasCode(s),
+    })
 }
 
 fn reply() -> impl Strategy<Value = Reply<'static>> {
@@ -132,7 +150,10 @@ fn reply() -> impl Strategy<Value = Reply<'static>> {
         psi4().prop_map(|v| Reply::State(StateCode(v))),
         psi4().prop_map(|v| Reply::CurrentError(ErrorCode(v))),
         (prop::sample::select(ACK_COMMANDS.to_vec()), 0u8..=2).prop_map(|(command, c)| {
-            Reply::Ack { command, result: Acceptance::from_code(c).unwrap() }
+            Reply::Ack {
+                command,
+                result: Acceptance::from_code(c).unwrap(),
+            }
         }),
         psi4().prop_map(Reply::PlasmaAmps),
         psi4().prop_map(Reply::NominalAmps),

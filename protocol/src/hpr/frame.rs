@@ -433,6 +433,19 @@ mod tests {
     }
 
     #[test]
+    fn decoder_accepts_longest_frame() {
+        let data = [b'7'; MAX_DATA_LEN];
+        let mut out = [0u8; MAX_FRAME_LEN];
+        let n = Frame::new(100, &data).emit(&mut out).unwrap();
+        assert_eq!(n, MAX_FRAME_LEN);
+        let mut d = Decoder::new();
+        let (used, ev) = d.feed(&out);
+        assert_eq!(used, MAX_FRAME_LEN);
+        assert_eq!(ev, Some(Ok(Frame::new(100, &data))));
+        assert!(!d.in_frame());
+    }
+
+    #[test]
     fn decoder_reports_bad_checksum() {
         let mut d = Decoder::new();
         let (used, ev) = d.feed(b">00091<>00090<");

@@ -591,6 +591,23 @@ mod tests {
     }
 
     #[test]
+    fn multi_drop_sequence() {
+        // Section II.e: SLEEP puts every system to sleep, WAKE + id wakes one (ids 0-3).
+        let mut out = [0u8; 16];
+        let n = Request::Sleep.emit(&mut out).unwrap();
+        assert_eq!(&out[..n], b">0869E<");
+        let expected: [&[u8]; 4] = [b">0850CD<", b">0851CE<", b">0852CF<", b">0853D0<"];
+        for (system_id, frame) in (0..=MAX_SYSTEM_ID).zip(expected) {
+            let n = Request::Wake { system_id }.emit(&mut out).unwrap();
+            assert_eq!(&out[..n], frame);
+        }
+        assert_eq!(
+            Request::Wake { system_id: 4 }.emit(&mut out),
+            Err(Error::Malformed)
+        );
+    }
+
+    #[test]
     fn sleep_and_broadcast_expect_no_reply() {
         assert!(!Request::Sleep.expects_reply());
         assert!(!Request::BroadcastMode.expects_reply());

@@ -97,9 +97,17 @@ const REJECTED: &[(&[u8], u8, u8)] = &[
     // 102, gas valves.
     (b">1021111111111111111111111111111167<", 0x20, 0x67),
     // 115 reply: ends "CAC00FF"; several two-digit completions of CAC00 fit, none is certain.
-    (b">115CAT0482 CBT0021 LVO0118 CFL0009 CTP0481 TTP0481 CAC00FF<", 0x92, 0xFF),
+    (
+        b">115CAT0482 CBT0021 LVO0118 CFL0009 CTP0481 TTP0481 CAC00FF<",
+        0x92,
+        0xFF,
+    ),
     // 116 reply.
-    (b">116CBC0014 WLC0005 CAS0000 CBS0534 PWMA0000 PWMB0000 PRSA0000 PRSB000041<", 0xC3, 0x41),
+    (
+        b">116CBC0014 WLC0005 CAS0000 CBS0534 PWMA0000 PWMB0000 PRSA0000 PRSB000041<",
+        0xC3,
+        0x41,
+    ),
 ];
 
 #[test]
@@ -117,6 +125,10 @@ fn untyped_seed_frames_round_trip() {
 #[test]
 fn damaged_seed_frames_are_rejected() {
     for &(bytes, expected, found) in REJECTED {
-        assert_eq!(Frame::parse(bytes), Err(Error::BadChecksum { expected, found }), "{bytes:?}");
+        assert_eq!(
+            Frame::parse(bytes),
+            Err(Error::BadChecksum { expected, found }),
+            "{bytes:?}"
+        );
     }
 }
