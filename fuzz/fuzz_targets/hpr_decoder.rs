@@ -11,7 +11,11 @@ use plasma_protocol::hpr::{Decoder, Frame, MAX_FRAME_LEN, Reply, Request};
 
 #[derive(Debug, PartialEq)]
 enum Event {
-    Frame { id: u16, len: usize, bytes: [u8; MAX_FRAME_LEN] },
+    Frame {
+        id: u16,
+        len: usize,
+        bytes: [u8; MAX_FRAME_LEN],
+    },
     Error(plasma_protocol::Error),
 }
 
@@ -31,7 +35,11 @@ fn check_frame(frame: &Frame<'_>) -> Event {
         let again = Frame::parse(&out[..n]).expect("emitted reply frame parses");
         assert_eq!(Reply::parse(&again), Ok(reply));
     }
-    Event::Frame { id: frame.id, len, bytes }
+    Event::Frame {
+        id: frame.id,
+        len,
+        bytes,
+    }
 }
 
 fn to_event(ev: plasma_protocol::Result<Frame<'_>>) -> Event {

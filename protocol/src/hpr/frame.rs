@@ -119,14 +119,18 @@ impl<'a> Frame<'a> {
         *start = START;
         [*d0, *d1, *d2] = id_digits(self.id);
         body.copy_from_slice(self.data);
-        *c0 = HEX_UPPER[usize::from(ck >> 4)];
-        *c1 = HEX_UPPER[usize::from(ck & 0x0F)];
+        *c0 = hex_digit(ck >> 4);
+        *c1 = hex_digit(ck & 0x0F);
         *end = END;
         Ok(len)
     }
 }
 
-const HEX_UPPER: [u8; 16] = *b"0123456789ABCDEF";
+/// Uppercase hex digit of the low nibble of `n`.
+const fn hex_digit(n: u8) -> u8 {
+    let n = n & 0x0F;
+    if n < 10 { b'0' + n } else { b'A' + n - 10 }
+}
 
 /// Bytes allowed in the data field: printable ASCII except the two delimiters.
 ///
@@ -360,10 +364,7 @@ mod tests {
         assert_eq!(Frame::parse(&long), Err(Error::Overlong));
         // Control characters in the data are refused even with a matching checksum.
         let ck = checksum(1, b"\r");
-        let hex = [
-            HEX_UPPER[usize::from(ck >> 4)],
-            HEX_UPPER[usize::from(ck & 15)],
-        ];
+        let hex = [hex_digit(ck >> 4), hex_digit(ck)];
         let bad = [b'>', b'0', b'0', b'1', b'\r', hex[0], hex[1], b'<'];
         assert_eq!(Frame::parse(&bad), Err(Error::Malformed));
     }
