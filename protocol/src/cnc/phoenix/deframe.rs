@@ -1,6 +1,6 @@
 //! Streaming receiver for Phoenix serial messages.
 
-use super::{CR, EOT, ETX, Format, LF, MAX_MESSAGE_LEN, SOH, STX, check_byte};
+use super::{CR, EOT, ETX, Format, LF, MAX_MESSAGE_LEN, STX, check_byte};
 use crate::{Error, Result};
 
 /// Where the receiver is within a frame.
@@ -343,7 +343,7 @@ impl<const N: usize> Deframer<N> {
 
 #[cfg(test)]
 mod tests {
-    use super::super::frame;
+    use super::super::{SOH, frame};
     use super::*;
 
     type Rx = Deframer<32>;
@@ -417,9 +417,13 @@ mod tests {
         let mut wire: heapless::Vec<u8, 64> = heapless::Vec::new();
         wire.push(STX).unwrap();
         wire.extend_from_slice(&[b'x'; 40]).unwrap();
-        wire.extend_from_slice(&[ETX, STX, b'o', b'k', ETX]).unwrap();
+        wire.extend_from_slice(&[ETX, STX, b'o', b'k', ETX])
+            .unwrap();
         let mut rx = Rx::new(fmt(32));
-        assert_eq!(&outcomes(&mut rx, &wire)[..], &[Err(Error::Overlong), ok(b"ok")]);
+        assert_eq!(
+            &outcomes(&mut rx, &wire)[..],
+            &[Err(Error::Overlong), ok(b"ok")]
+        );
         // Exactly N bytes fit.
         let mut rx = Rx::new(fmt(0));
         assert_eq!(&outcomes(&mut rx, &[b'y'; 32])[..], &[]);

@@ -198,7 +198,10 @@ mod tests {
         assert_eq!(decode("! "), Err(Error::Malformed));
         assert_eq!(decode("$~"), Err(Error::Malformed));
         assert_eq!(decode("AB&"), Err(Error::Truncated));
-        assert_eq!(decode_escapes(b"&A&B", &mut [0u8; 1]), Err(Error::BufferTooSmall));
+        assert_eq!(
+            decode_escapes(b"&A&B", &mut [0u8; 1]),
+            Err(Error::BufferTooSmall)
+        );
     }
 
     #[test]
@@ -215,6 +218,9 @@ mod tests {
         let mut out = [0u8; 8];
         let n = encode_escapes(b"A B ", &mut out).unwrap();
         assert_eq!(&out[..n], b"A B&'");
-        assert_eq!(encode_escapes(b"&", &mut [0u8; 1]), Err(Error::BufferTooSmall));
+        assert_eq!(
+            encode_escapes(b"&", &mut [0u8; 1]),
+            Err(Error::BufferTooSmall)
+        );
     }
 }

@@ -253,7 +253,10 @@ struct Cursor<'a> {
 
 impl Cursor<'_> {
     fn put(&mut self, bytes: &[u8]) -> Result<()> {
-        let end = self.at.checked_add(bytes.len()).ok_or(Error::BufferTooSmall)?;
+        let end = self
+            .at
+            .checked_add(bytes.len())
+            .ok_or(Error::BufferTooSmall)?;
         self.out
             .get_mut(self.at..end)
             .ok_or(Error::BufferTooSmall)?
@@ -275,9 +278,15 @@ mod tests {
 
     #[test]
     fn supported_values_are_exactly_the_manuals_list() {
-        let listed = [0, 1, 16, 17, 32, 33, 48, 49, 64, 65, 80, 81, 96, 97, 112, 113];
+        let listed = [
+            0, 1, 16, 17, 32, 33, 48, 49, 64, 65, 80, 81, 96, 97, 112, 113,
+        ];
         for v in 0..=255u8 {
-            assert_eq!(Format::from_value(v).is_ok(), listed.contains(&v), "value {v}");
+            assert_eq!(
+                Format::from_value(v).is_ok(),
+                listed.contains(&v),
+                "value {v}"
+            );
         }
         let all: heapless::Vec<u8, 16> = Format::ALL.iter().map(|f| f.value()).collect();
         assert_eq!(&all[..], &listed[..]);
@@ -348,7 +357,10 @@ mod tests {
             Err(Error::Malformed)
         );
         // A plain format carries any byte.
-        assert_eq!(frame(Format::PLAIN, b"\x01\x02\x03\x04\n", &mut [0; 8]), Ok(5));
+        assert_eq!(
+            frame(Format::PLAIN, b"\x01\x02\x03\x04\n", &mut [0; 8]),
+            Ok(5)
+        );
     }
 
     #[test]

@@ -160,7 +160,10 @@ mod tests {
             let inner = &program[1..program.len() - 1];
             let m = ProgramMessage::parse(inner).unwrap();
             assert_eq!(m.kind, MessageType::Delay);
-            assert_eq!((m.format.value(), m.delay_centis, m.port), (1, Some(100), 0));
+            assert_eq!(
+                (m.format.value(), m.delay_centis, m.port),
+                (1, Some(100), 0)
+            );
             assert_eq!(m.text, "Message");
             let mut text = [0u8; 16];
             let n = m.decode_text(&mut text).unwrap();
@@ -175,13 +178,21 @@ mod tests {
         let m = ProgramMessage::parse(">22+113+2.5+1<SET AMPS 45").unwrap();
         assert_eq!(m.kind, MessageType::Acknowledge);
         assert!(m.kind.needs_ack());
-        assert_eq!((m.format.value(), m.delay_centis, m.port), (113, Some(250), 1));
+        assert_eq!(
+            (m.format.value(), m.delay_centis, m.port),
+            (113, Some(250), 1)
+        );
         assert_eq!(m.text, "SET AMPS 45");
         let m = ProgramMessage::parse(">21 33<x").unwrap();
         assert_eq!((m.format.value(), m.delay_centis, m.port), (33, None, 0));
         let m = ProgramMessage::parse(">22<").unwrap();
         assert_eq!((m.format, m.text), (Format::PLAIN, ""));
-        assert_eq!(ProgramMessage::parse(">20-0-999.99<a").unwrap().delay_centis, Some(99999));
+        assert_eq!(
+            ProgramMessage::parse(">20-0-999.99<a")
+                .unwrap()
+                .delay_centis,
+            Some(99999)
+        );
     }
 
     #[test]
@@ -189,9 +200,15 @@ mod tests {
         assert_eq!(ProgramMessage::parse(">23<x"), Err(Error::Malformed));
         assert_eq!(ProgramMessage::parse(">20,2<x"), Err(Error::Malformed));
         assert_eq!(ProgramMessage::parse(">20,1,1000<x"), Err(Error::Malformed));
-        assert_eq!(ProgramMessage::parse(">20,1,1.234<x"), Err(Error::Malformed));
+        assert_eq!(
+            ProgramMessage::parse(">20,1,1.234<x"),
+            Err(Error::Malformed)
+        );
         assert_eq!(ProgramMessage::parse(">20,1,1,2<x"), Err(Error::Malformed));
-        assert_eq!(ProgramMessage::parse(">20,1,1,0,0<x"), Err(Error::Malformed));
+        assert_eq!(
+            ProgramMessage::parse(">20,1,1,0,0<x"),
+            Err(Error::Malformed)
+        );
         assert_eq!(ProgramMessage::parse(">21,0,5<x"), Err(Error::Malformed));
         assert_eq!(ProgramMessage::parse(">20,1"), Err(Error::Truncated));
         assert_eq!(ProgramMessage::parse("20<x"), Err(Error::Malformed));
