@@ -125,7 +125,8 @@ impl<const N: usize> Deframer<N> {
     }
 
     /// The line has gone idle: ends the message of formats 0 and 16; for the other formats
-    /// abandons an incomplete frame with [`Error::Truncated`].
+    /// abandons an incomplete frame with [`Error::Truncated`]. (An empty format-0 message
+    /// sends no byte, so there is nothing to receive.)
     pub fn idle(&mut self) -> Option<Result<&[u8]>> {
         let terminated = self.format.start_byte().is_some() || self.format.cr_lf();
         let step = match self.state {

@@ -76,6 +76,8 @@ pub const MAX_MESSAGE_LEN: usize = 300;
 /// | 64 | [`Format::SOH_EOT`] | SOH first, EOT after everything but the check byte |
 ///
 /// Supported values: 0, 1, 16, 17, 32, 33, 48, 49, 64, 65, 80, 81, 96, 97, 112, 113.
+/// (The OCR'd V9.5 table lost the "1" in front of "Append a Carriage Return ... and a Line
+/// Feed"; the list of supported values and the sums 17, 33, ... restore it.)
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Format(u8);
