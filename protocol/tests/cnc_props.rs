@@ -72,7 +72,9 @@ fn deframe_chunked<const N: usize>(
         }
         start = end;
     }
-    if idle_at_end && let Some(outcome) = rx.idle() {
+    // (No let-chain: the workspace's rust-version predates them.)
+    let at_idle = if idle_at_end { rx.idle() } else { None };
+    if let Some(outcome) = at_idle {
         out.push(outcome.map(<[u8]>::to_vec));
     }
     out
