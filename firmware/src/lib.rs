@@ -3,5 +3,5 @@
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
-pub mod time;
 pub mod port;
+pub mod time;
