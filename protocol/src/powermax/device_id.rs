@@ -5,6 +5,7 @@
 //! `:012B0E0401C1` (specific object 0x01) and gets back as `081335` for a Powermax65/85/105
 //! SYNC. The vendor name and revision objects play no part in the table.
 
+use super::ident::SyncModel;
 use crate::modbus_ascii::pdu::DeviceIdentification;
 use crate::modbus_ascii::{DeviceIdCode, Request};
 use crate::{Error, Result};
@@ -95,6 +96,17 @@ impl PowerSupplyModel {
             PowerSupplyModel::Powermax125 => "Powermax125",
             PowerSupplyModel::Powermax65_85_105Sync => "Powermax65/85/105 SYNC",
             PowerSupplyModel::Powermax45Sync => "Powermax45 SYNC",
+        }
+    }
+}
+
+impl From<SyncModel> for PowerSupplyModel {
+    /// The Table 2 type a Table 4 id belongs to.
+    fn from(model: SyncModel) -> Self {
+        if model.size() == 45 {
+            PowerSupplyModel::Powermax45Sync
+        } else {
+            PowerSupplyModel::Powermax65_85_105Sync
         }
     }
 }
@@ -191,6 +203,24 @@ mod tests {
         assert_eq!(model_from_product_code(b"08133"), None);
         assert_eq!(model_from_product_code(b""), None);
         assert_eq!(model_from_product_code(b"\0\0"), None);
+    }
+
+    #[test]
+    fn sync_model_family() {
+        assert_eq!(
+            PowerSupplyModel::from(SyncModel::Powermax105_Csa200_600),
+            PowerSupplyModel::Powermax65_85_105Sync
+        );
+        assert_eq!(
+            PowerSupplyModel::from(SyncModel::Powermax45_Csa480),
+            PowerSupplyModel::Powermax45Sync
+        );
+        for (_, model, _) in crate::powermax::SYNC_MODELS.iter() {
+            assert_eq!(
+                PowerSupplyModel::from(*model).addressing(),
+                AddressingSystem::Sync
+            );
+        }
     }
 
     #[test]

@@ -60,8 +60,12 @@ pub const PS_TRANSFER_TIME_LOW: u16 = 0x302E;
 pub const PS_TRANSFER_TIME_HIGH: u16 = 0x302F;
 /// Cartridge UID, bytes 0-1; the UID runs through 0x3037 (16 ASCII characters).
 pub const CARTRIDGE_UID: u16 = 0x3030;
+/// Cartridge UID, bytes 14-15 (register `CARTRIDGE_UID + n` holds bytes `2n` and `2n + 1`).
+pub const CARTRIDGE_UID_END: u16 = 0x3037;
 /// Cartridge part number, bytes 0-1; runs through 0x303A (6 ASCII characters, Table 5).
 pub const CARTRIDGE_PART_NUMBER: u16 = 0x3038;
+/// Cartridge part number, bytes 4-5 (0x3039 holds bytes 2-3).
+pub const CARTRIDGE_PART_NUMBER_END: u16 = 0x303A;
 /// Cartridge part number revision level.
 pub const CARTRIDGE_REVISION: u16 = 0x303B;
 /// Nominal (rated) current of the installed cartridge, amperes.
@@ -84,6 +88,8 @@ pub const FAULT_LOG_2: u16 = 0x3046;
 pub const FAULT_LOG_3: u16 = 0x3047;
 /// Cartridge name, bytes 0-1; runs through 0x304D (12 bytes, Table 7).
 pub const CARTRIDGE_NAME: u16 = 0x3048;
+/// Cartridge name, bytes 10-11 (register `CARTRIDGE_NAME + n` holds bytes `2n` and `2n + 1`).
+pub const CARTRIDGE_NAME_END: u16 = 0x304D;
 /// Remote operating mode setting (write, function 0x10). Legacy equivalent 0x2093.
 pub const REMOTE_MODE: u16 = 0x3080;
 /// Remote output current setting, A x 64 (write). Legacy equivalent 0x2094.
@@ -124,9 +130,13 @@ pub const ACTIVE_FAULT_SPAN: RegisterSpan = RegisterSpan::new(ACTIVE_FAULT, 1);
 /// 0x3028-0x302F: power-supply counters.
 pub const PS_COUNTERS_SPAN: RegisterSpan = RegisterSpan::new(PS_STARTS_LOW, 8);
 /// 0x3030-0x3037: cartridge UID.
-pub const CARTRIDGE_UID_SPAN: RegisterSpan = RegisterSpan::new(CARTRIDGE_UID, 8);
+pub const CARTRIDGE_UID_SPAN: RegisterSpan =
+    RegisterSpan::new(CARTRIDGE_UID, CARTRIDGE_UID_END - CARTRIDGE_UID + 1);
 /// 0x3038-0x303A: cartridge part number.
-pub const CARTRIDGE_PART_NUMBER_SPAN: RegisterSpan = RegisterSpan::new(CARTRIDGE_PART_NUMBER, 3);
+pub const CARTRIDGE_PART_NUMBER_SPAN: RegisterSpan = RegisterSpan::new(
+    CARTRIDGE_PART_NUMBER,
+    CARTRIDGE_PART_NUMBER_END - CARTRIDGE_PART_NUMBER + 1,
+);
 /// 0x3030-0x303C: UID, part number, revision and nominal current.
 pub const CARTRIDGE_ID_SPAN: RegisterSpan = RegisterSpan::new(CARTRIDGE_UID, 13);
 /// 0x3040-0x3043: cartridge counters.
@@ -134,7 +144,8 @@ pub const CARTRIDGE_COUNTERS_SPAN: RegisterSpan = RegisterSpan::new(CARTRIDGE_ST
 /// 0x3044-0x3047: fault log.
 pub const FAULT_LOG_SPAN: RegisterSpan = RegisterSpan::new(FAULT_LOG_0, 4);
 /// 0x3048-0x304D: cartridge name.
-pub const CARTRIDGE_NAME_SPAN: RegisterSpan = RegisterSpan::new(CARTRIDGE_NAME, 6);
+pub const CARTRIDGE_NAME_SPAN: RegisterSpan =
+    RegisterSpan::new(CARTRIDGE_NAME, CARTRIDGE_NAME_END - CARTRIDGE_NAME + 1);
 
 static STATUS_PARTS: [RegisterSpan; 2] = [SETTINGS_SPAN, OUTPUTS_AND_FAULT_SPAN];
 /// 0x3010-0x301A in one read: settings, actual outputs and active fault. Crosses the
@@ -559,7 +570,10 @@ mod tests {
 
     #[test]
     fn every_address() {
-        let map: [(u16, u16); 52] = [
+        let map: [(u16, u16); 55] = [
+            (CARTRIDGE_UID_END, 0x3037),
+            (CARTRIDGE_PART_NUMBER_END, 0x303A),
+            (CARTRIDGE_NAME_END, 0x304D),
             (IDENTIFICATION, 0x3000),
             (PERMITTED_MODES, 0x3001),
             (PERMITTED_MIN_CURRENT, 0x3002),
