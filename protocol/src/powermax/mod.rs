@@ -45,6 +45,7 @@ mod ident;
 pub mod legacy;
 mod mode;
 mod plan;
+pub mod registers;
 mod scaling;
 pub mod sync;
 pub mod timing;
