@@ -299,11 +299,10 @@ impl Interlocks {
                 Ok(()) => {
                     let until = self.last_start_fall + self.config.effective_start_gap();
                     if now >= until {
-                        self.phase = Self::on_since(now);
-                    } else {
-                        self.phase = StartPhase::Delayed { until };
-                        self.push_event(IoEvent::StartDelayed { until });
+                        return self.start_on(now, Reason::TorchOn);
                     }
+                    self.phase = StartPhase::Delayed { until };
+                    self.push_event(IoEvent::StartDelayed { until });
                     Reason::TorchOn
                 }
             },
@@ -311,7 +310,7 @@ impl Interlocks {
                 Err(interlock) => self.refuse(interlock),
                 Ok(()) => {
                     if now >= until {
-                        self.phase = Self::on_since(now);
+                        return self.start_on(now, Reason::StartGapElapsed);
                     }
                     Reason::StartGapElapsed
                 }
@@ -324,31 +323,46 @@ impl Interlocks {
                 if let Err(interlock) = self.interlock(now) {
                     return self.drop_start(interlock);
                 }
-                let transferred = transferred || self.motion.stable();
-                let overdue = now >= since + self.config.transfer_timeout;
-                if !transferred && !timeout_reported && overdue {
-                    self.push_event(IoEvent::TransferTimeout);
-                    if self.config.drop_start_on_transfer_timeout {
-                        return self.drop_start(Interlock::TransferTimeout);
-                    }
-                }
-                self.phase = StartPhase::On {
-                    since,
-                    transferred,
-                    timeout_reported: timeout_reported || (!transferred && overdue),
-                };
-                Reason::TorchOn
+                self.keep_on(now, since, transferred, timeout_reported, Reason::TorchOn)
             }
             StartPhase::Locked(interlock) => Reason::Interlock(interlock),
         }
     }
 
-    fn on_since(now: Instant) -> StartPhase {
-        StartPhase::On {
-            since: now,
-            transferred: false,
-            timeout_reported: false,
+    /// START comes on now (the interlocks were just checked).
+    fn start_on(&mut self, now: Instant, reason: Reason) -> Reason {
+        // Checked at once, so a zero time-out never leaves a deadline in the past.
+        self.keep_on(now, now, false, false, reason)
+    }
+
+    /// START stays on unless the arc is overdue and the configuration drops it.
+    fn keep_on(
+        &mut self,
+        now: Instant,
+        since: Instant,
+        transferred: bool,
+        timeout_reported: bool,
+        reason: Reason,
+    ) -> Reason {
+        let transferred = transferred || self.motion.stable();
+        let overdue = now >= since + self.config.transfer_timeout;
+        if !transferred && !timeout_reported && overdue {
+            self.push_event(IoEvent::TransferTimeout);
+            if self.config.drop_start_on_transfer_timeout {
+                // A zero time-out is overdue before START ever rose: that is a refusal.
+                return if self.outputs.start {
+                    self.drop_start(Interlock::TransferTimeout)
+                } else {
+                    self.refuse(Interlock::TransferTimeout)
+                };
+            }
         }
+        self.phase = StartPhase::On {
+            since,
+            transferred,
+            timeout_reported: timeout_reported || (!transferred && overdue),
+        };
+        reason
     }
 
     fn refuse(&mut self, interlock: Interlock) -> Reason {
