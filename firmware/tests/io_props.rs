@@ -101,6 +101,10 @@ struct Run {
     supply: SupplyState,
     levels: Outputs,
     latest_blackout: Instant,
+    /// When TORCH_ON last went from inactive to active.
+    torch_rose_at: Option<Instant>,
+    /// `now` of the previous call into the machine.
+    previous_call: Instant,
 }
 
 impl Run {
@@ -114,6 +118,8 @@ impl Run {
             supply: SupplyState::default(),
             levels: Outputs::OFF,
             latest_blackout: Instant::ZERO,
+            torch_rose_at: None,
+            previous_call: Instant::ZERO,
         };
         run.check(false);
         run
@@ -122,6 +128,9 @@ impl Run {
     fn apply(&mut self, op: &Op, blackout: Option<u64>) {
         match *op {
             Op::Input(input, active) => {
+                if input == Input::TorchOn && active && !self.inputs.torch_on {
+                    self.torch_rose_at = Some(self.now);
+                }
                 self.inputs.set(input, active);
                 self.io.on_input(self.now, input, active);
                 self.check(false);
@@ -172,10 +181,23 @@ impl Run {
         while let Some(t) = self.io.poll_transition() {
             assert_ne!(self.levels.get(t.output), t.level, "{t}");
             assert_eq!(t.at, self.now, "{t}");
+            if t.output == Output::Start && t.level {
+                // No surprise start: START only rises for a fresh TORCH_ON, in the call that
+                // reports it or in the first call after the gap; never when an interlock
+                // clears later on.
+                let rose = self.torch_rose_at.expect("START without any TORCH_ON edge");
+                let gap_end = rose + self.io.config().effective_start_gap();
+                assert!(
+                    t.at == rose || self.previous_call < gap_end,
+                    "{t}: TORCH_ON at {rose:?}, previous call at {:?}",
+                    self.previous_call
+                );
+            }
             set(&mut self.levels, t.output, t.level);
         }
         assert_eq!(self.levels, out);
         while self.io.poll_event().is_some() {}
+        self.previous_call = self.now;
 
         let config = *self.io.config();
         if out.start {

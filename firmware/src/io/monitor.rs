@@ -118,12 +118,10 @@ impl SafetyMonitor {
             self.last_start_fall = Some(now);
         }
 
-        if rose {
-            if let Some(fall) = self.last_start_fall {
-                let gap = now.saturating_since(fall);
-                if gap < START_GAP {
-                    self.record(now, ViolationKind::StartGapTooShort { gap });
-                }
+        if rose && let Some(fall) = self.last_start_fall {
+            let gap = now.saturating_since(fall);
+            if gap < START_GAP {
+                self.record(now, ViolationKind::StartGapTooShort { gap });
             }
         }
         if start && !torch_on {

@@ -678,6 +678,26 @@ fn the_timeout_restarts_with_each_start() {
     assert!(!rig.start());
 }
 
+#[test]
+fn a_zero_timeout_refuses_every_start() {
+    let mut rig = Rig::healthy_with(IoConfig {
+        transfer_timeout: Duration::ZERO,
+        ..IoConfig::default()
+    });
+    rig.torch(ms(100), true);
+    assert!(!rig.start());
+    assert_eq!(
+        rig.events,
+        [
+            IoEvent::TransferTimeout,
+            IoEvent::StartRefused {
+                reason: Interlock::TransferTimeout
+            }
+        ]
+    );
+    assert_eq!(rig.io.poll_at(), None);
+}
+
 // ---- READY and FAULT ----
 
 #[test]
