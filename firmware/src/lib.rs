@@ -3,6 +3,6 @@
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
-pub mod io;
-pub mod port;
 pub mod time;
+pub mod port;
+pub mod io;
