@@ -1,8 +1,10 @@
 //! The HPR simulator's byte edge: `>` + 3-digit command id + data + 2 hex digits of checksum +
-//! `<`, the checksum being the low byte of the sum of the id and data characters.
+//! `<`. Parsing and emitting go through [`plasma_protocol::hpr::Frame`]; this file only keeps
+//! the raw characters of a frame so the unit can tell a bad checksum (500) from an unknown
+//! command (501) the way the manual describes.
 
-/// Longest frame body the unit buffers before it gives up on a frame.
-const MAX_BODY: usize = 256;
+use plasma_protocol::Error;
+use plasma_protocol::hpr::{Frame, MAX_FRAME_LEN};
 
 /// What a completed frame turned out to be.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -13,10 +15,10 @@ pub(crate) enum Incoming {
     BadChecksum,
 }
 
-/// Collects characters between `>` and `<`.
+/// Collects the characters of a frame, `>` to `<`.
 #[derive(Debug, Default)]
 pub(crate) struct Assembler {
-    body: Vec<u8>,
+    raw: Vec<u8>,
     in_frame: bool,
     damaged: bool,
 }
@@ -26,28 +28,30 @@ impl Assembler {
     pub(crate) fn push(&mut self, byte: u8) -> Option<Incoming> {
         match byte {
             b'>' => {
-                self.body.clear();
+                self.raw.clear();
+                self.raw.push(byte);
                 self.in_frame = true;
                 self.damaged = false;
                 None
             }
             _ if !self.in_frame => None,
+            _ if self.raw.len() >= MAX_FRAME_LEN => {
+                // Longer than any frame: the unit gives up on it silently.
+                self.reset();
+                None
+            }
             b'<' => {
+                self.raw.push(byte);
                 self.in_frame = false;
-                let body = std::mem::take(&mut self.body);
+                let raw = std::mem::take(&mut self.raw);
                 Some(if self.damaged {
                     Incoming::BadChecksum
                 } else {
-                    parse(&body)
+                    classify(&raw)
                 })
             }
-            _ if self.body.len() >= MAX_BODY => {
-                self.in_frame = false;
-                self.body.clear();
-                None
-            }
             _ => {
-                self.body.push(byte);
+                self.raw.push(byte);
                 None
             }
         }
@@ -62,47 +66,63 @@ impl Assembler {
 
     /// Forgets any partial frame.
     pub(crate) fn reset(&mut self) {
-        self.body.clear();
+        self.raw.clear();
         self.in_frame = false;
         self.damaged = false;
     }
 }
 
-/// Checksum of id + data characters.
+/// Sum of the characters between the delimiters minus the checksum, against the checksum.
+fn checksum_matches(raw: &[u8]) -> bool {
+    let Some(inner) = raw.get(1..raw.len().saturating_sub(1)) else {
+        return false;
+    };
+    let Some((text, ck)) = inner.split_at_checked(inner.len().saturating_sub(2)) else {
+        return false;
+    };
+    let sum = text.iter().fold(0u8, |acc, &b| acc.wrapping_add(b));
+    std::str::from_utf8(ck)
+        .ok()
+        .and_then(|s| u8::from_str_radix(s, 16).ok())
+        .is_some_and(|given| ck.len() == 2 && given == sum)
+}
+
+fn classify(raw: &[u8]) -> Incoming {
+    match Frame::parse(raw) {
+        Ok(frame) => Incoming::Command {
+            id: Some(frame.id),
+            data: String::from_utf8_lossy(frame.data).into_owned(),
+        },
+        // A non-digit id with a right checksum is a command the unit does not know.
+        Err(Error::Malformed)
+            if checksum_matches(raw)
+                && !raw
+                    .get(1..4)
+                    .is_some_and(|d| d.iter().all(u8::is_ascii_digit)) =>
+        {
+            Incoming::Command {
+                id: None,
+                data: String::new(),
+            }
+        }
+        Err(_) => Incoming::BadChecksum,
+    }
+}
+
+/// A frame with command `id` and `data` (printable ASCII, short enough: the simulator's own
+/// replies always are).
+pub(crate) fn encode(id: u16, data: &str) -> Vec<u8> {
+    let mut buf = [0u8; MAX_FRAME_LEN];
+    match Frame::new(id, data.as_bytes()).emit(&mut buf) {
+        Ok(n) => buf[..n].to_vec(),
+        Err(e) => panic!("simulator reply {id:03} {data:?} cannot be framed: {e:?}"),
+    }
+}
+
+/// Checksum of id + data characters as text, for tests that build expected frames.
+#[cfg(test)]
 pub(crate) fn checksum(text: &[u8]) -> u8 {
     text.iter().fold(0u8, |acc, &b| acc.wrapping_add(b))
-}
-
-fn hex_value(c: u8) -> Option<u8> {
-    (c as char).to_digit(16).map(|d| d as u8)
-}
-
-fn parse(body: &[u8]) -> Incoming {
-    if body.len() < 5 {
-        return Incoming::BadChecksum;
-    }
-    let (text, check) = body.split_at(body.len() - 2);
-    let given = match (hex_value(check[0]), hex_value(check[1])) {
-        (Some(h), Some(l)) => h << 4 | l,
-        _ => return Incoming::BadChecksum,
-    };
-    if checksum(text) != given {
-        return Incoming::BadChecksum;
-    }
-    let id = std::str::from_utf8(&text[..3])
-        .ok()
-        .filter(|s| s.bytes().all(|b| b.is_ascii_digit()))
-        .and_then(|s| s.parse().ok());
-    Incoming::Command {
-        id,
-        data: String::from_utf8_lossy(&text[3..]).into_owned(),
-    }
-}
-
-/// A frame with command `id` and `data`.
-pub(crate) fn encode(id: u16, data: &str) -> Vec<u8> {
-    let text = format!("{id:03}{data}");
-    format!(">{text}{:02X}<", checksum(text.as_bytes())).into_bytes()
 }
 
 #[cfg(test)]
@@ -145,6 +165,23 @@ mod tests {
             Some(Incoming::Command {
                 id: Some(999),
                 data: String::new()
+            })
+        );
+        // Letters for an id, checksum right: an unknown command, not a bad checksum.
+        let ck = checksum(b"AB0");
+        assert_eq!(
+            feed(&format!(">AB0{ck:02X}<")),
+            Some(Incoming::Command {
+                id: None,
+                data: String::new()
+            })
+        );
+        // A lower-case checksum is still a checksum.
+        assert_eq!(
+            feed(">0850cd<"),
+            Some(Incoming::Command {
+                id: Some(85),
+                data: "0".into()
             })
         );
         // A '>' restarts the frame.
