@@ -233,6 +233,48 @@ impl Default for SimOptions {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::line::{End, Line, RxByte, Wiring};
+    use clock::earliest;
+    use plasma_firmware::port::Parity;
+
+    /// A minimal discrete-event loop (the shape of the scenario harness): the master sends
+    /// `request` at `t0`; returns what the master hears until `until`.
+    fn over_the_line(
+        unit: &mut dyn SimulatedUnit,
+        line: &mut Line,
+        t0: Instant,
+        request: &[u8],
+        until: Instant,
+    ) -> Vec<RxByte> {
+        line.transmit(End::Master, t0, request);
+        let mut heard = Vec::new();
+        let mut now = t0;
+        while let Some(t) = earliest(line.next_delivery(), unit.next_wakeup()) {
+            if t > until {
+                break;
+            }
+            now = now.max(t);
+            for b in line.receive(End::Unit, now) {
+                match b.error {
+                    None => unit.receive(b.at, b.byte),
+                    Some(_) => unit.receive_error(b.at),
+                }
+            }
+            unit.advance(now);
+            for (start, length) in unit.take_noise_bursts() {
+                line.add_noise_burst(start, length);
+            }
+            if let Some(bytes) = unit.poll_transmit(now) {
+                line.transmit(End::Unit, now, &bytes);
+            }
+            heard.extend(line.receive(End::Master, now));
+        }
+        heard
+    }
+
+    fn text(heard: &[RxByte]) -> Vec<u8> {
+        heard.iter().map(|b| b.byte).collect()
+    }
 
     #[test]
     fn every_model_round_trips_its_name_and_builds() {
@@ -248,5 +290,71 @@ mod tests {
         }
         assert_eq!(Model::from_name("SYNC65"), Some(Model::Sync65));
         assert_eq!(Model::from_name("hd4070"), None);
+    }
+
+    #[test]
+    fn a_sync_reply_arrives_with_baud_accurate_timing() {
+        let mut unit = Model::Sync65.build(&SimOptions::default());
+        let mut line = Line::new(unit.port(), unit.port(), Wiring::FourWire, 3);
+        let heard = over_the_line(
+            &mut *unit,
+            &mut line,
+            Instant::ZERO,
+            b":010430000001CA\r\n",
+            Instant::from_millis(100),
+        );
+        assert_eq!(text(&heard), b":0104020400F5\r\n");
+        // Request: 17 characters of 572.9 us = 9.740 ms; 3 ms latency; reply: 15 characters.
+        assert_eq!(heard[0].at, Instant::from_micros(12_740 + 573));
+        assert_eq!(heard[14].at, Instant::from_micros(21_334));
+    }
+
+    #[test]
+    fn a_sync_set_to_odd_parity_does_not_answer_an_even_parity_master() {
+        let mut unit = Model::Sync65.build(&SimOptions::default());
+        let odd = PortConfig {
+            parity: Parity::Odd,
+            ..PortConfig::MODBUS_DEFAULT
+        };
+        let mut line = Line::new(PortConfig::MODBUS_DEFAULT, odd, Wiring::FourWire, 3);
+        let heard = over_the_line(
+            &mut *unit,
+            &mut line,
+            Instant::ZERO,
+            b":010430000001CA\r\n",
+            Instant::from_millis(100),
+        );
+        assert!(heard.is_empty());
+    }
+
+    #[test]
+    fn hpr_traffic_is_lost_in_the_hf_ignition_burst_and_works_after_it() {
+        let mut unit = Model::Hpr260.build(&SimOptions::default());
+        {
+            let hpr = unit.as_any_mut().downcast_mut::<hpr::Hpr>().unwrap();
+            hpr.config_mut().timings.transfer_delay = None;
+            hpr.config_mut().timings.pilot_timeout = Duration::from_secs(2);
+        }
+        let mut line = Line::new(PortConfig::HPR, PortConfig::HPR, Wiring::FourWire, 5);
+        unit.advance(Instant::from_millis(3_000));
+        unit.set_start(Instant::from_millis(3_000), true);
+        // Ignition at 3.5 s: the noise burst lasts 1 s.
+        let during = over_the_line(
+            &mut *unit,
+            &mut line,
+            Instant::from_millis(3_600),
+            b">00292<",
+            Instant::from_millis(3_700),
+        );
+        assert!(!text(&during).windows(4).any(|w| w == b">002"));
+        let after = over_the_line(
+            &mut *unit,
+            &mut line,
+            Instant::from_millis(4_600),
+            b">00292<",
+            Instant::from_millis(4_700),
+        );
+        // Still pilot arc (state 5) at 4.6 s.
+        assert!(text(&after).ends_with(b">002000557<"), "{:?}", text(&after));
     }
 }
