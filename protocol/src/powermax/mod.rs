@@ -45,7 +45,6 @@ mod ident;
 pub mod legacy;
 mod mode;
 mod plan;
-mod scaling;
 pub mod sync;
 pub mod timing;
 
@@ -58,4 +57,4 @@ pub use fault::{FaultCode, FaultInfo, StepsRequired, SyncModels};
 pub use ident::{LeadLength, SYNC_MODELS, SyncModel, TORCH_TYPES, TorchKind, TorchType};
 pub use mode::OperatingMode;
 pub use plan::{BlockRead, RegisterSpan, Signals};
-pub use scaling::{Amps, Pressure, Psi};
+pub use crate::units::{Amps, Pressure, Psi};

@@ -9,7 +9,7 @@ use super::fault::FaultCode;
 use super::ident::{SyncModel, TorchType};
 use super::mode::OperatingMode;
 use super::plan::{BlockRead, RegisterSpan, need, u32_low_first, word};
-use super::scaling::{Amps, Pressure, Psi};
+use crate::units::{Amps, Pressure, Psi};
 use crate::modbus_ascii::{Registers, Request};
 use crate::{Error, Result};
 

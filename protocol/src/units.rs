@@ -223,7 +223,7 @@ fixed_point!(
     /// Output current in steps of 1/64 A (the register holds amps x 64).
     ///
     /// ```
-    /// use plasma_protocol::powermax::Amps;
+    /// use plasma_protocol::units::Amps;
     /// let a: Amps = "55.5".parse().unwrap();
     /// assert_eq!(a.raw(), 3552);
     /// assert_eq!(Amps::from_whole(63).unwrap().raw(), 0x0FC0);
@@ -241,7 +241,7 @@ fixed_point!(
     /// means "automatic", which [`Pressure`] spells out.
     ///
     /// ```
-    /// use plasma_protocol::powermax::Psi;
+    /// use plasma_protocol::units::Psi;
     /// assert_eq!(Psi::from_whole(45).unwrap().raw(), 0x1680);
     /// assert_eq!(Psi::from_raw(0x23DD).to_string(), "71.7265625");
     /// ```
