@@ -48,6 +48,7 @@ mod plan;
 pub mod sync;
 pub mod timing;
 
+pub use crate::units::{Amps, Pressure, Psi};
 pub use cartridge::{
     CARTRIDGE_NAMES, CARTRIDGE_TYPES, CartridgeCounters, CartridgeName, CartridgeNameInfo,
     CartridgeProcess, CartridgeType, CartridgeUid, PartNumber,
@@ -57,4 +58,3 @@ pub use fault::{FaultCode, FaultInfo, StepsRequired, SyncModels};
 pub use ident::{LeadLength, SYNC_MODELS, SyncModel, TORCH_TYPES, TorchKind, TorchType};
 pub use mode::OperatingMode;
 pub use plan::{BlockRead, RegisterSpan, Signals};
-pub use crate::units::{Amps, Pressure, Psi};
