@@ -903,6 +903,9 @@ impl SimulatedUnit for Hpr {
     }
 
     fn next_wakeup(&self) -> Option<Instant> {
+        if !self.powered {
+            return None;
+        }
         earliest(
             self.outbox.front().map(|&(due, _)| due),
             self.phase_deadline().map(|(at, _)| at),
@@ -1412,6 +1415,16 @@ mod tests {
         cmd(&mut u, ms(0), 0, "");
         cmd(&mut u, ms(10), 120, "");
         assert_eq!(u.commands_received(), &[0, 120]);
+    }
+
+    #[test]
+    fn a_unit_that_is_off_needs_no_wakeup_and_does_not_answer() {
+        let mut u = unit(Model::Hpr130);
+        u.power_off(ms(100));
+        assert_eq!(u.next_wakeup(), None);
+        assert!(talk(&mut u, ms(200), ">00090<").is_none());
+        u.power_on(ms(300));
+        assert_eq!(u.next_wakeup(), Some(ms(800)));
     }
 
     #[test]

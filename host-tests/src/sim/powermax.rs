@@ -913,6 +913,9 @@ impl SimulatedUnit for Powermax {
     }
 
     fn next_wakeup(&self) -> Option<Instant> {
+        if !self.powered {
+            return None;
+        }
         let reply = self.outbox.front().map(|&(due, _)| due);
         let deaf = (self.deaf_until > self.now).then_some(self.deaf_until);
         earliest(earliest(reply, self.arc_deadline()), deaf)
