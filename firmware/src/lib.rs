@@ -3,4 +3,7 @@
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
+pub mod safe_state;
+pub mod storage;
 pub mod time;
+pub mod watchdog;
