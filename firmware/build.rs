@@ -31,7 +31,9 @@ fn check_settings_region(memory_x: &str) {
     let flash = region(memory_x, "FLASH");
     let settings = region(memory_x, "SETTINGS");
     assert!(
-        settings.0 % PAGE == 0 && settings.1 % PAGE == 0 && settings.1 >= 2 * PAGE,
+        settings.0.is_multiple_of(PAGE)
+            && settings.1.is_multiple_of(PAGE)
+            && settings.1 >= 2 * PAGE,
         "memory.x: SETTINGS must be at least two whole 2 KiB pages"
     );
     assert!(

@@ -63,7 +63,10 @@ impl<const SIZE: usize> Default for RamFlash<SIZE> {
 impl<const SIZE: usize> RamFlash<SIZE> {
     /// Erased flash with the power on.
     pub const fn new() -> Self {
-        assert!(SIZE % PAGE_SIZE == 0 && SIZE > 0, "whole pages only");
+        assert!(
+            SIZE.is_multiple_of(PAGE_SIZE) && SIZE > 0,
+            "whole pages only"
+        );
         RamFlash {
             bytes: [0xFF; SIZE],
             steps: 0,
@@ -219,7 +222,7 @@ impl<const SIZE: usize> NorFlash for RamFlash<SIZE> {
 
     async fn write(&mut self, offset: u32, bytes: &[u8]) -> Result<(), Self::Error> {
         let range = self.range(offset, bytes.len())?;
-        if range.start % WORD_SIZE != 0 || bytes.len() % WORD_SIZE != 0 {
+        if !range.start.is_multiple_of(WORD_SIZE) || !bytes.len().is_multiple_of(WORD_SIZE) {
             return Err(RamFlashError::NotAligned);
         }
         for (i, word) in bytes.chunks_exact(WORD_SIZE).enumerate() {

@@ -36,8 +36,8 @@ impl Settings for TestConfig {
 
     fn encode(&self, out: &mut [u8]) -> usize {
         out[..4].copy_from_slice(&self.generation.to_le_bytes());
-        for i in 4..self.len {
-            out[i] = self.byte(i);
+        for (i, b) in out.iter_mut().enumerate().take(self.len).skip(4) {
+            *b = self.byte(i);
         }
         self.len.max(4)
     }
