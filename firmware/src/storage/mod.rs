@@ -168,6 +168,19 @@ pub enum StoreError<E> {
     Internal,
 }
 
+impl<E> StoreError<E> {
+    /// A short text for the log.
+    pub const fn as_str(&self) -> &'static str {
+        match self {
+            StoreError::Flash(_) => "flash error",
+            StoreError::Corrupted => "corrupted",
+            StoreError::TooLarge => "record too large",
+            StoreError::BadRegion => "region is not two pairs of whole flash pages",
+            StoreError::Internal => "storage layer error",
+        }
+    }
+}
+
 impl<E> From<sequential_storage::Error<E>> for StoreError<E> {
     fn from(e: sequential_storage::Error<E>) -> Self {
         match e {
