@@ -19,6 +19,7 @@ fn main() {
 mod image {
     use core::cell::RefCell;
     use core::mem::MaybeUninit;
+    use core::sync::atomic::{AtomicU32, Ordering};
 
     use cortex_m_rt::{ExceptionFrame, exception};
     use defmt::{error, info, warn};
@@ -120,6 +121,38 @@ mod image {
         fail(|| error!("hard fault at pc {=u32:#010x}", pc))
     }
 
+    /// Double ECC errors seen in the settings region (a program cut by a power loss can leave
+    /// one), for the log.
+    static SETTINGS_ECC_ERRORS: AtomicU32 = AtomicU32::new(0);
+
+    /// The L4 raises an NMI when a flash read hits a double ECC error. In the settings region
+    /// that is the trace of a torn write: clear it and return; the load completes with bad
+    /// data, which the store's CRCs reject. Anywhere else the program itself is damaged.
+    ///
+    /// An NMI can interrupt a critical section, so this handler touches only an atomic and
+    /// the FLASH registers; the failure path ignores that rule because it resets.
+    #[exception]
+    unsafe fn NonMaskableInt() {
+        let eccr = pac::FLASH.eccr().read();
+        if eccr.eccd() {
+            let bank_base = if eccr.bk_ecc() {
+                FLASH_BANK2
+            } else {
+                FLASH_BASE
+            };
+            let address = bank_base + eccr.addr_ecc();
+            // ECCD is write-1-to-clear.
+            pac::FLASH.eccr().modify(|w| w.set_eccd(true));
+            let settings = settings_region();
+            if (settings.start + FLASH_BASE..settings.end + FLASH_BASE).contains(&address) {
+                SETTINGS_ECC_ERRORS.fetch_add(1, Ordering::Relaxed);
+                return;
+            }
+            fail(|| error!("double ECC error in flash at {=u32:#010x}", address))
+        }
+        fail(|| error!("NMI"))
+    }
+
     /// HSI16 / 2 = 8 MHz PLL input (4..16 MHz allowed), x 20 = 160 MHz VCO (64..344 MHz),
     /// / 2 = 80 MHz SYSCLK, the L476's maximum; embassy sets 4 flash wait states for it.
     fn clock_config() -> embassy_stm32::Config {
@@ -139,13 +172,15 @@ mod image {
         config
     }
 
+    const FLASH_BASE: u32 = 0x0800_0000;
+    const FLASH_BANK2: u32 = 0x0808_0000;
+
     /// The settings region from memory.x, as offsets from the start of flash.
     fn settings_region() -> core::ops::Range<u32> {
         unsafe extern "C" {
             static __settings_start: u8;
             static __settings_end: u8;
         }
-        const FLASH_BASE: u32 = 0x0800_0000;
         // Only the addresses of these linker symbols are used, never their contents.
         let start = (&raw const __settings_start) as u32;
         let end = (&raw const __settings_end) as u32;
@@ -253,6 +288,13 @@ mod image {
                 Err(e) => warn!("settings: {}", e.as_str()),
             },
             Err(e) => error!("settings region: {}", e.as_str()),
+        }
+        let ecc_errors = SETTINGS_ECC_ERRORS.load(Ordering::Relaxed);
+        if ecc_errors > 0 {
+            warn!(
+                "settings: {} double ECC error(s) read (torn writes), skipped",
+                ecc_errors
+            );
         }
 
         let led = Output::new(p.PA5, Level::Low, Speed::Low);
