@@ -1,1 +1,2 @@
 //! Simulated power supplies and test harness for the plasma-bridge.
+pub mod decode;
