@@ -91,7 +91,9 @@ pub fn encode(address: u8, pdu: &[u8], out: &mut [u8]) -> Result<usize> {
     let (digits, end) = rest.split_at_mut(len - 3);
     end.copy_from_slice(b"\r\n");
     let sum = pdu.iter().fold(address, |s, &b| s.wrapping_add(b));
-    let bytes = core::iter::once(address).chain(pdu.iter().copied()).chain([sum.wrapping_neg()]);
+    let bytes = core::iter::once(address)
+        .chain(pdu.iter().copied())
+        .chain([sum.wrapping_neg()]);
     for (pair, byte) in digits.chunks_exact_mut(2).zip(bytes) {
         pair.copy_from_slice(&hex::encode_byte(byte));
     }
@@ -132,7 +134,12 @@ pub fn decode<'b>(input: &[u8], buf: &'b mut [u8]) -> Result<Frame<'b>> {
         // No LF yet: end the frame here.
         (_, None) => decoder.push(b'\n').unwrap_or(Err(Error::Truncated))?,
     };
-    let pdu = buf.get_mut(..frame.pdu.len()).ok_or(Error::BufferTooSmall)?;
+    let pdu = buf
+        .get_mut(..frame.pdu.len())
+        .ok_or(Error::BufferTooSmall)?;
     pdu.copy_from_slice(frame.pdu);
-    Ok(Frame { address: frame.address, pdu })
+    Ok(Frame {
+        address: frame.address,
+        pdu,
+    })
 }
