@@ -66,8 +66,15 @@ impl<'a> Frame<'a> {
 
 /// Number of characters [`encode`] writes for a PDU of `pdu_len` bytes.
 pub const fn encoded_len(pdu_len: usize) -> usize {
-    1 + 2 * (pdu_len + 2) + 2
+    // `:` + 2 digits per byte of (address, PDU, LRC) + CR LF; saturating, never panics.
+    pdu_len
+        .saturating_add(2)
+        .saturating_mul(2)
+        .saturating_add(3)
 }
+
+// The two limits agree.
+const _: () = assert!(encoded_len(MAX_PDU_LEN) == MAX_FRAME_CHARS);
 
 /// Encodes `:` + upper-case hex of (`address`, `pdu`, LRC) + CR LF into `out`; returns the
 /// number of characters written.
