@@ -66,8 +66,15 @@ impl<'a> Frame<'a> {
 
 /// Number of characters [`encode`] writes for a PDU of `pdu_len` bytes.
 pub const fn encoded_len(pdu_len: usize) -> usize {
-    1 + 2 * (pdu_len + 2) + 2
+    // `:` + 2 digits per byte of (address, PDU, LRC) + CR LF; saturating, never panics.
+    pdu_len
+        .saturating_add(2)
+        .saturating_mul(2)
+        .saturating_add(3)
 }
+
+// The two limits agree.
+const _: () = assert!(encoded_len(MAX_PDU_LEN) == MAX_FRAME_CHARS);
 
 /// Encodes `:` + upper-case hex of (`address`, `pdu`, LRC) + CR LF into `out`; returns the
 /// number of characters written.
@@ -91,7 +98,9 @@ pub fn encode(address: u8, pdu: &[u8], out: &mut [u8]) -> Result<usize> {
     let (digits, end) = rest.split_at_mut(len - 3);
     end.copy_from_slice(b"\r\n");
     let sum = pdu.iter().fold(address, |s, &b| s.wrapping_add(b));
-    let bytes = core::iter::once(address).chain(pdu.iter().copied()).chain([sum.wrapping_neg()]);
+    let bytes = core::iter::once(address)
+        .chain(pdu.iter().copied())
+        .chain([sum.wrapping_neg()]);
     for (pair, byte) in digits.chunks_exact_mut(2).zip(bytes) {
         pair.copy_from_slice(&hex::encode_byte(byte));
     }
@@ -132,7 +141,12 @@ pub fn decode<'b>(input: &[u8], buf: &'b mut [u8]) -> Result<Frame<'b>> {
         // No LF yet: end the frame here.
         (_, None) => decoder.push(b'\n').unwrap_or(Err(Error::Truncated))?,
     };
-    let pdu = buf.get_mut(..frame.pdu.len()).ok_or(Error::BufferTooSmall)?;
+    let pdu = buf
+        .get_mut(..frame.pdu.len())
+        .ok_or(Error::BufferTooSmall)?;
     pdu.copy_from_slice(frame.pdu);
-    Ok(Frame { address: frame.address, pdu })
+    Ok(Frame {
+        address: frame.address,
+        pdu,
+    })
 }

@@ -39,7 +39,10 @@ const fn build_class_table() -> [u8; 256] {
 /// The two upper-case characters of `byte`, high nibble first.
 #[inline]
 pub(crate) fn encode_byte(byte: u8) -> [u8; 2] {
-    [DIGITS[usize::from(byte >> 4)], DIGITS[usize::from(byte & 0x0F)]]
+    [
+        DIGITS[usize::from(byte >> 4)],
+        DIGITS[usize::from(byte & 0x0F)],
+    ]
 }
 
 #[cfg(test)]

@@ -11,7 +11,10 @@
 /// assert_eq!(lrc(&[0x01, 0x04, 0x30, 0x44, 0x00, 0x04]), 0x83);
 /// ```
 pub fn lrc(bytes: &[u8]) -> u8 {
-    bytes.iter().fold(0u8, |sum, &b| sum.wrapping_add(b)).wrapping_neg()
+    bytes
+        .iter()
+        .fold(0u8, |sum, &b| sum.wrapping_add(b))
+        .wrapping_neg()
 }
 
 #[cfg(test)]
@@ -35,7 +38,10 @@ mod tests {
         // 0xFF + 0x02 = 0x101: the manual's rule "subtract the last two digits from FF" then +1.
         assert_eq!(lrc(&[0xFF, 0x02]), 0xFF);
         // Fault log reply: 01 + 04 + 08 + 79 + 79 = 0xFF -> 0x01.
-        assert_eq!(lrc(&[0x01, 0x04, 0x08, 0x00, 0x79, 0x00, 0x79, 0, 0, 0, 0]), 0x01);
+        assert_eq!(
+            lrc(&[0x01, 0x04, 0x08, 0x00, 0x79, 0x00, 0x79, 0, 0, 0, 0]),
+            0x01
+        );
     }
 
     #[test]
@@ -46,7 +52,9 @@ mod tests {
 
     #[test]
     fn message_plus_lrc_sums_to_zero() {
-        let msg = [0x01, 0x10, 0x30, 0x80, 0x00, 0x03, 0x06, 0x00, 0x01, 0x0F, 0xC0, 0x00, 0x00];
+        let msg = [
+            0x01, 0x10, 0x30, 0x80, 0x00, 0x03, 0x06, 0x00, 0x01, 0x0F, 0xC0, 0x00, 0x00,
+        ];
         let sum = msg.iter().fold(lrc(&msg), |s: u8, &b| s.wrapping_add(b));
         assert_eq!(sum, 0);
         assert_eq!(lrc(&msg), 0x66);

@@ -28,11 +28,17 @@ fn lrc_of_seed(seed: &str) {
     assert_eq!(digits.len() % 2, 0, "{seed}: odd number of digits");
     let mut bytes = heapless::Vec::<u8, 256>::new();
     for i in (0..digits.len()).step_by(2) {
-        bytes.push(u8::from_str_radix(&digits[i..i + 2], 16).unwrap()).unwrap();
+        bytes
+            .push(u8::from_str_radix(&digits[i..i + 2], 16).unwrap())
+            .unwrap();
     }
     let (&found, body) = bytes.split_last().unwrap();
     let sum = body.iter().fold(0u8, |s, &b| s.wrapping_add(b));
-    assert_eq!(sum.wrapping_add(found), 0, "{seed}: LRC {found:02X} does not match");
+    assert_eq!(
+        sum.wrapping_add(found),
+        0,
+        "{seed}: LRC {found:02X} does not match"
+    );
     assert_eq!(lrc(body), found, "{seed}");
 }
 
@@ -64,7 +70,11 @@ fn seed_reply(seed: &str, address: u8, request: &Request<'_>, expected: Response
     let mut decoder = Decoder::new();
     let frame = decode_whole(&mut decoder, &text);
     assert_eq!(frame.address, address, "{seed}");
-    assert_eq!(validate_reply(request, address, &frame), Ok(expected), "{seed}");
+    assert_eq!(
+        validate_reply(request, address, &frame),
+        Ok(expected),
+        "{seed}"
+    );
 
     let mut out = [0u8; MAX_FRAME_CHARS];
     let n = encode_response(address, &expected, &mut out).unwrap();
@@ -84,7 +94,9 @@ fn read_input(start: u16, quantity: u16) -> Request<'static> {
 }
 
 fn input_values(words: &[u16]) -> Response<'_> {
-    Response::ReadInputRegisters { values: Registers::Words(words) }
+    Response::ReadInputRegisters {
+        values: Registers::Words(words),
+    }
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -117,8 +129,10 @@ fn sync_fault_log_reply() {
 /// Lines 572 and 587: Read Device Identification, one specific object (01, product code).
 #[test]
 fn sync_device_identification() {
-    let request =
-        Request::ReadDeviceIdentification { code: DeviceIdCode::Specific, object_id: 0x01 };
+    let request = Request::ReadDeviceIdentification {
+        code: DeviceIdCode::Specific,
+        object_id: 0x01,
+    };
     seed_request(":012B0E0401C1", 0x01, request);
 
     let seed = ":012B0E0481000101010630383133333504";
@@ -163,7 +177,12 @@ fn sync_device_identification() {
 #[test]
 fn sync_torch_and_supply_id() {
     seed_request(":010430000001CA", 0x01, read_input(0x3000, 1));
-    seed_reply(":0104020508EC", 0x01, &read_input(0x3000, 1), input_values(&[0x0508]));
+    seed_reply(
+        ":0104020508EC",
+        0x01,
+        &read_input(0x3000, 1),
+        input_values(&[0x0508]),
+    );
 }
 
 /// Lines 701 and 716: cartridge part number, "428936".
@@ -193,14 +212,19 @@ fn sync_permitted_settings() {
 /// Lines 833 and 851: enter remote mode, cut at 63 A (0x0FC0), automatic pressure.
 #[test]
 fn sync_remote_mode_63_amps() {
-    let request =
-        Request::WriteMultipleRegisters { start: 0x3080, values: Registers::Words(&[1, 0x0FC0, 0]) };
+    let request = Request::WriteMultipleRegisters {
+        start: 0x3080,
+        values: Registers::Words(&[1, 0x0FC0, 0]),
+    };
     seed_request(":0110308000030600010FC0000066", 0x01, request);
     seed_reply(
         ":0110308000033C",
         0x01,
         &request,
-        Response::WriteMultipleRegisters { start: 0x3080, quantity: 3 },
+        Response::WriteMultipleRegisters {
+            start: 0x3080,
+            quantity: 3,
+        },
     );
 }
 
@@ -208,16 +232,32 @@ fn sync_remote_mode_63_amps() {
 #[test]
 fn sync_active_fault() {
     seed_request(":0104301A0001B0", 0x01, read_input(0x301A, 1));
-    seed_reply(":01040201F404", 0x01, &read_input(0x301A, 1), input_values(&[0x01F4]));
+    seed_reply(
+        ":01040201F404",
+        0x01,
+        &read_input(0x301A, 1),
+        input_values(&[0x01F4]),
+    );
 }
 
 /// Lines 1038-1077: gas test coil 0x3180 on and off; the replies echo the requests.
 #[test]
 fn sync_gas_test_coil() {
     for (seed, on) in [(":01053180FF004A", true), (":01053180000049", false)] {
-        let request = Request::WriteSingleCoil { address: 0x3180, on };
+        let request = Request::WriteSingleCoil {
+            address: 0x3180,
+            on,
+        };
         seed_request(seed, 0x01, request);
-        seed_reply(seed, 0x01, &request, Response::WriteSingleCoil { address: 0x3180, on });
+        seed_reply(
+            seed,
+            0x01,
+            &request,
+            Response::WriteSingleCoil {
+                address: 0x3180,
+                on,
+            },
+        );
     }
 }
 
@@ -233,7 +273,10 @@ fn sync_quick_restart() {
         ":0110308E00022F",
         0x01,
         &request,
-        Response::WriteMultipleRegisters { start: 0x308E, quantity: 2 },
+        Response::WriteMultipleRegisters {
+            start: 0x308E,
+            quantity: 2,
+        },
     );
 }
 
@@ -245,14 +288,19 @@ fn sync_quick_restart() {
 #[test]
 fn sync_exit_remote_mode() {
     rejected_as_printed(":01103080000306000000000000036", Error::OddLength);
-    let request =
-        Request::WriteMultipleRegisters { start: 0x3080, values: Registers::Words(&[0, 0, 0]) };
+    let request = Request::WriteMultipleRegisters {
+        start: 0x3080,
+        values: Registers::Words(&[0, 0, 0]),
+    };
     seed_request(":0110308000030600000000000036", 0x01, request);
     seed_reply(
         ":0110308000033C",
         0x01,
         &request,
-        Response::WriteMultipleRegisters { start: 0x3080, quantity: 3 },
+        Response::WriteMultipleRegisters {
+            start: 0x3080,
+            quantity: 3,
+        },
     );
 }
 
@@ -288,7 +336,9 @@ fn sync_supply_counters() {
         ":010410D1B6000010EB0000D0750000D5AE00069B",
         0x01,
         &read_input(0x3028, 8),
-        input_values(&[0xD1B6, 0x0000, 0x10EB, 0x0000, 0xD075, 0x0000, 0xD5AE, 0x0006]),
+        input_values(&[
+            0xD1B6, 0x0000, 0x10EB, 0x0000, 0xD075, 0x0000, 0xD5AE, 0x0006,
+        ]),
     );
 }
 
@@ -341,12 +391,28 @@ fn sync_cartridge_name() {
 /// Lines 1700-1744: Start and Motion coils 0x3100/0x3101.
 #[test]
 fn sync_start_and_motion_coils() {
-    let one = Request::ReadCoils { start: 0x3100, quantity: 1 };
+    let one = Request::ReadCoils {
+        start: 0x3100,
+        quantity: 1,
+    };
     seed_request(":010131000001CC", 0x01, one);
-    seed_reply(":01010100FD", 0x01, &one, Response::ReadCoils { bits: &[0x00] });
-    let both = Request::ReadCoils { start: 0x3100, quantity: 2 };
+    seed_reply(
+        ":01010100FD",
+        0x01,
+        &one,
+        Response::ReadCoils { bits: &[0x00] },
+    );
+    let both = Request::ReadCoils {
+        start: 0x3100,
+        quantity: 2,
+    };
     seed_request(":010131000002CB", 0x01, both);
-    seed_reply(":01010103FA", 0x01, &both, Response::ReadCoils { bits: &[0x03] });
+    seed_reply(
+        ":01010103FA",
+        0x01,
+        &both,
+        Response::ReadCoils { bits: &[0x03] },
+    );
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -357,16 +423,38 @@ fn sync_start_and_motion_coils() {
 /// Line 122: LRC worked example, `:010108080001ED0D0A` ("the LRC is 0xED"): read coil 0x0808.
 #[test]
 fn legacy_lrc_example() {
-    seed_request(":010108080001ED", 0x01, Request::ReadCoils { start: 0x0808, quantity: 1 });
+    seed_request(
+        ":010108080001ED",
+        0x01,
+        Request::ReadCoils {
+            start: 0x0808,
+            quantity: 1,
+        },
+    );
 }
 
 /// Lines 151-156: cut_mode_force (0x2093) normal, CPA, gouge; replies echo the requests.
 #[test]
 fn legacy_cut_mode_force() {
-    for (seed, value) in [(":01062093000145", 1), (":01062093000244", 2), (":01062093000343", 3)] {
-        let request = Request::WriteSingleRegister { address: 0x2093, value };
+    for (seed, value) in [
+        (":01062093000145", 1),
+        (":01062093000244", 2),
+        (":01062093000343", 3),
+    ] {
+        let request = Request::WriteSingleRegister {
+            address: 0x2093,
+            value,
+        };
         seed_request(seed, 0x01, request);
-        seed_reply(seed, 0x01, &request, Response::WriteSingleRegister { address: 0x2093, value });
+        seed_reply(
+            seed,
+            0x01,
+            &request,
+            Response::WriteSingleRegister {
+                address: 0x2093,
+                value,
+            },
+        );
     }
 }
 
@@ -385,9 +473,20 @@ fn legacy_current_set_force() {
         (":010620941540F0", 0x1540), // 85 A
         (":010620940DE058", 0x0DE0), // 55.5 A
     ] {
-        let request = Request::WriteSingleRegister { address: 0x2094, value };
+        let request = Request::WriteSingleRegister {
+            address: 0x2094,
+            value,
+        };
         seed_request(seed, 0x01, request);
-        seed_reply(seed, 0x01, &request, Response::WriteSingleRegister { address: 0x2094, value });
+        seed_reply(
+            seed,
+            0x01,
+            &request,
+            Response::WriteSingleRegister {
+                address: 0x2094,
+                value,
+            },
+        );
     }
 }
 
@@ -395,9 +494,20 @@ fn legacy_current_set_force() {
 #[test]
 fn legacy_pressure_set_force() {
     for (seed, value) in [(":010620961680AD", 0x1680), (":01062096230020", 0x2300)] {
-        let request = Request::WriteSingleRegister { address: 0x2096, value };
+        let request = Request::WriteSingleRegister {
+            address: 0x2096,
+            value,
+        };
         seed_request(seed, 0x01, request);
-        seed_reply(seed, 0x01, &request, Response::WriteSingleRegister { address: 0x2096, value });
+        seed_reply(
+            seed,
+            0x01,
+            &request,
+            Response::WriteSingleRegister {
+                address: 0x2096,
+                value,
+            },
+        );
     }
 }
 
@@ -413,7 +523,12 @@ fn legacy_register_reads() {
     ] {
         let request_seed = request_seed.strip_suffix("0D0A").unwrap();
         seed_request(request_seed, 0x01, read_input(register, 1));
-        seed_reply(reply_seed, 0x01, &read_input(register, 1), input_values(&[value]));
+        seed_reply(
+            reply_seed,
+            0x01,
+            &read_input(register, 1),
+            input_values(&[value]),
+        );
     }
 }
 
@@ -440,9 +555,16 @@ fn legacy_arc_time() {
 /// LRC 0xEC, the same digits as the fragment, so it is restored with confidence.
 #[test]
 fn legacy_torch_index() {
-    let request = Request::ReadCoils { start: 0x0808, quantity: 2 };
+    let request = Request::ReadCoils {
+        start: 0x0808,
+        quantity: 2,
+    };
     seed_request(":010108080002EC", 0x01, request);
-    for (seed, bits) in [(":01010100FD", 0x00), (":01010101FC", 0x01), (":01010102FB", 0x02)] {
+    for (seed, bits) in [
+        (":01010100FD", 0x00),
+        (":01010101FC", 0x01),
+        (":01010102FB", 0x02),
+    ] {
         seed_reply(seed, 0x01, &request, Response::ReadCoils { bits: &[bits] });
     }
 }
@@ -492,11 +614,23 @@ fn one_shot_decode() {
     let frame = decode(b":0104020508ec", &mut buf).unwrap();
     assert_eq!((frame.address, frame.pdu), (1, &[4, 2, 5, 8][..]));
     assert_eq!(decode(b"0104020508EC\r\n", &mut buf), Err(Error::Malformed));
-    assert_eq!(decode(b":0104020508EC\r\n:", &mut buf), Err(Error::Malformed));
+    assert_eq!(
+        decode(b":0104020508EC\r\n:", &mut buf),
+        Err(Error::Malformed)
+    );
     assert_eq!(
         decode(b":0104020508ED", &mut buf),
-        Err(Error::BadChecksum { expected: 0xEC, found: 0xED })
+        Err(Error::BadChecksum {
+            expected: 0xEC,
+            found: 0xED
+        })
     );
-    assert_eq!(decode(b":0104080079007900000000001", &mut buf), Err(Error::OddLength));
-    assert_eq!(decode(b":0104020508EC", &mut buf[..2]), Err(Error::BufferTooSmall));
+    assert_eq!(
+        decode(b":0104080079007900000000001", &mut buf),
+        Err(Error::OddLength)
+    );
+    assert_eq!(
+        decode(b":0104020508EC", &mut buf[..2]),
+        Err(Error::BufferTooSmall)
+    );
 }

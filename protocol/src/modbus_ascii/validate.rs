@@ -26,7 +26,11 @@ pub fn validate_reply<'a>(
         return Err(Error::Mismatch);
     }
     let response = Response::parse(reply.pdu)?;
-    if answers(request, &response) { Ok(response) } else { Err(Error::Mismatch) }
+    if answers(request, &response) {
+        Ok(response)
+    } else {
+        Err(Error::Mismatch)
+    }
 }
 
 /// True when `response` is a reply to `request`, by function and contents.
@@ -45,19 +49,29 @@ fn answers(request: &Request<'_>, response: &Response<'_>) -> bool {
         }
         (
             Request::WriteSingleCoil { address, on },
-            Response::WriteSingleCoil { address: echo_address, on: echo_on },
+            Response::WriteSingleCoil {
+                address: echo_address,
+                on: echo_on,
+            },
         ) => address == echo_address && on == echo_on,
         (
             Request::WriteSingleRegister { address, value },
-            Response::WriteSingleRegister { address: echo_address, value: echo_value },
+            Response::WriteSingleRegister {
+                address: echo_address,
+                value: echo_value,
+            },
         ) => address == echo_address && value == echo_value,
         (
             Request::WriteMultipleRegisters { start, values },
-            Response::WriteMultipleRegisters { start: echo_start, quantity },
+            Response::WriteMultipleRegisters {
+                start: echo_start,
+                quantity,
+            },
         ) => start == echo_start && values.len() == usize::from(quantity),
-        (Request::ReadDeviceIdentification { code, .. }, Response::ReadDeviceIdentification(id)) => {
-            id.code == code
-        }
+        (
+            Request::ReadDeviceIdentification { code, .. },
+            Response::ReadDeviceIdentification(id),
+        ) => id.code == code,
         _ => false,
     }
 }
@@ -67,7 +81,10 @@ mod tests {
     use super::*;
     use crate::modbus_ascii::{DeviceIdCode, ExceptionCode, Registers};
 
-    const READ_FAULTS: Request<'static> = Request::ReadInputRegisters { start: 0x3044, quantity: 4 };
+    const READ_FAULTS: Request<'static> = Request::ReadInputRegisters {
+        start: 0x3044,
+        quantity: 4,
+    };
 
     fn frame(address: u8, pdu: &[u8]) -> Frame<'_> {
         Frame { address, pdu }
@@ -77,31 +94,58 @@ mod tests {
     fn matching_read() {
         let pdu = [0x04, 0x08, 0x00, 0x79, 0x00, 0x79, 0, 0, 0, 0];
         let r = validate_reply(&READ_FAULTS, 1, &frame(1, &pdu)).unwrap();
-        let Response::ReadInputRegisters { values } = r else { panic!("{r:?}") };
+        let Response::ReadInputRegisters { values } = r else {
+            panic!("{r:?}")
+        };
         assert!(values.iter().eq([0x79, 0x79, 0, 0]));
     }
 
     #[test]
     fn address_and_broadcast() {
         let pdu = [0x04, 0x08, 0x00, 0x79, 0x00, 0x79, 0, 0, 0, 0];
-        assert_eq!(validate_reply(&READ_FAULTS, 2, &frame(1, &pdu)), Err(Error::Mismatch));
-        assert_eq!(validate_reply(&READ_FAULTS, 0, &frame(0, &pdu)), Err(Error::Mismatch));
+        assert_eq!(
+            validate_reply(&READ_FAULTS, 2, &frame(1, &pdu)),
+            Err(Error::Mismatch)
+        );
+        assert_eq!(
+            validate_reply(&READ_FAULTS, 0, &frame(0, &pdu)),
+            Err(Error::Mismatch)
+        );
     }
 
     #[test]
     fn quantity_must_match() {
         let pdu = [0x04, 0x06, 0x00, 0x79, 0x00, 0x79, 0, 0];
-        assert_eq!(validate_reply(&READ_FAULTS, 1, &frame(1, &pdu)), Err(Error::Mismatch));
-        let holding = Request::ReadHoldingRegisters { start: 0x3044, quantity: 4 };
+        assert_eq!(
+            validate_reply(&READ_FAULTS, 1, &frame(1, &pdu)),
+            Err(Error::Mismatch)
+        );
+        let holding = Request::ReadHoldingRegisters {
+            start: 0x3044,
+            quantity: 4,
+        };
         let pdu = [0x04, 0x08, 0x00, 0x79, 0x00, 0x79, 0, 0, 0, 0];
         // Right size, wrong function.
-        assert_eq!(validate_reply(&holding, 1, &frame(1, &pdu)), Err(Error::Mismatch));
+        assert_eq!(
+            validate_reply(&holding, 1, &frame(1, &pdu)),
+            Err(Error::Mismatch)
+        );
     }
 
     #[test]
     fn coil_byte_count_is_rounded_up() {
-        for (quantity, bytes) in [(1u16, 1usize), (8, 1), (9, 2), (16, 2), (17, 3), (2000, 250)] {
-            let request = Request::ReadCoils { start: 0x3100, quantity };
+        for (quantity, bytes) in [
+            (1u16, 1usize),
+            (8, 1),
+            (9, 2),
+            (16, 2),
+            (17, 3),
+            (2000, 250),
+        ] {
+            let request = Request::ReadCoils {
+                start: 0x3100,
+                quantity,
+            };
             let mut pdu = [0u8; 252];
             pdu[0] = 0x01;
             pdu[1] = bytes as u8;
@@ -120,27 +164,42 @@ mod tests {
         let pdu = [0x84, 0x02];
         assert_eq!(
             validate_reply(&READ_FAULTS, 1, &frame(1, &pdu)),
-            Ok(Response::Exception { function: 0x04, code: ExceptionCode::IllegalDataAddress })
+            Ok(Response::Exception {
+                function: 0x04,
+                code: ExceptionCode::IllegalDataAddress
+            })
         );
         let pdu = [0x83, 0x02];
-        assert_eq!(validate_reply(&READ_FAULTS, 1, &frame(1, &pdu)), Err(Error::Mismatch));
+        assert_eq!(
+            validate_reply(&READ_FAULTS, 1, &frame(1, &pdu)),
+            Err(Error::Mismatch)
+        );
     }
 
     #[test]
     fn write_echoes() {
-        let coil = Request::WriteSingleCoil { address: 0x3180, on: true };
+        let coil = Request::WriteSingleCoil {
+            address: 0x3180,
+            on: true,
+        };
         assert!(validate_reply(&coil, 1, &frame(1, &[0x05, 0x31, 0x80, 0xFF, 0x00])).is_ok());
         let off = frame(1, &[0x05, 0x31, 0x80, 0x00, 0x00]);
         assert_eq!(validate_reply(&coil, 1, &off), Err(Error::Mismatch));
         let other = frame(1, &[0x05, 0x31, 0x81, 0xFF, 0x00]);
         assert_eq!(validate_reply(&coil, 1, &other), Err(Error::Mismatch));
 
-        let reg = Request::WriteSingleRegister { address: 0x2094, value: 0x1040 };
+        let reg = Request::WriteSingleRegister {
+            address: 0x2094,
+            value: 0x1040,
+        };
         assert!(validate_reply(&reg, 1, &frame(1, &[0x06, 0x20, 0x94, 0x10, 0x40])).is_ok());
         let wrong_value = frame(1, &[0x06, 0x20, 0x94, 0x10, 0x41]);
         assert_eq!(validate_reply(&reg, 1, &wrong_value), Err(Error::Mismatch));
         let wrong_address = frame(1, &[0x06, 0x20, 0x95, 0x10, 0x40]);
-        assert_eq!(validate_reply(&reg, 1, &wrong_address), Err(Error::Mismatch));
+        assert_eq!(
+            validate_reply(&reg, 1, &wrong_address),
+            Err(Error::Mismatch)
+        );
 
         let multi = Request::WriteMultipleRegisters {
             start: 0x3080,
@@ -155,16 +214,31 @@ mod tests {
 
     #[test]
     fn device_id_code() {
-        let request = Request::ReadDeviceIdentification { code: DeviceIdCode::Specific, object_id: 1 };
+        let request = Request::ReadDeviceIdentification {
+            code: DeviceIdCode::Specific,
+            object_id: 1,
+        };
         let pdu = [0x2B, 0x0E, 0x04, 0x81, 0x00, 0x01, 0x01, 0x01, 0x01, b'0'];
         assert!(validate_reply(&request, 1, &frame(1, &pdu)).is_ok());
-        let basic = Request::ReadDeviceIdentification { code: DeviceIdCode::Basic, object_id: 0 };
-        assert_eq!(validate_reply(&basic, 1, &frame(1, &pdu)), Err(Error::Mismatch));
+        let basic = Request::ReadDeviceIdentification {
+            code: DeviceIdCode::Basic,
+            object_id: 0,
+        };
+        assert_eq!(
+            validate_reply(&basic, 1, &frame(1, &pdu)),
+            Err(Error::Mismatch)
+        );
     }
 
     #[test]
     fn invalid_pdus_keep_their_error() {
-        assert_eq!(validate_reply(&READ_FAULTS, 1, &frame(1, &[0x04, 0x08])), Err(Error::Truncated));
-        assert_eq!(validate_reply(&READ_FAULTS, 1, &frame(1, &[0x07])), Err(Error::Unsupported));
+        assert_eq!(
+            validate_reply(&READ_FAULTS, 1, &frame(1, &[0x04, 0x08])),
+            Err(Error::Truncated)
+        );
+        assert_eq!(
+            validate_reply(&READ_FAULTS, 1, &frame(1, &[0x07])),
+            Err(Error::Unsupported)
+        );
     }
 }

@@ -121,10 +121,10 @@ impl ExceptionCode {
             ExceptionCode::GatewayPathUnavailable => {
                 "A gateway could not open a path to the target unit."
             }
-            ExceptionCode::GatewayTargetFailed => {
-                "A gateway got no reply from the target unit."
+            ExceptionCode::GatewayTargetFailed => "A gateway got no reply from the target unit.",
+            ExceptionCode::Other(_) => {
+                "The unit answered with an exception code Modbus does not define."
             }
-            ExceptionCode::Other(_) => "The unit answered with an exception code Modbus does not define.",
         }
     }
 }
@@ -177,7 +177,10 @@ mod tests {
         }
         assert_eq!(FunctionCode::from_u8(0x84), None);
         assert_eq!(FunctionCode::from_u8(0x02), None);
-        assert_eq!(FunctionCode::from_u8(0x10), Some(FunctionCode::WriteMultipleRegisters));
+        assert_eq!(
+            FunctionCode::from_u8(0x10),
+            Some(FunctionCode::WriteMultipleRegisters)
+        );
     }
 
     #[test]

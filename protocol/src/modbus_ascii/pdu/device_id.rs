@@ -24,7 +24,15 @@ impl<'a> DeviceIdentification<'a> {
         if data.first().is_some_and(|&mei| mei != MEI_READ_DEVICE_ID) {
             return Err(Error::Unsupported);
         }
-        let [_, code, conformity, more, next_object_id, object_count, ref objects @ ..] = *data
+        let [
+            _,
+            code,
+            conformity,
+            more,
+            next_object_id,
+            object_count,
+            ref objects @ ..,
+        ] = *data
         else {
             return Err(Error::Truncated);
         };
@@ -50,7 +58,10 @@ impl<'a> DeviceIdentification<'a> {
     /// For a parsed reply every object is complete. For a value built by hand with an
     /// inconsistent list, iteration stops at the first object that does not fit.
     pub fn objects(&self) -> DeviceObjects<'a> {
-        DeviceObjects { rest: self.objects, remaining: self.object_count }
+        DeviceObjects {
+            rest: self.objects,
+            remaining: self.object_count,
+        }
     }
 
     /// The value of object `id`, if the reply holds it.
@@ -59,7 +70,9 @@ impl<'a> DeviceIdentification<'a> {
     /// units report their family in the product code (e.g. `081335` for Powermax65/85/105
     /// SYNC).
     pub fn object(&self, id: u8) -> Option<&'a [u8]> {
-        self.objects().find(|&(object_id, _)| object_id == id).map(|(_, value)| value)
+        self.objects()
+            .find(|&(object_id, _)| object_id == id)
+            .map(|(_, value)| value)
     }
 
     /// Writes the whole reply PDU (function 0x2B included) into `out`; returns its length.
@@ -124,7 +137,11 @@ impl<'a> DeviceIdentification<'a> {
         w.u8(MEI_READ_DEVICE_ID)?;
         w.u8(self.code.to_u8())?;
         w.u8(self.conformity)?;
-        w.u8(if self.more_follows { MORE_FOLLOWS } else { NO_MORE })?;
+        w.u8(if self.more_follows {
+            MORE_FOLLOWS
+        } else {
+            NO_MORE
+        })?;
         w.u8(self.next_object_id)?;
         w.u8(self.object_count)
     }
@@ -139,7 +156,11 @@ fn check_objects(objects: &[u8], count: u8) -> Result<()> {
         };
         rest = tail.get(usize::from(len)..).ok_or(Error::Truncated)?;
     }
-    if rest.is_empty() { Ok(()) } else { Err(Error::Malformed) }
+    if rest.is_empty() {
+        Ok(())
+    } else {
+        Err(Error::Malformed)
+    }
 }
 
 /// Iterator over the `(id, value)` objects of a [`DeviceIdentification`].
@@ -225,7 +246,10 @@ mod tests {
         assert_eq!(id.object_count, 3);
         assert!(id.objects().eq(objects.iter().copied()));
         let mut again = [0u8; 64];
-        assert_eq!(Response::ReadDeviceIdentification(id).emit(&mut again), Ok(n));
+        assert_eq!(
+            Response::ReadDeviceIdentification(id).emit(&mut again),
+            Ok(n)
+        );
         assert_eq!(&again[..n], &out[..n]);
     }
 

@@ -2,8 +2,8 @@
 
 use super::wire::{Writer, check_quantity, coil_state, coil_value, exact_len, two_words};
 use super::{
-    DeviceIdCode, FunctionCode, MAX_READ_COILS, MAX_READ_REGISTERS, MAX_WRITE_REGISTERS,
-    Registers, Request,
+    DeviceIdCode, FunctionCode, MAX_READ_COILS, MAX_READ_REGISTERS, MAX_WRITE_REGISTERS, Registers,
+    Request,
 };
 use crate::{Error, Result};
 
@@ -64,10 +64,18 @@ impl<'a> Request<'a> {
             FunctionCode::EncapsulatedInterface => {
                 // Other MEI types (e.g. 0x0D, CANopen) exist but no Powermax uses them.
                 if data.first() != Some(&MEI_READ_DEVICE_ID) {
-                    return Err(if data.is_empty() { Error::Truncated } else { Error::Unsupported });
+                    return Err(if data.is_empty() {
+                        Error::Truncated
+                    } else {
+                        Error::Unsupported
+                    });
                 }
                 let [_, code, object_id] = *data else {
-                    return Err(if data.len() < 3 { Error::Truncated } else { Error::Malformed });
+                    return Err(if data.len() < 3 {
+                        Error::Truncated
+                    } else {
+                        Error::Malformed
+                    });
                 };
                 let code = DeviceIdCode::from_u8(code).ok_or(Error::Malformed)?;
                 Ok(Request::ReadDeviceIdentification { code, object_id })
@@ -136,10 +144,8 @@ impl<'a> Request<'a> {
 
 /// Number of registers in `values`, refusing a byte form with an odd length (half a register).
 pub(crate) fn register_count(values: &Registers<'_>) -> Result<u16> {
-    if let Registers::BigEndian(bytes) = values {
-        if bytes.len() % 2 != 0 {
-            return Err(Error::Malformed);
-        }
+    if matches!(values, Registers::BigEndian(bytes) if bytes.len() % 2 != 0) {
+        return Err(Error::Malformed);
     }
     u16::try_from(values.len()).map_err(|_| Error::Malformed)
 }
@@ -167,27 +173,45 @@ mod tests {
     fn every_function() {
         round_trip(
             &[0x01, 0x31, 0x00, 0x00, 0x02],
-            Request::ReadCoils { start: 0x3100, quantity: 2 },
+            Request::ReadCoils {
+                start: 0x3100,
+                quantity: 2,
+            },
         );
         round_trip(
             &[0x03, 0x20, 0x93, 0x00, 0x03],
-            Request::ReadHoldingRegisters { start: 0x2093, quantity: 3 },
+            Request::ReadHoldingRegisters {
+                start: 0x2093,
+                quantity: 3,
+            },
         );
         round_trip(
             &[0x04, 0x30, 0x44, 0x00, 0x04],
-            Request::ReadInputRegisters { start: 0x3044, quantity: 4 },
+            Request::ReadInputRegisters {
+                start: 0x3044,
+                quantity: 4,
+            },
         );
         round_trip(
             &[0x05, 0x31, 0x80, 0xFF, 0x00],
-            Request::WriteSingleCoil { address: 0x3180, on: true },
+            Request::WriteSingleCoil {
+                address: 0x3180,
+                on: true,
+            },
         );
         round_trip(
             &[0x05, 0x31, 0x80, 0x00, 0x00],
-            Request::WriteSingleCoil { address: 0x3180, on: false },
+            Request::WriteSingleCoil {
+                address: 0x3180,
+                on: false,
+            },
         );
         round_trip(
             &[0x06, 0x20, 0x94, 0x10, 0x40],
-            Request::WriteSingleRegister { address: 0x2094, value: 0x1040 },
+            Request::WriteSingleRegister {
+                address: 0x2094,
+                value: 0x1040,
+            },
         );
         round_trip(
             &[0x10, 0x30, 0x8E, 0x00, 0x02, 0x04, 0x04, 0x04, 0x06, 0x18],
@@ -198,7 +222,10 @@ mod tests {
         );
         round_trip(
             &[0x2B, 0x0E, 0x04, 0x01],
-            Request::ReadDeviceIdentification { code: DeviceIdCode::Specific, object_id: 1 },
+            Request::ReadDeviceIdentification {
+                code: DeviceIdCode::Specific,
+                object_id: 1,
+            },
         );
     }
 
@@ -216,9 +243,15 @@ mod tests {
         assert_eq!(read(0x01, 2001), Err(Error::Malformed));
 
         let mut out = [0u8; 8];
-        let too_many = Request::ReadInputRegisters { start: 0, quantity: 126 };
+        let too_many = Request::ReadInputRegisters {
+            start: 0,
+            quantity: 126,
+        };
         assert_eq!(too_many.emit(&mut out), Err(Error::Malformed));
-        let none = Request::ReadCoils { start: 0, quantity: 0 };
+        let none = Request::ReadCoils {
+            start: 0,
+            quantity: 0,
+        };
         assert_eq!(none.emit(&mut out), Err(Error::Malformed));
     }
 
@@ -240,15 +273,27 @@ mod tests {
             Err(Error::Malformed)
         );
         // Fewer data bytes than the byte count, and more.
-        assert_eq!(Request::parse(&[0x10, 0, 0, 0, 1, 2, 0]), Err(Error::Truncated));
-        assert_eq!(Request::parse(&[0x10, 0, 0, 0, 1, 2, 0, 0, 0]), Err(Error::Malformed));
+        assert_eq!(
+            Request::parse(&[0x10, 0, 0, 0, 1, 2, 0]),
+            Err(Error::Truncated)
+        );
+        assert_eq!(
+            Request::parse(&[0x10, 0, 0, 0, 1, 2, 0, 0, 0]),
+            Err(Error::Malformed)
+        );
         assert_eq!(Request::parse(&[0x10, 0, 0, 0, 1]), Err(Error::Truncated));
 
         let mut out = [0u8; 300];
-        let empty = Request::WriteMultipleRegisters { start: 0, values: Registers::Words(&[]) };
+        let empty = Request::WriteMultipleRegisters {
+            start: 0,
+            values: Registers::Words(&[]),
+        };
         assert_eq!(empty.emit(&mut out), Err(Error::Malformed));
         let words = [0u16; 124];
-        let big = Request::WriteMultipleRegisters { start: 0, values: Registers::Words(&words) };
+        let big = Request::WriteMultipleRegisters {
+            start: 0,
+            values: Registers::Words(&words),
+        };
         assert_eq!(big.emit(&mut out), Err(Error::Malformed));
         let odd = Request::WriteMultipleRegisters {
             start: 0,
@@ -259,29 +304,62 @@ mod tests {
 
     #[test]
     fn coil_value_must_be_ff00_or_0000() {
-        assert_eq!(Request::parse(&[0x05, 0x31, 0x80, 0x00, 0x01]), Err(Error::Malformed));
-        assert_eq!(Request::parse(&[0x05, 0x31, 0x80, 0x00, 0xFF]), Err(Error::Malformed));
-        assert_eq!(Request::parse(&[0x05, 0x31, 0x80, 0xFF, 0xFF]), Err(Error::Malformed));
+        assert_eq!(
+            Request::parse(&[0x05, 0x31, 0x80, 0x00, 0x01]),
+            Err(Error::Malformed)
+        );
+        assert_eq!(
+            Request::parse(&[0x05, 0x31, 0x80, 0x00, 0xFF]),
+            Err(Error::Malformed)
+        );
+        assert_eq!(
+            Request::parse(&[0x05, 0x31, 0x80, 0xFF, 0xFF]),
+            Err(Error::Malformed)
+        );
     }
 
     #[test]
     fn lengths_and_unknown_functions() {
         assert_eq!(Request::parse(&[]), Err(Error::Truncated));
-        assert_eq!(Request::parse(&[0x04, 0x30, 0x44, 0x00]), Err(Error::Truncated));
-        assert_eq!(Request::parse(&[0x04, 0x30, 0x44, 0x00, 0x04, 0x00]), Err(Error::Malformed));
-        assert_eq!(Request::parse(&[0x02, 0x00, 0x00, 0x00, 0x01]), Err(Error::Unsupported));
+        assert_eq!(
+            Request::parse(&[0x04, 0x30, 0x44, 0x00]),
+            Err(Error::Truncated)
+        );
+        assert_eq!(
+            Request::parse(&[0x04, 0x30, 0x44, 0x00, 0x04, 0x00]),
+            Err(Error::Malformed)
+        );
+        assert_eq!(
+            Request::parse(&[0x02, 0x00, 0x00, 0x00, 0x01]),
+            Err(Error::Unsupported)
+        );
         assert_eq!(Request::parse(&[0x84, 0x02]), Err(Error::Unsupported));
         assert_eq!(Request::parse(&[0x2B]), Err(Error::Truncated));
-        assert_eq!(Request::parse(&[0x2B, 0x0D, 0x00, 0x00]), Err(Error::Unsupported));
+        assert_eq!(
+            Request::parse(&[0x2B, 0x0D, 0x00, 0x00]),
+            Err(Error::Unsupported)
+        );
         assert_eq!(Request::parse(&[0x2B, 0x0E, 0x04]), Err(Error::Truncated));
-        assert_eq!(Request::parse(&[0x2B, 0x0E, 0x04, 0x01, 0x00]), Err(Error::Malformed));
-        assert_eq!(Request::parse(&[0x2B, 0x0E, 0x05, 0x01]), Err(Error::Malformed));
-        assert_eq!(Request::parse(&[0x2B, 0x0E, 0x00, 0x01]), Err(Error::Malformed));
+        assert_eq!(
+            Request::parse(&[0x2B, 0x0E, 0x04, 0x01, 0x00]),
+            Err(Error::Malformed)
+        );
+        assert_eq!(
+            Request::parse(&[0x2B, 0x0E, 0x05, 0x01]),
+            Err(Error::Malformed)
+        );
+        assert_eq!(
+            Request::parse(&[0x2B, 0x0E, 0x00, 0x01]),
+            Err(Error::Malformed)
+        );
     }
 
     #[test]
     fn emit_needs_room() {
-        let req = Request::ReadInputRegisters { start: 0x3044, quantity: 4 };
+        let req = Request::ReadInputRegisters {
+            start: 0x3044,
+            quantity: 4,
+        };
         let mut out = [0u8; 4];
         assert_eq!(req.emit(&mut out), Err(Error::BufferTooSmall));
         let mut out = [0u8; 5];

@@ -46,7 +46,10 @@ impl<'a> Response<'a> {
             }),
             FunctionCode::WriteSingleCoil => {
                 let (address, value) = two_words(data)?;
-                Ok(Response::WriteSingleCoil { address, on: coil_state(value)? })
+                Ok(Response::WriteSingleCoil {
+                    address,
+                    on: coil_state(value)?,
+                })
             }
             FunctionCode::WriteSingleRegister => {
                 let (address, value) = two_words(data)?;
@@ -57,9 +60,9 @@ impl<'a> Response<'a> {
                 check_quantity(quantity, MAX_WRITE_REGISTERS)?;
                 Ok(Response::WriteMultipleRegisters { start, quantity })
             }
-            FunctionCode::EncapsulatedInterface => {
-                Ok(Response::ReadDeviceIdentification(DeviceIdentification::parse(data)?))
-            }
+            FunctionCode::EncapsulatedInterface => Ok(Response::ReadDeviceIdentification(
+                DeviceIdentification::parse(data)?,
+            )),
         }
     }
 
@@ -71,9 +74,7 @@ impl<'a> Response<'a> {
             Response::ReadInputRegisters { .. } => FunctionCode::ReadInputRegisters.to_u8(),
             Response::WriteSingleCoil { .. } => FunctionCode::WriteSingleCoil.to_u8(),
             Response::WriteSingleRegister { .. } => FunctionCode::WriteSingleRegister.to_u8(),
-            Response::WriteMultipleRegisters { .. } => {
-                FunctionCode::WriteMultipleRegisters.to_u8()
-            }
+            Response::WriteMultipleRegisters { .. } => FunctionCode::WriteMultipleRegisters.to_u8(),
             Response::ReadDeviceIdentification(_) => FunctionCode::EncapsulatedInterface.to_u8(),
             Response::Exception { function, .. } => function | EXCEPTION_BIT,
         }
@@ -161,31 +162,50 @@ mod tests {
         round_trip(&[0x01, 0x01, 0x03], Response::ReadCoils { bits: &[0x03] });
         round_trip(
             &[0x03, 0x02, 0x00, 0x6F],
-            Response::ReadHoldingRegisters { values: Registers::Words(&[0x006F]) },
+            Response::ReadHoldingRegisters {
+                values: Registers::Words(&[0x006F]),
+            },
         );
         round_trip(
             &[0x04, 0x04, 0x10, 0x40, 0x23, 0xDD],
-            Response::ReadInputRegisters { values: Registers::Words(&[0x1040, 0x23DD]) },
+            Response::ReadInputRegisters {
+                values: Registers::Words(&[0x1040, 0x23DD]),
+            },
         );
         round_trip(
             &[0x05, 0x31, 0x80, 0xFF, 0x00],
-            Response::WriteSingleCoil { address: 0x3180, on: true },
+            Response::WriteSingleCoil {
+                address: 0x3180,
+                on: true,
+            },
         );
         round_trip(
             &[0x06, 0x20, 0x93, 0x00, 0x01],
-            Response::WriteSingleRegister { address: 0x2093, value: 1 },
+            Response::WriteSingleRegister {
+                address: 0x2093,
+                value: 1,
+            },
         );
         round_trip(
             &[0x10, 0x30, 0x80, 0x00, 0x03],
-            Response::WriteMultipleRegisters { start: 0x3080, quantity: 3 },
+            Response::WriteMultipleRegisters {
+                start: 0x3080,
+                quantity: 3,
+            },
         );
         round_trip(
             &[0x84, 0x02],
-            Response::Exception { function: 0x04, code: ExceptionCode::IllegalDataAddress },
+            Response::Exception {
+                function: 0x04,
+                code: ExceptionCode::IllegalDataAddress,
+            },
         );
         round_trip(
             &[0x90, 0x03],
-            Response::Exception { function: 0x10, code: ExceptionCode::IllegalDataValue },
+            Response::Exception {
+                function: 0x10,
+                code: ExceptionCode::IllegalDataValue,
+            },
         );
     }
 
@@ -196,15 +216,24 @@ mod tests {
         // An exception to a function this crate does not implement still parses.
         assert_eq!(
             Response::parse(&[0x82, 0x01]),
-            Ok(Response::Exception { function: 0x02, code: ExceptionCode::IllegalFunction })
+            Ok(Response::Exception {
+                function: 0x02,
+                code: ExceptionCode::IllegalFunction
+            })
         );
     }
 
     #[test]
     fn byte_counts() {
         // Count says 4, only 2 follow; count says 2, 3 follow.
-        assert_eq!(Response::parse(&[0x04, 0x04, 0x00, 0x01]), Err(Error::Truncated));
-        assert_eq!(Response::parse(&[0x04, 0x02, 0x00, 0x01, 0x02]), Err(Error::Malformed));
+        assert_eq!(
+            Response::parse(&[0x04, 0x04, 0x00, 0x01]),
+            Err(Error::Truncated)
+        );
+        assert_eq!(
+            Response::parse(&[0x04, 0x02, 0x00, 0x01, 0x02]),
+            Err(Error::Malformed)
+        );
         // Odd and zero register byte counts.
         assert_eq!(Response::parse(&[0x03, 0x01, 0x00]), Err(Error::Malformed));
         assert_eq!(Response::parse(&[0x04, 0x00]), Err(Error::Malformed));
@@ -224,10 +253,22 @@ mod tests {
 
     #[test]
     fn echo_checks() {
-        assert_eq!(Response::parse(&[0x05, 0x31, 0x80, 0x12, 0x34]), Err(Error::Malformed));
-        assert_eq!(Response::parse(&[0x10, 0x30, 0x80, 0x00, 0x00]), Err(Error::Malformed));
-        assert_eq!(Response::parse(&[0x10, 0x30, 0x80, 0x00, 0x7C]), Err(Error::Malformed));
-        assert_eq!(Response::parse(&[0x06, 0x30, 0x80, 0x00]), Err(Error::Truncated));
+        assert_eq!(
+            Response::parse(&[0x05, 0x31, 0x80, 0x12, 0x34]),
+            Err(Error::Malformed)
+        );
+        assert_eq!(
+            Response::parse(&[0x10, 0x30, 0x80, 0x00, 0x00]),
+            Err(Error::Malformed)
+        );
+        assert_eq!(
+            Response::parse(&[0x10, 0x30, 0x80, 0x00, 0x7C]),
+            Err(Error::Malformed)
+        );
+        assert_eq!(
+            Response::parse(&[0x06, 0x30, 0x80, 0x00]),
+            Err(Error::Truncated)
+        );
         assert_eq!(Response::parse(&[0x07, 0x00]), Err(Error::Unsupported));
         assert_eq!(Response::parse(&[]), Err(Error::Truncated));
     }
@@ -237,16 +278,28 @@ mod tests {
         let mut out = [0u8; 300];
         let no_bits = Response::ReadCoils { bits: &[] };
         assert_eq!(no_bits.emit(&mut out), Err(Error::Malformed));
-        let no_regs = Response::ReadInputRegisters { values: Registers::Words(&[]) };
+        let no_regs = Response::ReadInputRegisters {
+            values: Registers::Words(&[]),
+        };
         assert_eq!(no_regs.emit(&mut out), Err(Error::Malformed));
         let words = [0u16; 126];
-        let many = Response::ReadHoldingRegisters { values: Registers::Words(&words) };
+        let many = Response::ReadHoldingRegisters {
+            values: Registers::Words(&words),
+        };
         assert_eq!(many.emit(&mut out), Err(Error::Malformed));
-        let odd = Response::ReadHoldingRegisters { values: Registers::BigEndian(&[0, 1, 2]) };
+        let odd = Response::ReadHoldingRegisters {
+            values: Registers::BigEndian(&[0, 1, 2]),
+        };
         assert_eq!(odd.emit(&mut out), Err(Error::Malformed));
-        let zero = Response::WriteMultipleRegisters { start: 0, quantity: 0 };
+        let zero = Response::WriteMultipleRegisters {
+            start: 0,
+            quantity: 0,
+        };
         assert_eq!(zero.emit(&mut out), Err(Error::Malformed));
-        let short = Response::WriteSingleRegister { address: 0, value: 0 };
+        let short = Response::WriteSingleRegister {
+            address: 0,
+            value: 0,
+        };
         assert_eq!(short.emit(&mut out[..4]), Err(Error::BufferTooSmall));
     }
 }

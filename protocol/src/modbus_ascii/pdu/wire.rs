@@ -69,8 +69,14 @@ impl<'a> Writer<'a> {
     }
 
     pub(crate) fn bytes(&mut self, bytes: &[u8]) -> Result<()> {
-        let end = self.len.checked_add(bytes.len()).ok_or(Error::BufferTooSmall)?;
-        let slot = self.out.get_mut(self.len..end).ok_or(Error::BufferTooSmall)?;
+        let end = self
+            .len
+            .checked_add(bytes.len())
+            .ok_or(Error::BufferTooSmall)?;
+        let slot = self
+            .out
+            .get_mut(self.len..end)
+            .ok_or(Error::BufferTooSmall)?;
         slot.copy_from_slice(bytes);
         self.len = end;
         Ok(())
@@ -90,7 +96,10 @@ mod tests {
     fn two_words_lengths() {
         assert_eq!(two_words(&[0x30, 0x44, 0x00, 0x04]), Ok((0x3044, 4)));
         assert_eq!(two_words(&[0x30, 0x44, 0x00]), Err(Error::Truncated));
-        assert_eq!(two_words(&[0x30, 0x44, 0x00, 0x04, 0x00]), Err(Error::Malformed));
+        assert_eq!(
+            two_words(&[0x30, 0x44, 0x00, 0x04, 0x00]),
+            Err(Error::Malformed)
+        );
     }
 
     #[test]
