@@ -5,3 +5,4 @@
 
 pub mod time;
 pub mod port;
+pub mod link;
