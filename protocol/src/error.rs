@@ -39,7 +39,10 @@ impl fmt::Display for Error {
             Error::NonHex => f.write_str("non-hex character"),
             Error::OddLength => f.write_str("odd number of hex characters"),
             Error::BadChecksum { expected, found } => {
-                write!(f, "bad checksum: expected {expected:02X}, found {found:02X}")
+                write!(
+                    f,
+                    "bad checksum: expected {expected:02X}, found {found:02X}"
+                )
             }
             Error::Overlong => f.write_str("frame too long"),
             Error::Malformed => f.write_str("malformed field"),
