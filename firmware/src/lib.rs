@@ -1,8 +1,17 @@
 //! The bridge's behaviour, free of any HAL: built and tested on the host.
+//!
+//! Every piece is a sans-IO state machine that takes `now` and events and returns actions, so
+//! the board glue (src/bin) and the host simulators drive exactly the same code.
+//!
+//! - [`io`]: torch-safe discrete I/O (START interlocks, ARC_OK, READY, FAULT) and the
+//!   independent [`io::SafetyMonitor`] used by every scenario test.
+//! - [`port`]: UART settings the link asks for.
+//! - [`time`]: caller-supplied monotonic time.
 #![cfg_attr(not(test), no_std)]
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
-pub mod time;
+pub mod io;
 pub mod port;
 pub mod link;
+pub mod time;

@@ -1,0 +1,949 @@
+//! The CNC text commands: one line in, one typed [`Command`] out.
+
+use super::error::ParseError;
+use super::number::{Amps, NumberError, Pressure, Psi, parse_fixed};
+
+/// Power supply operating mode.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Mode {
+    /// Normal cutting.
+    Cut,
+    /// Continuous pilot arc (cutting expanded or perforated metal on supplies that call it so).
+    Cpa,
+    /// Expanded-metal mode.
+    Expanded,
+    /// Gouging.
+    Gouge,
+}
+
+impl Mode {
+    /// Every mode.
+    pub const ALL: [Mode; 4] = [Mode::Cut, Mode::Cpa, Mode::Expanded, Mode::Gouge];
+    /// The accepted words, as written in an error reply.
+    pub const EXPECTED: &'static str = "CUT|CPA|EXPANDED|GOUGE";
+
+    /// The word used in commands and replies.
+    pub const fn name(self) -> &'static str {
+        match self {
+            Mode::Cut => "CUT",
+            Mode::Cpa => "CPA",
+            Mode::Expanded => "EXPANDED",
+            Mode::Gouge => "GOUGE",
+        }
+    }
+
+    /// The mode for a word, case-insensitive. No aliases: one word per mode.
+    pub fn from_name(word: &str) -> Option<Mode> {
+        Mode::ALL
+            .into_iter()
+            .find(|m| m.name().eq_ignore_ascii_case(word))
+    }
+}
+
+/// Inlet gases of HPR / MaxPro200 supplies: the CNC-selectable entries of the HPR manual's
+/// table VI (gas type codes). Codes 0 (no gas) and 9, 10, 12 (internal marking modes, "not
+/// used by CNC") are left out.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Gas {
+    /// Oxygen, code 1.
+    O2,
+    /// Methane, code 2.
+    Ch4,
+    /// Argon-hydrogen, code 3.
+    H35,
+    /// H5, code 4.
+    H5,
+    /// Air, code 5.
+    Air,
+    /// Nitrogen, code 6.
+    N2,
+    /// Argon, code 7.
+    Ar,
+    /// N95, code 8.
+    N95,
+    /// F5, code 11.
+    F5,
+}
+
+impl Gas {
+    /// Every gas.
+    pub const ALL: [Gas; 9] = [
+        Gas::O2,
+        Gas::Ch4,
+        Gas::H35,
+        Gas::H5,
+        Gas::Air,
+        Gas::N2,
+        Gas::Ar,
+        Gas::N95,
+        Gas::F5,
+    ];
+    /// The accepted words, as written in an error reply.
+    pub const EXPECTED: &'static str = "O2|CH4|H35|H5|AIR|N2|AR|N95|F5";
+
+    /// The word used in commands and replies.
+    pub const fn name(self) -> &'static str {
+        match self {
+            Gas::O2 => "O2",
+            Gas::Ch4 => "CH4",
+            Gas::H35 => "H35",
+            Gas::H5 => "H5",
+            Gas::Air => "AIR",
+            Gas::N2 => "N2",
+            Gas::Ar => "AR",
+            Gas::N95 => "N95",
+            Gas::F5 => "F5",
+        }
+    }
+
+    /// The HPR gas type code (table VI).
+    pub const fn hpr_code(self) -> u8 {
+        match self {
+            Gas::O2 => 1,
+            Gas::Ch4 => 2,
+            Gas::H35 => 3,
+            Gas::H5 => 4,
+            Gas::Air => 5,
+            Gas::N2 => 6,
+            Gas::Ar => 7,
+            Gas::N95 => 8,
+            Gas::F5 => 11,
+        }
+    }
+
+    /// The gas for an HPR gas type code (`None` for 0, 9, 10, 12 and unknown codes).
+    pub fn from_hpr_code(code: u8) -> Option<Gas> {
+        Gas::ALL.into_iter().find(|g| g.hpr_code() == code)
+    }
+
+    /// The gas for a word, case-insensitive.
+    pub fn from_name(word: &str) -> Option<Gas> {
+        Gas::ALL
+            .into_iter()
+            .find(|g| g.name().eq_ignore_ascii_case(word))
+    }
+}
+
+/// A setting of the bridge, read and written with `CONFIG`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[allow(missing_docs)] // each variant is documented by its `name()`
+pub enum ConfigKey {
+    Protocol,
+    Address,
+    Parity,
+    StopBits,
+    TimeoutMs,
+    Retries,
+    PollMs,
+    InterlockFault,
+    InterlockLink,
+    ArcOkDebounceMs,
+    TransferTimeoutMs,
+    TransferTimeoutDropsStart,
+    Events,
+    HprId,
+}
+
+impl ConfigKey {
+    /// Every key, in the order `CONFIG` lists them.
+    pub const ALL: [ConfigKey; 14] = [
+        ConfigKey::Protocol,
+        ConfigKey::Address,
+        ConfigKey::Parity,
+        ConfigKey::StopBits,
+        ConfigKey::TimeoutMs,
+        ConfigKey::Retries,
+        ConfigKey::PollMs,
+        ConfigKey::InterlockFault,
+        ConfigKey::InterlockLink,
+        ConfigKey::ArcOkDebounceMs,
+        ConfigKey::TransferTimeoutMs,
+        ConfigKey::TransferTimeoutDropsStart,
+        ConfigKey::Events,
+        ConfigKey::HprId,
+    ];
+
+    /// The key as written in commands and replies (lower case, `snake_case`).
+    pub const fn name(self) -> &'static str {
+        match self {
+            ConfigKey::Protocol => "protocol",
+            ConfigKey::Address => "address",
+            ConfigKey::Parity => "parity",
+            ConfigKey::StopBits => "stop_bits",
+            ConfigKey::TimeoutMs => "timeout_ms",
+            ConfigKey::Retries => "retries",
+            ConfigKey::PollMs => "poll_ms",
+            ConfigKey::InterlockFault => "interlock_fault",
+            ConfigKey::InterlockLink => "interlock_link",
+            ConfigKey::ArcOkDebounceMs => "arc_ok_debounce_ms",
+            ConfigKey::TransferTimeoutMs => "transfer_timeout_ms",
+            ConfigKey::TransferTimeoutDropsStart => "transfer_timeout_drops_start",
+            ConfigKey::Events => "events",
+            ConfigKey::HprId => "hpr_id",
+        }
+    }
+
+    /// The key for a word, case-insensitive.
+    pub fn from_name(word: &str) -> Option<ConfigKey> {
+        ConfigKey::ALL
+            .into_iter()
+            .find(|k| k.name().eq_ignore_ascii_case(word))
+    }
+}
+
+/// The forms of `CONFIG`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum ConfigCommand<'a> {
+    /// `CONFIG`: list every setting.
+    Show,
+    /// `CONFIG <key>`: one setting.
+    Get(ConfigKey),
+    /// `CONFIG <key> <value>`: change one setting (the value is checked by the firmware).
+    Set {
+        /// The setting.
+        key: ConfigKey,
+        /// The value as typed (one word, original case).
+        value: &'a str,
+    },
+    /// `CONFIG SAVE`: store the settings in flash.
+    Save,
+}
+
+/// One command from the CNC. Borrowed text (`RAW`, `CONFIG` values) points into the line.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Command<'a> {
+    /// `HELP`: list the commands.
+    Help,
+    /// `ID`: identify the bridge and the power supply.
+    Id,
+    /// `STATUS`: state, setpoints, actual values.
+    Status,
+    /// `LIMITS`: the connected supply's setpoint ranges.
+    Limits,
+    /// `FAULT`: the current fault.
+    Fault,
+    /// `FAULTLOG`: recent faults.
+    FaultLog,
+    /// `COUNTERS`: arc-on time, starts, errors.
+    Counters,
+    /// `CARTRIDGE`: consumable cartridge data (Powermax SYNC).
+    Cartridge,
+    /// `SET MODE <mode>`.
+    SetMode(Mode),
+    /// `SET AMPS <A>`.
+    SetAmps(Amps),
+    /// `SET PSI <psi|AUTO>`.
+    SetPsi(Pressure),
+    /// `SET PROCESS <mode> <A> <psi|AUTO>`: all three in one remote-mode write.
+    SetProcess {
+        /// Operating mode.
+        mode: Mode,
+        /// Current.
+        amps: Amps,
+        /// Pressure.
+        pressure: Pressure,
+    },
+    /// `REMOTE OFF`: hand control back to the supply's front panel.
+    RemoteOff,
+    /// `GASTEST ON|OFF`.
+    GasTest(bool),
+    /// `RESTART`: quick restart (Powermax SYNC).
+    Restart,
+    /// `GASES <plasma> <shield>` (HPR, MaxPro200).
+    Gases {
+        /// Plasma gas.
+        plasma: Gas,
+        /// Shield gas.
+        shield: Gas,
+    },
+    /// `CORNER <percent>`: corner current, 50..=100 % (HPR).
+    Corner(u8),
+    /// `RESET`: clear a shutdown error (HPR software reset).
+    Reset,
+    /// `CLEARWARN`: acknowledge warnings.
+    ClearWarn,
+    /// `EVENTS ON|OFF`: unsolicited `!` event lines.
+    Events(bool),
+    /// `CONFIG ...`.
+    Config(ConfigCommand<'a>),
+    /// `RAW <frame>`: send a frame to the supply (checked against the allow-list by the
+    /// firmware). The frame is the rest of the line, spaces included, original case.
+    Raw(&'a str),
+    /// `TORCH ON|OFF`: simulator only.
+    Torch(bool),
+}
+
+/// Corner current bounds (HPR command 095: "corner current percent (50 - 100%)").
+const CORNER_MIN: u8 = 50;
+const CORNER_MAX: u8 = 100;
+
+fn is_blank(c: char) -> bool {
+    c == ' ' || c == '\t'
+}
+
+/// The words of a line, with access to the unsplit remainder.
+struct Args<'a> {
+    rest: &'a str,
+}
+
+impl<'a> Args<'a> {
+    fn next(&mut self) -> Option<&'a str> {
+        let s = self.rest.trim_start_matches(is_blank);
+        if s.is_empty() {
+            self.rest = s;
+            return None;
+        }
+        let (word, rest) = s.split_at(s.find(is_blank).unwrap_or(s.len()));
+        self.rest = rest;
+        Some(word)
+    }
+
+    fn expect(&mut self, what: &'static str) -> Result<&'a str, ParseError> {
+        self.next().ok_or(ParseError::MissingArgument { what })
+    }
+
+    fn end(&mut self) -> Result<(), ParseError> {
+        match self.next() {
+            Some(_) => Err(ParseError::UnexpectedArgument),
+            None => Ok(()),
+        }
+    }
+
+    fn remainder(&mut self) -> &'a str {
+        core::mem::take(&mut self.rest).trim_matches(is_blank)
+    }
+}
+
+fn is(word: &str, keyword: &str) -> bool {
+    word.eq_ignore_ascii_case(keyword)
+}
+
+fn on_off(args: &mut Args<'_>, what: &'static str) -> Result<bool, ParseError> {
+    let word = args.expect(what)?;
+    if is(word, "ON") {
+        Ok(true)
+    } else if is(word, "OFF") {
+        Ok(false)
+    } else {
+        Err(ParseError::BadKeyword {
+            what,
+            expected: "ON|OFF",
+        })
+    }
+}
+
+fn mode(args: &mut Args<'_>) -> Result<Mode, ParseError> {
+    Mode::from_name(args.expect("mode")?).ok_or(ParseError::BadKeyword {
+        what: "mode",
+        expected: Mode::EXPECTED,
+    })
+}
+
+fn gas(args: &mut Args<'_>, what: &'static str) -> Result<Gas, ParseError> {
+    Gas::from_name(args.expect(what)?).ok_or(ParseError::BadKeyword {
+        what,
+        expected: Gas::EXPECTED,
+    })
+}
+
+fn number_error(error: NumberError, what: &'static str, range: &'static str) -> ParseError {
+    match error {
+        NumberError::Syntax => ParseError::BadNumber { what },
+        NumberError::TooLarge => ParseError::OutOfRange { what, range },
+        NumberError::Inexact => ParseError::NotMultiple {
+            what,
+            step: if what == "amps" { "1/64" } else { "1/128" },
+        },
+    }
+}
+
+fn amps(args: &mut Args<'_>) -> Result<Amps, ParseError> {
+    const WHAT: &str = "amps";
+    let raw =
+        parse_fixed(args.expect(WHAT)?, 64).map_err(|e| number_error(e, WHAT, Amps::RANGE_TEXT))?;
+    let out_of_range = ParseError::OutOfRange {
+        what: WHAT,
+        range: Amps::RANGE_TEXT,
+    };
+    let amps = Amps::from_64ths(u16::try_from(raw).map_err(|_| out_of_range)?);
+    if amps < Amps::MIN || amps > Amps::MAX {
+        return Err(out_of_range);
+    }
+    Ok(amps)
+}
+
+fn pressure(args: &mut Args<'_>) -> Result<Pressure, ParseError> {
+    const WHAT: &str = "psi";
+    let word = args.expect(WHAT)?;
+    if is(word, "AUTO") {
+        return Ok(Pressure::Auto);
+    }
+    let out_of_range = ParseError::OutOfRange {
+        what: WHAT,
+        range: Psi::RANGE_TEXT,
+    };
+    let raw = parse_fixed(word, 128).map_err(|e| match e {
+        NumberError::Syntax => ParseError::BadKeyword {
+            what: WHAT,
+            expected: "a number or AUTO",
+        },
+        other => number_error(other, WHAT, Psi::RANGE_TEXT),
+    })?;
+    let psi = Psi::from_128ths(u16::try_from(raw).map_err(|_| out_of_range)?);
+    if psi < Psi::MIN || psi > Psi::MAX {
+        return Err(out_of_range);
+    }
+    Ok(Pressure::Psi(psi))
+}
+
+fn corner(args: &mut Args<'_>) -> Result<u8, ParseError> {
+    const WHAT: &str = "percent";
+    const RANGE: &str = "50..100";
+    let raw = parse_fixed(args.expect(WHAT)?, 1).map_err(|e| match e {
+        NumberError::Inexact => ParseError::NotMultiple {
+            what: WHAT,
+            step: "1",
+        },
+        other => number_error(other, WHAT, RANGE),
+    })?;
+    match u8::try_from(raw) {
+        Ok(p) if (CORNER_MIN..=CORNER_MAX).contains(&p) => Ok(p),
+        _ => Err(ParseError::OutOfRange {
+            what: WHAT,
+            range: RANGE,
+        }),
+    }
+}
+
+fn set(args: &mut Args<'_>) -> Result<Command<'static>, ParseError> {
+    const WHAT: &str = "SET parameter";
+    const EXPECTED: &str = "MODE|AMPS|PSI|PROCESS";
+    let word = args
+        .next()
+        .ok_or(ParseError::MissingArgument { what: WHAT })?;
+    let command = if is(word, "MODE") {
+        Command::SetMode(mode(args)?)
+    } else if is(word, "AMPS") {
+        Command::SetAmps(amps(args)?)
+    } else if is(word, "PSI") {
+        Command::SetPsi(pressure(args)?)
+    } else if is(word, "PROCESS") {
+        Command::SetProcess {
+            mode: mode(args)?,
+            amps: amps(args)?,
+            pressure: pressure(args)?,
+        }
+    } else {
+        return Err(ParseError::BadKeyword {
+            what: WHAT,
+            expected: EXPECTED,
+        });
+    };
+    Ok(command)
+}
+
+fn config<'a>(args: &mut Args<'a>) -> Result<ConfigCommand<'a>, ParseError> {
+    let Some(word) = args.next() else {
+        return Ok(ConfigCommand::Show);
+    };
+    if is(word, "SAVE") {
+        return Ok(ConfigCommand::Save);
+    }
+    let key = ConfigKey::from_name(word).ok_or(ParseError::BadKeyword {
+        what: "config key",
+        expected: "SAVE or a key listed by CONFIG",
+    })?;
+    Ok(match args.next() {
+        None => ConfigCommand::Get(key),
+        Some(value) => ConfigCommand::Set { key, value },
+    })
+}
+
+/// Commands that take no argument.
+const PLAIN_COMMANDS: [(&str, Command<'static>); 11] = [
+    ("HELP", Command::Help),
+    ("ID", Command::Id),
+    ("STATUS", Command::Status),
+    ("LIMITS", Command::Limits),
+    ("FAULT", Command::Fault),
+    ("FAULTLOG", Command::FaultLog),
+    ("COUNTERS", Command::Counters),
+    ("CARTRIDGE", Command::Cartridge),
+    ("RESTART", Command::Restart),
+    ("RESET", Command::Reset),
+    ("CLEARWARN", Command::ClearWarn),
+];
+
+impl<'a> Command<'a> {
+    /// Parse one line (without its terminator). Keywords are case-insensitive; words are
+    /// separated by spaces or tabs.
+    ///
+    /// ```
+    /// use plasma_protocol::cnc::command::{Command, Mode};
+    /// use plasma_protocol::cnc::{ErrorCode, ParseError};
+    ///
+    /// let cmd = Command::parse("set process cut 55.5 auto")?;
+    /// let Command::SetProcess { mode, amps, .. } = cmd else { unreachable!() };
+    /// assert_eq!(mode, Mode::Cut);
+    /// assert_eq!(amps.as_64ths(), 3552); // 55.5 A x 64, exactly
+    ///
+    /// let err = Command::parse("SET AMPS 500").unwrap_err();
+    /// assert_eq!(err.code(), ErrorCode::Range);
+    /// # Ok::<(), ParseError>(())
+    /// ```
+    pub fn parse(line: &'a str) -> Result<Command<'a>, ParseError> {
+        let mut args = Args { rest: line };
+        let word = args.next().ok_or(ParseError::Empty)?;
+        if let Some((_, command)) = PLAIN_COMMANDS.iter().find(|(name, _)| is(word, name)) {
+            args.end()?;
+            return Ok(*command);
+        }
+        let command = if is(word, "SET") {
+            set(&mut args)?
+        } else if is(word, "REMOTE") {
+            let what = "REMOTE argument";
+            let arg = args.expect(what)?;
+            if !is(arg, "OFF") {
+                return Err(ParseError::BadKeyword {
+                    what,
+                    expected: "OFF",
+                });
+            }
+            Command::RemoteOff
+        } else if is(word, "GASTEST") {
+            Command::GasTest(on_off(&mut args, "GASTEST argument")?)
+        } else if is(word, "EVENTS") {
+            Command::Events(on_off(&mut args, "EVENTS argument")?)
+        } else if is(word, "TORCH") {
+            Command::Torch(on_off(&mut args, "TORCH argument")?)
+        } else if is(word, "GASES") {
+            Command::Gases {
+                plasma: gas(&mut args, "plasma gas")?,
+                shield: gas(&mut args, "shield gas")?,
+            }
+        } else if is(word, "CORNER") {
+            Command::Corner(corner(&mut args)?)
+        } else if is(word, "CONFIG") {
+            Command::Config(config(&mut args)?)
+        } else if is(word, "RAW") {
+            let frame = args.remainder();
+            if frame.is_empty() {
+                return Err(ParseError::MissingArgument { what: "frame" });
+            }
+            return Ok(Command::Raw(frame));
+        } else {
+            return Err(ParseError::UnknownCommand);
+        };
+        args.end()?;
+        Ok(command)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::ErrorCode;
+    use super::*;
+    use core::fmt::Write;
+
+    fn amps(a: f64) -> Amps {
+        Amps::from_64ths((a * 64.0) as u16)
+    }
+
+    fn psi(p: f64) -> Pressure {
+        Pressure::Psi(Psi::from_128ths((p * 128.0) as u16))
+    }
+
+    fn err(line: &str) -> ParseError {
+        Command::parse(line).unwrap_err()
+    }
+
+    fn text(e: ParseError) -> heapless::String<96> {
+        let mut s = heapless::String::new();
+        write!(s, "{} {}", e.code(), e).unwrap();
+        s
+    }
+
+    #[test]
+    fn plain_commands_in_any_case() {
+        let cases = [
+            ("HELP", Command::Help),
+            ("id", Command::Id),
+            ("Status", Command::Status),
+            ("LIMITS", Command::Limits),
+            ("fault", Command::Fault),
+            ("FaultLog", Command::FaultLog),
+            ("COUNTERS", Command::Counters),
+            ("cartridge", Command::Cartridge),
+            ("RESTART", Command::Restart),
+            ("reset", Command::Reset),
+            ("ClearWarn", Command::ClearWarn),
+            ("  status\t", Command::Status),
+        ];
+        for (line, command) in cases {
+            assert_eq!(Command::parse(line), Ok(command), "{line}");
+        }
+        for line in [
+            "HELP me",
+            "id 1",
+            "STATUS x",
+            "restart now",
+            "CLEARWARN all",
+        ] {
+            assert_eq!(err(line), ParseError::UnexpectedArgument, "{line}");
+        }
+    }
+
+    #[test]
+    fn unknown_and_empty() {
+        assert_eq!(err("FLY"), ParseError::UnknownCommand);
+        assert_eq!(err("STATUSX"), ParseError::UnknownCommand);
+        assert_eq!(err("   "), ParseError::Empty);
+        assert_eq!(err(""), ParseError::Empty);
+        assert_eq!(err("\u{e9}tat"), ParseError::UnknownCommand);
+        assert_eq!(text(err("FLY")), "SYNTAX unknown command");
+    }
+
+    #[test]
+    fn set_mode() {
+        assert_eq!(
+            Command::parse("SET MODE CUT"),
+            Ok(Command::SetMode(Mode::Cut))
+        );
+        assert_eq!(
+            Command::parse("set mode cpa"),
+            Ok(Command::SetMode(Mode::Cpa))
+        );
+        assert_eq!(
+            Command::parse("SET MODE Expanded"),
+            Ok(Command::SetMode(Mode::Expanded))
+        );
+        assert_eq!(
+            Command::parse("SET MODE GOUGE"),
+            Ok(Command::SetMode(Mode::Gouge))
+        );
+        assert_eq!(
+            err("SET MODE"),
+            ParseError::MissingArgument { what: "mode" }
+        );
+        assert_eq!(
+            text(err("SET MODE MARK")),
+            "SYNTAX mode: expected CUT|CPA|EXPANDED|GOUGE"
+        );
+        assert_eq!(err("SET MODE CUT GOUGE"), ParseError::UnexpectedArgument);
+        assert_eq!(text(err("SET")), "SYNTAX missing SET parameter");
+        assert_eq!(
+            text(err("SET VOLTS 5")),
+            "SYNTAX SET parameter: expected MODE|AMPS|PSI|PROCESS"
+        );
+    }
+
+    #[test]
+    fn set_amps_exact_decimals_and_bounds() {
+        assert_eq!(
+            Command::parse("SET AMPS 45"),
+            Ok(Command::SetAmps(amps(45.0)))
+        );
+        assert_eq!(
+            Command::parse("set amps 55.5"),
+            Ok(Command::SetAmps(amps(55.5)))
+        );
+        assert_eq!(
+            Command::parse("SET AMPS 45.5"),
+            Ok(Command::SetAmps(Amps::from_64ths(2912)))
+        );
+        assert_eq!(
+            Command::parse("SET AMPS 5"),
+            Ok(Command::SetAmps(Amps::MIN))
+        );
+        assert_eq!(
+            Command::parse("SET AMPS 400.0"),
+            Ok(Command::SetAmps(Amps::MAX))
+        );
+        assert_eq!(
+            text(err("SET AMPS 400.015625")),
+            "RANGE amps out of range 5..400"
+        );
+        assert_eq!(
+            text(err("SET AMPS 4.984375")),
+            "RANGE amps out of range 5..400"
+        );
+        assert_eq!(
+            text(err("SET AMPS 99999999")),
+            "RANGE amps out of range 5..400"
+        );
+        assert_eq!(text(err("SET AMPS 1024")), "RANGE amps out of range 5..400");
+        assert_eq!(
+            text(err("SET AMPS 45.1")),
+            "RANGE amps must be a multiple of 1/64"
+        );
+        assert_eq!(text(err("SET AMPS -5")), "SYNTAX amps: not a number");
+        assert_eq!(text(err("SET AMPS AUTO")), "SYNTAX amps: not a number");
+        assert_eq!(text(err("SET AMPS")), "SYNTAX missing amps");
+        assert_eq!(err("SET AMPS 45 46"), ParseError::UnexpectedArgument);
+    }
+
+    #[test]
+    fn set_psi() {
+        assert_eq!(
+            Command::parse("SET PSI AUTO"),
+            Ok(Command::SetPsi(Pressure::Auto))
+        );
+        assert_eq!(
+            Command::parse("set psi auto"),
+            Ok(Command::SetPsi(Pressure::Auto))
+        );
+        assert_eq!(
+            Command::parse("SET PSI 72.5"),
+            Ok(Command::SetPsi(psi(72.5)))
+        );
+        assert_eq!(
+            Command::parse("SET PSI 0.9921875"),
+            Err(ParseError::OutOfRange {
+                what: "psi",
+                range: "1..150"
+            })
+        );
+        assert_eq!(text(err("SET PSI 0")), "RANGE psi out of range 1..150");
+        assert_eq!(text(err("SET PSI 150.5")), "RANGE psi out of range 1..150");
+        assert_eq!(
+            text(err("SET PSI 72.001")),
+            "RANGE psi must be a multiple of 1/128"
+        );
+        assert_eq!(
+            text(err("SET PSI high")),
+            "SYNTAX psi: expected a number or AUTO"
+        );
+        assert_eq!(text(err("SET PSI")), "SYNTAX missing psi");
+    }
+
+    #[test]
+    fn set_process() {
+        assert_eq!(
+            Command::parse("SET PROCESS CUT 45 AUTO"),
+            Ok(Command::SetProcess {
+                mode: Mode::Cut,
+                amps: amps(45.0),
+                pressure: Pressure::Auto
+            })
+        );
+        assert_eq!(
+            Command::parse("set process gouge 55.5 68.25"),
+            Ok(Command::SetProcess {
+                mode: Mode::Gouge,
+                amps: amps(55.5),
+                pressure: psi(68.25)
+            })
+        );
+        assert_eq!(text(err("SET PROCESS CUT 45")), "SYNTAX missing psi");
+        assert_eq!(text(err("SET PROCESS CUT")), "SYNTAX missing amps");
+        assert_eq!(text(err("SET PROCESS")), "SYNTAX missing mode");
+        assert_eq!(
+            text(err("SET PROCESS 45 CUT AUTO")),
+            "SYNTAX mode: expected CUT|CPA|EXPANDED|GOUGE"
+        );
+        assert_eq!(
+            text(err("SET PROCESS CUT 401 AUTO")),
+            "RANGE amps out of range 5..400"
+        );
+        assert_eq!(
+            err("SET PROCESS CUT 45 AUTO X"),
+            ParseError::UnexpectedArgument
+        );
+    }
+
+    #[test]
+    fn switches() {
+        assert_eq!(Command::parse("REMOTE OFF"), Ok(Command::RemoteOff));
+        assert_eq!(Command::parse("remote off"), Ok(Command::RemoteOff));
+        assert_eq!(
+            text(err("REMOTE ON")),
+            "SYNTAX REMOTE argument: expected OFF"
+        );
+        assert_eq!(text(err("REMOTE")), "SYNTAX missing REMOTE argument");
+        assert_eq!(err("REMOTE OFF NOW"), ParseError::UnexpectedArgument);
+        for (word, make) in [
+            ("GASTEST", Command::GasTest as fn(bool) -> Command<'static>),
+            ("EVENTS", Command::Events),
+            ("TORCH", Command::Torch),
+        ] {
+            let mut line = heapless::String::<32>::new();
+            write!(line, "{word} on").unwrap();
+            assert_eq!(Command::parse(&line), Ok(make(true)));
+            line.clear();
+            write!(line, "{word} OFF").unwrap();
+            assert_eq!(Command::parse(&line), Ok(make(false)));
+            line.clear();
+            write!(line, "{word} maybe").unwrap();
+            assert!(matches!(
+                err(&line),
+                ParseError::BadKeyword {
+                    expected: "ON|OFF",
+                    ..
+                }
+            ));
+            assert!(matches!(err(word), ParseError::MissingArgument { .. }));
+        }
+        assert_eq!(
+            text(err("GASTEST 1")),
+            "SYNTAX GASTEST argument: expected ON|OFF"
+        );
+        assert_eq!(err("TORCH ON ON"), ParseError::UnexpectedArgument);
+    }
+
+    #[test]
+    fn gases_and_corner() {
+        assert_eq!(
+            Command::parse("GASES O2 AIR"),
+            Ok(Command::Gases {
+                plasma: Gas::O2,
+                shield: Gas::Air
+            })
+        );
+        assert_eq!(
+            Command::parse("gases h35 n2"),
+            Ok(Command::Gases {
+                plasma: Gas::H35,
+                shield: Gas::N2
+            })
+        );
+        assert_eq!(text(err("GASES O2")), "SYNTAX missing shield gas");
+        assert_eq!(text(err("GASES")), "SYNTAX missing plasma gas");
+        assert_eq!(
+            text(err("GASES CO2 AIR")),
+            "SYNTAX plasma gas: expected O2|CH4|H35|H5|AIR|N2|AR|N95|F5"
+        );
+        assert_eq!(err("GASES O2 AIR N2"), ParseError::UnexpectedArgument);
+        assert_eq!(Command::parse("CORNER 75"), Ok(Command::Corner(75)));
+        assert_eq!(Command::parse("corner 50"), Ok(Command::Corner(50)));
+        assert_eq!(Command::parse("CORNER 100"), Ok(Command::Corner(100)));
+        assert_eq!(text(err("CORNER 49")), "RANGE percent out of range 50..100");
+        assert_eq!(
+            text(err("CORNER 300")),
+            "RANGE percent out of range 50..100"
+        );
+        assert_eq!(
+            text(err("CORNER 75.5")),
+            "RANGE percent must be a multiple of 1"
+        );
+        assert_eq!(text(err("CORNER x")), "SYNTAX percent: not a number");
+        assert_eq!(text(err("CORNER")), "SYNTAX missing percent");
+    }
+
+    #[test]
+    fn gas_table_matches_hpr_table_vi() {
+        let codes: [(Gas, u8); 9] = [
+            (Gas::O2, 1),
+            (Gas::Ch4, 2),
+            (Gas::H35, 3),
+            (Gas::H5, 4),
+            (Gas::Air, 5),
+            (Gas::N2, 6),
+            (Gas::Ar, 7),
+            (Gas::N95, 8),
+            (Gas::F5, 11),
+        ];
+        for (gas, code) in codes {
+            assert_eq!(gas.hpr_code(), code);
+            assert_eq!(Gas::from_hpr_code(code), Some(gas));
+            assert_eq!(Gas::from_name(gas.name()), Some(gas));
+        }
+        for code in [0, 9, 10, 12, 13, 255] {
+            assert_eq!(Gas::from_hpr_code(code), None);
+        }
+    }
+
+    #[test]
+    fn config_forms() {
+        assert_eq!(
+            Command::parse("CONFIG"),
+            Ok(Command::Config(ConfigCommand::Show))
+        );
+        assert_eq!(
+            Command::parse("config save"),
+            Ok(Command::Config(ConfigCommand::Save))
+        );
+        assert_eq!(
+            Command::parse("CONFIG TIMEOUT_MS"),
+            Ok(Command::Config(ConfigCommand::Get(ConfigKey::TimeoutMs)))
+        );
+        assert_eq!(
+            Command::parse("config parity Even"),
+            Ok(Command::Config(ConfigCommand::Set {
+                key: ConfigKey::Parity,
+                value: "Even"
+            }))
+        );
+        assert_eq!(
+            text(err("CONFIG colour red")),
+            "SYNTAX config key: expected SAVE or a key listed by CONFIG"
+        );
+        assert_eq!(err("CONFIG address 1 2"), ParseError::UnexpectedArgument);
+        assert_eq!(err("CONFIG SAVE NOW"), ParseError::UnexpectedArgument);
+        for key in ConfigKey::ALL {
+            assert_eq!(ConfigKey::from_name(key.name()), Some(key));
+            let mut line = heapless::String::<64>::new();
+            write!(line, "CONFIG {} 7", key.name().to_ascii_uppercase_str()).unwrap();
+            assert_eq!(
+                Command::parse(&line),
+                Ok(Command::Config(ConfigCommand::Set { key, value: "7" }))
+            );
+        }
+    }
+
+    trait Upper {
+        fn to_ascii_uppercase_str(&self) -> heapless::String<32>;
+    }
+    impl Upper for str {
+        fn to_ascii_uppercase_str(&self) -> heapless::String<32> {
+            self.chars().map(|c| c.to_ascii_uppercase()).collect()
+        }
+    }
+
+    #[test]
+    fn raw_keeps_the_rest_of_the_line() {
+        assert_eq!(Command::parse("RAW >00494<"), Ok(Command::Raw(">00494<")));
+        assert_eq!(
+            Command::parse("raw   >07855 45 35 25 50 50AB<  "),
+            Ok(Command::Raw(">07855 45 35 25 50 50AB<"))
+        );
+        assert_eq!(
+            Command::parse("RAW :0103209400037A"),
+            Ok(Command::Raw(":0103209400037A"))
+        );
+        assert_eq!(text(err("RAW")), "SYNTAX missing frame");
+        assert_eq!(text(err("RAW \t ")), "SYNTAX missing frame");
+    }
+
+    #[test]
+    fn codes() {
+        assert_eq!(ParseError::TooLong.code(), ErrorCode::TooLong);
+        assert_eq!(ParseError::Binary.code(), ErrorCode::Binary);
+        assert_eq!(
+            text(ParseError::TooLong),
+            "TOOLONG line longer than 128 characters"
+        );
+        assert_eq!(
+            text(ParseError::Binary),
+            "BINARY non-printable byte in line"
+        );
+        let words: heapless::Vec<&str, 8> = ErrorCode::ALL.iter().map(|c| c.as_str()).collect();
+        assert_eq!(
+            &words[..],
+            &[
+                "SYNTAX",
+                "RANGE",
+                "TOOLONG",
+                "BINARY",
+                "STATE",
+                "LINK",
+                "UNSUPPORTED",
+                "DENIED"
+            ]
+        );
+    }
+}
