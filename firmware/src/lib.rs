@@ -12,6 +12,6 @@
 #![warn(missing_docs)]
 
 pub mod io;
-pub mod port;
 pub mod link;
+pub mod port;
 pub mod time;

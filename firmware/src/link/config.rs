@@ -101,7 +101,8 @@ impl LinkConfig {
         if self.hpr_id > Self::MAX_HPR_ID {
             return Err(ConfigError::HprIdOutOfRange { id: self.hpr_id });
         }
-        if self.failures_before_down == 0 || self.failures_before_down > Self::MAX_FAILURES_BEFORE_DOWN
+        if self.failures_before_down == 0
+            || self.failures_before_down > Self::MAX_FAILURES_BEFORE_DOWN
         {
             return Err(ConfigError::FailuresBeforeDownOutOfRange {
                 count: self.failures_before_down,
@@ -220,29 +221,56 @@ mod tests {
         let base = LinkConfig::default();
         let check = |config: LinkConfig| config.validate().err();
         assert_eq!(
-            check(LinkConfig { node_address: 0, ..base }),
+            check(LinkConfig {
+                node_address: 0,
+                ..base
+            }),
             Some(ConfigError::NodeAddressZero)
         );
         assert_eq!(
-            check(LinkConfig { response_timeout: Duration::from_millis(59), ..base }),
+            check(LinkConfig {
+                response_timeout: Duration::from_millis(59),
+                ..base
+            }),
             Some(ConfigError::ResponseTimeoutOutOfRange { ms: 59 })
         );
         assert_eq!(
-            check(LinkConfig { response_timeout: Duration::from_millis(1001), ..base }),
+            check(LinkConfig {
+                response_timeout: Duration::from_millis(1001),
+                ..base
+            }),
             Some(ConfigError::ResponseTimeoutOutOfRange { ms: 1001 })
         );
-        assert_eq!(check(LinkConfig { response_timeout: Duration::from_millis(60), ..base }), None);
-        assert_eq!(check(LinkConfig { response_timeout: Duration::from_millis(1000), ..base }), None);
+        assert_eq!(
+            check(LinkConfig {
+                response_timeout: Duration::from_millis(60),
+                ..base
+            }),
+            None
+        );
+        assert_eq!(
+            check(LinkConfig {
+                response_timeout: Duration::from_millis(1000),
+                ..base
+            }),
+            None
+        );
         assert_eq!(
             check(LinkConfig { retries: 6, ..base }),
             Some(ConfigError::TooManyRetries { retries: 6 })
         );
         assert_eq!(
-            check(LinkConfig { poll_interval: Duration::from_millis(1500), ..base }),
+            check(LinkConfig {
+                poll_interval: Duration::from_millis(1500),
+                ..base
+            }),
             Some(ConfigError::PollIntervalOutOfRange { ms: 1500 })
         );
         assert_eq!(
-            check(LinkConfig { slow_data_interval: Duration::from_millis(500), ..base }),
+            check(LinkConfig {
+                slow_data_interval: Duration::from_millis(500),
+                ..base
+            }),
             Some(ConfigError::SlowDataIntervalOutOfRange { ms: 500 })
         );
         assert_eq!(
@@ -250,7 +278,10 @@ mod tests {
             Some(ConfigError::HprIdOutOfRange { id: 4 })
         );
         assert_eq!(
-            check(LinkConfig { failures_before_down: 0, ..base }),
+            check(LinkConfig {
+                failures_before_down: 0,
+                ..base
+            }),
             Some(ConfigError::FailuresBeforeDownOutOfRange { count: 0 })
         );
     }

@@ -130,9 +130,15 @@ mod tests {
         let mut d = Diagnostics::default();
         d.record_error(TransactionError::Timeout);
         d.record_error(TransactionError::BadChecksum);
-        d.record_error(TransactionError::Exception(ExceptionCode::IllegalDataAddress));
-        d.record_error(TransactionError::Exception(ExceptionCode::IllegalDataAddress));
-        d.record_error(TransactionError::Exception(ExceptionCode::GatewayTargetFailed));
+        d.record_error(TransactionError::Exception(
+            ExceptionCode::IllegalDataAddress,
+        ));
+        d.record_error(TransactionError::Exception(
+            ExceptionCode::IllegalDataAddress,
+        ));
+        d.record_error(TransactionError::Exception(
+            ExceptionCode::GatewayTargetFailed,
+        ));
         d.record_error(TransactionError::Exception(ExceptionCode::Other(0x00)));
         d.record_error(TransactionError::Exception(ExceptionCode::Other(0x40)));
         d.record_error(TransactionError::Mismatch);

@@ -180,8 +180,7 @@ impl<T> Transaction<T> {
         ready_at: Instant,
         quiet: Duration,
     ) -> Result<Self, FrameTooLong> {
-        let mut transaction =
-            Self::new(tag, frame, ready_at, quiet, 0, RetrySpacing::Immediate)?;
+        let mut transaction = Self::new(tag, frame, ready_at, quiet, 0, RetrySpacing::Immediate)?;
         transaction.expects_reply = false;
         Ok(transaction)
     }
@@ -253,8 +252,10 @@ impl<T> Transaction<T> {
             return Outcome::Failed(error);
         }
         let first = self.first_sent.unwrap_or(now);
-        let planned =
-            first + self.spacing.attempt_offset(self.attempts_sent, self.timeout, self.retries);
+        let planned = first
+            + self
+                .spacing
+                .attempt_offset(self.attempts_sent, self.timeout, self.retries);
         self.phase = Phase::Ready {
             at: if planned > now { planned } else { now },
         };
@@ -300,8 +301,7 @@ mod tests {
 
     #[test]
     fn modbus_timeouts_retry_immediately_then_fail() {
-        let mut t =
-            Transaction::new((), b"abc", ms(0), T100, 2, RetrySpacing::Immediate).unwrap();
+        let mut t = Transaction::new((), b"abc", ms(0), T100, 2, RetrySpacing::Immediate).unwrap();
         assert_eq!(t.poll_transmit(ms(0)), Some(&b"abc"[..]));
         assert_eq!(t.poll_transmit(ms(1)), None, "one attempt at a time");
         assert_eq!(t.poll_at(), ms(100));
@@ -325,8 +325,15 @@ mod tests {
 
     #[test]
     fn hpr_retries_follow_the_schedule_even_after_early_bad_replies() {
-        let mut t = Transaction::new((), b">00090<", ms(0), T100, 2, RetrySpacing::RideThroughBlackout)
-            .unwrap();
+        let mut t = Transaction::new(
+            (),
+            b">00090<",
+            ms(0),
+            T100,
+            2,
+            RetrySpacing::RideThroughBlackout,
+        )
+        .unwrap();
         assert!(t.poll_transmit(ms(10)).is_some());
         // A corrupted reply arrives after 5 ms: the retry still waits for its slot.
         assert_eq!(
@@ -350,13 +357,14 @@ mod tests {
 
     #[test]
     fn final_answers_are_not_retried() {
-        let mut t =
-            Transaction::new((), b"x", ms(0), T100, 2, RetrySpacing::Immediate).unwrap();
+        let mut t = Transaction::new((), b"x", ms(0), T100, 2, RetrySpacing::Immediate).unwrap();
         t.poll_transmit(ms(0));
         let exception = TransactionError::Exception(ExceptionCode::IllegalDataAddress);
-        assert_eq!(t.attempt_failed(ms(5), exception), Outcome::Failed(exception));
-        let mut t =
-            Transaction::new((), b"x", ms(0), T100, 2, RetrySpacing::Immediate).unwrap();
+        assert_eq!(
+            t.attempt_failed(ms(5), exception),
+            Outcome::Failed(exception)
+        );
+        let mut t = Transaction::new((), b"x", ms(0), T100, 2, RetrySpacing::Immediate).unwrap();
         t.poll_transmit(ms(0));
         assert_eq!(
             t.attempt_failed(ms(5), TransactionError::HprUnknownCommand501),
@@ -366,8 +374,8 @@ mod tests {
 
     #[test]
     fn requests_without_reply_complete_after_the_quiet_time() {
-        let mut t = Transaction::without_reply((), b">0869E<", ms(0), Duration::from_millis(20))
-            .unwrap();
+        let mut t =
+            Transaction::without_reply((), b">0869E<", ms(0), Duration::from_millis(20)).unwrap();
         assert!(t.poll_transmit(ms(0)).is_some());
         assert!(!t.is_awaiting_reply());
         assert_eq!(t.handle_timeout(ms(19)), None);
