@@ -6,13 +6,16 @@
 //! - [`modbus_ascii`]: Modbus ASCII framing (LRC, encoder, streaming decoder) and the PDUs the
 //!   Powermax units use.
 //! - [`powermax`]: register and coil map of legacy Powermax (0x2xxx) and Powermax SYNC (0x3xxx)
-//!   units, fixed-point scaling and the fault/model/cartridge tables.
+//!   units (values in [`units`]) and the fault/model/cartridge tables.
 //! - [`hpr`]: the `>ID data CK<` protocol of HyPerformance HPR and MaxPro200 units.
+//! - [`units`]: exact fixed-point amps (1/64 A), psi (1/128 psi) and pressure settings, shared
+//!   by the Powermax registers and the CNC commands.
 //! - [`cnc`]: what the CNC sends: Phoenix serial-messaging framing and the text commands.
 #![no_std]
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
+mod decimal;
 mod error;
 pub use error::{Error, Result};
 
@@ -20,3 +23,4 @@ pub mod cnc;
 pub mod hpr;
 pub mod modbus_ascii;
 pub mod powermax;
+pub mod units;

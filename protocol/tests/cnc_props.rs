@@ -148,11 +148,11 @@ proptest! {
 
     #[test]
     fn amps_and_psi_round_trip_through_their_text(a in 320u16..=25600, p in 128u16..=19200) {
-        let line = format!("SET PROCESS CUT {} {}", Amps::from_64ths(a), Psi::from_128ths(p));
+        let line = format!("SET PROCESS CUT {} {}", Amps::from_raw(a), Psi::from_raw(p));
         match Command::parse(&line) {
             Ok(Command::SetProcess { amps, pressure, .. }) => {
-                prop_assert_eq!(amps.as_64ths(), a);
-                prop_assert_eq!(pressure.as_128ths(), p);
+                prop_assert_eq!(amps.raw(), a);
+                prop_assert_eq!(pressure.raw(), p);
             }
             other => prop_assert!(false, "{line}: {other:?}"),
         }

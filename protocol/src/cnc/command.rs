@@ -1,7 +1,21 @@
 //! The CNC text commands: one line in, one typed [`Command`] out.
 
 use super::error::ParseError;
-use super::number::{Amps, NumberError, Pressure, Psi, parse_fixed};
+use crate::units::{self, Amps, Pressure, Psi, Rounding};
+
+/// Lowest current any supported supply accepts (HPR: 5 A).
+pub const AMPS_MIN: Amps = Amps::from_raw(5 * Amps::STEPS_PER_UNIT);
+/// Highest current any supported supply accepts (HPR400: 400 A).
+pub const AMPS_MAX: Amps = Amps::from_raw(400 * Amps::STEPS_PER_UNIT);
+/// [`AMPS_MIN`]..[`AMPS_MAX`] as written in an error reply.
+pub const AMPS_RANGE_TEXT: &str = "5..400";
+
+/// Lowest explicit pressure (0 means automatic on a Powermax: write `AUTO`).
+pub const PSI_MIN: Psi = Psi::from_raw(Psi::STEPS_PER_UNIT);
+/// Highest pressure accepted (above any supported supply's setpoint range).
+pub const PSI_MAX: Psi = Psi::from_raw(150 * Psi::STEPS_PER_UNIT);
+/// [`PSI_MIN`]..[`PSI_MAX`] as written in an error reply.
+pub const PSI_RANGE_TEXT: &str = "1..150";
 
 /// Power supply operating mode.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -351,28 +365,46 @@ fn gas(args: &mut Args<'_>, what: &'static str) -> Result<Gas, ParseError> {
     })
 }
 
-fn number_error(error: NumberError, what: &'static str, range: &'static str) -> ParseError {
-    match error {
-        NumberError::Syntax => ParseError::BadNumber { what },
-        NumberError::TooLarge => ParseError::OutOfRange { what, range },
-        NumberError::Inexact => ParseError::NotMultiple {
-            what,
-            step: if what == "amps" { "1/64" } else { "1/128" },
-        },
+/// A CNC number: unsigned decimal text, exactly `bits` fraction bits, with bounds checked by the
+/// caller. Every refusal becomes the reply that says what was wrong.
+fn number(
+    word: &str,
+    bits: u32,
+    what: &'static str,
+    range: &'static str,
+    step: &'static str,
+) -> Result<i16, ParseError> {
+    // The CNC grammar has no sign (no setpoint is negative); `-5` is a syntax error, not a
+    // value out of range.
+    if word.starts_with('-') {
+        return Err(ParseError::BadNumber { what });
     }
+    units::parse_fixed(word, bits, Rounding::Exact).map_err(|e| match e {
+        units::ParseError::Syntax => ParseError::BadNumber { what },
+        units::ParseError::OutOfRange => ParseError::OutOfRange { what, range },
+        // More than 30 significant fraction digits cannot be a multiple of 1/2^bits either
+        // (those need at most `bits` digits).
+        units::ParseError::Inexact | units::ParseError::TooManyDigits => {
+            ParseError::NotMultiple { what, step }
+        }
+    })
 }
 
 fn amps(args: &mut Args<'_>) -> Result<Amps, ParseError> {
     const WHAT: &str = "amps";
-    let raw =
-        parse_fixed(args.expect(WHAT)?, 64).map_err(|e| number_error(e, WHAT, Amps::RANGE_TEXT))?;
-    let out_of_range = ParseError::OutOfRange {
-        what: WHAT,
-        range: Amps::RANGE_TEXT,
-    };
-    let amps = Amps::from_64ths(u16::try_from(raw).map_err(|_| out_of_range)?);
-    if amps < Amps::MIN || amps > Amps::MAX {
-        return Err(out_of_range);
+    let steps = number(
+        args.expect(WHAT)?,
+        Amps::FRACTION_BITS,
+        WHAT,
+        AMPS_RANGE_TEXT,
+        "1/64",
+    )?;
+    let amps = Amps::from_raw(steps as u16);
+    if amps < AMPS_MIN || amps > AMPS_MAX {
+        return Err(ParseError::OutOfRange {
+            what: WHAT,
+            range: AMPS_RANGE_TEXT,
+        });
     }
     Ok(amps)
 }
@@ -383,35 +415,29 @@ fn pressure(args: &mut Args<'_>) -> Result<Pressure, ParseError> {
     if is(word, "AUTO") {
         return Ok(Pressure::Auto);
     }
-    let out_of_range = ParseError::OutOfRange {
-        what: WHAT,
-        range: Psi::RANGE_TEXT,
-    };
-    let raw = parse_fixed(word, 128).map_err(|e| match e {
-        NumberError::Syntax => ParseError::BadKeyword {
+    let steps =
+        number(word, Psi::FRACTION_BITS, WHAT, PSI_RANGE_TEXT, "1/128").map_err(|e| match e {
+            ParseError::BadNumber { what } => ParseError::BadKeyword {
+                what,
+                expected: "a number or AUTO",
+            },
+            other => other,
+        })?;
+    let psi = Psi::from_raw(steps as u16);
+    if psi < PSI_MIN || psi > PSI_MAX {
+        return Err(ParseError::OutOfRange {
             what: WHAT,
-            expected: "a number or AUTO",
-        },
-        other => number_error(other, WHAT, Psi::RANGE_TEXT),
-    })?;
-    let psi = Psi::from_128ths(u16::try_from(raw).map_err(|_| out_of_range)?);
-    if psi < Psi::MIN || psi > Psi::MAX {
-        return Err(out_of_range);
+            range: PSI_RANGE_TEXT,
+        });
     }
-    Ok(Pressure::Psi(psi))
+    Ok(Pressure::Set(psi))
 }
 
 fn corner(args: &mut Args<'_>) -> Result<u8, ParseError> {
     const WHAT: &str = "percent";
     const RANGE: &str = "50..100";
-    let raw = parse_fixed(args.expect(WHAT)?, 1).map_err(|e| match e {
-        NumberError::Inexact => ParseError::NotMultiple {
-            what: WHAT,
-            step: "1",
-        },
-        other => number_error(other, WHAT, RANGE),
-    })?;
-    match u8::try_from(raw) {
+    let percent = number(args.expect(WHAT)?, 0, WHAT, RANGE, "1")?;
+    match u8::try_from(percent) {
         Ok(p) if (CORNER_MIN..=CORNER_MAX).contains(&p) => Ok(p),
         _ => Err(ParseError::OutOfRange {
             what: WHAT,
@@ -490,7 +516,7 @@ impl<'a> Command<'a> {
     /// let cmd = Command::parse("set process cut 55.5 auto")?;
     /// let Command::SetProcess { mode, amps, .. } = cmd else { unreachable!() };
     /// assert_eq!(mode, Mode::Cut);
-    /// assert_eq!(amps.as_64ths(), 3552); // 55.5 A x 64, exactly
+    /// assert_eq!(amps.raw(), 3552); // 55.5 A x 64, exactly
     ///
     /// let err = Command::parse("SET AMPS 500").unwrap_err();
     /// assert_eq!(err.code(), ErrorCode::Range);
@@ -551,11 +577,11 @@ mod tests {
     use core::fmt::Write;
 
     fn amps(a: f64) -> Amps {
-        Amps::from_64ths((a * 64.0) as u16)
+        Amps::from_raw((a * 64.0) as u16)
     }
 
     fn psi(p: f64) -> Pressure {
-        Pressure::Psi(Psi::from_128ths((p * 128.0) as u16))
+        Pressure::Set(Psi::from_raw((p * 128.0) as u16))
     }
 
     fn err(line: &str) -> ParseError {
@@ -654,15 +680,12 @@ mod tests {
         );
         assert_eq!(
             Command::parse("SET AMPS 45.5"),
-            Ok(Command::SetAmps(Amps::from_64ths(2912)))
+            Ok(Command::SetAmps(Amps::from_raw(2912)))
         );
-        assert_eq!(
-            Command::parse("SET AMPS 5"),
-            Ok(Command::SetAmps(Amps::MIN))
-        );
+        assert_eq!(Command::parse("SET AMPS 5"), Ok(Command::SetAmps(AMPS_MIN)));
         assert_eq!(
             Command::parse("SET AMPS 400.0"),
-            Ok(Command::SetAmps(Amps::MAX))
+            Ok(Command::SetAmps(AMPS_MAX))
         );
         assert_eq!(
             text(err("SET AMPS 400.015625")),

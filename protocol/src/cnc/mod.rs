@@ -58,11 +58,13 @@
 pub mod command;
 mod error;
 pub mod line;
-mod number;
 pub mod phoenix;
 pub mod reply;
 
-pub use command::{Command, ConfigCommand, ConfigKey, Gas, Mode};
+pub use crate::units::{Amps, Pressure, Psi};
+pub use command::{
+    AMPS_MAX, AMPS_MIN, AMPS_RANGE_TEXT, Command, ConfigCommand, ConfigKey, Gas, Mode, PSI_MAX,
+    PSI_MIN, PSI_RANGE_TEXT,
+};
 pub use error::{ErrorCode, ParseError};
 pub use line::{LineAssembler, LineError, MAX_LINE_LEN};
-pub use number::{Amps, Pressure, Psi};

@@ -108,8 +108,8 @@ pub fn write_parse_error<W: Write>(out: &mut W, error: &ParseError) -> fmt::Resu
 
 #[cfg(test)]
 mod tests {
-    use super::super::number::Amps;
     use super::*;
+    use crate::units::Amps;
 
     #[test]
     fn ok_lines() {
@@ -118,7 +118,7 @@ mod tests {
         assert_eq!(line, "OK\r\n");
         line.clear();
         let mut r = ReplyWriter::ok(&mut line).unwrap();
-        r.field("amps", Amps::from_64ths(3552)).unwrap();
+        r.field("amps", Amps::from_raw(3552)).unwrap();
         r.field("state", "ready").unwrap();
         r.finish().unwrap();
         assert_eq!(line, "OK amps=55.5 state=ready\r\n");

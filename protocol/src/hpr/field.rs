@@ -5,6 +5,7 @@
 //! value means the same either way. Writers produce the padding the manual's samples show.
 
 use super::frame::MAX_DATA_LEN;
+use crate::decimal::parse_decimal;
 use crate::{Error, Result};
 
 /// Builds a data field in a fixed buffer.
@@ -87,20 +88,6 @@ impl DataWriter {
         self.separator()?;
         self.decimal(value, min_width, max_width)
     }
-}
-
-/// Decimal digits only, 1..=`max_digits` of them.
-pub(crate) fn parse_decimal(text: &[u8], max_digits: usize) -> Result<u32> {
-    if text.is_empty() || text.len() > max_digits || text.len() > 9 {
-        return Err(Error::Malformed);
-    }
-    text.iter().try_fold(0u32, |acc, &b| {
-        if b.is_ascii_digit() {
-            Ok(acc * 10 + u32::from(b - b'0'))
-        } else {
-            Err(Error::Malformed)
-        }
-    })
 }
 
 /// Parse a decimal and check it against an inclusive range.
@@ -210,9 +197,6 @@ mod tests {
             Fields::new(b"PP0044").tagged::<u16>(b"PC", 4),
             Err(Error::Malformed)
         );
-        assert_eq!(parse_decimal(b"", 4), Err(Error::Malformed));
-        assert_eq!(parse_decimal(b"12345", 4), Err(Error::Malformed));
-        assert_eq!(parse_decimal(b"1a", 4), Err(Error::Malformed));
         assert_eq!(parse_in::<u8>(b"300", 3, 0, 999), Err(Error::Malformed));
         assert_eq!(field_count(b""), 0);
         assert_eq!(field_count(b"1 6"), 2);

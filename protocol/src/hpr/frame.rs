@@ -5,6 +5,7 @@
 //! application note says extra characters such as CR/LF can lock up older control boards,
 //! so [`Frame::emit`] never writes them.
 
+use crate::decimal::parse_decimal;
 use crate::{Error, Result};
 
 /// Start-of-message character.
@@ -151,13 +152,8 @@ fn id_digits(id: u16) -> [u8; 3] {
 }
 
 fn parse_id(digits: &[u8]) -> Result<u16> {
-    digits.iter().try_fold(0u16, |acc, &b| {
-        if b.is_ascii_digit() {
-            Ok(acc * 10 + u16::from(b - b'0'))
-        } else {
-            Err(Error::Malformed)
-        }
-    })
+    let id = parse_decimal(digits, 3)?;
+    u16::try_from(id).map_err(|_| Error::Malformed)
 }
 
 fn hex_value(b: u8) -> Result<u8> {

@@ -9,13 +9,14 @@
 
 use super::command::id;
 use super::error_codes::ErrorCode;
-use super::field::{DataWriter, Fields, parse_decimal};
+use super::field::{DataWriter, Fields};
 use super::frame::Frame;
 use super::gas::GasCode;
 use super::identity::SystemId;
 use super::request::Request;
 use super::state::StateCode;
 use super::values::{GasFlows, GasPair, GasPressures, TorchId, in_range};
+use crate::decimal::parse_decimal;
 use crate::{Error, Result};
 
 /// Answer of commands whose return value is "1 = accepted, 0 = not accepted".

@@ -46,10 +46,10 @@ pub mod legacy;
 mod mode;
 mod plan;
 pub mod registers;
-mod scaling;
 pub mod sync;
 pub mod timing;
 
+pub use crate::units::{Amps, Pressure, Psi};
 pub use cartridge::{
     CARTRIDGE_NAMES, CARTRIDGE_TYPES, CartridgeCounters, CartridgeName, CartridgeNameInfo,
     CartridgeProcess, CartridgeType, CartridgeUid, PartNumber,
@@ -59,4 +59,3 @@ pub use fault::{FaultCode, FaultInfo, StepsRequired, SyncModels};
 pub use ident::{LeadLength, SYNC_MODELS, SyncModel, TORCH_TYPES, TorchKind, TorchType};
 pub use mode::OperatingMode;
 pub use plan::{BlockRead, RegisterSpan, Signals};
-pub use scaling::{Amps, Pressure, Psi};

@@ -9,8 +9,8 @@ use super::fault::FaultCode;
 use super::ident::{SyncModel, TorchType};
 use super::mode::OperatingMode;
 use super::plan::{BlockRead, RegisterSpan, need, u32_low_first, word};
-use super::scaling::{Amps, Pressure, Psi};
 use crate::modbus_ascii::{Registers, Request};
+use crate::units::{Amps, Pressure, Psi};
 use crate::{Error, Result};
 
 // ---------------------------------------------------------------------------------------------

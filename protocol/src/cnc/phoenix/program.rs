@@ -1,6 +1,7 @@
 //! The message command as written in a part program: `>20+Format+Delay+Port<Message`.
 
 use super::{Format, MAX_MESSAGE_LEN, decode_escapes};
+use crate::decimal::parse_decimal;
 use crate::{Error, Result};
 
 /// The message command types.
@@ -118,12 +119,7 @@ impl<'a> ProgramMessage<'a> {
 
 /// Decimal integer 0..=max.
 fn parse_small(field: &str, max: u32) -> Result<u32> {
-    if field.is_empty() || field.len() > 3 || !field.bytes().all(|b| b.is_ascii_digit()) {
-        return Err(Error::Malformed);
-    }
-    let value = field
-        .bytes()
-        .fold(0u32, |acc, b| acc * 10 + u32::from(b - b'0'));
+    let value = parse_decimal(field.as_bytes(), 3)?;
     if value > max {
         return Err(Error::Malformed);
     }

@@ -1,18 +1,31 @@
-//! Fixed-point current (1/64 A) and gas pressure (1/128 psi), exact in both directions.
+//! Exact fixed-point current (1/64 A) and gas pressure (1/128 psi), shared by the Powermax
+//! registers and the CNC commands so a value typed on the CNC reaches the supply unchanged.
 //!
-//! Both manuals describe these registers as "16-bit, fixed-point binary with 1-bit sign at MSB
-//! and 6-bit (current) / 7-bit (pressure) decimal at LSB": the raw word is a two's-complement
-//! `i16` holding units x 64 or units x 128. Every raw value therefore has a finite decimal
-//! expansion (1/64 = 0.015625, 1/128 = 0.0078125), which [`Display`](core::fmt::Display) prints
-//! exactly, without floats.
+//! Both Powermax manuals describe these registers as "16-bit, fixed-point binary with 1-bit sign
+//! at MSB and 6-bit (current) / 7-bit (pressure) decimal at LSB": the raw word is a
+//! two's-complement `i16` holding units x 64 or units x 128. Every raw value therefore has a
+//! finite decimal expansion (1/64 = 0.015625, 1/128 = 0.0078125), which
+//! [`Display`](core::fmt::Display) prints exactly, without floats.
 //!
 //! Text goes back through [`FromStr`] with one documented rule: the decimal value is converted
 //! to the NEAREST raw step, and a value exactly half-way between two steps rounds away from zero
 //! (`"0.0078125"` A is half of 1/64 A and becomes raw 1). [`Amps::parse_exact`] and
 //! [`Psi::parse_exact`] refuse text that is not a whole number of steps instead.
 //!
-//! Parse errors: [`Error::Malformed`] for bad syntax or a value outside the 16-bit range,
-//! [`Error::Overlong`] for more than 30 significant fraction digits.
+//! Both map their refusals to the crate [`Error`]: [`Error::Malformed`] for bad syntax, a value
+//! outside the 16-bit range or (exact parsing) a value between two steps, [`Error::Overlong`] for
+//! more than 30 significant fraction digits. Callers that must say which of these it was (the
+//! CNC replies do) use [`Amps::from_decimal`] / [`Psi::from_decimal`], which return a
+//! [`ParseError`].
+//!
+//! ```
+//! use plasma_protocol::units::{Amps, ParseError, Rounding};
+//! assert_eq!(Amps::from_decimal("45.25", Rounding::Exact), Ok(Amps::from_raw(2896)));
+//! assert_eq!(Amps::from_decimal("45.1", Rounding::Exact), Err(ParseError::Inexact));
+//! assert_eq!(Amps::from_decimal("45.1", Rounding::Nearest), Ok(Amps::from_raw(2886)));
+//! assert_eq!(Amps::from_decimal("512", Rounding::Nearest), Err(ParseError::OutOfRange));
+//! assert_eq!(Amps::from_decimal("4S", Rounding::Nearest), Err(ParseError::Syntax));
+//! ```
 
 use core::cmp::Ordering;
 use core::fmt;
@@ -22,6 +35,39 @@ use crate::{Error, Result};
 
 /// Significant fraction digits accepted when parsing (far beyond the 7 an exact value needs).
 const MAX_FRACTION_DIGITS: usize = 30;
+
+/// Why decimal text was refused.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum ParseError {
+    /// Not `[-]digits[.digits]`.
+    Syntax,
+    /// Outside the signed 16-bit raw range (after rounding).
+    OutOfRange,
+    /// Between two steps, with [`Rounding::Exact`].
+    Inexact,
+    /// More than 30 significant fraction digits.
+    TooManyDigits,
+}
+
+impl From<ParseError> for Error {
+    fn from(error: ParseError) -> Error {
+        match error {
+            ParseError::TooManyDigits => Error::Overlong,
+            ParseError::Syntax | ParseError::OutOfRange | ParseError::Inexact => Error::Malformed,
+        }
+    }
+}
+
+/// What to do with a decimal value that falls between two raw steps.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Rounding {
+    /// Take the nearest step; half-way rounds away from zero.
+    Nearest,
+    /// Refuse it ([`ParseError::Inexact`]).
+    Exact,
+}
 
 /// Writes `raw / 2^bits` as an exact decimal without trailing zeros.
 fn write_fixed(f: &mut fmt::Formatter<'_>, raw: u16, bits: u32) -> fmt::Result {
@@ -46,29 +92,35 @@ fn write_fixed(f: &mut fmt::Formatter<'_>, raw: u16, bits: u32) -> fmt::Result {
     Ok(())
 }
 
-/// Parses decimal text into a raw value of `bits` fraction bits (see the module docs).
-fn parse_fixed(text: &str, bits: u32, exact: bool) -> Result<u16> {
+/// Parses `[-]digits[.digits]` into signed steps of `bits` fraction bits (see the module docs).
+///
+/// The crate's one decimal parser: the CNC commands use it too (with `bits` 0 for whole numbers).
+pub(crate) fn parse_fixed(
+    text: &str,
+    bits: u32,
+    rounding: Rounding,
+) -> core::result::Result<i16, ParseError> {
     let (negative, body) = match text.as_bytes().split_first() {
         Some((b'-', rest)) => (true, rest),
         Some(_) => (false, text.as_bytes()),
-        None => return Err(Error::Malformed),
+        None => return Err(ParseError::Syntax),
     };
     let (whole_digits, fraction_digits) = match body.iter().position(|&b| b == b'.') {
         Some(dot) => {
             let (w, f) = body.split_at(dot);
             let f = f.get(1..).unwrap_or(&[]);
             if f.is_empty() {
-                return Err(Error::Malformed);
+                return Err(ParseError::Syntax);
             }
             (w, f)
         }
         None => (body, &[][..]),
     };
     if whole_digits.is_empty() || !whole_digits.iter().all(u8::is_ascii_digit) {
-        return Err(Error::Malformed);
+        return Err(ParseError::Syntax);
     }
     if !fraction_digits.iter().all(u8::is_ascii_digit) {
-        return Err(Error::Malformed);
+        return Err(ParseError::Syntax);
     }
     let mut whole: u32 = 0;
     for &d in whole_digits {
@@ -76,7 +128,7 @@ fn parse_fixed(text: &str, bits: u32, exact: bool) -> Result<u16> {
             .checked_mul(10)
             .and_then(|w| w.checked_add(u32::from(d - b'0')))
             .filter(|&w| w <= 0xFFFF)
-            .ok_or(Error::Malformed)?;
+            .ok_or(ParseError::OutOfRange)?;
     }
     // Trailing zeros carry no value; only the rest counts toward the digit limit.
     let significant = fraction_digits
@@ -84,7 +136,7 @@ fn parse_fixed(text: &str, bits: u32, exact: bool) -> Result<u16> {
         .rposition(|&d| d != b'0')
         .map_or(0, |last| last + 1);
     if significant > MAX_FRACTION_DIGITS {
-        return Err(Error::Overlong);
+        return Err(ParseError::TooManyDigits);
     }
     let mut numerator: u128 = 0;
     let mut denominator: u128 = 1;
@@ -97,8 +149,8 @@ fn parse_fixed(text: &str, bits: u32, exact: bool) -> Result<u16> {
     steps += scaled / denominator;
     let remainder = scaled % denominator;
     if remainder != 0 {
-        if exact {
-            return Err(Error::Malformed);
+        if rounding == Rounding::Exact {
+            return Err(ParseError::Inexact);
         }
         if remainder * 2 >= denominator {
             steps += 1;
@@ -106,14 +158,14 @@ fn parse_fixed(text: &str, bits: u32, exact: bool) -> Result<u16> {
     }
     let limit = if negative { 0x8000 } else { 0x7FFF };
     if steps > limit {
-        return Err(Error::Malformed);
+        return Err(ParseError::OutOfRange);
     }
     let signed = if negative {
         (steps as i32).wrapping_neg()
     } else {
         steps as i32
     };
-    Ok(signed as i16 as u16)
+    Ok(signed as i16)
 }
 
 /// `numerator / denominator` units as raw steps of `bits` fraction bits, nearest, ties away
@@ -182,9 +234,33 @@ macro_rules! fixed_point {
                 from_ratio(u32::from(hundredths), 100, $bits).map(Self)
             }
 
+            /// Whether the value is a whole number of units (e.g. for supplies that take whole
+            /// amps, such as the HPR).
+            pub const fn is_whole(self) -> bool {
+                self.0 & (Self::STEPS_PER_UNIT - 1) == 0
+            }
+
+            #[doc = concat!("Whole ", $unit, ", nearest, half-way away from zero.")]
+            pub const fn round_whole(self) -> i16 {
+                let steps = self.steps() as i32;
+                let half = (Self::STEPS_PER_UNIT / 2) as i32;
+                let away = if steps < 0 { steps - half } else { steps + half };
+                // Division truncates toward zero, so this rounds half away from zero; the
+                // result is within i16 (at most 2^(15 - bits) in magnitude).
+                (away / Self::STEPS_PER_UNIT as i32) as i16
+            }
+
+            /// Parses decimal text, telling why it was refused (see the module docs).
+            pub fn from_decimal(
+                text: &str,
+                rounding: Rounding,
+            ) -> core::result::Result<Self, ParseError> {
+                parse_fixed(text, $bits, rounding).map(|steps| Self(steps as u16))
+            }
+
             /// Parses decimal text that must be a whole number of raw steps.
             pub fn parse_exact(text: &str) -> Result<Self> {
-                parse_fixed(text, $bits, true).map(Self)
+                Ok(Self::from_decimal(text, Rounding::Exact)?)
             }
         }
 
@@ -193,7 +269,7 @@ macro_rules! fixed_point {
 
             /// Decimal text to the nearest raw step (ties away from zero); see the module docs.
             fn from_str(text: &str) -> Result<Self> {
-                parse_fixed(text, $bits, false).map(Self)
+                Ok(Self::from_decimal(text, Rounding::Nearest)?)
             }
         }
 
@@ -223,7 +299,7 @@ fixed_point!(
     /// Output current in steps of 1/64 A (the register holds amps x 64).
     ///
     /// ```
-    /// use plasma_protocol::powermax::Amps;
+    /// use plasma_protocol::units::Amps;
     /// let a: Amps = "55.5".parse().unwrap();
     /// assert_eq!(a.raw(), 3552);
     /// assert_eq!(Amps::from_whole(63).unwrap().raw(), 0x0FC0);
@@ -241,7 +317,7 @@ fixed_point!(
     /// means "automatic", which [`Pressure`] spells out.
     ///
     /// ```
-    /// use plasma_protocol::powermax::Psi;
+    /// use plasma_protocol::units::Psi;
     /// assert_eq!(Psi::from_whole(45).unwrap().raw(), 0x1680);
     /// assert_eq!(Psi::from_raw(0x23DD).to_string(), "71.7265625");
     /// ```
@@ -289,10 +365,10 @@ impl Pressure {
 }
 
 impl fmt::Display for Pressure {
-    /// `auto` or the exact psi value.
+    /// `AUTO` (the CNC keyword) or the exact psi value.
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match Pressure::from_raw(self.raw()) {
-            Pressure::Auto => f.write_str("auto"),
+            Pressure::Auto => f.write_str("AUTO"),
             Pressure::Set(psi) => psi.fmt(f),
         }
     }
@@ -371,6 +447,8 @@ mod tests {
     fn display_is_exact() {
         assert_eq!(text(Amps::from_raw(1)).as_str(), "0.015625");
         assert_eq!(text(Amps::from_raw(2896)).as_str(), "45.25");
+        assert_eq!(text(Amps::from_raw(2881)).as_str(), "45.015625");
+        assert_eq!(text(Psi::from_raw(9248)).as_str(), "72.25");
         assert_eq!(text(Amps::from_raw(0x7FFF)).as_str(), "511.984375");
         assert_eq!(text(Amps::from_raw(0x8000)).as_str(), "-512");
         assert_eq!(text(Amps::from_raw(0xFFFF)).as_str(), "-0.015625");
@@ -441,13 +519,85 @@ mod tests {
     }
 
     #[test]
+    fn parse_errors_say_why() {
+        let exact = |t| Amps::from_decimal(t, Rounding::Exact);
+        assert_eq!(exact("55.5"), Ok(Amps::from_raw(3552)));
+        assert_eq!(exact("045.50"), Ok(Amps::from_raw(2912)));
+        assert_eq!(exact("0.015625"), Ok(Amps::from_raw(1)));
+        assert_eq!(exact("0000000000045"), Ok(Amps::from_raw(2880)));
+        assert_eq!(exact("1.50000000000000"), Ok(Amps::from_raw(96)));
+        assert_eq!(exact("45.1"), Err(ParseError::Inexact));
+        assert_eq!(exact("0.0078125"), Err(ParseError::Inexact));
+        assert_eq!(exact("1.0000000001"), Err(ParseError::Inexact));
+        assert_eq!(exact("99999999"), Err(ParseError::OutOfRange));
+        assert_eq!(
+            exact("99999999999999999999999"),
+            Err(ParseError::OutOfRange)
+        );
+        assert_eq!(exact("512"), Err(ParseError::OutOfRange));
+        assert_eq!(exact("-512.015625"), Err(ParseError::OutOfRange));
+        let long = "1.0000000000000000000000000000001"; // 31 significant fraction digits
+        assert_eq!(exact(long), Err(ParseError::TooManyDigits));
+        for bad in [
+            "", ".", "-", ".5", "5.", "+5", "4 5", "1e3", "4.5.1", "0x10", "\u{663}", "--1",
+        ] {
+            assert_eq!(exact(bad), Err(ParseError::Syntax), "{bad}");
+            assert_eq!(
+                Psi::from_decimal(bad, Rounding::Nearest),
+                Err(ParseError::Syntax)
+            );
+        }
+        assert_eq!(
+            Psi::from_decimal("72.25", Rounding::Exact),
+            Ok(Psi::from_raw(9248))
+        );
+        assert_eq!(
+            Psi::from_decimal("0.0078125", Rounding::Exact),
+            Ok(Psi::from_raw(1))
+        );
+        assert_eq!(
+            Psi::from_decimal("72.001", Rounding::Nearest),
+            Ok(Psi::from_raw(9216))
+        );
+        // The crate error keeps the old mapping.
+        assert_eq!(Error::from(ParseError::Syntax), Error::Malformed);
+        assert_eq!(Error::from(ParseError::OutOfRange), Error::Malformed);
+        assert_eq!(Error::from(ParseError::Inexact), Error::Malformed);
+        assert_eq!(Error::from(ParseError::TooManyDigits), Error::Overlong);
+    }
+
+    #[test]
+    fn whole_units() {
+        assert_eq!(Amps::from_raw(3552).round_whole(), 56); // 55.5: half-way, away from zero
+        assert_eq!(Amps::from_raw(3551).round_whole(), 55);
+        assert!(!Amps::from_raw(3552).is_whole());
+        assert!(Amps::from_raw(2880).is_whole());
+        assert!(Amps::ZERO.is_whole());
+        assert_eq!(Amps::from_raw(0x7FFF).round_whole(), 512);
+        assert_eq!(Amps::from_raw(0x8000).round_whole(), -512);
+        assert!(Amps::from_raw(0x8000).is_whole());
+        assert!(Amps::from_raw(0xFFC0).is_whole()); // -1 A
+        assert!(!Amps::from_raw(0xFFFF).is_whole());
+        assert_eq!(Amps::from_raw(0xFFFF).round_whole(), 0); // -1/64 A
+        assert_eq!(Amps::from_raw(0xFFE0).round_whole(), -1); // -0.5 A
+        assert_eq!(Amps::from_raw(0xFFE1).round_whole(), 0); // -0.484375 A
+        assert_eq!(Psi::from_raw(9216).round_whole(), 72);
+        assert_eq!(Psi::from_raw(9216 + 63).round_whole(), 72);
+        assert_eq!(Psi::from_raw(9216 + 64).round_whole(), 73);
+        assert_eq!(Psi::from_raw(0x7FFF).round_whole(), 256);
+        assert_eq!(Psi::from_raw(0x8000).round_whole(), -256);
+        assert!(Psi::from_raw(128).is_whole());
+        assert!(!Psi::from_raw(64).is_whole());
+    }
+
+    #[test]
     fn pressure_auto() {
         assert_eq!(Pressure::from_raw(0), Pressure::Auto);
         assert_eq!(Pressure::Auto.raw(), 0);
         assert_eq!(Pressure::from_raw(0x1680).psi(), Psi::from_whole(45));
         assert_eq!(Pressure::Set(Psi::ZERO).psi(), None);
-        assert_eq!(text(Pressure::Auto).as_str(), "auto");
-        assert_eq!(text(Pressure::Set(Psi::ZERO)).as_str(), "auto");
+        assert_eq!(text(Pressure::Auto).as_str(), "AUTO");
+        assert_eq!(text(Pressure::Set(Psi::ZERO)).as_str(), "AUTO");
         assert_eq!(text(Pressure::from_raw(0x2300)).as_str(), "70");
         assert_eq!("AUTO".parse::<Pressure>(), Ok(Pressure::Auto));
         assert_eq!("0".parse::<Pressure>(), Ok(Pressure::Auto));
