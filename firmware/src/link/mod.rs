@@ -342,6 +342,36 @@ impl PsLink {
         &self.raw_reply
     }
 
+    /// Use another configuration: whatever is in progress is abandoned (pending commands fail
+    /// with [`CommandFailure::LinkDown`], a link that was up reports
+    /// [`LinkDownReason::Reconfigured`]) and detection starts again. Kept settings stay.
+    pub fn reconfigure(&mut self, now: Instant, config: LinkConfig) {
+        self.now = now;
+        let was_up = match &mut self.phase {
+            Phase::Powermax(driver) => {
+                driver.abort(&mut self.core);
+                true
+            }
+            Phase::Hpr(driver) => {
+                driver.abort(&mut self.core);
+                true
+            }
+            Phase::Detecting(_) => false,
+        };
+        self.core.config = sanitize(config);
+        self.core.status.forget_unit();
+        if was_up {
+            self.core.emit(LinkEvent::LinkDown {
+                reason: LinkDownReason::Reconfigured,
+            });
+        }
+        self.txn = None;
+        self.consecutive_failures = 0;
+        self.modbus_rx.reset();
+        self.hpr_rx.reset();
+        self.start_detection(now, 0);
+    }
+
     /// The configuration in use (after clamping).
     pub fn config(&self) -> &LinkConfig {
         &self.core.config
@@ -686,11 +716,11 @@ impl PsLink {
         Some(txn.tag().clone())
     }
 
-    fn awaited_tag(&mut self, bytes: usize) -> Option<Tag> {
+    fn awaited_tag(&mut self) -> Option<Tag> {
         match &self.txn {
             Some(txn) if txn.is_awaiting_reply() => Some(txn.tag().clone()),
             _ => {
-                self.core.diagnostics.record_unsolicited(bytes);
+                self.core.diagnostics.record_unsolicited();
                 None
             }
         }
@@ -701,7 +731,7 @@ impl PsLink {
         now: Instant,
         result: plasma_protocol::Result<(u8, Vec<u8, { modbus_ascii::MAX_FRAME_BYTES }>)>,
     ) {
-        let Some(tag) = self.awaited_tag(1) else {
+        let Some(tag) = self.awaited_tag() else {
             return;
         };
         let (request, raw) = match &tag {
@@ -783,7 +813,7 @@ impl PsLink {
         now: Instant,
         result: plasma_protocol::Result<(u16, Vec<u8, { hpr_wire::MAX_FRAME_LEN }>)>,
     ) {
-        let Some(tag) = self.awaited_tag(1) else {
+        let Some(tag) = self.awaited_tag() else {
             return;
         };
         let (id, data) = match result {

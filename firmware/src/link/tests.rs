@@ -1200,3 +1200,50 @@ fn hpr_errors_raise_and_clear_faults() {
             .is_ok()
     );
 }
+
+#[test]
+fn reconfiguring_pins_the_protocol_and_restarts_detection() {
+    let (mut bench, _fake) = sync_bench();
+    bench.events();
+    let config = LinkConfig {
+        protocol: ProtocolChoice::Hpr,
+        ..LinkConfig::default()
+    };
+    bench.link.reconfigure(bench.now, config);
+    assert_eq!(
+        bench.events(),
+        std::vec![LinkEvent::LinkDown {
+            reason: LinkDownReason::Reconfigured
+        }]
+    );
+    assert_eq!(bench.next_tx(bench.now).unwrap(), b">00090<");
+    assert_eq!(bench.link.port_config(), PortConfig::HPR);
+}
+
+#[test]
+fn invalid_configurations_are_refused_or_clamped() {
+    let bad = LinkConfig {
+        response_timeout: Duration::from_millis(10),
+        hpr_id: 7,
+        ..LinkConfig::default()
+    };
+    assert_eq!(
+        PsLink::try_new(bad, ms(0)).err(),
+        Some(ConfigError::ResponseTimeoutOutOfRange { ms: 10 })
+    );
+    let link = PsLink::new(bad, ms(0));
+    assert_eq!(link.config().response_timeout, Duration::from_millis(60));
+    assert_eq!(link.config().hpr_id, 3);
+}
+
+#[test]
+fn noise_and_late_replies_do_not_disturb_the_link() {
+    let (mut bench, mut fake) = sync_bench();
+    // Nothing awaited: a stray frame and line noise are counted and ignored.
+    bench
+        .link
+        .handle_rx(bench.now, b"\x00\xff:0104020508EC\r\n>0041C5<garbage");
+    assert_eq!(bench.link.diagnostics().unsolicited_frames, 1);
+    bench.run(&mut fake, bench.now + Duration::from_millis(300));
+    assert!(bench.link.status().link_up);
+}
