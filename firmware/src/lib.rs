@@ -14,6 +14,7 @@
 #![warn(missing_docs)]
 
 pub mod io;
+pub mod link;
 pub mod port;
 pub mod safe_state;
 pub mod storage;
