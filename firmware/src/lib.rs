@@ -7,10 +7,16 @@
 //!   independent [`io::SafetyMonitor`] used by every scenario test.
 //! - [`port`]: UART settings the link asks for.
 //! - [`time`]: caller-supplied monotonic time.
+//! - [`safe_state`], [`watchdog`], [`storage`]: the board's reset/panic policy, task-progress
+//!   watchdog feeding and power-cut-safe settings storage, as logic.
 #![cfg_attr(not(test), no_std)]
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
 pub mod io;
+pub mod link;
 pub mod port;
+pub mod safe_state;
+pub mod storage;
 pub mod time;
+pub mod watchdog;

@@ -6,5 +6,6 @@
 //!   MaxPro200) behind one byte-level interface, [`sim::SimulatedUnit`].
 #![warn(missing_docs)]
 
+pub mod decode;
 pub mod line;
 pub mod sim;

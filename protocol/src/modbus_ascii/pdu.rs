@@ -1,4 +1,19 @@
 //! Typed Modbus PDUs (function code + data) for the functions Powermax units use.
+//!
+//! Each type has a `parse` that checks every length, count and limit of the Modbus application
+//! protocol and borrows its data from the input, and an `emit` that writes the binary PDU into a
+//! caller's buffer and refuses to write what `parse` would refuse.
+
+mod codes;
+mod device_id;
+mod request;
+mod response;
+mod wire;
+
+pub use device_id::DeviceObjects;
+
+/// Longest PDU a Modbus ASCII frame can carry: function code + 252 data bytes.
+pub const MAX_PDU_LEN: usize = 253;
 
 /// Most registers one read may ask for (Modbus limit for functions 03 and 04).
 pub const MAX_READ_REGISTERS: u16 = 125;
@@ -6,6 +21,8 @@ pub const MAX_READ_REGISTERS: u16 = 125;
 pub const MAX_WRITE_REGISTERS: u16 = 123;
 /// Most coils one read may ask for (Modbus limit for function 01).
 pub const MAX_READ_COILS: u16 = 2000;
+/// Most data bytes a Read Coils reply may carry: 2000 coils packed 8 to a byte.
+pub const MAX_COIL_BYTES: usize = 250;
 
 /// Function codes the bridge uses.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -108,7 +125,16 @@ impl<'a> Registers<'a> {
 
     /// The values in order.
     pub fn iter(&self) -> impl Iterator<Item = u16> + '_ {
-        (0..self.len()).filter_map(move |i| self.get(i))
+        // Two plain slice iterators, one of them empty: cheaper than indexing with `get`.
+        let (words, bytes): (&[u16], &[u8]) = match *self {
+            Registers::Words(w) => (w, &[]),
+            Registers::BigEndian(b) => (&[], b),
+        };
+        words.iter().copied().chain(
+            bytes
+                .chunks_exact(2)
+                .map(|pair| u16::from_be_bytes([pair[0], pair[1]])),
+        )
     }
 }
 

@@ -1,0 +1,272 @@
+//! What the CNC session can ask of the link, and why the link may refuse before sending.
+
+use core::fmt;
+
+use heapless::Vec;
+use plasma_protocol::hpr::{ErrorCode, GasPair, HprParameters, MaxProParameters, StateCode};
+use plasma_protocol::powermax::sync::PermittedModes;
+use plasma_protocol::powermax::{Amps, FaultCode, OperatingMode, Pressure, Psi};
+
+use super::status::Family;
+use crate::time::Instant;
+
+/// Longest RAW frame accepted (a Modbus ASCII frame is at most 513 characters).
+pub const RAW_CAPACITY: usize = 520;
+
+/// Which HPR gas test.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum HprGasFlow {
+    /// Preflow gases (064 / 065).
+    Preflow,
+    /// Cutflow gases (066 / 067).
+    Cutflow,
+}
+
+/// An operation asked of the link; it completes with `LinkEvent::CommandDone`.
+// No allocator: a RAW frame travels inline, so this enum is as large as one frame.
+#[allow(clippy::large_enum_variant)]
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum LinkCommand {
+    /// Powermax: enter remote control with these settings. Checked against the permitted
+    /// limits first; written in one request (SYNC) or as the legacy guide requires, read back,
+    /// then kept and re-applied after a power cycle or a link return.
+    ApplySettings {
+        /// Operating mode.
+        mode: OperatingMode,
+        /// Output current.
+        current: Amps,
+        /// Gas pressure; [`Pressure::Auto`] lets the unit choose.
+        pressure: Pressure,
+    },
+    /// Powermax: leave remote control (zeros to all three settings) and forget the kept
+    /// settings.
+    ExitRemote,
+    /// Powermax: start (`true`) or stop a gas test.
+    GasTest {
+        /// Start or stop.
+        on: bool,
+    },
+    /// Powermax SYNC: quick restart that clears fault 0-50-0 (refused unless 0-50-0 is
+    /// active); no request for 2 s afterwards.
+    QuickRestart,
+    /// Read the slow data again (limits, counters, cartridge, fault or error log, timers).
+    RefreshSlowData,
+    /// HPR / MaxPro200: set the current (058).
+    HprSetNominalAmps {
+        /// Amps (5 up to the unit's rating).
+        amps: u16,
+    },
+    /// MaxPro200: set current and gases, the unit sets pressures itself (137).
+    HprSetProcess {
+        /// Amps 5-200.
+        amps: u16,
+        /// Plasma and shield gas.
+        gases: GasPair,
+    },
+    /// HPR (auto gas): set every parameter (095).
+    HprSetAllParameters(HprParameters),
+    /// MaxPro200: set every parameter (095, MaxPro form).
+    MaxProSetAllParameters(MaxProParameters),
+    /// HPR (auto gas) / MaxPro200: set the inlet gases (096).
+    HprSetInletGases(GasPair),
+    /// HPR: corner current percent 50-100 (070).
+    HprSetCornerCurrent {
+        /// Percent of the cutting current.
+        percent: u8,
+    },
+    /// HPR: clear warnings (131, error codes below 43).
+    HprClearWarnings,
+    /// HPR / MaxPro200: software reset (068), only when the manual allows it.
+    HprSoftwareReset,
+    /// HPR: start or stop a gas test (064-067).
+    HprGasTest {
+        /// Which gases.
+        flow: HprGasFlow,
+        /// Start or stop.
+        on: bool,
+    },
+    /// HPR: read the error log (134).
+    HprReadErrorLog,
+    /// HPR: read the timers and counters (125).
+    HprReadTimers,
+    /// A whole frame to forward as is (Modbus `:...\r\n` or HPR `>...<`), subject to the
+    /// allow-lists; the reply frame is returned.
+    Raw(Vec<u8, RAW_CAPACITY>),
+}
+
+/// Which HPR value was out of range.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum HprValue {
+    /// Current in amps.
+    Amps,
+    /// Corner current percent.
+    CornerPercent,
+    /// A gas type code or pressure set point.
+    GasParameter,
+}
+
+/// Why a command was refused; nothing was sent.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Refusal {
+    /// No unit is connected (detection running or link down).
+    LinkNotUp,
+    /// The command does not exist for this family.
+    NotSupported {
+        /// The family on the line.
+        family: Family,
+    },
+    /// The permitted limits have not been read yet.
+    LimitsUnknown,
+    /// The mode is not permitted for the installed cartridge.
+    ModeNotPermitted {
+        /// Mode asked for.
+        mode: OperatingMode,
+        /// Modes permitted (0x3001).
+        permitted: PermittedModes,
+    },
+    /// Current outside the permitted range.
+    CurrentOutOfRange {
+        /// Asked for.
+        requested: Amps,
+        /// Lowest permitted.
+        min: Amps,
+        /// Highest permitted.
+        max: Amps,
+    },
+    /// Pressure set point outside the permitted range.
+    PressureOutOfRange {
+        /// Asked for.
+        requested: Psi,
+        /// Lowest permitted.
+        min: Psi,
+        /// Highest permitted.
+        max: Psi,
+    },
+    /// A quick restart only clears 0-50-0, which is not active.
+    QuickRestartNeeds050 {
+        /// The fault that is active instead, if any.
+        active: Option<FaultCode>,
+    },
+    /// Within the 2 s after a quick restart.
+    Blackout {
+        /// End of the blackout.
+        until: Instant,
+    },
+    /// Too many commands waiting.
+    QueueFull,
+    /// An HPR value outside the manual's range (or the unit's rating).
+    HprValueOutOfRange {
+        /// Which value.
+        value: HprValue,
+        /// Asked for.
+        requested: u16,
+        /// Lowest allowed.
+        min: u16,
+        /// Highest allowed.
+        max: u16,
+    },
+    /// The unit's state does not allow the command (HPR software reset: only in a shutdown
+    /// error, state 14 with error > 79; MaxPro200: not while cutting, states 4-10).
+    StateForbids {
+        /// Current state, if known.
+        state: Option<StateCode>,
+        /// Current error, if known.
+        error: Option<ErrorCode>,
+    },
+    /// The RAW frame could not be parsed (framing, checksum, PDU).
+    RawMalformed(plasma_protocol::Error),
+    /// The RAW Modbus frame names another node.
+    RawWrongAddress {
+        /// Node address of the link.
+        expected: u8,
+        /// Address in the frame.
+        found: u8,
+    },
+    /// The RAW Modbus function is neither a read nor an allowed write.
+    RawFunctionNotAllowed {
+        /// Function code.
+        function: u8,
+    },
+    /// The RAW Modbus write targets a register or coil not documented as writable.
+    RawWriteNotAllowed {
+        /// First address written.
+        address: u16,
+    },
+    /// The RAW HPR command is not on the allow-list (factory-only, dangerous or unknown),
+    /// or is line control the link owns (SLEEP/WAKE/BROADCAST).
+    RawCommandNotAllowed {
+        /// Command id.
+        id: u16,
+    },
+}
+
+impl fmt::Display for Refusal {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Refusal::LinkNotUp => f.write_str("no power supply connected"),
+            Refusal::NotSupported { family } => write!(f, "not supported by {family:?}"),
+            Refusal::LimitsUnknown => f.write_str("permitted limits not read yet"),
+            Refusal::ModeNotPermitted { mode, permitted } => write!(
+                f,
+                "mode {} not permitted (permitted: {:?}, {:?})",
+                mode.sync_name(),
+                permitted.low_mode(),
+                permitted.high_mode()
+            ),
+            Refusal::CurrentOutOfRange {
+                requested,
+                min,
+                max,
+            } => {
+                write!(f, "current {requested} A outside {min}-{max} A")
+            }
+            Refusal::PressureOutOfRange {
+                requested,
+                min,
+                max,
+            } => {
+                write!(f, "pressure {requested} psi outside {min}-{max} psi")
+            }
+            Refusal::QuickRestartNeeds050 { active } => match active {
+                Some(code) => write!(f, "quick restart needs fault 0-50-0, active is {code}"),
+                None => f.write_str("quick restart needs fault 0-50-0, no fault active"),
+            },
+            Refusal::Blackout { until } => {
+                write!(
+                    f,
+                    "quiet after quick restart until {} ms",
+                    until.as_millis()
+                )
+            }
+            Refusal::QueueFull => f.write_str("too many commands waiting"),
+            Refusal::HprValueOutOfRange {
+                value,
+                requested,
+                min,
+                max,
+            } => {
+                write!(f, "{value:?} {requested} outside {min}-{max}")
+            }
+            Refusal::StateForbids { state, error } => {
+                write!(f, "not allowed in state {state:?} with error {error:?}")
+            }
+            Refusal::RawMalformed(e) => write!(f, "raw frame rejected: {e}"),
+            Refusal::RawWrongAddress { expected, found } => {
+                write!(
+                    f,
+                    "raw frame for node {found}, link talks to node {expected}"
+                )
+            }
+            Refusal::RawFunctionNotAllowed { function } => {
+                write!(f, "raw function {function:02X} not allowed")
+            }
+            Refusal::RawWriteNotAllowed { address } => {
+                write!(f, "raw write to {address:04X} not allowed")
+            }
+            Refusal::RawCommandNotAllowed { id } => write!(f, "raw command {id:03} not allowed"),
+        }
+    }
+}

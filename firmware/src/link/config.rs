@@ -1,0 +1,288 @@
+//! What the installer chooses about the power-supply link, checked before the link starts.
+
+use core::fmt;
+
+use crate::port::{Parity, PortConfig, StopBits};
+use crate::time::Duration;
+
+/// Which protocol family the link speaks.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum ProtocolChoice {
+    /// Find out: Modbus device identification, then a legacy register read, then HPR HELLO.
+    #[default]
+    Auto,
+    /// Powermax SYNC (registers 0x3xxx) only.
+    Sync,
+    /// Older Powermax (registers 0x2xxx) only.
+    Legacy,
+    /// HyPerformance HPR / MaxPro200 (`>ID data CK<`) only.
+    Hpr,
+}
+
+/// Link settings. Build with [`LinkConfig::default`] and adjust; [`LinkConfig::validate`]
+/// says precisely what is wrong.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct LinkConfig {
+    /// Protocol family (default: auto-detect).
+    pub protocol: ProtocolChoice,
+    /// Modbus node address, 1-255 (default 1). A unit set to 0 learns it from the first request.
+    pub node_address: u8,
+    /// Modbus parity (default even; SYNC units can be set to odd or none).
+    pub modbus_parity: Parity,
+    /// Modbus stop bits (default 1).
+    pub modbus_stop_bits: StopBits,
+    /// Time to wait for a reply, 60-1000 ms (default 100 ms; the SYNC guide asks for 60-100).
+    pub response_timeout: Duration,
+    /// Further attempts after the first one fails, 0-[`LinkConfig::MAX_RETRIES`] (default 2).
+    pub retries: u8,
+    /// Time between status polls, 20-1000 ms (default 100 ms; faults must be checked at least
+    /// every second, and a new fault should be known within 250 ms).
+    pub poll_interval: Duration,
+    /// Time between refreshes of slow data (limits, counters, cartridge, logs), 1 s - 1 h
+    /// (default 30 s). Slow data is also read at start, on a cartridge change and on request.
+    pub slow_data_interval: Duration,
+    /// HPR multi-drop system id 0-3 (dip switches); ids other than 0 need SLEEP/WAKE.
+    pub hpr_id: u8,
+    /// Consecutive failed transactions (all retries used) before the link is declared down,
+    /// 1-[`LinkConfig::MAX_FAILURES_BEFORE_DOWN`] (default 3).
+    pub failures_before_down: u8,
+}
+
+impl LinkConfig {
+    /// Shortest response time-out accepted.
+    pub const MIN_RESPONSE_TIMEOUT: Duration = Duration::from_millis(60);
+    /// Longest response time-out accepted.
+    pub const MAX_RESPONSE_TIMEOUT: Duration = Duration::from_millis(1000);
+    /// Most retries accepted.
+    pub const MAX_RETRIES: u8 = 5;
+    /// Shortest poll interval accepted.
+    pub const MIN_POLL_INTERVAL: Duration = Duration::from_millis(20);
+    /// Longest poll interval accepted (the SYNC guide: check for faults every second).
+    pub const MAX_POLL_INTERVAL: Duration = Duration::from_millis(1000);
+    /// Shortest slow-data interval accepted.
+    pub const MIN_SLOW_DATA_INTERVAL: Duration = Duration::from_secs(1);
+    /// Longest slow-data interval accepted.
+    pub const MAX_SLOW_DATA_INTERVAL: Duration = Duration::from_secs(3600);
+    /// Highest HPR multi-drop id (dip switches 2-4 give 0-3; the rest are reserved).
+    pub const MAX_HPR_ID: u8 = 3;
+    /// Most consecutive failures accepted before link-down.
+    pub const MAX_FAILURES_BEFORE_DOWN: u8 = 10;
+
+    /// Check every field; the first problem found is returned.
+    pub fn validate(&self) -> Result<(), ConfigError> {
+        if self.node_address == 0 {
+            return Err(ConfigError::NodeAddressZero);
+        }
+        let timeout = self.response_timeout;
+        if timeout < Self::MIN_RESPONSE_TIMEOUT || timeout > Self::MAX_RESPONSE_TIMEOUT {
+            return Err(ConfigError::ResponseTimeoutOutOfRange {
+                ms: timeout.as_millis(),
+            });
+        }
+        if self.retries > Self::MAX_RETRIES {
+            return Err(ConfigError::TooManyRetries {
+                retries: self.retries,
+            });
+        }
+        let poll = self.poll_interval;
+        if poll < Self::MIN_POLL_INTERVAL || poll > Self::MAX_POLL_INTERVAL {
+            return Err(ConfigError::PollIntervalOutOfRange {
+                ms: poll.as_millis(),
+            });
+        }
+        let slow = self.slow_data_interval;
+        if slow < Self::MIN_SLOW_DATA_INTERVAL || slow > Self::MAX_SLOW_DATA_INTERVAL {
+            return Err(ConfigError::SlowDataIntervalOutOfRange {
+                ms: slow.as_millis(),
+            });
+        }
+        if self.hpr_id > Self::MAX_HPR_ID {
+            return Err(ConfigError::HprIdOutOfRange { id: self.hpr_id });
+        }
+        if self.failures_before_down == 0
+            || self.failures_before_down > Self::MAX_FAILURES_BEFORE_DOWN
+        {
+            return Err(ConfigError::FailuresBeforeDownOutOfRange {
+                count: self.failures_before_down,
+            });
+        }
+        Ok(())
+    }
+
+    /// The UART settings for Modbus with this configuration (19200 baud).
+    pub const fn modbus_port(&self) -> PortConfig {
+        PortConfig {
+            baud: PortConfig::MODBUS_DEFAULT.baud,
+            parity: self.modbus_parity,
+            stop_bits: self.modbus_stop_bits,
+        }
+    }
+}
+
+impl Default for LinkConfig {
+    fn default() -> Self {
+        LinkConfig {
+            protocol: ProtocolChoice::Auto,
+            node_address: 1,
+            modbus_parity: Parity::Even,
+            modbus_stop_bits: StopBits::One,
+            response_timeout: Duration::from_millis(100),
+            retries: 2,
+            poll_interval: Duration::from_millis(100),
+            slow_data_interval: Duration::from_secs(30),
+            hpr_id: 0,
+            failures_before_down: 3,
+        }
+    }
+}
+
+/// Why a [`LinkConfig`] was rejected.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum ConfigError {
+    /// Node address 0 is the units' own "learn the address" setting, not a valid target.
+    NodeAddressZero,
+    /// Response time-out outside 60-1000 ms.
+    ResponseTimeoutOutOfRange {
+        /// The value given, in milliseconds.
+        ms: u64,
+    },
+    /// More than [`LinkConfig::MAX_RETRIES`] retries.
+    TooManyRetries {
+        /// The value given.
+        retries: u8,
+    },
+    /// Poll interval outside 20-1000 ms.
+    PollIntervalOutOfRange {
+        /// The value given, in milliseconds.
+        ms: u64,
+    },
+    /// Slow-data interval outside 1 s - 1 h.
+    SlowDataIntervalOutOfRange {
+        /// The value given, in milliseconds.
+        ms: u64,
+    },
+    /// HPR multi-drop id above 3.
+    HprIdOutOfRange {
+        /// The value given.
+        id: u8,
+    },
+    /// Failures-before-down outside 1-10.
+    FailuresBeforeDownOutOfRange {
+        /// The value given.
+        count: u8,
+    },
+}
+
+impl fmt::Display for ConfigError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            ConfigError::NodeAddressZero => f.write_str("node address must be 1-255, not 0"),
+            ConfigError::ResponseTimeoutOutOfRange { ms } => {
+                write!(f, "response time-out {ms} ms is outside 60-1000 ms")
+            }
+            ConfigError::TooManyRetries { retries } => write!(
+                f,
+                "{retries} retries is more than the maximum of {}",
+                LinkConfig::MAX_RETRIES
+            ),
+            ConfigError::PollIntervalOutOfRange { ms } => {
+                write!(f, "poll interval {ms} ms is outside 20-1000 ms")
+            }
+            ConfigError::SlowDataIntervalOutOfRange { ms } => {
+                write!(f, "slow-data interval {ms} ms is outside 1 s - 1 h")
+            }
+            ConfigError::HprIdOutOfRange { id } => write!(f, "HPR id {id} is outside 0-3"),
+            ConfigError::FailuresBeforeDownOutOfRange { count } => {
+                write!(f, "failures before link-down {count} is outside 1-10")
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn defaults_are_valid_and_follow_the_manuals() {
+        let config = LinkConfig::default();
+        assert_eq!(config.validate(), Ok(()));
+        assert_eq!(config.node_address, 1);
+        assert_eq!(config.response_timeout, Duration::from_millis(100));
+        assert_eq!(config.retries, 2);
+        assert_eq!(config.modbus_port(), PortConfig::MODBUS_DEFAULT);
+    }
+
+    #[test]
+    fn each_out_of_range_field_is_named() {
+        let base = LinkConfig::default();
+        let check = |config: LinkConfig| config.validate().err();
+        assert_eq!(
+            check(LinkConfig {
+                node_address: 0,
+                ..base
+            }),
+            Some(ConfigError::NodeAddressZero)
+        );
+        assert_eq!(
+            check(LinkConfig {
+                response_timeout: Duration::from_millis(59),
+                ..base
+            }),
+            Some(ConfigError::ResponseTimeoutOutOfRange { ms: 59 })
+        );
+        assert_eq!(
+            check(LinkConfig {
+                response_timeout: Duration::from_millis(1001),
+                ..base
+            }),
+            Some(ConfigError::ResponseTimeoutOutOfRange { ms: 1001 })
+        );
+        assert_eq!(
+            check(LinkConfig {
+                response_timeout: Duration::from_millis(60),
+                ..base
+            }),
+            None
+        );
+        assert_eq!(
+            check(LinkConfig {
+                response_timeout: Duration::from_millis(1000),
+                ..base
+            }),
+            None
+        );
+        assert_eq!(
+            check(LinkConfig { retries: 6, ..base }),
+            Some(ConfigError::TooManyRetries { retries: 6 })
+        );
+        assert_eq!(
+            check(LinkConfig {
+                poll_interval: Duration::from_millis(1500),
+                ..base
+            }),
+            Some(ConfigError::PollIntervalOutOfRange { ms: 1500 })
+        );
+        assert_eq!(
+            check(LinkConfig {
+                slow_data_interval: Duration::from_millis(500),
+                ..base
+            }),
+            Some(ConfigError::SlowDataIntervalOutOfRange { ms: 500 })
+        );
+        assert_eq!(
+            check(LinkConfig { hpr_id: 4, ..base }),
+            Some(ConfigError::HprIdOutOfRange { id: 4 })
+        );
+        assert_eq!(
+            check(LinkConfig {
+                failures_before_down: 0,
+                ..base
+            }),
+            Some(ConfigError::FailuresBeforeDownOutOfRange { count: 0 })
+        );
+    }
+}

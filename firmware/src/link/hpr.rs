@@ -1,0 +1,669 @@
+//! The HPR / MaxPro200 driver (`>ID data CK<`): polling GET_PS_INFO, the pilot-arc pause,
+//! remote settings and the allow-listed commands.
+//!
+//! Manual rules kept here (section VII/VIII): one command at a time, each reply awaited
+//! before the next (the transaction layer), no trailing CR/LF (frames come from the protocol
+//! crate as `>...<` only), retries spaced over more than 1 s (the transaction layer), and
+//! while the state is pilot arc "stop serial communications" for the length of an
+//! HF-ignition burst, then ask GET_STATE only until the pilot arc is over.
+
+use heapless::{Deque, Vec};
+use plasma_protocol::hpr::command::id;
+use plasma_protocol::hpr::{
+    self, Acceptance, ErrorCode, Frame, GasCode, GasFlows, GasPair, Reply, Request, StateCode,
+    SystemId,
+};
+
+use super::Core;
+use super::command::{HprGasFlow, HprValue, LinkCommand, Refusal};
+use super::event::{CommandFailure, CommandOutput, LinkEvent, Ticket};
+use super::status::{ActiveFault, Family};
+use super::transaction::TransactionError;
+use crate::time::{Duration, Instant};
+
+/// How long all traffic stops when the state is pilot arc: the manual's HF-ignition burst
+/// ("can be active for up to 1 second").
+pub const PILOT_ARC_PAUSE: Duration = Duration::from_secs(1);
+/// Longest RAW HPR frame.
+pub const RAW_HPR_CAPACITY: usize = hpr::MAX_FRAME_LEN;
+const QUEUE_CAPACITY: usize = 4;
+
+/// What is expected back.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum HprExpect {
+    /// A typed request; its reply is parsed for it.
+    Typed(Request),
+    /// A RAW frame with this id; any reply echoing it (or 500/501) is forwarded.
+    Raw(u16),
+}
+
+/// What an HPR transaction is for.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum HprPurpose {
+    /// GET_PS_INFO.
+    Poll,
+    /// GET_STATE while the pilot arc lasts.
+    State,
+    /// 004 REMOTE_MODE before the first setting.
+    RemoteMode,
+    /// 134 READ ERROR LOG (slow data).
+    SlowErrorLog,
+    /// 125 GET_TIMER_COUNTER (slow data).
+    SlowTimers,
+    /// The active command.
+    Active,
+}
+
+#[derive(Debug, Clone, PartialEq, Eq)]
+enum HprJob {
+    Typed(Request),
+    Raw {
+        id: u16,
+        frame: Vec<u8, RAW_HPR_CAPACITY>,
+    },
+}
+
+impl HprJob {
+    fn needs_remote(&self) -> bool {
+        matches!(
+            self,
+            HprJob::Typed(
+                Request::SetNominalAmps { .. }
+                    | Request::SetProcess { .. }
+                    | Request::SetAllParameters(_)
+                    | Request::SetAllParametersMaxPro200(_)
+                    | Request::SetInletGases(_)
+                    | Request::SetCornerCurrent { .. }
+            )
+        )
+    }
+}
+
+const SLOW_ERROR_LOG: u8 = 1;
+const SLOW_TIMERS: u8 = 2;
+
+/// Driver state for one detected HPR or MaxPro200.
+#[derive(Debug, Clone)]
+pub struct HprDriver {
+    system: SystemId,
+    next_poll_at: Instant,
+    pause_until: Option<Instant>,
+    slow_pending: u8,
+    slow_error: Option<TransactionError>,
+    slow_tickets: Vec<Ticket, QUEUE_CAPACITY>,
+    next_slow_at: Instant,
+    queue: Deque<(Ticket, HprJob), QUEUE_CAPACITY>,
+    active: Option<(Ticket, HprJob)>,
+    now: Instant,
+}
+
+/// True for the states in which the HF ignition may fire (HPR 5 PILOT ARC; MaxPro200
+/// 6 IGNITE and 7 PILOT ARC).
+fn is_pilot_arc(maxpro: bool, state: StateCode) -> bool {
+    if maxpro {
+        matches!(state.0, 6 | 7)
+    } else {
+        state.0 == 5
+    }
+}
+
+/// True while cutting (states 4-10 on both families: preflow to rampdown), when the manual
+/// forbids gas changes, gas tests and resets.
+fn is_cutting(state: Option<StateCode>) -> bool {
+    state.is_some_and(|s| (4..=10).contains(&s.0))
+}
+
+impl HprDriver {
+    /// A driver for a unit that answered HELLO with `system`.
+    pub fn new(system: SystemId, now: Instant, core: &Core) -> Self {
+        let maxpro = system == SystemId::MaxPro200;
+        HprDriver {
+            system,
+            next_poll_at: now,
+            pause_until: None,
+            slow_pending: if maxpro {
+                0
+            } else {
+                SLOW_ERROR_LOG | SLOW_TIMERS
+            },
+            slow_error: None,
+            slow_tickets: Vec::new(),
+            next_slow_at: now + core.config.slow_data_interval,
+            queue: Deque::new(),
+            active: None,
+            now,
+        }
+    }
+
+    fn maxpro(&self) -> bool {
+        self.system == SystemId::MaxPro200
+    }
+
+    /// Family of the unit.
+    pub fn family(&self) -> Family {
+        if self.maxpro() {
+            Family::MaxPro200
+        } else {
+            Family::Hpr
+        }
+    }
+
+    fn max_amps(&self) -> u16 {
+        match self.system {
+            SystemId::Hpr { rating, .. } => rating.max_amps(),
+            SystemId::MaxPro200 => hpr::MAX_MAXPRO_AMPS,
+        }
+    }
+
+    /// True when the active command is a RAW forward.
+    pub fn active_is_raw(&self) -> bool {
+        matches!(self.active, Some((_, HprJob::Raw { .. })))
+    }
+
+    fn in_pilot_arc(&self, core: &Core) -> bool {
+        core.status
+            .hpr
+            .state
+            .is_some_and(|s| is_pilot_arc(self.maxpro(), s))
+    }
+
+    /// Earliest time the driver wants to send something.
+    pub fn wake_at(&self, core: &Core) -> Option<Instant> {
+        if let Some(until) = self.pause_until.filter(|&u| self.now < u) {
+            return Some(until);
+        }
+        if self.in_pilot_arc(core) {
+            return Some(self.next_poll_at);
+        }
+        if self.active.is_some() || !self.queue.is_empty() || self.slow_pending != 0 {
+            return Some(self.now);
+        }
+        Some(self.next_poll_at.min(self.next_slow_at))
+    }
+
+    /// The next frame to send, if any, and what it is for.
+    pub fn next_request(
+        &mut self,
+        now: Instant,
+        core: &mut Core,
+    ) -> Option<(HprPurpose, HprExpect, Vec<u8, RAW_HPR_CAPACITY>)> {
+        self.now = now;
+        if self.pause_until.is_some_and(|until| now < until) {
+            return None;
+        }
+        if self.in_pilot_arc(core) {
+            // Only GET_STATE until the pilot arc is over.
+            if now < self.next_poll_at {
+                return None;
+            }
+            return typed(HprPurpose::State, Request::GetState);
+        }
+        if self.active.is_none() {
+            self.active = self.queue.pop_front();
+        }
+        if let Some((_, job)) = &self.active {
+            if job.needs_remote() && !core.status.hpr.remote_accepted {
+                return typed(HprPurpose::RemoteMode, Request::RemoteMode);
+            }
+            return match job {
+                HprJob::Typed(request) => typed(HprPurpose::Active, *request),
+                HprJob::Raw { id, frame } => {
+                    Some((HprPurpose::Active, HprExpect::Raw(*id), frame.clone()))
+                }
+            };
+        }
+        if now >= self.next_poll_at {
+            self.next_poll_at = now + core.config.poll_interval;
+            return typed(HprPurpose::Poll, Request::GetPsInfo);
+        }
+        if self.slow_pending & SLOW_ERROR_LOG != 0 {
+            return typed(HprPurpose::SlowErrorLog, Request::ReadErrorLog);
+        }
+        if self.slow_pending & SLOW_TIMERS != 0 {
+            return typed(HprPurpose::SlowTimers, Request::GetTimerCounter);
+        }
+        if now >= self.next_slow_at {
+            self.next_slow_at = now + core.config.slow_data_interval;
+            if !self.maxpro() {
+                self.slow_pending = SLOW_ERROR_LOG | SLOW_TIMERS;
+                return typed(HprPurpose::SlowErrorLog, Request::ReadErrorLog);
+            }
+        }
+        None
+    }
+
+    /// A reply arrived for `purpose` (already checked to answer the request; error replies
+    /// 500/501 never get here, except for RAW forwards).
+    pub fn on_reply(
+        &mut self,
+        now: Instant,
+        purpose: HprPurpose,
+        reply: Option<&Reply<'_>>,
+        raw_len: usize,
+        core: &mut Core,
+    ) {
+        self.now = now;
+        match (purpose, reply) {
+            (HprPurpose::Poll, Some(Reply::PsInfo(info))) => {
+                core.status.hpr.ps_info = Some(*info);
+                core.status.hpr.nominal_amps = Some(info.current_setpoint);
+                self.update_state(now, info.state, core);
+                self.update_error(info.error, core);
+            }
+            (HprPurpose::Poll, Some(Reply::MaxProPsInfo(info))) => {
+                core.status.hpr.maxpro_info = Some(*info);
+                core.status.hpr.nominal_amps = Some(info.current_setpoint);
+                self.update_state(now, info.state, core);
+                self.update_error(info.error, core);
+            }
+            (HprPurpose::State, Some(Reply::State(state))) => {
+                self.next_poll_at = now + core.config.poll_interval;
+                self.update_state(now, *state, core);
+            }
+            (HprPurpose::RemoteMode, Some(Reply::Ack { result, .. })) => {
+                if *result == Acceptance::Accepted {
+                    core.status.hpr.remote_accepted = true;
+                    if !core.status.remote {
+                        core.status.remote = true;
+                        core.emit(LinkEvent::RemoteModeChanged { remote: true });
+                    }
+                } else if let Some((ticket, _)) = self.active.take() {
+                    core.emit(LinkEvent::CommandDone {
+                        ticket,
+                        result: Err(CommandFailure::NotAccepted),
+                    });
+                }
+            }
+            (HprPurpose::SlowErrorLog, reply) => {
+                if let Some(Reply::ErrorLog(log)) = reply {
+                    core.status.hpr.error_log = Some(*log);
+                }
+                self.slow_done(SLOW_ERROR_LOG, None, core);
+            }
+            (HprPurpose::SlowTimers, reply) => {
+                if let Some(Reply::TimerCounter(t)) = reply {
+                    core.status.hpr.timers = Some(*t);
+                }
+                self.slow_done(SLOW_TIMERS, None, core);
+            }
+            (HprPurpose::Active, reply) => {
+                let Some((ticket, job)) = self.active.take() else {
+                    return;
+                };
+                let result = match (&job, reply) {
+                    (HprJob::Raw { .. }, _) => Ok(CommandOutput::Raw { len: raw_len }),
+                    (_, Some(Reply::NominalAmps(amps))) => {
+                        core.status.hpr.nominal_amps = Some(*amps);
+                        Ok(CommandOutput::Value(*amps))
+                    }
+                    (_, Some(Reply::CornerCurrentSet(percent))) => {
+                        Ok(CommandOutput::Value(*percent))
+                    }
+                    (_, Some(Reply::Ack { result, .. })) => {
+                        if *result == Acceptance::Accepted {
+                            Ok(CommandOutput::Done)
+                        } else {
+                            Err(CommandFailure::NotAccepted)
+                        }
+                    }
+                    (_, Some(Reply::ErrorLog(log))) => {
+                        core.status.hpr.error_log = Some(*log);
+                        Ok(CommandOutput::ErrorLog(*log))
+                    }
+                    (_, Some(Reply::TimerCounter(t))) => {
+                        core.status.hpr.timers = Some(*t);
+                        Ok(CommandOutput::Done)
+                    }
+                    _ => Ok(CommandOutput::Done),
+                };
+                core.emit(LinkEvent::CommandDone { ticket, result });
+            }
+            _ => {}
+        }
+    }
+
+    /// `purpose` failed for good.
+    pub fn on_failed(
+        &mut self,
+        now: Instant,
+        purpose: HprPurpose,
+        error: TransactionError,
+        core: &mut Core,
+    ) {
+        self.now = now;
+        match purpose {
+            HprPurpose::Poll | HprPurpose::State => {}
+            HprPurpose::SlowErrorLog => self.slow_done(SLOW_ERROR_LOG, Some(error), core),
+            HprPurpose::SlowTimers => self.slow_done(SLOW_TIMERS, Some(error), core),
+            HprPurpose::RemoteMode | HprPurpose::Active => {
+                if let Some((ticket, _)) = self.active.take() {
+                    core.emit(LinkEvent::CommandDone {
+                        ticket,
+                        result: Err(CommandFailure::Transaction(error)),
+                    });
+                }
+            }
+        }
+    }
+
+    fn update_state(&mut self, now: Instant, state: StateCode, core: &mut Core) {
+        let previous = core.status.hpr.state;
+        if previous != Some(state) {
+            core.status.hpr.state = Some(state);
+            core.emit(LinkEvent::StateChanged {
+                from: previous,
+                to: state,
+            });
+            if is_pilot_arc(self.maxpro(), state) {
+                let until = now + PILOT_ARC_PAUSE;
+                self.pause_until = Some(until);
+                self.next_poll_at = until;
+            }
+        }
+    }
+
+    fn update_error(&mut self, error: ErrorCode, core: &mut Core) {
+        let new = error.is_error().then_some(ActiveFault::Hpr(error));
+        core.status.hpr.error = Some(error);
+        if core.status.active_fault == new {
+            return;
+        }
+        if let Some(old) = core.status.active_fault {
+            core.emit(LinkEvent::FaultCleared { code: old });
+        }
+        if let Some(fault) = new {
+            core.emit(LinkEvent::FaultRaised {
+                code: fault,
+                action_required: fault.action_required(),
+            });
+        }
+        core.status.active_fault = new;
+    }
+
+    fn slow_done(&mut self, bit: u8, error: Option<TransactionError>, core: &mut Core) {
+        self.slow_pending &= !bit;
+        if error.is_some() {
+            self.slow_error = error;
+        }
+        if self.slow_pending == 0 {
+            let result = match self.slow_error.take() {
+                None => Ok(CommandOutput::Done),
+                Some(e) => Err(CommandFailure::Transaction(e)),
+            };
+            for ticket in self.slow_tickets.iter() {
+                core.emit(LinkEvent::CommandDone {
+                    ticket: *ticket,
+                    result,
+                });
+            }
+            self.slow_tickets.clear();
+        }
+    }
+
+    /// Validate and queue a command.
+    pub fn submit(
+        &mut self,
+        now: Instant,
+        ticket: Ticket,
+        command: &LinkCommand,
+        core: &mut Core,
+    ) -> Result<(), Refusal> {
+        self.now = now;
+        let family = self.family();
+        let maxpro = self.maxpro();
+        let unsupported = Refusal::NotSupported { family };
+        let state = core.status.hpr.state;
+        let error = core.status.hpr.error;
+        let forbidden = Refusal::StateForbids { state, error };
+        let request = match command {
+            LinkCommand::HprSetNominalAmps { amps } => {
+                check_amps(*amps, self.max_amps())?;
+                Request::SetNominalAmps { amps: *amps }
+            }
+            LinkCommand::HprSetProcess { amps, gases } => {
+                if !maxpro {
+                    return Err(unsupported);
+                }
+                check_amps(*amps, hpr::MAX_MAXPRO_AMPS)?;
+                check_gases(gases)?;
+                // "only accepted when the system is in state #2 or #3".
+                if !state.is_some_and(|s| matches!(s.0, 2 | 3)) {
+                    return Err(forbidden);
+                }
+                Request::SetProcess {
+                    amps: *amps,
+                    gases: *gases,
+                }
+            }
+            LinkCommand::HprSetAllParameters(parameters) => {
+                let auto_console = matches!(
+                    self.system,
+                    SystemId::Hpr {
+                        console: Some(hpr::GasConsole::Auto | hpr::GasConsole::AutoMix) | None,
+                        ..
+                    }
+                );
+                if maxpro || !auto_console {
+                    return Err(unsupported);
+                }
+                check_amps(parameters.amps, self.max_amps())?;
+                check_corner(parameters.corner_percent)?;
+                check_gases(&parameters.gases)?;
+                check_flows(&parameters.flows)?;
+                if is_cutting(state) {
+                    return Err(forbidden);
+                }
+                Request::SetAllParameters(*parameters)
+            }
+            LinkCommand::MaxProSetAllParameters(parameters) => {
+                if !maxpro {
+                    return Err(unsupported);
+                }
+                check_amps(parameters.amps, hpr::MAX_MAXPRO_AMPS)?;
+                check_gases(&parameters.gases)?;
+                for psi in [parameters.pressures.plasma, parameters.pressures.shield] {
+                    check_range(HprValue::GasParameter, psi, 0, hpr::MAX_FLOW_PSI)?;
+                }
+                if !state.is_some_and(|s| matches!(s.0, 2 | 3)) {
+                    return Err(forbidden);
+                }
+                Request::SetAllParametersMaxPro200(*parameters)
+            }
+            LinkCommand::HprSetInletGases(gases) => {
+                check_gases(gases)?;
+                if is_cutting(state) {
+                    return Err(forbidden);
+                }
+                Request::SetInletGases(*gases)
+            }
+            LinkCommand::HprSetCornerCurrent { percent } => {
+                if maxpro {
+                    return Err(unsupported);
+                }
+                check_corner(*percent)?;
+                Request::SetCornerCurrent { percent: *percent }
+            }
+            LinkCommand::HprClearWarnings => {
+                if maxpro {
+                    return Err(unsupported);
+                }
+                Request::ClearWarnings
+            }
+            LinkCommand::HprSoftwareReset => {
+                let allowed = if maxpro {
+                    // "only valid when the system is not cutting".
+                    state.is_some() && !is_cutting(state)
+                } else {
+                    // "Only accepted if ... Error code > 79 and State = 14".
+                    state == Some(StateCode(14)) && error.is_some_and(|e| e.is_shutdown_error())
+                };
+                if !allowed {
+                    return Err(forbidden);
+                }
+                Request::SoftwareReset
+            }
+            LinkCommand::HprGasTest { flow, on } => {
+                if maxpro {
+                    return Err(unsupported);
+                }
+                if is_cutting(state) {
+                    return Err(forbidden);
+                }
+                match (flow, on) {
+                    (HprGasFlow::Preflow, true) => Request::GasPreflowTestStart,
+                    (HprGasFlow::Preflow, false) => Request::GasPreflowTestStop,
+                    (HprGasFlow::Cutflow, true) => Request::GasCutflowTestStart,
+                    (HprGasFlow::Cutflow, false) => Request::GasCutflowTestStop,
+                }
+            }
+            LinkCommand::HprReadErrorLog => {
+                if maxpro {
+                    return Err(unsupported);
+                }
+                Request::ReadErrorLog
+            }
+            LinkCommand::HprReadTimers => {
+                if maxpro {
+                    return Err(unsupported);
+                }
+                Request::GetTimerCounter
+            }
+            LinkCommand::RefreshSlowData => {
+                if maxpro {
+                    core.emit(LinkEvent::CommandDone {
+                        ticket,
+                        result: Ok(CommandOutput::Done),
+                    });
+                    return Ok(());
+                }
+                self.slow_tickets
+                    .push(ticket)
+                    .map_err(|_| Refusal::QueueFull)?;
+                self.slow_pending |= SLOW_ERROR_LOG | SLOW_TIMERS;
+                return Ok(());
+            }
+            LinkCommand::Raw(bytes) => {
+                let job = parse_raw(bytes)?;
+                return self
+                    .queue
+                    .push_back((ticket, job))
+                    .map_err(|_| Refusal::QueueFull);
+            }
+            _ => return Err(unsupported),
+        };
+        // Belt and braces: the typed commands above are all on the allow-list.
+        if !hpr::is_allowed(request.id()) {
+            return Err(Refusal::RawCommandNotAllowed { id: request.id() });
+        }
+        let mut buf = [0u8; hpr::MAX_FRAME_LEN];
+        request.emit(&mut buf).map_err(Refusal::RawMalformed)?;
+        self.queue
+            .push_back((ticket, HprJob::Typed(request)))
+            .map_err(|_| Refusal::QueueFull)
+    }
+
+    /// The link went down: every pending command fails.
+    pub fn abort(&mut self, core: &mut Core) {
+        let failed = Err(CommandFailure::LinkDown);
+        if let Some((ticket, _)) = self.active.take() {
+            core.emit(LinkEvent::CommandDone {
+                ticket,
+                result: failed,
+            });
+        }
+        while let Some((ticket, _)) = self.queue.pop_front() {
+            core.emit(LinkEvent::CommandDone {
+                ticket,
+                result: failed,
+            });
+        }
+        for ticket in self.slow_tickets.iter() {
+            core.emit(LinkEvent::CommandDone {
+                ticket: *ticket,
+                result: failed,
+            });
+        }
+        self.slow_tickets.clear();
+    }
+}
+
+fn typed(
+    purpose: HprPurpose,
+    request: Request,
+) -> Option<(HprPurpose, HprExpect, Vec<u8, RAW_HPR_CAPACITY>)> {
+    let frame = emit(&request)?;
+    Some((purpose, HprExpect::Typed(request), frame))
+}
+
+/// The frame for `request`: `>ID data CK<`, nothing after `<`.
+pub fn emit(request: &Request) -> Option<Vec<u8, RAW_HPR_CAPACITY>> {
+    let mut buf = [0u8; hpr::MAX_FRAME_LEN];
+    let len = request.emit(&mut buf).ok()?;
+    Vec::from_slice(buf.get(..len)?).ok()
+}
+
+fn check_range(value: HprValue, requested: u16, min: u16, max: u16) -> Result<(), Refusal> {
+    if (min..=max).contains(&requested) {
+        Ok(())
+    } else {
+        Err(Refusal::HprValueOutOfRange {
+            value,
+            requested,
+            min,
+            max,
+        })
+    }
+}
+
+fn check_amps(amps: u16, max: u16) -> Result<(), Refusal> {
+    check_range(HprValue::Amps, amps, hpr::MIN_AMPS, max)
+}
+
+fn check_corner(percent: u8) -> Result<(), Refusal> {
+    check_range(
+        HprValue::CornerPercent,
+        u16::from(percent),
+        u16::from(*hpr::CORNER_PERCENT.start()),
+        u16::from(*hpr::CORNER_PERCENT.end()),
+    )
+}
+
+/// Gas type codes 1..=12 (0 is "No Gas, invalid gas type").
+fn check_gases(gases: &GasPair) -> Result<(), Refusal> {
+    for gas in [gases.plasma, gases.shield] {
+        check_range(HprValue::GasParameter, gas.0, 1, GasCode::MAX)?;
+    }
+    Ok(())
+}
+
+fn check_flows(flows: &GasFlows) -> Result<(), Refusal> {
+    for (i, psi) in flows.to_array().into_iter().enumerate() {
+        let max = if i < 4 {
+            hpr::MAX_FLOW_PSI
+        } else {
+            hpr::MAX_MIX_PSI
+        };
+        check_range(HprValue::GasParameter, psi, 0, max)?;
+    }
+    Ok(())
+}
+
+/// Check a RAW HPR frame: valid framing and checksum, an allow-listed id, and not line
+/// control the link owns (SLEEP, WAKE, BROADCAST would strand the link).
+fn parse_raw(bytes: &[u8]) -> Result<HprJob, Refusal> {
+    let frame = Frame::parse(bytes).map_err(Refusal::RawMalformed)?;
+    let line_control = matches!(frame.id, id::SLEEP | id::WAKE | id::BROADCAST_MODE);
+    if !hpr::is_allowed(frame.id) || line_control {
+        return Err(Refusal::RawCommandNotAllowed { id: frame.id });
+    }
+    let mut buf = [0u8; hpr::MAX_FRAME_LEN];
+    let len = frame.emit(&mut buf).map_err(Refusal::RawMalformed)?;
+    let frame_bytes = buf
+        .get(..len)
+        .and_then(|b| Vec::from_slice(b).ok())
+        .ok_or(Refusal::RawMalformed(plasma_protocol::Error::Overlong))?;
+    Ok(HprJob::Raw {
+        id: frame.id,
+        frame: frame_bytes,
+    })
+}

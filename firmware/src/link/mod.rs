@@ -1,0 +1,899 @@
+//! The power-supply link (see notes/LINK-DESIGN.md): a sans-IO state machine that speaks
+//! Modbus ASCII to Powermax units and `>ID data CK<` to HPR / MaxPro200 units.
+//!
+//! It never reads a clock or touches a UART: the caller feeds it received bytes and the time,
+//! transmits what [`PsLink::poll_transmit`] returns with the port settings of
+//! [`PsLink::port_config`], and wakes it at [`PsLink::poll_at`].
+//!
+//! ```
+//! use plasma_firmware::link::{LinkConfig, PsLink};
+//! use plasma_firmware::time::Instant;
+//!
+//! let mut link = PsLink::new(LinkConfig::default(), Instant::ZERO);
+//! // Auto-detection starts with Read Device Identification at node 1, 8E1.
+//! let frame = link.poll_transmit(Instant::ZERO).unwrap();
+//! assert_eq!(frame, b":012B0E0401C1\r\n");
+//! // The unit answers: a Powermax65/85/105 SYNC.
+//! link.handle_rx(Instant::from_millis(20), b":012B0E0481000101010630383133333504\r\n");
+//! assert!(link.status().link_up);
+//! ```
+
+pub mod command;
+pub mod config;
+pub mod diagnostics;
+pub mod event;
+pub mod hpr;
+pub mod legacy;
+pub mod modbus;
+pub mod powermax;
+pub mod status;
+pub mod sync;
+pub mod transaction;
+
+#[cfg(test)]
+mod tests;
+
+use heapless::Vec;
+use plasma_protocol::hpr::{self as hpr_wire, Reply, SystemId};
+use plasma_protocol::modbus_ascii::{self, Response};
+use plasma_protocol::powermax::{
+    AddressingSystem, PowerSupplyModel, device_id, legacy as pm_legacy,
+};
+
+pub use command::{HprGasFlow, HprValue, LinkCommand, Refusal};
+pub use config::{ConfigError, LinkConfig, ProtocolChoice};
+pub use diagnostics::Diagnostics;
+pub use event::{
+    CommandFailure, CommandOutput, LinkDownReason, LinkEvent, SettingsFailure, Ticket,
+};
+pub use status::{ActiveFault, Family, Limits, Model, PowermaxSettings, UnitStatus};
+pub use transaction::TransactionError;
+
+use event::EventQueue;
+use hpr::{HprDriver, HprExpect, HprPurpose};
+use modbus::MbRequest;
+use powermax::{MbPurpose, PowermaxDriver, Variant};
+use transaction::{Outcome, RetrySpacing, TX_CAPACITY, Transaction};
+
+use crate::port::{Parity, PortConfig, StopBits};
+use crate::time::{Duration, Instant};
+
+/// Pause between two detection rounds, so a silent line is not hammered.
+pub const DETECT_ROUND_PAUSE: Duration = Duration::from_millis(250);
+/// Quiet time after HPR SLEEP (086), which no unit answers.
+pub const SLEEP_QUIET: Duration = Duration::from_millis(20);
+
+/// Modbus line settings tried in turn by auto-detection (the configured one first).
+const MODBUS_FRAMINGS: [(Parity, StopBits); 6] = [
+    (Parity::Even, StopBits::One),
+    (Parity::Odd, StopBits::One),
+    (Parity::None, StopBits::One),
+    (Parity::Even, StopBits::Two),
+    (Parity::Odd, StopBits::Two),
+    (Parity::None, StopBits::Two),
+];
+
+/// State shared by the link and its family drivers.
+#[derive(Debug)]
+pub struct Core {
+    /// The (validated) configuration.
+    pub config: LinkConfig,
+    /// What is known about the unit.
+    pub status: UnitStatus,
+    /// Counters.
+    pub diagnostics: Diagnostics,
+    events: EventQueue,
+}
+
+impl Core {
+    /// Queue an event.
+    pub fn emit(&mut self, event: LinkEvent) {
+        self.events.push(event, &mut self.diagnostics);
+    }
+}
+
+/// Which framing the receiver expects.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Wire {
+    Modbus,
+    Hpr,
+}
+
+/// Auto-detection steps.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum DetectStep {
+    /// Read Device Identification (2B/0E, code 04, object 01).
+    DeviceId,
+    /// Plain legacy register read (0x2098) for units without device identification.
+    LegacyProbe,
+    /// HPR multi-drop: SLEEP all systems.
+    HprSleep,
+    /// HPR multi-drop: WAKE the configured id.
+    HprWake,
+    /// HPR HELLO (000).
+    HprHello,
+}
+
+#[derive(Debug, Clone)]
+struct Detector {
+    step: DetectStep,
+    round: u32,
+    not_before: Instant,
+}
+
+#[derive(Debug, Clone)]
+enum DetectExpect {
+    Modbus(MbRequest),
+    Hpr(hpr_wire::Request),
+}
+
+#[derive(Debug, Clone)]
+enum Tag {
+    Detect(DetectStep, DetectExpect),
+    Modbus(MbPurpose, MbRequest),
+    Hpr(HprPurpose, HprExpect),
+}
+
+// One phase at a time, held inline (no allocator).
+#[allow(clippy::large_enum_variant)]
+#[derive(Debug)]
+enum Phase {
+    Detecting(Detector),
+    Powermax(PowermaxDriver),
+    Hpr(HprDriver),
+}
+
+/// The power-supply link.
+#[derive(Debug)]
+pub struct PsLink {
+    core: Core,
+    phase: Phase,
+    port: PortConfig,
+    wire: Wire,
+    txn: Option<Transaction<Tag>>,
+    modbus_rx: modbus_ascii::Decoder,
+    hpr_rx: hpr_wire::Decoder,
+    consecutive_failures: u8,
+    next_ticket: u32,
+    raw_reply: Vec<u8, TX_CAPACITY>,
+    now: Instant,
+}
+
+/// Clamp every field of `config` into its valid range (used by [`PsLink::new`]).
+fn sanitize(config: LinkConfig) -> LinkConfig {
+    let clamp = |d: Duration, lo: Duration, hi: Duration| d.max(lo).min(hi);
+    LinkConfig {
+        node_address: config.node_address.max(1),
+        response_timeout: clamp(
+            config.response_timeout,
+            LinkConfig::MIN_RESPONSE_TIMEOUT,
+            LinkConfig::MAX_RESPONSE_TIMEOUT,
+        ),
+        retries: config.retries.min(LinkConfig::MAX_RETRIES),
+        poll_interval: clamp(
+            config.poll_interval,
+            LinkConfig::MIN_POLL_INTERVAL,
+            LinkConfig::MAX_POLL_INTERVAL,
+        ),
+        slow_data_interval: clamp(
+            config.slow_data_interval,
+            LinkConfig::MIN_SLOW_DATA_INTERVAL,
+            LinkConfig::MAX_SLOW_DATA_INTERVAL,
+        ),
+        hpr_id: config.hpr_id.min(LinkConfig::MAX_HPR_ID),
+        failures_before_down: config
+            .failures_before_down
+            .clamp(1, LinkConfig::MAX_FAILURES_BEFORE_DOWN),
+        ..config
+    }
+}
+
+impl PsLink {
+    /// A link that starts detecting at `now`. Fields out of range are clamped into range;
+    /// use [`PsLink::try_new`] to have them refused instead.
+    pub fn new(config: LinkConfig, now: Instant) -> Self {
+        let config = sanitize(config);
+        let mut link = PsLink {
+            core: Core {
+                config,
+                status: UnitStatus::default(),
+                diagnostics: Diagnostics::default(),
+                events: EventQueue::new(),
+            },
+            phase: Phase::Detecting(Detector {
+                step: DetectStep::DeviceId,
+                round: 0,
+                not_before: now,
+            }),
+            port: config.modbus_port(),
+            wire: Wire::Modbus,
+            txn: None,
+            modbus_rx: modbus_ascii::Decoder::new(),
+            hpr_rx: hpr_wire::Decoder::new(),
+            consecutive_failures: 0,
+            next_ticket: 1,
+            raw_reply: Vec::new(),
+            now,
+        };
+        link.start_detection(now, 0);
+        link
+    }
+
+    /// A link for a configuration that passes [`LinkConfig::validate`].
+    pub fn try_new(config: LinkConfig, now: Instant) -> Result<Self, ConfigError> {
+        config.validate()?;
+        Ok(Self::new(config, now))
+    }
+
+    /// Bytes received on the PS UART (any chunking).
+    pub fn handle_rx(&mut self, now: Instant, bytes: &[u8]) {
+        self.now = now;
+        let mut rest = bytes;
+        while !rest.is_empty() {
+            match self.wire {
+                Wire::Modbus => {
+                    let (used, result) = self.modbus_rx.feed(rest);
+                    let owned = result.map(|r| {
+                        r.and_then(|frame| {
+                            Vec::<u8, { modbus_ascii::MAX_FRAME_BYTES }>::from_slice(frame.pdu)
+                                .map(|pdu| (frame.address, pdu))
+                                .map_err(|_| plasma_protocol::Error::Overlong)
+                        })
+                    });
+                    rest = rest.get(used..).unwrap_or(&[]);
+                    if let Some(result) = owned {
+                        self.on_modbus_frame(now, result);
+                    }
+                    if used == 0 {
+                        break;
+                    }
+                }
+                Wire::Hpr => {
+                    let (used, result) = self.hpr_rx.feed(rest);
+                    let owned = result.map(|r| {
+                        r.and_then(|frame| {
+                            Vec::<u8, { hpr_wire::MAX_FRAME_LEN }>::from_slice(frame.data)
+                                .map(|data| (frame.id, data))
+                                .map_err(|_| plasma_protocol::Error::Overlong)
+                        })
+                    });
+                    rest = rest.get(used..).unwrap_or(&[]);
+                    if let Some(result) = owned {
+                        self.on_hpr_frame(now, result);
+                    }
+                    if used == 0 {
+                        break;
+                    }
+                }
+            }
+        }
+        self.core.status.update_ready(now);
+    }
+
+    /// Bytes to put on the wire now (one whole frame), if any. The caller transmits them
+    /// completely before calling again. Returns None while waiting for a reply/time-out.
+    pub fn poll_transmit(&mut self, now: Instant) -> Option<&[u8]> {
+        self.now = now;
+        self.handle_timeout(now);
+        if self.txn.is_none() {
+            self.start_next(now);
+        }
+        self.core.status.update_ready(now);
+        let wire = self.wire;
+        let frame = self.txn.as_mut()?.poll_transmit(now)?;
+        // A new attempt starts with a clean receiver: leftovers of a damaged reply must not
+        // be taken for the answer.
+        match wire {
+            Wire::Modbus => self.modbus_rx.reset(),
+            Wire::Hpr => self.hpr_rx.reset(),
+        }
+        Some(frame)
+    }
+
+    /// The port settings the UART must use now (changes during auto-detection).
+    pub fn port_config(&self) -> PortConfig {
+        self.port
+    }
+
+    /// Earliest time at which `poll_transmit`/timers need attention. None = only new rx or
+    /// commands matter.
+    pub fn poll_at(&self) -> Option<Instant> {
+        if let Some(txn) = &self.txn {
+            return Some(txn.poll_at());
+        }
+        match &self.phase {
+            Phase::Detecting(d) => Some(d.not_before),
+            Phase::Powermax(d) => d.wake_at(),
+            Phase::Hpr(d) => d.wake_at(&self.core),
+        }
+    }
+
+    /// Drain events for the rest of the bridge.
+    pub fn poll_event(&mut self) -> Option<LinkEvent> {
+        self.core.events.pop()
+    }
+
+    /// Ask for an operation. Validates against the unit's limits BEFORE anything is sent;
+    /// Err = refused with a precise reason, nothing sent.
+    pub fn submit(&mut self, now: Instant, command: LinkCommand) -> Result<Ticket, Refusal> {
+        self.now = now;
+        let ticket = Ticket(self.next_ticket);
+        match &mut self.phase {
+            Phase::Detecting(_) => return Err(Refusal::LinkNotUp),
+            Phase::Powermax(driver) => driver.submit(now, ticket, &command, &mut self.core)?,
+            Phase::Hpr(driver) => driver.submit(now, ticket, &command, &mut self.core)?,
+        }
+        self.next_ticket = self.next_ticket.wrapping_add(1).max(1);
+        Ok(ticket)
+    }
+
+    /// Snapshot of what the bridge knows about the unit.
+    pub fn status(&self) -> &UnitStatus {
+        &self.core.status
+    }
+
+    /// Diagnostics counters.
+    pub fn diagnostics(&self) -> &Diagnostics {
+        &self.core.diagnostics
+    }
+
+    /// The reply frame of the last RAW command (see [`CommandOutput::Raw`]).
+    pub fn raw_reply(&self) -> &[u8] {
+        &self.raw_reply
+    }
+
+    /// Use another configuration: whatever is in progress is abandoned (pending commands fail
+    /// with [`CommandFailure::LinkDown`], a link that was up reports
+    /// [`LinkDownReason::Reconfigured`]) and detection starts again. Kept settings stay.
+    pub fn reconfigure(&mut self, now: Instant, config: LinkConfig) {
+        self.now = now;
+        let was_up = match &mut self.phase {
+            Phase::Powermax(driver) => {
+                driver.abort(&mut self.core);
+                true
+            }
+            Phase::Hpr(driver) => {
+                driver.abort(&mut self.core);
+                true
+            }
+            Phase::Detecting(_) => false,
+        };
+        self.core.config = sanitize(config);
+        self.core.status.forget_unit();
+        if was_up {
+            self.core.emit(LinkEvent::LinkDown {
+                reason: LinkDownReason::Reconfigured,
+            });
+        }
+        self.txn = None;
+        self.consecutive_failures = 0;
+        self.modbus_rx.reset();
+        self.hpr_rx.reset();
+        self.start_detection(now, 0);
+    }
+
+    /// The configuration in use (after clamping).
+    pub fn config(&self) -> &LinkConfig {
+        &self.core.config
+    }
+
+    // --- detection ---------------------------------------------------------------------
+
+    fn first_step(&self) -> DetectStep {
+        match self.core.config.protocol {
+            ProtocolChoice::Hpr => self.hpr_first_step(),
+            _ => DetectStep::DeviceId,
+        }
+    }
+
+    fn hpr_first_step(&self) -> DetectStep {
+        if self.core.config.hpr_id == 0 {
+            DetectStep::HprHello
+        } else {
+            DetectStep::HprSleep
+        }
+    }
+
+    fn start_detection(&mut self, not_before: Instant, round: u32) {
+        let step = self.first_step();
+        self.phase = Phase::Detecting(Detector {
+            step,
+            round,
+            not_before,
+        });
+        self.set_port_for(step, round);
+    }
+
+    fn set_port_for(&mut self, step: DetectStep, round: u32) {
+        let (port, wire) = match step {
+            DetectStep::DeviceId | DetectStep::LegacyProbe => {
+                (self.modbus_framing(round), Wire::Modbus)
+            }
+            DetectStep::HprSleep | DetectStep::HprWake | DetectStep::HprHello => {
+                (PortConfig::HPR, Wire::Hpr)
+            }
+        };
+        self.port = port;
+        if self.wire != wire {
+            self.modbus_rx.reset();
+            self.hpr_rx.reset();
+        }
+        self.wire = wire;
+    }
+
+    /// Modbus line settings for detection round `round`: the configured ones, and in auto
+    /// mode the other parity / stop-bit combinations in turn.
+    fn modbus_framing(&self, round: u32) -> PortConfig {
+        let configured = self.core.config.modbus_port();
+        if self.core.config.protocol != ProtocolChoice::Auto {
+            return configured;
+        }
+        let index = (round % MODBUS_FRAMINGS.len() as u32) as usize;
+        if index == 0 {
+            return configured;
+        }
+        MODBUS_FRAMINGS
+            .iter()
+            .filter(|(p, s)| !(*p == configured.parity && *s == configured.stop_bits))
+            .nth(index - 1)
+            .map_or(configured, |&(parity, stop_bits)| PortConfig {
+                parity,
+                stop_bits,
+                ..configured
+            })
+    }
+
+    fn detect_request(&self, step: DetectStep) -> Option<DetectExpect> {
+        match step {
+            DetectStep::DeviceId => {
+                MbRequest::from_request(&device_id::read_product_code()).map(DetectExpect::Modbus)
+            }
+            DetectStep::LegacyProbe => {
+                MbRequest::from_request(&pm_legacy::read_fault()).map(DetectExpect::Modbus)
+            }
+            DetectStep::HprSleep => Some(DetectExpect::Hpr(hpr_wire::Request::Sleep)),
+            DetectStep::HprWake => Some(DetectExpect::Hpr(hpr_wire::Request::Wake {
+                system_id: self.core.config.hpr_id,
+            })),
+            DetectStep::HprHello => Some(DetectExpect::Hpr(hpr_wire::Request::Hello)),
+        }
+    }
+
+    /// The step after `step` did not find a unit.
+    fn detect_next(&mut self, now: Instant, step: DetectStep) {
+        let Phase::Detecting(detector) = &self.phase else {
+            return;
+        };
+        let round = detector.round;
+        let choice = self.core.config.protocol;
+        let next = match (step, choice) {
+            (DetectStep::DeviceId, ProtocolChoice::Auto | ProtocolChoice::Legacy) => {
+                Some(DetectStep::LegacyProbe)
+            }
+            (DetectStep::LegacyProbe, ProtocolChoice::Auto) => Some(self.hpr_first_step()),
+            (DetectStep::HprSleep, _) => Some(DetectStep::HprWake),
+            (DetectStep::HprWake, _) => Some(DetectStep::HprHello),
+            _ => None,
+        };
+        match next {
+            Some(step) => {
+                self.phase = Phase::Detecting(Detector {
+                    step,
+                    round,
+                    not_before: now,
+                });
+                self.set_port_for(step, round);
+            }
+            None => self.start_detection(now + DETECT_ROUND_PAUSE, round.wrapping_add(1)),
+        }
+    }
+
+    fn link_up(&mut self, now: Instant, model: Model, family: Family) {
+        self.consecutive_failures = 0;
+        self.core.status.family = Some(family);
+        self.core.status.model = Some(model);
+        self.core.status.link_up = true;
+        self.core.emit(LinkEvent::LinkUp { model, family });
+        self.phase = match family {
+            Family::PowermaxSync => {
+                Phase::Powermax(PowermaxDriver::new(Variant::Sync, now, &self.core))
+            }
+            Family::PowermaxLegacy => {
+                Phase::Powermax(PowermaxDriver::new(Variant::Legacy, now, &self.core))
+            }
+            Family::Hpr | Family::MaxPro200 => {
+                let system = match model {
+                    Model::Hpr(system) => system,
+                    _ => SystemId::MaxPro200,
+                };
+                Phase::Hpr(HprDriver::new(system, now, &self.core))
+            }
+        };
+    }
+
+    /// A Modbus unit answered device identification (`model` if Table 2 knows it).
+    fn detected_modbus(&mut self, now: Instant, model: Option<PowerSupplyModel>) {
+        let choice = self.core.config.protocol;
+        let variant = match (choice, model.map(|m| m.addressing())) {
+            (ProtocolChoice::Sync, _) => Some(Family::PowermaxSync),
+            (ProtocolChoice::Legacy, _) => Some(Family::PowermaxLegacy),
+            (_, Some(AddressingSystem::Sync)) => Some(Family::PowermaxSync),
+            (_, Some(AddressingSystem::Legacy)) => Some(Family::PowermaxLegacy),
+            (_, None) => None,
+        };
+        match (variant, model) {
+            (Some(family), Some(model)) => self.link_up(now, Model::Powermax(model), family),
+            (Some(family), None) => self.link_up(now, Model::PowermaxUnidentified, family),
+            // Unknown product code: the legacy register read decides.
+            (None, _) => self.detect_next(now, DetectStep::DeviceId),
+        }
+    }
+
+    fn link_down(&mut self, now: Instant, last_error: TransactionError) {
+        match &mut self.phase {
+            Phase::Powermax(driver) => driver.abort(&mut self.core),
+            Phase::Hpr(driver) => driver.abort(&mut self.core),
+            Phase::Detecting(_) => return,
+        }
+        let count = self.consecutive_failures;
+        self.core.status.forget_unit();
+        self.core.diagnostics.record_link_down();
+        self.core.emit(LinkEvent::LinkDown {
+            reason: LinkDownReason::ConsecutiveFailures { count, last_error },
+        });
+        self.txn = None;
+        self.consecutive_failures = 0;
+        self.start_detection(now, 0);
+    }
+
+    // --- transactions --------------------------------------------------------------------
+
+    fn start_next(&mut self, now: Instant) {
+        let config = self.core.config;
+        let (tag, frame, retries, spacing, no_reply): (
+            Tag,
+            Vec<u8, TX_CAPACITY>,
+            u8,
+            RetrySpacing,
+            bool,
+        ) = match &mut self.phase {
+            Phase::Detecting(detector) => {
+                if now < detector.not_before {
+                    return;
+                }
+                let step = detector.step;
+                let Some(expect) = self.detect_request(step) else {
+                    return;
+                };
+                let mut buf = [0u8; TX_CAPACITY];
+                let (len, spacing) = match &expect {
+                    DetectExpect::Modbus(request) => (
+                        request.encode(config.node_address, &mut buf).ok(),
+                        RetrySpacing::Immediate,
+                    ),
+                    DetectExpect::Hpr(request) => (
+                        request.emit(&mut buf).ok(),
+                        RetrySpacing::RideThroughBlackout,
+                    ),
+                };
+                let Some(frame) = len
+                    .and_then(|len| buf.get(..len))
+                    .and_then(|b| Vec::from_slice(b).ok())
+                else {
+                    return;
+                };
+                let no_reply = step == DetectStep::HprSleep;
+                (
+                    Tag::Detect(step, expect),
+                    frame,
+                    config.retries,
+                    spacing,
+                    no_reply,
+                )
+            }
+            Phase::Powermax(driver) => {
+                let Some((purpose, request, retries)) = driver.next_request(now, &mut self.core)
+                else {
+                    return;
+                };
+                let mut buf = [0u8; TX_CAPACITY];
+                let Some(frame) = request
+                    .encode(config.node_address, &mut buf)
+                    .ok()
+                    .and_then(|len| buf.get(..len))
+                    .and_then(|b| Vec::from_slice(b).ok())
+                else {
+                    return;
+                };
+                (
+                    Tag::Modbus(purpose, request),
+                    frame,
+                    retries.unwrap_or(config.retries),
+                    RetrySpacing::Immediate,
+                    false,
+                )
+            }
+            Phase::Hpr(driver) => {
+                let Some((purpose, expect, frame)) = driver.next_request(now, &mut self.core)
+                else {
+                    return;
+                };
+                let Ok(frame) = Vec::from_slice(&frame) else {
+                    return;
+                };
+                (
+                    Tag::Hpr(purpose, expect),
+                    frame,
+                    config.retries,
+                    RetrySpacing::RideThroughBlackout,
+                    false,
+                )
+            }
+        };
+        self.txn = if no_reply {
+            Transaction::without_reply(tag, &frame, now, SLEEP_QUIET).ok()
+        } else {
+            Transaction::new(tag, &frame, now, config.response_timeout, retries, spacing).ok()
+        };
+    }
+
+    fn handle_timeout(&mut self, now: Instant) {
+        let Some(txn) = self.txn.as_mut() else {
+            return;
+        };
+        match txn.handle_timeout(now) {
+            None => {}
+            Some(Outcome::Retrying(error)) => {
+                self.core.diagnostics.record_error(error);
+                self.core.diagnostics.record_retry();
+            }
+            Some(Outcome::Failed(error)) => {
+                self.core.diagnostics.record_error(error);
+                self.transaction_failed(now, error);
+            }
+            Some(Outcome::Sent) => {
+                let tag = self.txn.take().map(|t| t.tag().clone());
+                if let Some(Tag::Detect(step, _)) = tag {
+                    self.detect_next(now, step);
+                }
+            }
+        }
+    }
+
+    /// One attempt failed with `error` (a reply arrived but is unusable).
+    fn attempt_failed(&mut self, now: Instant, error: TransactionError) {
+        self.core.diagnostics.record_error(error);
+        let Some(txn) = self.txn.as_mut() else {
+            return;
+        };
+        match txn.attempt_failed(now, error) {
+            Outcome::Retrying(_) => self.core.diagnostics.record_retry(),
+            Outcome::Failed(error) => self.transaction_failed(now, error),
+            Outcome::Sent => {}
+        }
+    }
+
+    /// The transaction in flight failed for good.
+    fn transaction_failed(&mut self, now: Instant, error: TransactionError) {
+        let Some(txn) = self.txn.take() else {
+            return;
+        };
+        self.core.diagnostics.record_failed();
+        if error.is_retryable() {
+            self.consecutive_failures = self.consecutive_failures.saturating_add(1);
+        } else {
+            // The unit answered (exception, unknown command): it is there.
+            self.consecutive_failures = 0;
+        }
+        match txn.tag().clone() {
+            Tag::Detect(step, _) => match (step, error) {
+                // A unit that refuses device identification is still a Modbus unit.
+                (DetectStep::DeviceId, TransactionError::Exception(_)) => {
+                    self.detected_modbus(now, None)
+                }
+                _ => self.detect_next(now, step),
+            },
+            Tag::Modbus(purpose, _) => {
+                if let Phase::Powermax(driver) = &mut self.phase {
+                    driver.on_failed(now, purpose, error, &mut self.core);
+                }
+            }
+            Tag::Hpr(purpose, _) => {
+                if let Phase::Hpr(driver) = &mut self.phase {
+                    driver.on_failed(now, purpose, error, &mut self.core);
+                }
+            }
+        }
+        if self.consecutive_failures >= self.core.config.failures_before_down {
+            self.link_down(now, error);
+        }
+    }
+
+    fn transaction_ok(&mut self) -> Option<Tag> {
+        let txn = self.txn.take()?;
+        self.core.diagnostics.record_ok();
+        self.consecutive_failures = 0;
+        Some(txn.tag().clone())
+    }
+
+    fn awaited_tag(&mut self) -> Option<Tag> {
+        match &self.txn {
+            Some(txn) if txn.is_awaiting_reply() => Some(txn.tag().clone()),
+            _ => {
+                self.core.diagnostics.record_unsolicited();
+                None
+            }
+        }
+    }
+
+    fn on_modbus_frame(
+        &mut self,
+        now: Instant,
+        result: plasma_protocol::Result<(u8, Vec<u8, { modbus_ascii::MAX_FRAME_BYTES }>)>,
+    ) {
+        let Some(tag) = self.awaited_tag() else {
+            return;
+        };
+        let (request, raw) = match &tag {
+            Tag::Detect(_, DetectExpect::Modbus(request)) => (request.clone(), false),
+            Tag::Modbus(purpose, request) => (
+                request.clone(),
+                *purpose == MbPurpose::Active
+                    && matches!(&self.phase, Phase::Powermax(d) if d.active_is_raw()),
+            ),
+            _ => return,
+        };
+        let (address, pdu) = match result {
+            Ok(frame) => frame,
+            Err(error) => return self.attempt_failed(now, modbus::classify(error)),
+        };
+        let frame = modbus_ascii::Frame { address, pdu: &pdu };
+        let response = match modbus_ascii::validate_reply(
+            &request.as_request(),
+            self.core.config.node_address,
+            &frame,
+        ) {
+            Ok(response) => response,
+            Err(error) => return self.attempt_failed(now, modbus::classify(error)),
+        };
+        if let Response::Exception { code, .. } = response {
+            let error = TransactionError::Exception(code);
+            if !raw {
+                self.core.diagnostics.record_error(error);
+                if let Some(txn) = self.txn.as_mut()
+                    && let Outcome::Failed(error) = txn.attempt_failed(now, error)
+                {
+                    self.transaction_failed(now, error);
+                }
+                return;
+            }
+            self.core.diagnostics.record_error(error);
+        }
+        let mut raw_len = 0;
+        if raw {
+            let mut buf = [0u8; TX_CAPACITY];
+            raw_len = modbus_ascii::encode(address, &pdu, &mut buf).unwrap_or(0);
+            self.raw_reply = buf
+                .get(..raw_len)
+                .and_then(|b| Vec::from_slice(b).ok())
+                .unwrap_or_default();
+        }
+        let Some(tag) = self.transaction_ok() else {
+            return;
+        };
+        match tag {
+            Tag::Detect(DetectStep::DeviceId, _) => {
+                let model = match response {
+                    Response::ReadDeviceIdentification(id) => {
+                        device_id::model_from_device_id(&id).ok().flatten()
+                    }
+                    _ => None,
+                };
+                self.detected_modbus(now, model);
+            }
+            Tag::Detect(DetectStep::LegacyProbe, _) => {
+                let family = match self.core.config.protocol {
+                    ProtocolChoice::Sync => Family::PowermaxSync,
+                    _ => Family::PowermaxLegacy,
+                };
+                self.link_up(now, Model::PowermaxUnidentified, family);
+            }
+            Tag::Detect(step, _) => self.detect_next(now, step),
+            Tag::Modbus(purpose, _) => {
+                if let Phase::Powermax(driver) = &mut self.phase {
+                    driver.on_response(now, purpose, &response, raw_len, &mut self.core);
+                }
+            }
+            Tag::Hpr(..) => {}
+        }
+    }
+
+    fn on_hpr_frame(
+        &mut self,
+        now: Instant,
+        result: plasma_protocol::Result<(u16, Vec<u8, { hpr_wire::MAX_FRAME_LEN }>)>,
+    ) {
+        let Some(tag) = self.awaited_tag() else {
+            return;
+        };
+        let (id, data) = match result {
+            Ok(frame) => frame,
+            Err(plasma_protocol::Error::BadChecksum { .. }) => {
+                return self.attempt_failed(now, TransactionError::BadChecksum);
+            }
+            Err(_) => return self.attempt_failed(now, TransactionError::Malformed),
+        };
+        let frame = hpr_wire::Frame { id, data: &data };
+        let (typed, raw_id, purpose) = match &tag {
+            Tag::Detect(_, DetectExpect::Hpr(request)) => (Some(*request), None, None),
+            Tag::Hpr(purpose, HprExpect::Typed(request)) => (Some(*request), None, Some(*purpose)),
+            Tag::Hpr(purpose, HprExpect::Raw(raw_id)) => (None, Some(*raw_id), Some(*purpose)),
+            _ => return,
+        };
+        if id == hpr_wire::command::id::BAD_CHECKSUM {
+            // The unit saw our request damaged: send it again.
+            return self.attempt_failed(now, TransactionError::HprBadChecksum500);
+        }
+        let mut reply = None;
+        if let Some(raw_id) = raw_id {
+            if id != raw_id && id != hpr_wire::command::id::UNKNOWN_COMMAND {
+                return self.attempt_failed(now, TransactionError::Mismatch);
+            }
+            if id == hpr_wire::command::id::UNKNOWN_COMMAND {
+                self.core
+                    .diagnostics
+                    .record_error(TransactionError::HprUnknownCommand501);
+            }
+            let mut buf = [0u8; TX_CAPACITY];
+            let len = frame.emit(&mut buf).unwrap_or(0);
+            self.raw_reply = buf
+                .get(..len)
+                .and_then(|b| Vec::from_slice(b).ok())
+                .unwrap_or_default();
+        } else if let Some(request) = typed {
+            if id == hpr_wire::command::id::UNKNOWN_COMMAND {
+                self.core
+                    .diagnostics
+                    .record_error(TransactionError::HprUnknownCommand501);
+                if let Some(txn) = self.txn.as_mut()
+                    && let Outcome::Failed(error) =
+                        txn.attempt_failed(now, TransactionError::HprUnknownCommand501)
+                {
+                    self.transaction_failed(now, error);
+                }
+                return;
+            }
+            match Reply::parse_for(&request, &frame) {
+                Ok(parsed) => reply = Some(parsed),
+                Err(plasma_protocol::Error::Mismatch) => {
+                    return self.attempt_failed(now, TransactionError::Mismatch);
+                }
+                Err(_) => return self.attempt_failed(now, TransactionError::Malformed),
+            }
+        }
+        let raw_len = self.raw_reply.len();
+        let Some(tag) = self.transaction_ok() else {
+            return;
+        };
+        match (tag, purpose) {
+            (Tag::Detect(DetectStep::HprHello, _), _) => match reply {
+                Some(Reply::Hello(system)) => {
+                    let family = if system == SystemId::MaxPro200 {
+                        Family::MaxPro200
+                    } else {
+                        Family::Hpr
+                    };
+                    self.link_up(now, Model::Hpr(system), family);
+                }
+                _ => self.detect_next(now, DetectStep::HprHello),
+            },
+            (Tag::Detect(step, _), _) => self.detect_next(now, step),
+            (Tag::Hpr(..), Some(purpose)) => {
+                if let Phase::Hpr(driver) = &mut self.phase {
+                    driver.on_reply(now, purpose, reply.as_ref(), raw_len, &mut self.core);
+                }
+            }
+            _ => {}
+        }
+    }
+}

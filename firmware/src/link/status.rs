@@ -1,0 +1,188 @@
+//! The bridge's picture of the power supply, kept up to date by the link.
+
+use plasma_protocol::hpr::{ErrorCode, MaxProPsInfo, PsInfo, StateCode, SystemId, TimerCounter};
+use plasma_protocol::powermax::sync::{
+    Cartridge, FaultLog, Identification, PermittedModes, PsCounters,
+};
+use plasma_protocol::powermax::{
+    Amps, CartridgeName, FaultCode, OperatingMode, PowerSupplyModel, Pressure, Psi,
+};
+
+use crate::time::Instant;
+
+/// Protocol family of the unit on the line.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Family {
+    /// Powermax SYNC, registers 0x3xxx.
+    PowermaxSync,
+    /// Older Powermax, registers 0x2xxx.
+    PowermaxLegacy,
+    /// HyPerformance HPR130/260/400 (XD).
+    Hpr,
+    /// MaxPro200.
+    MaxPro200,
+}
+
+impl Family {
+    /// True for the two Modbus families.
+    pub const fn is_modbus(self) -> bool {
+        matches!(self, Family::PowermaxSync | Family::PowermaxLegacy)
+    }
+}
+
+/// Which unit answered.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Model {
+    /// A Powermax identified by Read Device Identification (SYNC guide Table 2).
+    Powermax(PowerSupplyModel),
+    /// A Powermax that answered register reads but not (or not recognisably) device
+    /// identification.
+    PowermaxUnidentified,
+    /// An HPR or MaxPro200, from its HELLO reply.
+    Hpr(SystemId),
+}
+
+/// The fault a unit reports.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum ActiveFault {
+    /// Powermax fault code (X-YY-Z).
+    Powermax(FaultCode),
+    /// HPR / MaxPro200 error code (section IV).
+    Hpr(ErrorCode),
+}
+
+impl ActiveFault {
+    /// True when cutting cannot go on until someone acts. Powermax: the SYNC table's
+    /// "Steps required: Yes" (a code the table does not list counts as blocking); HPR: any
+    /// error that is not a warning (codes 1-42 are warnings 131 CLEAR WARNINGS clears).
+    pub fn action_required(&self) -> bool {
+        match self {
+            ActiveFault::Powermax(code) => code.info().is_none_or(|info| info.action_required()),
+            ActiveFault::Hpr(code) => code.is_error() && !code.is_warning(),
+        }
+    }
+}
+
+/// Mode, current and pressure of a Powermax, as written or as read back.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct PowermaxSettings {
+    /// Operating mode; `None` when the unit reports 0 or an unknown value.
+    pub mode: Option<OperatingMode>,
+    /// Output current.
+    pub current: Amps,
+    /// Gas pressure (0 = automatic).
+    pub pressure: Pressure,
+}
+
+/// What the unit permits (SYNC: for the installed cartridge; legacy: for the unit).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Limits {
+    /// Permitted modes (SYNC 0x3001); `None` on legacy units, which do not report them.
+    pub modes: Option<PermittedModes>,
+    /// Lowest current.
+    pub min_current: Amps,
+    /// Highest current.
+    pub max_current: Amps,
+    /// Lowest pressure set point.
+    pub min_pressure: Psi,
+    /// Highest pressure set point.
+    pub max_pressure: Psi,
+}
+
+/// HPR / MaxPro200 specifics.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct HprStatus {
+    /// System state (table V).
+    pub state: Option<StateCode>,
+    /// Current error (table IV).
+    pub error: Option<ErrorCode>,
+    /// Last GET_PS_INFO of an HPR.
+    pub ps_info: Option<PsInfo>,
+    /// Last GET_PS_INFO of a MaxPro200.
+    pub maxpro_info: Option<MaxProPsInfo>,
+    /// Last nominal current set or reported, amps.
+    pub nominal_amps: Option<u16>,
+    /// Last error log read (134), most recent first.
+    pub error_log: Option<[ErrorCode; 4]>,
+    /// Last timer/counter read (125).
+    pub timers: Option<TimerCounter>,
+    /// True after the unit accepted 004 REMOTE_MODE.
+    pub remote_accepted: bool,
+}
+
+/// Snapshot of what the bridge knows about the unit.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct UnitStatus {
+    /// Family of the unit, once detected.
+    pub family: Option<Family>,
+    /// Model of the unit, once detected.
+    pub model: Option<Model>,
+    /// True while the unit answers.
+    pub link_up: bool,
+    /// True while the bridge holds the unit in remote control.
+    pub remote: bool,
+    /// Settings as the unit reports them (SYNC 0x3010-0x3012, legacy force registers read
+    /// back when the unit allows it).
+    pub settings: Option<PowermaxSettings>,
+    /// Settings the CNC asked for; kept and re-applied after a power cycle or link return.
+    pub desired: Option<PowermaxSettings>,
+    /// Actual output current (SYNC).
+    pub actual_current: Option<Amps>,
+    /// Actual gas pressure (SYNC).
+    pub actual_pressure: Option<Psi>,
+    /// Active fault; `None` = no fault (or not known while the link is down).
+    pub active_fault: Option<ActiveFault>,
+    /// Permitted settings.
+    pub limits: Option<Limits>,
+    /// SYNC 0x3000: torch and power-supply type.
+    pub identification: Option<Identification>,
+    /// SYNC power-supply counters (0x3028-0x302F).
+    pub ps_counters: Option<PsCounters>,
+    /// Legacy arc-on time in seconds (0x209E-0x209F).
+    pub arc_seconds: Option<u32>,
+    /// SYNC cartridge: UID, part number, revision, nominal current, counters.
+    pub cartridge: Option<Cartridge>,
+    /// SYNC cartridge name (0x3048-0x304D).
+    pub cartridge_name: Option<CartridgeName>,
+    /// SYNC cartridge fault log (0x3044-0x3047).
+    pub fault_log: Option<FaultLog>,
+    /// HPR / MaxPro200 data.
+    pub hpr: HprStatus,
+    /// After a quick restart: no request (and no START) before this time.
+    pub restart_blackout_until: Option<Instant>,
+    /// True when the unit can take a start: link up, no blocking fault, no blackout, and
+    /// (HPR) in its ready state.
+    pub ready: bool,
+}
+
+impl UnitStatus {
+    /// Forget everything learned from the unit (after link-down); desired settings stay.
+    pub fn forget_unit(&mut self) {
+        let desired = self.desired;
+        *self = UnitStatus {
+            desired,
+            ..UnitStatus::default()
+        };
+    }
+
+    /// Recompute [`UnitStatus::ready`] for time `now`.
+    pub fn update_ready(&mut self, now: Instant) {
+        let blackout = self.restart_blackout_until.is_some_and(|until| now < until);
+        let fault_blocks = self.active_fault.is_some_and(|f| f.action_required());
+        let state_ready = match self.family {
+            Some(Family::Hpr) | Some(Family::MaxPro200) => {
+                // Table V: 3 = IDLE2 (HPR) / READY FOR START (MaxPro200).
+                self.hpr.state == Some(StateCode(3))
+            }
+            _ => true,
+        };
+        self.ready = self.link_up && !blackout && !fault_blocks && state_ready;
+    }
+}

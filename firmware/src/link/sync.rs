@@ -1,0 +1,182 @@
+//! Powermax SYNC specifics (registers 0x3xxx): what the driver polls, reads slowly, writes.
+
+use heapless::Vec;
+use plasma_protocol::modbus_ascii::Registers;
+use plasma_protocol::powermax::sync::{
+    self, CARTRIDGE_NAME_SPAN, FAULT_LOG_SPAN, IDENTIFICATION_SPAN, PERMITTED_SETTINGS_SPAN,
+    PS_COUNTERS_SPAN, PermittedSettings, SETTINGS_SPAN, StatusBlock,
+};
+use plasma_protocol::powermax::{Amps, FaultCode, Pressure, Psi, RegisterSpan};
+
+use super::modbus::MbRequest;
+use super::status::{Limits, PowermaxSettings};
+
+/// The poll: 0x3010-0x301A in one function-04 request (fallback: 0x3010-0x3012 and
+/// 0x3018-0x301A).
+pub const POLL_PLAN: plasma_protocol::powermax::BlockRead = sync::STATUS_BLOCK;
+
+/// What one poll tells.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct PollData {
+    /// Settings as the unit reports them.
+    pub settings: PowermaxSettings,
+    /// Actual output current.
+    pub actual_current: Amps,
+    /// Actual gas pressure.
+    pub actual_pressure: Psi,
+    /// Active fault.
+    pub fault: FaultCode,
+}
+
+/// Decode a complete poll block.
+pub fn decode_poll(registers: Registers<'_>) -> Option<PollData> {
+    let block = StatusBlock::decode(registers).ok()?;
+    Some(PollData {
+        settings: PowermaxSettings {
+            mode: block.settings.mode,
+            current: block.settings.current,
+            pressure: block.settings.pressure,
+        },
+        actual_current: block.actual.current,
+        actual_pressure: block.actual.pressure,
+        fault: block.fault,
+    })
+}
+
+/// A read request for a span (function 04).
+pub fn read(span: RegisterSpan) -> MbRequest {
+    MbRequest::ReadInput {
+        start: span.start,
+        quantity: span.quantity,
+    }
+}
+
+/// Slow-data items of a SYNC unit, in the order they are read (limits first: settings
+/// commands need them).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SlowItem {
+    /// 0x3001-0x3005.
+    Permitted,
+    /// 0x3000.
+    Identification,
+    /// 0x3028-0x302F.
+    PsCounters,
+    /// 0x3030-0x3043 (block with fallback).
+    Cartridge,
+    /// 0x3044-0x3047.
+    FaultLog,
+    /// 0x3048-0x304D.
+    CartridgeName,
+}
+
+impl SlowItem {
+    /// Every item, in reading order.
+    pub const ALL: [SlowItem; 6] = [
+        SlowItem::Permitted,
+        SlowItem::Identification,
+        SlowItem::PsCounters,
+        SlowItem::Cartridge,
+        SlowItem::FaultLog,
+        SlowItem::CartridgeName,
+    ];
+
+    /// Bit in a pending-set.
+    pub const fn bit(self) -> u8 {
+        match self {
+            SlowItem::Permitted => 1,
+            SlowItem::Identification => 2,
+            SlowItem::PsCounters => 4,
+            SlowItem::Cartridge => 8,
+            SlowItem::FaultLog => 16,
+            SlowItem::CartridgeName => 32,
+        }
+    }
+
+    /// Items that depend on the installed cartridge.
+    pub const CARTRIDGE_ITEMS: u8 = SlowItem::Permitted.bit()
+        | SlowItem::Cartridge.bit()
+        | SlowItem::FaultLog.bit()
+        | SlowItem::CartridgeName.bit();
+
+    /// Every item.
+    pub const ALL_ITEMS: u8 = 0x3F;
+
+    /// The single-span read for this item (the cartridge block is read by its poller).
+    pub fn span(self) -> Option<RegisterSpan> {
+        match self {
+            SlowItem::Permitted => Some(PERMITTED_SETTINGS_SPAN),
+            SlowItem::Identification => Some(IDENTIFICATION_SPAN),
+            SlowItem::PsCounters => Some(PS_COUNTERS_SPAN),
+            SlowItem::Cartridge => None,
+            SlowItem::FaultLog => Some(FAULT_LOG_SPAN),
+            SlowItem::CartridgeName => Some(CARTRIDGE_NAME_SPAN),
+        }
+    }
+}
+
+/// Permitted settings as link limits.
+pub fn limits(registers: Registers<'_>) -> Option<Limits> {
+    let p = PermittedSettings::decode(registers).ok()?;
+    Some(Limits {
+        modes: Some(p.modes),
+        min_current: p.min_current,
+        max_current: p.max_current,
+        min_pressure: p.min_pressure,
+        max_pressure: p.max_pressure,
+    })
+}
+
+/// The one request that writes mode, current and pressure (0x3080-0x3082, function 0x10).
+pub fn write_settings(words: [u16; 3]) -> MbRequest {
+    MbRequest::WriteRegisters {
+        start: sync::REMOTE_MODE,
+        values: Vec::from_iter(words),
+    }
+}
+
+/// The words for `settings`; `None` when the protocol crate refuses them.
+pub fn settings_words(
+    mode: plasma_protocol::powermax::OperatingMode,
+    current: Amps,
+    pressure: Pressure,
+) -> Option<[u16; 3]> {
+    sync::enter_remote(mode, current, pressure).ok()
+}
+
+/// Read the settings back (0x3010-0x3012).
+pub fn read_back() -> MbRequest {
+    read(SETTINGS_SPAN)
+}
+
+/// Decode a settings read-back.
+pub fn decode_settings(registers: Registers<'_>) -> Option<PowermaxSettings> {
+    let s = sync::Settings::decode(registers).ok()?;
+    Some(PowermaxSettings {
+        mode: s.mode,
+        current: s.current,
+        pressure: s.pressure,
+    })
+}
+
+/// Quick restart (0x308E-0x308F).
+pub fn quick_restart() -> Option<MbRequest> {
+    MbRequest::from_request(&sync::quick_restart())
+}
+
+/// Gas test coil 0x3180.
+pub fn gas_test(on: bool) -> MbRequest {
+    MbRequest::WriteCoil {
+        address: sync::GAS_TEST_COIL,
+        on,
+    }
+}
+
+/// Zeros to 0x3080-0x3082 in one request.
+pub fn exit_remote() -> MbRequest {
+    write_settings(sync::EXIT_REMOTE_WORDS)
+}
+
+/// UID read used to notice a cartridge change (0x3030-0x3037).
+pub fn read_uid() -> MbRequest {
+    read(sync::CARTRIDGE_UID_SPAN)
+}

@@ -1,0 +1,1249 @@
+//! Byte-level tests of the whole link: the test feeds the exact reply bytes and moves time.
+//!
+//! Seed frames from the manuals are used only after their LRC/checksum was recomputed
+//! (`assert_lrc` / `hpr_checksum_ok`); the one seed that is wrong is corrected with a note.
+
+extern crate std;
+
+use std::collections::BTreeMap;
+use std::string::String;
+use std::vec::Vec;
+
+use plasma_protocol::hpr::{ErrorCode, GasCode, GasPair, StateCode, SystemId};
+use plasma_protocol::modbus_ascii::{self, Request};
+use plasma_protocol::powermax::{Amps, FaultCode, OperatingMode, PowerSupplyModel, Pressure, Psi};
+
+use super::*;
+use crate::port::{Parity, PortConfig};
+
+// ---------------------------------------------------------------------------------------
+// helpers
+
+fn ms(v: u64) -> Instant {
+    Instant::from_millis(v)
+}
+
+/// Modbus ASCII frame for node 1 from a binary PDU (LRC computed here, independently).
+fn mb(pdu: &[u8]) -> Vec<u8> {
+    let mut bytes = std::vec![1u8];
+    bytes.extend_from_slice(pdu);
+    let sum = bytes.iter().fold(0u8, |s, &b| s.wrapping_add(b));
+    bytes.push(sum.wrapping_neg());
+    let mut out = String::from(":");
+    for b in bytes {
+        out.push_str(&std::format!("{b:02X}"));
+    }
+    out.push_str("\r\n");
+    out.into_bytes()
+}
+
+/// Recompute the LRC of a seed frame (`:...LL\r\n`) and check it.
+fn assert_lrc(frame: &[u8]) {
+    let text = core::str::from_utf8(frame).unwrap();
+    let hex = text.trim_start_matches(':').trim_end_matches("\r\n");
+    let bytes: Vec<u8> = (0..hex.len())
+        .step_by(2)
+        .map(|i| u8::from_str_radix(&hex[i..i + 2], 16).unwrap())
+        .collect();
+    let sum = bytes.iter().fold(0u8, |s, &b| s.wrapping_add(b));
+    assert_eq!(sum, 0, "LRC of seed {text:?} does not check");
+}
+
+/// HPR frame `>ID data CK<` (checksum computed here).
+fn hf(id: u16, data: &str) -> Vec<u8> {
+    let body = std::format!("{id:03}{data}");
+    let sum = body.bytes().fold(0u8, |s, b| s.wrapping_add(b));
+    std::format!(">{body}{sum:02X}<").into_bytes()
+}
+
+fn hpr_checksum_ok(frame: &[u8]) -> bool {
+    let inner = &frame[1..frame.len() - 3];
+    let sum = inner.iter().fold(0u8, |s, &b| s.wrapping_add(b));
+    let ck = core::str::from_utf8(&frame[frame.len() - 3..frame.len() - 1]).unwrap();
+    u8::from_str_radix(ck, 16).unwrap() == sum
+}
+
+fn words_pdu(function: u8, words: &[u16]) -> Vec<u8> {
+    let mut pdu = std::vec![function, (words.len() * 2) as u8];
+    for w in words {
+        pdu.extend_from_slice(&w.to_be_bytes());
+    }
+    pdu
+}
+
+fn device_id_pdu(code: &str) -> Vec<u8> {
+    let mut pdu = std::vec![
+        0x2B,
+        0x0E,
+        0x04,
+        0x81,
+        0x00,
+        0x00,
+        0x01,
+        0x01,
+        code.len() as u8
+    ];
+    pdu.extend_from_slice(code.as_bytes());
+    pdu
+}
+
+/// A scripted Powermax: registers and a few switches. Answers like the manuals describe.
+struct FakePowermax {
+    regs: BTreeMap<u16, u16>,
+    product_code: Option<&'static str>,
+    /// Addresses the unit refuses to read (exception 02) when a read touches them.
+    undocumented: Vec<u16>,
+    silent: bool,
+    writes: Vec<Vec<u8>>,
+}
+
+impl FakePowermax {
+    fn sync() -> Self {
+        let mut regs = BTreeMap::new();
+        // 0x3001-0x3005: cut + expanded metal, 20-105 A, 58-78 psi.
+        for (a, v) in [
+            (0x3000, 0x0508),
+            (0x3001, 0x0201),
+            (0x3002, 20 * 64),
+            (0x3003, 105 * 64),
+            (0x3004, 0x1D00),
+            (0x3005, 0x2700),
+            (0x3010, 1),
+            (0x3011, 45 * 64),
+            (0x3012, 0x2600),
+        ] {
+            regs.insert(a, v);
+        }
+        for (i, b) in b"E00401D0036FB25D".chunks(2).enumerate() {
+            regs.insert(0x3030 + i as u16, u16::from_be_bytes([b[0], b[1]]));
+        }
+        FakePowermax {
+            regs,
+            product_code: Some("081335"),
+            undocumented: Vec::new(),
+            silent: false,
+            writes: Vec::new(),
+        }
+    }
+
+    fn legacy() -> Self {
+        let mut regs = BTreeMap::new();
+        for (a, v) in [
+            (0x2099, 20 * 64),
+            (0x209A, 65 * 64),
+            (0x209C, 63 * 128),
+            (0x209D, 78 * 128),
+        ] {
+            regs.insert(a, v);
+        }
+        FakePowermax {
+            regs,
+            product_code: Some("081223"),
+            undocumented: Vec::new(),
+            silent: false,
+            writes: Vec::new(),
+        }
+    }
+
+    fn answer(&mut self, frame: &[u8]) -> Option<Vec<u8>> {
+        if self.silent {
+            return None;
+        }
+        let mut buf = [0u8; 300];
+        let decoded = modbus_ascii::decode(frame, &mut buf).unwrap();
+        assert_eq!(decoded.address, 1);
+        let request = Request::parse(decoded.pdu).unwrap();
+        let pdu: Vec<u8> = match request {
+            Request::ReadInputRegisters { start, quantity } => {
+                let range = start..start + quantity;
+                if self.undocumented.iter().any(|a| range.contains(a)) {
+                    std::vec![0x84, 0x02]
+                } else {
+                    let words: Vec<u16> = range.map(|a| *self.regs.get(&a).unwrap_or(&0)).collect();
+                    words_pdu(0x04, &words)
+                }
+            }
+            Request::ReadDeviceIdentification { .. } => match self.product_code {
+                Some(code) => device_id_pdu(code),
+                None => std::vec![0xAB, 0x01],
+            },
+            Request::WriteMultipleRegisters { start, values } => {
+                self.writes.push(frame.to_vec());
+                for (i, v) in values.iter().enumerate() {
+                    self.regs.insert(start + i as u16, v);
+                    // Remote settings show up in the settings registers.
+                    if (0x3080..=0x3082).contains(&(start + i as u16)) {
+                        self.regs.insert(start + i as u16 - 0x70, v);
+                    }
+                }
+                let n = values.len() as u16;
+                let mut p = std::vec![0x10];
+                p.extend_from_slice(&start.to_be_bytes());
+                p.extend_from_slice(&n.to_be_bytes());
+                p
+            }
+            Request::WriteSingleRegister { address, value } => {
+                self.writes.push(frame.to_vec());
+                self.regs.insert(address, value);
+                let mut p = std::vec![0x06];
+                p.extend_from_slice(&address.to_be_bytes());
+                p.extend_from_slice(&value.to_be_bytes());
+                p
+            }
+            Request::WriteSingleCoil { address, on } => {
+                self.writes.push(frame.to_vec());
+                let mut p = std::vec![0x05];
+                p.extend_from_slice(&address.to_be_bytes());
+                p.extend_from_slice(if on { &[0xFF, 0x00] } else { &[0, 0] });
+                p
+            }
+            other => panic!("unexpected request {other:?}"),
+        };
+        Some(mb(&pdu))
+    }
+}
+
+/// Drives a link: collects transmitted frames, answers with a closure, moves time.
+struct Bench {
+    link: PsLink,
+    now: Instant,
+    sent: Vec<(Instant, Vec<u8>)>,
+}
+
+impl Bench {
+    fn new(config: LinkConfig) -> Self {
+        Bench {
+            link: PsLink::new(config, Instant::ZERO),
+            now: Instant::ZERO,
+            sent: Vec::new(),
+        }
+    }
+
+    /// Next frame the link sends, advancing time to `poll_at` as needed (up to `limit`).
+    fn next_tx(&mut self, limit: Instant) -> Option<Vec<u8>> {
+        loop {
+            if let Some(frame) = self.link.poll_transmit(self.now) {
+                let frame = frame.to_vec();
+                self.sent.push((self.now, frame.clone()));
+                return Some(frame);
+            }
+            let at = self.link.poll_at()?;
+            // Nothing to send yet although attention was asked for: let time move on.
+            let at = if at <= self.now {
+                self.now + Duration::from_millis(1)
+            } else {
+                at
+            };
+            if at > limit {
+                return None;
+            }
+            self.now = at;
+        }
+    }
+
+    fn rx(&mut self, delay_ms: u64, bytes: &[u8]) {
+        self.now = self.now + Duration::from_millis(delay_ms);
+        self.link.handle_rx(self.now, bytes);
+    }
+
+    /// Run the link against `fake` until `until`.
+    fn run(&mut self, fake: &mut FakePowermax, until: Instant) {
+        while let Some(frame) = self.next_tx(until) {
+            if let Some(reply) = fake.answer(&frame) {
+                self.rx(10, &reply);
+            }
+        }
+        self.now = self.now.max(until);
+    }
+
+    fn events(&mut self) -> Vec<LinkEvent> {
+        core::iter::from_fn(|| self.link.poll_event()).collect()
+    }
+}
+
+fn sync_bench() -> (Bench, FakePowermax) {
+    let mut bench = Bench::new(LinkConfig::default());
+    let mut fake = FakePowermax::sync();
+    bench.run(&mut fake, ms(500));
+    assert!(bench.link.status().link_up);
+    assert!(
+        bench.link.status().limits.is_some(),
+        "slow data read at start"
+    );
+    (bench, fake)
+}
+
+fn amps(a: u16) -> Amps {
+    Amps::from_whole(a).unwrap()
+}
+
+// ---------------------------------------------------------------------------------------
+// detection
+
+#[test]
+fn detects_sync_by_device_identification() {
+    let mut bench = Bench::new(LinkConfig::default());
+    assert_eq!(bench.link.port_config(), PortConfig::MODBUS_DEFAULT);
+    let request = bench.next_tx(ms(0)).unwrap();
+    // SYNC guide example request (LRC C1 rechecked).
+    assert_lrc(b":012B0E0401C1\r\n");
+    assert_eq!(request, b":012B0E0401C1\r\n");
+    let reply = b":012B0E0481000101010630383133333504\r\n";
+    assert_lrc(reply);
+    // Any chunking: byte by byte.
+    for &b in reply.iter() {
+        bench.rx(0, &[b]);
+    }
+    assert_eq!(
+        bench.events().first(),
+        Some(&LinkEvent::LinkUp {
+            model: Model::Powermax(PowerSupplyModel::Powermax65_85_105Sync),
+            family: Family::PowermaxSync,
+        })
+    );
+    // First SYNC poll: 0x3010-0x301A in ONE function-04 request.
+    let poll = bench.next_tx(ms(10)).unwrap();
+    assert_eq!(poll, mb(&[0x04, 0x30, 0x10, 0x00, 0x0B]));
+}
+
+#[test]
+fn detects_legacy_by_device_identification() {
+    let mut bench = Bench::new(LinkConfig::default());
+    let mut fake = FakePowermax::legacy();
+    bench.run(&mut fake, ms(100));
+    assert_eq!(bench.link.status().family, Some(Family::PowermaxLegacy));
+    assert_eq!(
+        bench.link.status().model,
+        Some(Model::Powermax(PowerSupplyModel::Powermax65_85_105))
+    );
+}
+
+#[test]
+fn finds_a_legacy_unit_without_device_identification_by_a_register_read() {
+    let mut bench = Bench::new(LinkConfig::default());
+    // Three attempts of 2B/0E time out (100 ms each, immediate retries).
+    for attempt in 0..3 {
+        assert_eq!(bench.next_tx(ms(1000)).unwrap(), b":012B0E0401C1\r\n");
+        assert_eq!(bench.now, ms(100 * attempt));
+    }
+    // Then the plain legacy fault read (legacy guide sample, LRC 42 rechecked).
+    let probe = bench.next_tx(ms(1000)).unwrap();
+    assert_lrc(b":01042098000142\r\n");
+    assert_eq!(probe, b":01042098000142\r\n");
+    assert_eq!(bench.now, ms(300));
+    assert_eq!(bench.link.diagnostics().timeouts, 3);
+    assert_eq!(bench.link.diagnostics().retries, 2);
+    let reply = b":010402006F8A\r\n";
+    assert_lrc(reply);
+    bench.rx(5, reply);
+    assert_eq!(bench.link.status().family, Some(Family::PowermaxLegacy));
+    assert_eq!(bench.link.status().model, Some(Model::PowermaxUnidentified));
+}
+
+#[test]
+fn a_unit_refusing_device_identification_is_probed_with_a_register_read() {
+    let mut bench = Bench::new(LinkConfig::default());
+    bench.next_tx(ms(0)).unwrap();
+    bench.rx(5, &mb(&[0xAB, 0x01]));
+    assert_eq!(bench.link.diagnostics().exceptions[0], 1);
+    // Not retried: an exception is the unit's answer.
+    assert_eq!(bench.next_tx(ms(10)).unwrap(), b":01042098000142\r\n");
+}
+
+#[test]
+fn finds_hpr_after_modbus_silence_and_switches_to_8n1() {
+    let mut bench = Bench::new(LinkConfig::default());
+    for _ in 0..6 {
+        let frame = bench.next_tx(ms(5000)).unwrap();
+        assert_eq!(frame[0], b':');
+    }
+    let hello = bench.next_tx(ms(5000)).unwrap();
+    assert_eq!(hello, b">00090<", "HELLO, no CR/LF");
+    assert_eq!(bench.link.port_config(), PortConfig::HPR);
+    // The manual's sample prints HYPERPERFORMANCE; its checksum only fits HYPERFORMANCE.
+    let reply = hf(0, "HYPERFORMANCE130AUTO");
+    assert_eq!(reply, b">000HYPERFORMANCE130AUTO30<");
+    bench.rx(5, &reply);
+    assert_eq!(bench.link.status().family, Some(Family::Hpr));
+    let poll = bench.next_tx(ms(5000)).unwrap();
+    assert_eq!(poll, b">079A0<");
+    assert!(hpr_checksum_ok(&poll));
+}
+
+#[test]
+fn detects_maxpro200() {
+    let config = LinkConfig {
+        protocol: ProtocolChoice::Hpr,
+        ..LinkConfig::default()
+    };
+    let mut bench = Bench::new(config);
+    assert_eq!(bench.next_tx(ms(0)).unwrap(), b">00090<");
+    let reply = b">000MaxPro20079<";
+    assert!(hpr_checksum_ok(reply));
+    bench.rx(3, reply);
+    assert_eq!(bench.link.status().family, Some(Family::MaxPro200));
+    assert_eq!(
+        bench.link.status().model,
+        Some(Model::Hpr(SystemId::MaxPro200))
+    );
+}
+
+#[test]
+fn multi_drop_id_sleeps_the_line_then_wakes_the_unit() {
+    let config = LinkConfig {
+        protocol: ProtocolChoice::Hpr,
+        hpr_id: 2,
+        ..LinkConfig::default()
+    };
+    let mut bench = Bench::new(config);
+    assert_eq!(bench.next_tx(ms(0)).unwrap(), b">0869E<");
+    // SLEEP has no reply: WAKE follows after the quiet time.
+    assert_eq!(bench.next_tx(ms(100)).unwrap(), hf(85, "2"));
+    assert_eq!(bench.now, ms(20));
+    bench.rx(2, &hf(85, "2"));
+    assert_eq!(bench.next_tx(ms(100)).unwrap(), b">00090<");
+}
+
+#[test]
+fn auto_detection_tries_other_modbus_framings_in_later_rounds() {
+    let mut bench = Bench::new(LinkConfig::default());
+    let mut ports = Vec::new();
+    while bench.now < ms(8000) {
+        if bench.next_tx(ms(8000)).is_some() {
+            ports.push(bench.link.port_config());
+        } else {
+            break;
+        }
+    }
+    assert!(ports.iter().any(|p| p.parity == Parity::Odd));
+    assert!(ports.contains(&PortConfig::HPR));
+}
+
+// ---------------------------------------------------------------------------------------
+// transactions: validation and classification
+
+#[test]
+fn replies_are_validated_and_errors_classified() {
+    let mut bench = Bench::new(LinkConfig::default());
+    bench.next_tx(ms(0)).unwrap();
+    // Wrong node address: mismatch, retried.
+    let mut other = b":022B0E0481000101010630383133333503\r\n".to_vec();
+    assert_lrc(&other);
+    bench.rx(5, &other);
+    assert_eq!(bench.link.diagnostics().mismatches, 1);
+    assert_eq!(bench.next_tx(ms(10)).unwrap(), b":012B0E0401C1\r\n");
+    // Damaged LRC: bad checksum, retried.
+    other = b":012B0E0481000101010630383133333505\r\n".to_vec();
+    bench.rx(5, &other);
+    assert_eq!(bench.link.diagnostics().bad_checksums, 1);
+    assert_eq!(bench.link.diagnostics().retries, 2);
+    bench.next_tx(ms(20)).unwrap();
+    bench.rx(5, b":012B0E0481000101010630383133333504\r\n");
+    assert!(bench.link.status().link_up);
+    assert_eq!(bench.link.diagnostics().transactions_ok, 1);
+}
+
+#[test]
+fn link_goes_down_after_consecutive_failures_and_detection_restarts() {
+    let (mut bench, mut fake) = sync_bench();
+    bench.events();
+    fake.silent = true;
+    // 3 transactions x 3 attempts x 100 ms, with a poll interval between them.
+    bench.run(&mut fake, bench.now + Duration::from_millis(1100));
+    let events = bench.events();
+    assert!(events.iter().any(|e| matches!(
+        e,
+        LinkEvent::LinkDown {
+            reason: LinkDownReason::ConsecutiveFailures {
+                count: 3,
+                last_error: TransactionError::Timeout
+            }
+        }
+    )));
+    assert!(!bench.link.status().link_up);
+    assert_eq!(bench.link.diagnostics().link_downs, 1);
+    let next = bench.next_tx(bench.now + Duration::from_secs(1)).unwrap();
+    assert_eq!(next, b":012B0E0401C1\r\n", "auto-detection again");
+}
+
+// ---------------------------------------------------------------------------------------
+// SYNC settings
+
+#[test]
+fn settings_outside_the_limits_are_refused_before_anything_is_sent() {
+    let mut bench = Bench::new(LinkConfig::default());
+    assert_eq!(
+        bench.link.submit(ms(0), LinkCommand::ExitRemote),
+        Err(Refusal::LinkNotUp)
+    );
+    let (mut bench, fake) = sync_bench();
+    let before = fake.writes.len();
+    let now = bench.now;
+    let refuse = |bench: &mut Bench, mode, current, pressure| {
+        bench.link.submit(
+            now,
+            LinkCommand::ApplySettings {
+                mode,
+                current,
+                pressure,
+            },
+        )
+    };
+    assert_eq!(
+        refuse(&mut bench, OperatingMode::Cut, amps(106), Pressure::Auto),
+        Err(Refusal::CurrentOutOfRange {
+            requested: amps(106),
+            min: amps(20),
+            max: amps(105)
+        })
+    );
+    assert_eq!(
+        refuse(&mut bench, OperatingMode::Cut, amps(19), Pressure::Auto),
+        Err(Refusal::CurrentOutOfRange {
+            requested: amps(19),
+            min: amps(20),
+            max: amps(105)
+        })
+    );
+    let psi = |p| Psi::from_whole(p).unwrap();
+    assert_eq!(
+        refuse(
+            &mut bench,
+            OperatingMode::Cut,
+            amps(45),
+            Pressure::Set(psi(80))
+        ),
+        Err(Refusal::PressureOutOfRange {
+            requested: psi(80),
+            min: psi(58),
+            max: psi(78)
+        })
+    );
+    assert!(matches!(
+        refuse(&mut bench, OperatingMode::Gouge, amps(45), Pressure::Auto),
+        Err(Refusal::ModeNotPermitted {
+            mode: OperatingMode::Gouge,
+            ..
+        })
+    ));
+    // Nothing but polls goes out afterwards.
+    let mut fake = fake;
+    bench.run(&mut fake, now + Duration::from_millis(300));
+    assert_eq!(fake.writes.len(), before);
+}
+
+#[test]
+fn cut_at_63_a_with_automatic_pressure_is_the_guides_frame_and_is_read_back() {
+    let (mut bench, mut fake) = sync_bench();
+    bench.events();
+    let ticket = bench
+        .link
+        .submit(
+            bench.now,
+            LinkCommand::ApplySettings {
+                mode: OperatingMode::Cut,
+                current: amps(63),
+                pressure: Pressure::Auto,
+            },
+        )
+        .unwrap();
+    // Let any poll in flight finish, then the write goes out.
+    let write = loop {
+        let frame = bench.next_tx(bench.now + Duration::from_secs(1)).unwrap();
+        if frame.starts_with(b":0110") {
+            break frame;
+        }
+        let reply = fake.answer(&frame).unwrap();
+        bench.rx(5, &reply);
+    };
+    assert_lrc(b":0110308000030600010FC0000066\r\n");
+    assert_eq!(write, b":0110308000030600010FC0000066\r\n");
+    let echo = fake.answer(&write).unwrap();
+    assert_eq!(echo, b":0110308000033C\r\n");
+    bench.rx(5, &echo);
+    // Read back 0x3010-0x3012 (guide's request, LRC B8 rechecked).
+    let read_back = bench.next_tx(bench.now).unwrap();
+    assert_eq!(read_back, b":010430100003B8\r\n");
+    bench.rx(5, &fake.answer(&read_back).unwrap());
+    let events = bench.events();
+    let applied = PowermaxSettings {
+        mode: Some(OperatingMode::Cut),
+        current: amps(63),
+        pressure: Pressure::Auto,
+    };
+    assert!(events.contains(&LinkEvent::RemoteModeChanged { remote: true }));
+    assert!(events.contains(&LinkEvent::SettingsApplied {
+        settings: applied,
+        reapplied: false
+    }));
+    assert!(events.contains(&LinkEvent::CommandDone {
+        ticket,
+        result: Ok(CommandOutput::Settings(applied))
+    }));
+    assert_eq!(bench.link.status().desired, Some(applied));
+    assert!(bench.link.status().remote);
+}
+
+#[test]
+fn a_read_back_that_differs_fails_the_command() {
+    let (mut bench, mut fake) = sync_bench();
+    let ticket = bench
+        .link
+        .submit(
+            bench.now,
+            LinkCommand::ApplySettings {
+                mode: OperatingMode::Cut,
+                current: amps(63),
+                pressure: Pressure::Auto,
+            },
+        )
+        .unwrap();
+    while let Some(frame) = bench.next_tx(bench.now + Duration::from_millis(200)) {
+        let mut reply = fake.answer(&frame).unwrap();
+        if frame == b":010430100003B8\r\n" {
+            reply = mb(&words_pdu(0x04, &[1, 45 * 64, 0]));
+        }
+        bench.rx(5, &reply);
+        if frame == b":010430100003B8\r\n" {
+            break;
+        }
+    }
+    let events = bench.events();
+    assert!(events.iter().any(|e| matches!(
+        e,
+        LinkEvent::CommandDone { ticket: t, result: Err(CommandFailure::Settings(SettingsFailure::ReadBackDiffers { .. })) } if *t == ticket
+    )));
+    assert_eq!(bench.link.status().desired, None);
+}
+
+#[test]
+fn exit_remote_writes_zeros_to_all_three_registers() {
+    let (mut bench, mut fake) = sync_bench();
+    bench
+        .link
+        .submit(bench.now, LinkCommand::ExitRemote)
+        .unwrap();
+    let write = loop {
+        let frame = bench.next_tx(bench.now + Duration::from_secs(1)).unwrap();
+        if frame.starts_with(b":0110") {
+            break frame;
+        }
+        bench.rx(5, &fake.answer(&frame).unwrap());
+    };
+    // The SYNC guide prints `:01103080000306000000000000036`, which has one '0' too many
+    // (15 characters after 06 instead of 12 zeros + LRC). Recomputed: LRC 36 over
+    // 01 10 30 80 00 03 06 00 00 00 00 00 00.
+    assert_lrc(b":0110308000030600000000000036\r\n");
+    assert_eq!(write, b":0110308000030600000000000036\r\n");
+}
+
+#[test]
+fn kept_settings_are_reapplied_when_the_unit_reverts_after_a_power_cycle() {
+    let (mut bench, mut fake) = sync_bench();
+    bench
+        .link
+        .submit(
+            bench.now,
+            LinkCommand::ApplySettings {
+                mode: OperatingMode::Cut,
+                current: amps(63),
+                pressure: Pressure::Auto,
+            },
+        )
+        .unwrap();
+    bench.run(&mut fake, bench.now + Duration::from_millis(300));
+    assert!(bench.link.status().remote);
+    bench.events();
+    fake.writes.clear();
+    // Power cycle: the unit is back on its own settings.
+    fake.regs.insert(0x3010, 1);
+    fake.regs.insert(0x3011, 45 * 64);
+    fake.regs.insert(0x3012, 0x2600);
+    bench.run(&mut fake, bench.now + Duration::from_millis(300));
+    let events = bench.events();
+    assert!(events.contains(&LinkEvent::RemoteModeChanged { remote: false }));
+    assert!(events.iter().any(|e| matches!(
+        e,
+        LinkEvent::SettingsApplied {
+            reapplied: true,
+            ..
+        }
+    )));
+    assert_eq!(
+        fake.writes.first().map(|w| w.as_slice()),
+        Some(&b":0110308000030600010FC0000066\r\n"[..])
+    );
+    assert!(bench.link.status().remote);
+}
+
+#[test]
+fn kept_settings_are_reapplied_when_the_link_returns() {
+    let (mut bench, mut fake) = sync_bench();
+    bench
+        .link
+        .submit(
+            bench.now,
+            LinkCommand::ApplySettings {
+                mode: OperatingMode::Cut,
+                current: amps(63),
+                pressure: Pressure::Auto,
+            },
+        )
+        .unwrap();
+    bench.run(&mut fake, bench.now + Duration::from_millis(300));
+    fake.silent = true;
+    bench.run(&mut fake, bench.now + Duration::from_millis(1000));
+    assert!(!bench.link.status().link_up);
+    assert!(
+        bench.link.status().desired.is_some(),
+        "kept across the link-down"
+    );
+    fake.silent = false;
+    fake.writes.clear();
+    bench.run(&mut fake, bench.now + Duration::from_millis(2000));
+    assert!(bench.link.status().link_up);
+    assert_eq!(
+        fake.writes.first().map(|w| w.as_slice()),
+        Some(&b":0110308000030600010FC0000066\r\n"[..])
+    );
+}
+
+// ---------------------------------------------------------------------------------------
+// faults, quick restart, gas test
+
+#[test]
+fn a_new_fault_is_reported_within_one_poll_interval() {
+    let (mut bench, mut fake) = sync_bench();
+    bench.events();
+    let t0 = bench.now;
+    fake.regs.insert(0x301A, 500);
+    bench.run(&mut fake, t0 + Duration::from_millis(200));
+    let events = bench.events();
+    let raised = LinkEvent::FaultRaised {
+        code: ActiveFault::Powermax(FaultCode(500)),
+        action_required: true,
+    };
+    assert!(events.contains(&raised));
+    assert!(!bench.link.status().ready);
+    fake.regs.insert(0x301A, 0);
+    bench.run(&mut fake, bench.now + Duration::from_millis(200));
+    assert!(bench.events().contains(&LinkEvent::FaultCleared {
+        code: ActiveFault::Powermax(FaultCode(500))
+    }));
+    assert!(bench.link.status().ready);
+}
+
+#[test]
+fn quick_restart_needs_0_50_0_and_is_followed_by_2_s_of_silence() {
+    let (mut bench, mut fake) = sync_bench();
+    assert_eq!(
+        bench.link.submit(bench.now, LinkCommand::QuickRestart),
+        Err(Refusal::QuickRestartNeeds050 { active: None })
+    );
+    fake.regs.insert(0x301A, 121);
+    bench.run(&mut fake, bench.now + Duration::from_millis(200));
+    assert_eq!(
+        bench.link.submit(bench.now, LinkCommand::QuickRestart),
+        Err(Refusal::QuickRestartNeeds050 {
+            active: Some(FaultCode(121))
+        })
+    );
+    fake.regs.insert(0x301A, 500);
+    bench.run(&mut fake, bench.now + Duration::from_millis(200));
+    let ticket = bench
+        .link
+        .submit(bench.now, LinkCommand::QuickRestart)
+        .unwrap();
+    let restart = loop {
+        let frame = bench.next_tx(bench.now + Duration::from_secs(1)).unwrap();
+        if frame.starts_with(b":0110308E") {
+            break frame;
+        }
+        bench.rx(5, &fake.answer(&frame).unwrap());
+    };
+    assert_lrc(b":0110308E0002040404061805\r\n");
+    assert_eq!(restart, b":0110308E0002040404061805\r\n");
+    let echo = fake.answer(&restart).unwrap();
+    assert_eq!(echo, b":0110308E00022F\r\n");
+    bench.rx(5, &echo);
+    let t_reply = bench.now;
+    assert!(bench.events().contains(&LinkEvent::CommandDone {
+        ticket,
+        result: Ok(CommandOutput::Done)
+    }));
+    assert_eq!(
+        bench.link.status().restart_blackout_until,
+        Some(t_reply + Duration::from_secs(2))
+    );
+    assert!(!bench.link.status().ready);
+    assert_eq!(
+        bench
+            .link
+            .submit(bench.now, LinkCommand::GasTest { on: true }),
+        Err(Refusal::Blackout {
+            until: t_reply + Duration::from_secs(2)
+        })
+    );
+    assert_eq!(bench.link.poll_at(), Some(t_reply + Duration::from_secs(2)));
+    assert!(
+        bench
+            .link
+            .poll_transmit(t_reply + Duration::from_millis(1999))
+            .is_none()
+    );
+    let next = bench
+        .link
+        .poll_transmit(t_reply + Duration::from_secs(2))
+        .map(|f| f.to_vec());
+    assert!(next.is_some(), "traffic resumes after 2 s");
+}
+
+#[test]
+fn gas_test_writes_the_coil() {
+    let (mut bench, mut fake) = sync_bench();
+    bench
+        .link
+        .submit(bench.now, LinkCommand::GasTest { on: true })
+        .unwrap();
+    bench.run(&mut fake, bench.now + Duration::from_millis(200));
+    assert_lrc(b":01053180FF004A\r\n");
+    assert!(fake.writes.iter().any(|w| w == b":01053180FF004A\r\n"));
+}
+
+// ---------------------------------------------------------------------------------------
+// block reads with fallback
+
+#[test]
+fn sync_block_read_falls_back_to_documented_parts_and_remembers() {
+    let mut bench = Bench::new(LinkConfig::default());
+    let mut fake = FakePowermax::sync();
+    fake.undocumented = std::vec![0x3015];
+    bench.run(&mut fake, ms(1000));
+    let polls: Vec<&Vec<u8>> = bench
+        .sent
+        .iter()
+        .map(|(_, f)| f)
+        .filter(|f| f.starts_with(b":01043010") || f.starts_with(b":01043018"))
+        .collect();
+    // Whole block once, then only the parts.
+    let whole = mb(&[0x04, 0x30, 0x10, 0x00, 0x0B]);
+    assert_eq!(polls.iter().filter(|f| ***f == whole).count(), 1);
+    assert!(
+        polls
+            .iter()
+            .filter(|f| ***f == mb(&[0x04, 0x30, 0x10, 0x00, 0x03]))
+            .count()
+            >= 3
+    );
+    assert!(
+        polls
+            .iter()
+            .filter(|f| ***f == mb(&[0x04, 0x30, 0x18, 0x00, 0x03]))
+            .count()
+            >= 3
+    );
+    fake.regs.insert(0x301A, 500);
+    bench.run(&mut fake, ms(1300));
+    assert_eq!(
+        bench.link.status().active_fault,
+        Some(ActiveFault::Powermax(FaultCode(500)))
+    );
+}
+
+#[test]
+fn legacy_block_read_falls_back_and_drops_refused_parts() {
+    let mut bench = Bench::new(LinkConfig::default());
+    let mut fake = FakePowermax::legacy();
+    // A unit that refuses the gaps and the write-only force registers.
+    fake.undocumented = std::vec![0x2093, 0x2095, 0x2096, 0x2097, 0x209B];
+    fake.regs.insert(0x2098, 111);
+    bench.run(&mut fake, ms(1000));
+    let sent: Vec<Vec<u8>> = bench.sent.iter().map(|(_, f)| f.clone()).collect();
+    let whole = mb(&[0x04, 0x20, 0x93, 0x00, 0x0D]);
+    let force = mb(&[0x04, 0x20, 0x93, 0x00, 0x02]);
+    let status = mb(&[0x04, 0x20, 0x98, 0x00, 0x03]);
+    assert_eq!(sent.iter().filter(|f| **f == whole).count(), 1);
+    assert_eq!(
+        sent.iter().filter(|f| **f == force).count(),
+        1,
+        "refused part not asked again"
+    );
+    assert!(sent.iter().filter(|f| **f == status).count() >= 3);
+    let s = bench.link.status();
+    assert_eq!(s.active_fault, Some(ActiveFault::Powermax(FaultCode(111))));
+    assert_eq!(s.limits.map(|l| l.max_current), Some(amps(65)));
+    assert_eq!(
+        bench
+            .link
+            .diagnostics()
+            .exceptions_with(plasma_protocol::modbus_ascii::ExceptionCode::IllegalDataAddress),
+        3
+    );
+}
+
+#[test]
+fn legacy_settings_use_the_three_force_registers() {
+    let mut bench = Bench::new(LinkConfig::default());
+    let mut fake = FakePowermax::legacy();
+    bench.run(&mut fake, ms(300));
+    let ticket = bench
+        .link
+        .submit(
+            bench.now,
+            LinkCommand::ApplySettings {
+                mode: OperatingMode::Cut,
+                current: amps(65),
+                pressure: Pressure::Set(Psi::from_whole(70).unwrap()),
+            },
+        )
+        .unwrap();
+    bench.run(&mut fake, bench.now + Duration::from_millis(300));
+    // Legacy guide samples (LRCs 45, F5, 20 rechecked).
+    for seed in [
+        &b":01062093000145\r\n"[..],
+        b":010620941040F5\r\n",
+        b":01062096230020\r\n",
+    ] {
+        assert_lrc(seed);
+    }
+    let writes: Vec<&[u8]> = fake.writes.iter().map(|w| w.as_slice()).collect();
+    assert_eq!(
+        writes,
+        std::vec![
+            &b":01062093000145\r\n"[..],
+            b":010620941040F5\r\n",
+            b":01062096230020\r\n"
+        ]
+    );
+    assert!(bench.events().iter().any(|e| matches!(e, LinkEvent::CommandDone { ticket: t, result: Ok(CommandOutput::Settings(_)) } if *t == ticket)));
+    fake.writes.clear();
+    bench
+        .link
+        .submit(bench.now, LinkCommand::ExitRemote)
+        .unwrap();
+    bench.run(&mut fake, bench.now + Duration::from_millis(300));
+    let zeros: Vec<Vec<u8>> = [0x93u8, 0x94, 0x96]
+        .iter()
+        .map(|&r| mb(&[0x06, 0x20, r, 0, 0]))
+        .collect();
+    assert_eq!(fake.writes, zeros);
+}
+
+// ---------------------------------------------------------------------------------------
+// RAW and allow-lists
+
+#[test]
+fn raw_modbus_reads_are_forwarded_and_unlisted_writes_refused() {
+    let (mut bench, mut fake) = sync_bench();
+    let raw = |bytes: &[u8]| LinkCommand::Raw(heapless::Vec::from_slice(bytes).unwrap());
+    let now = bench.now;
+    assert_eq!(
+        bench
+            .link
+            .submit(now, raw(&mb(&[0x10, 0x30, 0x8E, 0, 2, 4, 4, 4, 6, 0x18]))),
+        Err(Refusal::RawWriteNotAllowed { address: 0x308E })
+    );
+    assert_eq!(
+        bench.link.submit(now, raw(&mb(&[0x06, 0x30, 0x00, 0, 1]))),
+        Err(Refusal::RawWriteNotAllowed { address: 0x3000 })
+    );
+    assert_eq!(
+        bench
+            .link
+            .submit(now, raw(&mb(&[0x05, 0x31, 0x00, 0xFF, 0]))),
+        Err(Refusal::RawWriteNotAllowed { address: 0x3100 })
+    );
+    assert!(matches!(
+        bench.link.submit(now, raw(b":0104301A0001B1\r\n")),
+        Err(Refusal::RawMalformed(
+            plasma_protocol::Error::BadChecksum { .. }
+        ))
+    ));
+    let ticket = bench.link.submit(now, raw(b":0104301A0001B0\r\n")).unwrap();
+    fake.regs.insert(0x301A, 500);
+    bench.run(&mut fake, now + Duration::from_millis(200));
+    let done = bench.events().into_iter().find_map(|e| match e {
+        LinkEvent::CommandDone { ticket: t, result } if t == ticket => Some(result),
+        _ => None,
+    });
+    assert_eq!(done, Some(Ok(CommandOutput::Raw { len: 15 })));
+    assert_lrc(b":01040201F404\r\n");
+    assert_eq!(bench.link.raw_reply(), b":01040201F404\r\n");
+}
+
+// ---------------------------------------------------------------------------------------
+// HPR
+
+fn hpr_bench(system: &str) -> Bench {
+    let config = LinkConfig {
+        protocol: ProtocolChoice::Hpr,
+        ..LinkConfig::default()
+    };
+    let mut bench = Bench::new(config);
+    bench.next_tx(ms(0)).unwrap();
+    bench.rx(3, &hf(0, system));
+    assert!(bench.link.status().link_up);
+    bench
+}
+
+fn ps_info(state: u16, error: u16) -> Vec<u8> {
+    hf(
+        79,
+        &std::format!(
+            "PC0044 PP0042 SC0034 SP0035 CS0130 ST{state:04} ER{error:04} CG0000 CG0000 MV0000 MV0000"
+        ),
+    )
+}
+
+#[test]
+fn hpr_retries_span_more_than_a_one_second_blackout() {
+    let mut bench = hpr_bench("HYPERFORMANCE260AUTO");
+    let t0 = bench.now;
+    let mut times = Vec::new();
+    for _ in 0..3 {
+        bench.next_tx(t0 + Duration::from_secs(5)).unwrap();
+        times.push(bench.now);
+    }
+    assert_eq!(
+        times[1].saturating_since(times[0]),
+        Duration::from_millis(450)
+    );
+    assert!(times[2].saturating_since(times[0]) > Duration::from_millis(1200));
+    // The third attempt gets through the noise.
+    bench.rx(3, &ps_info(3, 0));
+    assert_eq!(bench.link.status().hpr.state, Some(StateCode(3)));
+    assert!(bench.link.status().ready);
+}
+
+#[test]
+fn hpr_error_replies_are_classified() {
+    let mut bench = hpr_bench("HYPERFORMANCE130MANUAL");
+    bench.next_tx(bench.now).unwrap();
+    bench.rx(2, b">50095<");
+    assert_eq!(bench.link.diagnostics().hpr_bad_checksum_500, 1);
+    let retry = bench.next_tx(bench.now + Duration::from_secs(2)).unwrap();
+    assert_eq!(retry, b">079A0<");
+    bench.rx(2, b">50196<");
+    assert_eq!(bench.link.diagnostics().hpr_unknown_command_501, 1);
+    assert_eq!(bench.link.diagnostics().transactions_failed, 1);
+}
+
+#[test]
+fn hpr_pauses_during_pilot_arc_then_asks_only_for_the_state() {
+    let mut bench = hpr_bench("HYPERFORMANCE130AUTO");
+    bench.next_tx(bench.now).unwrap();
+    bench.rx(2, &ps_info(5, 0));
+    let t = bench.now;
+    assert_eq!(bench.link.poll_at(), Some(t + Duration::from_secs(1)));
+    assert!(
+        bench
+            .link
+            .poll_transmit(t + Duration::from_millis(999))
+            .is_none()
+    );
+    assert_eq!(
+        bench
+            .link
+            .poll_transmit(t + Duration::from_secs(1))
+            .map(|f| f.to_vec()),
+        Some(b">00292<".to_vec())
+    );
+}
+
+#[test]
+fn hpr_settings_are_range_checked_and_preceded_by_remote_mode() {
+    let mut bench = hpr_bench("HYPERFORMANCE130AUTO");
+    bench.next_tx(bench.now).unwrap();
+    bench.rx(2, &ps_info(3, 0));
+    assert_eq!(
+        bench
+            .link
+            .submit(bench.now, LinkCommand::HprSetNominalAmps { amps: 131 }),
+        Err(Refusal::HprValueOutOfRange {
+            value: HprValue::Amps,
+            requested: 131,
+            min: 5,
+            max: 130
+        })
+    );
+    assert_eq!(
+        bench
+            .link
+            .submit(bench.now, LinkCommand::HprSetCornerCurrent { percent: 49 }),
+        Err(Refusal::HprValueOutOfRange {
+            value: HprValue::CornerPercent,
+            requested: 49,
+            min: 50,
+            max: 100
+        })
+    );
+    assert_eq!(
+        bench.link.submit(bench.now, LinkCommand::HprSoftwareReset),
+        Err(Refusal::StateForbids {
+            state: Some(StateCode(3)),
+            error: Some(ErrorCode(0))
+        })
+    );
+    assert_eq!(
+        bench.link.submit(bench.now, LinkCommand::QuickRestart),
+        Err(Refusal::NotSupported {
+            family: Family::Hpr
+        })
+    );
+    let ticket = bench
+        .link
+        .submit(bench.now, LinkCommand::HprSetNominalAmps { amps: 130 })
+        .unwrap();
+    let frame = bench.next_tx(bench.now + Duration::from_secs(1)).unwrap();
+    assert_eq!(frame, b">00494<", "REMOTE_MODE first");
+    bench.rx(2, b">0041C5<");
+    let frame = bench.next_tx(bench.now).unwrap();
+    assert_eq!(frame, b">05813031<");
+    bench.rx(2, b">058013061<");
+    let events = bench.events();
+    assert!(events.contains(&LinkEvent::RemoteModeChanged { remote: true }));
+    assert!(events.contains(&LinkEvent::CommandDone {
+        ticket,
+        result: Ok(CommandOutput::Value(130))
+    }));
+}
+
+#[test]
+fn maxpro_set_process_needs_state_2_or_3() {
+    let mut bench = hpr_bench("MaxPro200");
+    let gases = GasPair {
+        plasma: GasCode(5),
+        shield: GasCode(5),
+    };
+    assert!(matches!(
+        bench
+            .link
+            .submit(bench.now, LinkCommand::HprSetProcess { amps: 200, gases }),
+        Err(Refusal::StateForbids { state: None, .. })
+    ));
+    bench.next_tx(bench.now).unwrap();
+    bench.rx(
+        2,
+        &hf(
+            79,
+            "st0003 er0000 pg0005 ps0056 sg0005 ss0058 cs0200 dm0001 lm0000",
+        ),
+    );
+    assert_eq!(bench.link.status().hpr.state, Some(StateCode(3)));
+    assert_eq!(
+        bench
+            .link
+            .submit(bench.now, LinkCommand::HprSetProcess { amps: 201, gases }),
+        Err(Refusal::HprValueOutOfRange {
+            value: HprValue::Amps,
+            requested: 201,
+            min: 5,
+            max: 200
+        })
+    );
+    bench
+        .link
+        .submit(bench.now, LinkCommand::HprSetProcess { amps: 200, gases })
+        .unwrap();
+    assert_eq!(
+        bench.next_tx(bench.now + Duration::from_secs(1)).unwrap(),
+        b">00494<"
+    );
+    bench.rx(2, b">0041C5<");
+    // Manual sample `>137200 5 5D7<`.
+    assert_eq!(bench.next_tx(bench.now).unwrap(), b">137200 5 5D7<");
+}
+
+#[test]
+fn hpr_raw_commands_outside_the_allow_list_are_refused() {
+    let mut bench = hpr_bench("HYPERFORMANCE400XD");
+    let raw = |frame: &[u8]| LinkCommand::Raw(heapless::Vec::from_slice(frame).unwrap());
+    for id in [120u16, 119, 102, 101, 71, 103, 85, 86, 87, 999] {
+        let frame = hf(id, "");
+        assert_eq!(
+            bench.link.submit(bench.now, raw(&frame)),
+            Err(Refusal::RawCommandNotAllowed { id }),
+            "id {id}"
+        );
+    }
+    let ticket = bench.link.submit(bench.now, raw(b">00292<")).unwrap();
+    // Commands go before the next poll.
+    assert_eq!(bench.next_tx(bench.now).unwrap(), b">00292<");
+    bench.rx(2, b">002000355<");
+    assert!(bench.events().contains(&LinkEvent::CommandDone {
+        ticket,
+        result: Ok(CommandOutput::Raw { len: 11 })
+    }));
+    assert_eq!(bench.link.raw_reply(), b">002000355<");
+}
+
+#[test]
+fn hpr_errors_raise_and_clear_faults() {
+    let mut bench = hpr_bench("HYPERFORMANCE130AUTO");
+    bench.events();
+    bench.next_tx(bench.now).unwrap();
+    bench.rx(2, &ps_info(14, 116));
+    let events = bench.events();
+    assert!(events.contains(&LinkEvent::FaultRaised {
+        code: ActiveFault::Hpr(ErrorCode(116)),
+        action_required: true
+    }));
+    assert!(events.contains(&LinkEvent::StateChanged {
+        from: None,
+        to: StateCode(14)
+    }));
+    // Shutdown error: software reset allowed now.
+    assert!(
+        bench
+            .link
+            .submit(bench.now, LinkCommand::HprSoftwareReset)
+            .is_ok()
+    );
+}
+
+#[test]
+fn reconfiguring_pins_the_protocol_and_restarts_detection() {
+    let (mut bench, _fake) = sync_bench();
+    bench.events();
+    let config = LinkConfig {
+        protocol: ProtocolChoice::Hpr,
+        ..LinkConfig::default()
+    };
+    bench.link.reconfigure(bench.now, config);
+    assert_eq!(
+        bench.events(),
+        std::vec![LinkEvent::LinkDown {
+            reason: LinkDownReason::Reconfigured
+        }]
+    );
+    assert_eq!(bench.next_tx(bench.now).unwrap(), b">00090<");
+    assert_eq!(bench.link.port_config(), PortConfig::HPR);
+}
+
+#[test]
+fn invalid_configurations_are_refused_or_clamped() {
+    let bad = LinkConfig {
+        response_timeout: Duration::from_millis(10),
+        hpr_id: 7,
+        ..LinkConfig::default()
+    };
+    assert_eq!(
+        PsLink::try_new(bad, ms(0)).err(),
+        Some(ConfigError::ResponseTimeoutOutOfRange { ms: 10 })
+    );
+    let link = PsLink::new(bad, ms(0));
+    assert_eq!(link.config().response_timeout, Duration::from_millis(60));
+    assert_eq!(link.config().hpr_id, 3);
+}
+
+#[test]
+fn noise_and_late_replies_do_not_disturb_the_link() {
+    let (mut bench, mut fake) = sync_bench();
+    // Nothing awaited: a stray frame and line noise are counted and ignored.
+    bench
+        .link
+        .handle_rx(bench.now, b"\x00\xff:0104020508EC\r\n>0041C5<garbage");
+    assert_eq!(bench.link.diagnostics().unsolicited_frames, 1);
+    bench.run(&mut fake, bench.now + Duration::from_millis(300));
+    assert!(bench.link.status().link_up);
+}
