@@ -1,110 +1,54 @@
-//! The simulators' byte edge for Modbus ASCII: frame assembly, LRC, and the PDU <-> typed
-//! [`Request`] / [`Response`] conversion.
+//! The simulators' byte edge for Modbus ASCII, through the protocol crate's framing
+//! ([`Decoder`], [`encode`](modbus_ascii::encode)) and PDU codecs ([`Request::parse`],
+//! [`Response::emit`]).
 //!
 //! Kept deliberately thin: the unit models only ever see typed requests and build owned
 //! [`Reply`] values, so this file is the only place that knows about characters.
 
+use plasma_protocol::Error;
 use plasma_protocol::modbus_ascii::{
-    DeviceIdCode, ExceptionCode, Registers, Request, Response, pdu::DeviceIdentification,
+    self, Decoder, DeviceIdCode, DeviceIdentification, ExceptionCode, MAX_FRAME_CHARS, MAX_PDU_LEN,
+    Registers, Request, Response,
 };
 
-/// Longest frame body (between `:` and CR LF) a unit buffers: address, function, 252 data
-/// bytes and the LRC, as hex.
-const MAX_FRAME_CHARS: usize = 2 * (1 + 1 + 252 + 1);
-
-/// Collects characters into frames: `:` starts one (dropping any partial frame), CR LF ends it.
+/// Collects characters into frames (LRC checked); frames that fail are dropped silently, as
+/// a Modbus unit does.
 #[derive(Debug, Default)]
 pub(crate) struct Assembler {
-    body: Vec<u8>,
-    in_frame: bool,
-    saw_cr: bool,
+    decoder: Decoder,
 }
 
 impl Assembler {
-    /// Feeds one character; returns the hex body of a frame that just ended.
-    pub(crate) fn push(&mut self, byte: u8) -> Option<Vec<u8>> {
-        match byte {
-            b':' => {
-                self.body.clear();
-                self.in_frame = true;
-                self.saw_cr = false;
-                None
-            }
-            _ if !self.in_frame => None,
-            b'\r' => {
-                self.saw_cr = true;
-                None
-            }
-            b'\n' if self.saw_cr => {
-                self.in_frame = false;
-                Some(std::mem::take(&mut self.body))
-            }
-            _ if self.saw_cr || self.body.len() >= MAX_FRAME_CHARS => {
-                self.reset();
-                None
-            }
-            _ => {
-                self.body.push(byte);
-                None
-            }
+    /// Feeds one character; returns (address, PDU) of a good frame that just ended.
+    pub(crate) fn push(&mut self, byte: u8) -> Option<(u8, Vec<u8>)> {
+        match self.decoder.push(byte)? {
+            Ok(frame) => Some((frame.address, frame.pdu.to_vec())),
+            Err(_) => None,
         }
     }
 
     /// A character arrived with a parity or framing error: the frame in progress is void.
     pub(crate) fn reset(&mut self) {
-        self.body.clear();
-        self.in_frame = false;
-        self.saw_cr = false;
+        self.decoder.reset();
     }
 }
 
-fn hex_value(c: u8) -> Option<u8> {
-    match c {
-        b'0'..=b'9' => Some(c - b'0'),
-        b'A'..=b'F' => Some(c - b'A' + 10),
-        b'a'..=b'f' => Some(c - b'a' + 10),
-        _ => None,
-    }
-}
-
-/// LRC of Modbus ASCII: two's complement of the byte sum.
-pub(crate) fn lrc(bytes: &[u8]) -> u8 {
-    bytes
-        .iter()
-        .fold(0u8, |acc, &b| acc.wrapping_add(b))
-        .wrapping_neg()
-}
-
-/// Hex body -> (address, PDU), if the characters are hex pairs and the LRC is right.
-pub(crate) fn decode(body: &[u8]) -> Option<(u8, Vec<u8>)> {
-    if !body.len().is_multiple_of(2) || body.len() < 6 {
-        return None;
-    }
-    let bytes: Option<Vec<u8>> = body
-        .chunks(2)
-        .map(|p| Some(hex_value(p[0])? << 4 | hex_value(p[1])?))
-        .collect();
-    let bytes = bytes?;
-    let (frame, check) = bytes.split_at(bytes.len() - 1);
-    if lrc(frame) != check[0] {
-        return None;
-    }
-    Some((frame[0], frame[1..].to_vec()))
+/// Characters of one whole frame (`:` ... CR LF) -> (address, PDU), if it checks out.
+#[cfg(test)]
+pub(crate) fn decode(frame: &[u8]) -> Option<(u8, Vec<u8>)> {
+    let mut buf = [0u8; MAX_PDU_LEN];
+    modbus_ascii::decode(frame, &mut buf)
+        .ok()
+        .map(|f| (f.address, f.pdu.to_vec()))
 }
 
 /// (address, PDU) -> the characters of a frame, `:` to CR LF.
 pub(crate) fn encode(address: u8, pdu: &[u8]) -> Vec<u8> {
-    let mut frame = Vec::with_capacity(pdu.len() + 2);
-    frame.push(address);
-    frame.extend_from_slice(pdu);
-    frame.push(lrc(&frame));
-    let mut out = Vec::with_capacity(frame.len() * 2 + 3);
-    out.push(b':');
-    for b in frame {
-        out.extend_from_slice(format!("{b:02X}").as_bytes());
+    let mut out = [0u8; MAX_FRAME_CHARS];
+    match modbus_ascii::encode(address, pdu, &mut out) {
+        Ok(n) => out[..n].to_vec(),
+        Err(e) => panic!("simulator reply {pdu:02X?} cannot be framed: {e:?}"),
     }
-    out.extend_from_slice(b"\r\n");
-    out
 }
 
 /// Why a PDU is not a request the unit can act on, as the exception it answers with.
@@ -114,139 +58,25 @@ pub(crate) struct Refused {
     pub code: ExceptionCode,
 }
 
-fn be(pdu: &[u8], at: usize) -> Option<u16> {
-    Some(u16::from_be_bytes([*pdu.get(at)?, *pdu.get(at + 1)?]))
-}
-
-/// PDU -> typed request.
+/// PDU -> typed request, or the exception a unit answers: 01 for a function (or MEI type) it
+/// does not implement, 03 for bad lengths, quantities or values.
 pub(crate) fn parse_request(pdu: &[u8]) -> Result<Request<'_>, Refused> {
-    let function = *pdu.first().ok_or(Refused {
-        function: 0,
-        code: ExceptionCode::IllegalFunction,
-    })?;
-    let bad_value = Refused {
+    let function = pdu.first().copied().unwrap_or(0);
+    Request::parse(pdu).map_err(|e| Refused {
         function,
-        code: ExceptionCode::IllegalDataValue,
-    };
-    let pair = || -> Result<(u16, u16), Refused> {
-        if pdu.len() != 5 {
-            return Err(bad_value);
-        }
-        Ok((be(pdu, 1).ok_or(bad_value)?, be(pdu, 3).ok_or(bad_value)?))
-    };
-    match function {
-        0x01 => pair().map(|(start, quantity)| Request::ReadCoils { start, quantity }),
-        0x03 => pair().map(|(start, quantity)| Request::ReadHoldingRegisters { start, quantity }),
-        0x04 => pair().map(|(start, quantity)| Request::ReadInputRegisters { start, quantity }),
-        0x05 => match pair()? {
-            (address, 0xFF00) => Ok(Request::WriteSingleCoil { address, on: true }),
-            (address, 0x0000) => Ok(Request::WriteSingleCoil { address, on: false }),
-            _ => Err(bad_value),
+        code: match e {
+            Error::Unsupported => ExceptionCode::IllegalFunction,
+            _ => ExceptionCode::IllegalDataValue,
         },
-        0x06 => pair().map(|(address, value)| Request::WriteSingleRegister { address, value }),
-        0x10 => {
-            let start = be(pdu, 1).ok_or(bad_value)?;
-            let quantity = be(pdu, 3).ok_or(bad_value)?;
-            let count = *pdu.get(5).ok_or(bad_value)? as usize;
-            let data = pdu.get(6..).ok_or(bad_value)?;
-            if quantity == 0 || count != 2 * quantity as usize || data.len() != count {
-                return Err(bad_value);
-            }
-            Ok(Request::WriteMultipleRegisters {
-                start,
-                values: Registers::BigEndian(data),
-            })
-        }
-        0x2B => {
-            if pdu.get(1) != Some(&0x0E) {
-                return Err(Refused {
-                    function,
-                    code: ExceptionCode::IllegalFunction,
-                });
-            }
-            if pdu.len() != 4 {
-                return Err(bad_value);
-            }
-            let code = match pdu[2] {
-                0x01 => DeviceIdCode::Basic,
-                0x02 => DeviceIdCode::Regular,
-                0x03 => DeviceIdCode::Extended,
-                0x04 => DeviceIdCode::Specific,
-                _ => return Err(bad_value),
-            };
-            Ok(Request::ReadDeviceIdentification {
-                code,
-                object_id: pdu[3],
-            })
-        }
-        _ => Err(Refused {
-            function,
-            code: ExceptionCode::IllegalFunction,
-        }),
-    }
+    })
 }
 
-fn exception_byte(code: ExceptionCode) -> u8 {
-    match code {
-        ExceptionCode::IllegalFunction => 0x01,
-        ExceptionCode::IllegalDataAddress => 0x02,
-        ExceptionCode::IllegalDataValue => 0x03,
-        ExceptionCode::ServerDeviceFailure => 0x04,
-        ExceptionCode::Acknowledge => 0x05,
-        ExceptionCode::ServerDeviceBusy => 0x06,
-        ExceptionCode::MemoryParityError => 0x08,
-        ExceptionCode::GatewayPathUnavailable => 0x0A,
-        ExceptionCode::GatewayTargetFailed => 0x0B,
-        ExceptionCode::Other(c) => c,
+fn emit(response: &Response<'_>) -> Vec<u8> {
+    let mut out = [0u8; MAX_PDU_LEN];
+    match response.emit(&mut out) {
+        Ok(n) => out[..n].to_vec(),
+        Err(e) => panic!("simulator reply {response:?} cannot be emitted: {e:?}"),
     }
-}
-
-/// Typed response -> PDU bytes.
-pub(crate) fn emit_response(response: &Response<'_>) -> Vec<u8> {
-    let mut out = Vec::new();
-    let registers = |out: &mut Vec<u8>, function: u8, values: &Registers<'_>| {
-        out.push(function);
-        out.push((values.len() * 2) as u8);
-        for v in values.iter() {
-            out.extend_from_slice(&v.to_be_bytes());
-        }
-    };
-    match response {
-        Response::ReadCoils { bits } => {
-            out.push(0x01);
-            out.push(bits.len() as u8);
-            out.extend_from_slice(bits);
-        }
-        Response::ReadHoldingRegisters { values } => registers(&mut out, 0x03, values),
-        Response::ReadInputRegisters { values } => registers(&mut out, 0x04, values),
-        Response::WriteSingleCoil { address, on } => {
-            out.push(0x05);
-            out.extend_from_slice(&address.to_be_bytes());
-            out.extend_from_slice(if *on { &[0xFF, 0x00] } else { &[0x00, 0x00] });
-        }
-        Response::WriteSingleRegister { address, value } => {
-            out.push(0x06);
-            out.extend_from_slice(&address.to_be_bytes());
-            out.extend_from_slice(&value.to_be_bytes());
-        }
-        Response::WriteMultipleRegisters { start, quantity } => {
-            out.push(0x10);
-            out.extend_from_slice(&start.to_be_bytes());
-            out.extend_from_slice(&quantity.to_be_bytes());
-        }
-        Response::ReadDeviceIdentification(id) => {
-            out.extend_from_slice(&[0x2B, 0x0E, id.code as u8, id.conformity]);
-            out.push(if id.more_follows { 0xFF } else { 0x00 });
-            out.push(id.next_object_id);
-            out.push(id.object_count);
-            out.extend_from_slice(id.objects);
-        }
-        Response::Exception { function, code } => {
-            out.push(function | 0x80);
-            out.push(exception_byte(*code));
-        }
-    }
-    out
 }
 
 /// What a unit answers, owned so a model can build it; [`Reply::response`] borrows it as the
@@ -309,25 +139,23 @@ impl Reply {
     /// The PDU bytes of this reply.
     pub fn to_pdu(&self) -> Vec<u8> {
         match self {
-            Reply::HoldingRegisters(v) => emit_response(&Response::ReadHoldingRegisters {
+            Reply::HoldingRegisters(v) => emit(&Response::ReadHoldingRegisters {
                 values: Registers::Words(v),
             }),
-            Reply::InputRegisters(v) => emit_response(&Response::ReadInputRegisters {
+            Reply::InputRegisters(v) => emit(&Response::ReadInputRegisters {
                 values: Registers::Words(v),
             }),
-            Reply::Coils(bits) => emit_response(&Response::ReadCoils { bits }),
-            Reply::WriteSingleCoil { address, on } => emit_response(&Response::WriteSingleCoil {
+            Reply::Coils(bits) => emit(&Response::ReadCoils { bits }),
+            Reply::WriteSingleCoil { address, on } => emit(&Response::WriteSingleCoil {
                 address: *address,
                 on: *on,
             }),
-            Reply::WriteSingleRegister { address, value } => {
-                emit_response(&Response::WriteSingleRegister {
-                    address: *address,
-                    value: *value,
-                })
-            }
+            Reply::WriteSingleRegister { address, value } => emit(&Response::WriteSingleRegister {
+                address: *address,
+                value: *value,
+            }),
             Reply::WriteMultipleRegisters { start, quantity } => {
-                emit_response(&Response::WriteMultipleRegisters {
+                emit(&Response::WriteMultipleRegisters {
                     start: *start,
                     quantity: *quantity,
                 })
@@ -338,22 +166,22 @@ impl Reply {
                 next_object_id,
                 objects,
             } => {
-                let mut raw = Vec::new();
-                for (id, value) in objects {
-                    raw.push(*id);
-                    raw.push(value.len() as u8);
-                    raw.extend_from_slice(value);
+                let objects: Vec<(u8, &[u8])> =
+                    objects.iter().map(|(id, v)| (*id, v.as_slice())).collect();
+                let mut out = [0u8; MAX_PDU_LEN];
+                match DeviceIdentification::emit_objects(
+                    *code,
+                    *conformity,
+                    false,
+                    *next_object_id,
+                    &objects,
+                    &mut out,
+                ) {
+                    Ok(n) => out[..n].to_vec(),
+                    Err(e) => panic!("device identification cannot be emitted: {e:?}"),
                 }
-                emit_response(&Response::ReadDeviceIdentification(DeviceIdentification {
-                    code: *code,
-                    conformity: *conformity,
-                    more_follows: false,
-                    next_object_id: *next_object_id,
-                    object_count: objects.len() as u8,
-                    objects: &raw,
-                }))
             }
-            Reply::Exception { function, code } => emit_response(&Response::Exception {
+            Reply::Exception { function, code } => emit(&Response::Exception {
                 function: *function,
                 code: *code,
             }),
@@ -365,21 +193,15 @@ impl Reply {
 mod tests {
     use super::*;
 
-    fn frame(text: &str) -> Vec<u8> {
+    fn frame(text: &str) -> Option<(u8, Vec<u8>)> {
         let mut a = Assembler::default();
-        let mut out = None;
-        for &b in text.as_bytes() {
-            if let Some(f) = a.push(b) {
-                out = Some(f);
-            }
-        }
-        out.expect("complete frame")
+        text.bytes().filter_map(|b| a.push(b)).last()
     }
 
     #[test]
     fn manual_request_decodes_to_a_typed_read() {
         // SYNC guide p. 11: read the 4-entry cartridge fault log.
-        let (address, pdu) = decode(&frame(":01043044000483\r\n")).unwrap();
+        let (address, pdu) = frame(":01043044000483\r\n").unwrap();
         assert_eq!(address, 1);
         assert_eq!(
             parse_request(&pdu),
@@ -392,12 +214,15 @@ mod tests {
 
     #[test]
     fn a_wrong_lrc_is_not_a_frame() {
-        assert_eq!(decode(&frame(":01043044000484\r\n")), None);
+        assert_eq!(frame(":01043044000484\r\n"), None);
     }
 
     #[test]
     fn a_colon_restarts_the_frame() {
-        assert_eq!(frame(":0104:010430000001CA\r\n"), b"010430000001CA");
+        assert_eq!(
+            frame(":0104:010430000001CA\r\n").unwrap().1,
+            [4, 0x30, 0, 0, 1]
+        );
     }
 
     #[test]
@@ -412,14 +237,29 @@ mod tests {
         }
         .to_pdu();
         assert_eq!(encode(1, &pdu), b":0110308000033C\r\n");
+        assert_eq!(decode(b":0110308000033C\r\n"), Some((1, pdu)));
     }
 
     #[test]
-    fn unknown_functions_are_illegal() {
+    fn unknown_functions_are_illegal_and_bad_quantities_illegal_values() {
         assert_eq!(
             parse_request(&[0x17, 0, 0, 0, 1]),
             Err(Refused {
                 function: 0x17,
+                code: ExceptionCode::IllegalFunction
+            })
+        );
+        assert_eq!(
+            parse_request(&[0x04, 0x30, 0, 0, 0]),
+            Err(Refused {
+                function: 0x04,
+                code: ExceptionCode::IllegalDataValue
+            })
+        );
+        assert_eq!(
+            parse_request(&[0x2B, 0x0D, 4, 1]),
+            Err(Refused {
+                function: 0x2B,
                 code: ExceptionCode::IllegalFunction
             })
         );

@@ -744,7 +744,7 @@ impl Powermax {
     /// Acts on one request addressed to this unit.
     fn handle(&mut self, now: Instant, request: &Request<'_>) -> Option<Reply> {
         use ExceptionCode::*;
-        let function = request_function(request);
+        let function = request.function().to_u8();
         let refuse = |code| Some(Reply::exception(function, code));
         self.requests += 1;
         match *request {
@@ -836,10 +836,7 @@ impl Powermax {
         }
     }
 
-    fn on_frame(&mut self, now: Instant, body: &[u8]) {
-        let Some((address, pdu)) = modbus_wire::decode(body) else {
-            return;
-        };
+    fn on_frame(&mut self, now: Instant, address: u8, pdu: &[u8]) {
         let broadcast = address == 0;
         if !broadcast {
             match self.address() {
@@ -848,7 +845,7 @@ impl Powermax {
                 Some(_) => return,
             }
         }
-        let reply = match modbus_wire::parse_request(&pdu) {
+        let reply = match modbus_wire::parse_request(pdu) {
             Ok(request) => self.handle(now, &request),
             Err(refused) => Some(Reply::exception(refused.function, refused.code)),
         };
@@ -866,18 +863,6 @@ impl Powermax {
     }
 }
 
-fn request_function(request: &Request<'_>) -> u8 {
-    match request {
-        Request::ReadCoils { .. } => 0x01,
-        Request::ReadHoldingRegisters { .. } => 0x03,
-        Request::ReadInputRegisters { .. } => 0x04,
-        Request::WriteSingleCoil { .. } => 0x05,
-        Request::WriteSingleRegister { .. } => 0x06,
-        Request::WriteMultipleRegisters { .. } => 0x10,
-        Request::ReadDeviceIdentification { .. } => 0x2B,
-    }
-}
-
 impl SimulatedUnit for Powermax {
     fn model(&self) -> Model {
         self.config.model
@@ -892,8 +877,8 @@ impl SimulatedUnit for Powermax {
         if self.is_deaf(now) {
             return;
         }
-        if let Some(body) = self.assembler.push(byte) {
-            self.on_frame(now, &body);
+        if let Some((address, pdu)) = self.assembler.push(byte) {
+            self.on_frame(now, address, &pdu);
         }
     }
 
@@ -1047,9 +1032,7 @@ pub(crate) mod testing {
             reply.starts_with(b":") && reply.ends_with(b"\r\n"),
             "{reply:?}"
         );
-        modbus_wire::decode(&reply[1..reply.len() - 2])
-            .expect("reply LRC")
-            .1
+        modbus_wire::decode(reply).expect("reply LRC").1
     }
 
     /// Reads `quantity` registers with function 04 and returns the values.
