@@ -110,6 +110,7 @@ fn every_simulated_model_is_detected_automatically() {
         world.run_for(secs(3));
         assert!(world.link().status().link_up, "{model}");
         assert_eq!(world.link().diagnostics().link_downs, 0, "{model}");
+        assert_eq!(world.stats().stale_wakeups, 0, "{model}: poll_at never in the past");
     }
 }
 

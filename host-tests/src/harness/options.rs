@@ -16,6 +16,10 @@ pub enum RxErrors {
     Deliver,
     /// Drop it (a UART driver that discards flagged characters).
     Drop,
+    /// Hand over a NUL instead: a character no frame may contain, so the frame it falls in
+    /// is rejected whatever its checksum says (a board glue that turns UART errors into a
+    /// broken frame; the link has no call to report a UART error).
+    Substitute,
 }
 
 /// Everything that makes one [`World`](super::World).

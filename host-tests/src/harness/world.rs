@@ -21,6 +21,11 @@ use crate::sim::{Model, SimulatedUnit};
 /// this the request is stale and the loop moves on (and counts it).
 const MAX_REPEATS_AT_ONE_INSTANT: u32 = 2;
 
+/// While the endpoint keeps asking for an instant already processed, a board's task loop
+/// would spin; the loop models that spin as a call every millisecond, so whatever the
+/// endpoint does when time passes still happens (at most this late).
+const BUSY_LOOP_TICK: Duration = Duration::from_millis(1);
+
 /// A wait ran out of virtual time.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Timeout {
@@ -48,8 +53,9 @@ impl std::error::Error for Timeout {}
 pub struct WorldStats {
     /// Instants processed.
     pub steps: u64,
-    /// Times a wake-up time at or before the current instant was still asked for after the
-    /// instant had been processed (on a board: a busy loop). See the module docs.
+    /// Steps taken because a wake-up time at or before the current instant was still asked
+    /// for after the instant had been processed: on a board, a busy loop. Each counts one
+    /// millisecond of spinning.
     pub stale_wakeups: u64,
 }
 
@@ -66,6 +72,7 @@ pub struct World<E: PsEndpoint = PsLink> {
     io_events: Vec<(Instant, IoEvent)>,
     transitions: Vec<Transition>,
     trace: WireTrace,
+    heard: Vec<(Instant, u8)>,
     noise_bursts: Vec<(Instant, Duration)>,
     start_given: bool,
     last_supply: SupplyState,
@@ -154,6 +161,7 @@ impl<E: PsEndpoint> World<E> {
             io_events: Vec::new(),
             transitions: Vec::new(),
             trace: WireTrace::default(),
+            heard: Vec::new(),
             noise_bursts: Vec::new(),
             start_given: false,
             last_supply: SupplyState::default(),
@@ -376,6 +384,21 @@ impl<E: PsEndpoint> World<E> {
         &self.trace
     }
 
+    /// Every character the endpoint was handed, with the instant (what the bridge actually
+    /// heard, after the line's damage; the trace holds what was sent).
+    pub fn heard(&self) -> &[(Instant, u8)] {
+        &self.heard
+    }
+
+    /// The characters the endpoint was handed in `[from, to)`.
+    pub fn heard_between(&self, from: Instant, to: Instant) -> Vec<u8> {
+        self.heard
+            .iter()
+            .filter(|(t, _)| *t >= from && *t < to)
+            .map(|&(_, b)| b)
+            .collect()
+    }
+
     /// Loop counters.
     pub fn stats(&self) -> WorldStats {
         self.stats
@@ -400,7 +423,18 @@ impl<E: PsEndpoint> World<E> {
         if next.is_some_and(|t| t <= self.now) {
             if self.repeats >= MAX_REPEATS_AT_ONE_INSTANT {
                 self.stats.stale_wakeups += 1;
-                next = wakeups.iter().flatten().filter(|&&t| t > self.now).min().copied();
+                let spin = self
+                    .endpoint
+                    .poll_at()
+                    .filter(|&t| t <= self.now)
+                    .map(|_| self.now + BUSY_LOOP_TICK);
+                next = wakeups
+                    .iter()
+                    .flatten()
+                    .copied()
+                    .filter(|&t| t > self.now)
+                    .chain(spin)
+                    .min();
             } else {
                 self.repeats += 1;
             }
@@ -455,10 +489,14 @@ impl<E: PsEndpoint> World<E> {
             .line
             .receive(End::Master, now)
             .into_iter()
-            .filter(|b| b.error.is_none() || self.rx_errors == RxErrors::Deliver)
-            .map(|b| b.byte)
+            .filter_map(|b| match (b.error, self.rx_errors) {
+                (None, _) | (Some(_), RxErrors::Deliver) => Some(b.byte),
+                (Some(_), RxErrors::Drop) => None,
+                (Some(_), RxErrors::Substitute) => Some(0),
+            })
             .collect();
         if !heard.is_empty() {
+            self.heard.extend(heard.iter().map(|&b| (now, b)));
             self.endpoint.handle_ps_rx(now, &heard);
         }
         self.drain_endpoint();
