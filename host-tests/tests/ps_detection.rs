@@ -86,7 +86,10 @@ fn every_simulated_model_is_detected_automatically() {
             .unwrap_or_else(|t| panic!("{model}: {t}\n{}", world.trace().tail(20)));
         assert_detected(&world, model);
         let first = &world.trace().frames()[0];
-        assert_eq!(first.bytes, b":012B0E0401C1\r\n", "{model}: starts with device id");
+        assert_eq!(
+            first.bytes, b":012B0E0401C1\r\n",
+            "{model}: starts with device id"
+        );
         assert_eq!(first.port, PortConfig::MODBUS_DEFAULT);
         match model.family() {
             // Powermax units answer the first request: up within one transaction.
@@ -110,7 +113,11 @@ fn every_simulated_model_is_detected_automatically() {
         world.run_for(secs(3));
         assert!(world.link().status().link_up, "{model}");
         assert_eq!(world.link().diagnostics().link_downs, 0, "{model}");
-        assert_eq!(world.stats().stale_wakeups, 0, "{model}: poll_at never in the past");
+        assert_eq!(
+            world.stats().stale_wakeups,
+            0,
+            "{model}: poll_at never in the past"
+        );
     }
 }
 
@@ -223,7 +230,10 @@ fn a_legacy_unit_without_device_identification_is_found_by_a_register_read() {
         .collect();
     assert_eq!(requests.len(), 4);
     assert!(requests[..3].iter().all(|r| r == b":012B0E0401C1\r\n"));
-    assert_eq!(requests[3], b":01042098000142\r\n", "legacy fault register 0x2098");
+    assert_eq!(
+        requests[3], b":01042098000142\r\n",
+        "legacy fault register 0x2098"
+    );
     assert!((300..350).contains(&up.as_millis()), "{up:?}");
 
     // Exception 01 (illegal function): the unit is there, the register read tells which.
@@ -362,7 +372,10 @@ fn a_sleeping_hpr_is_not_talked_into_answering_by_a_link_without_its_id() {
     };
     let mut world = World::new(Model::Hpr260, options);
     assert!(world.wait_link_up(secs(5)).is_err());
-    assert!(world.trace().replies().next().is_none(), "asleep: no reply at all");
+    assert!(
+        world.trace().replies().next().is_none(),
+        "asleep: no reply at all"
+    );
     assert!(world.trace().requests().all(|f| f.hpr_id() == Some(0)));
     assert!(!world.sim::<Hpr>().is_awake());
 }

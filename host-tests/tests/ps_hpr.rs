@@ -102,9 +102,10 @@ fn hf_ignition_noise_during_a_cut_causes_no_link_down_and_commands_succeed() {
         .expect("back to idle");
     let events: Vec<LinkEvent> = world.events()[mark..].iter().map(|(_, e)| *e).collect();
     assert!(
-        !events
-            .iter()
-            .any(|e| matches!(e, LinkEvent::LinkDown { .. } | LinkEvent::FaultRaised { .. })),
+        !events.iter().any(|e| matches!(
+            e,
+            LinkEvent::LinkDown { .. } | LinkEvent::FaultRaised { .. }
+        )),
         "{events:?}"
     );
     assert!(world.link().status().link_up);
@@ -312,7 +313,11 @@ fn after_an_hpr_power_blip_settings_still_take_effect() {
     world
         .run_until(|w| w.link().status().ready, secs(8))
         .expect("ready again");
-    assert_eq!(world.link().diagnostics().link_downs, 0, "a blip, not a loss");
+    assert_eq!(
+        world.link().diagnostics().link_downs,
+        0,
+        "a blip, not a loss"
+    );
     assert_eq!(
         world.command(LinkCommand::HprSetNominalAmps { amps: 130 }, secs(3)),
         Ok(CommandOutput::Value(130))

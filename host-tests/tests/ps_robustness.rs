@@ -50,7 +50,10 @@ fn fault_ok(status: &UnitStatus, allowed: &[Option<ActiveFault>]) -> Result<(), 
     if allowed.contains(&status.active_fault) {
         Ok(())
     } else {
-        Err(format!("fault {:?} not in {allowed:?}", status.active_fault))
+        Err(format!(
+            "fault {:?} not in {allowed:?}",
+            status.active_fault
+        ))
     }
 }
 
@@ -64,14 +67,19 @@ fn powermax_consistent(w: &World, faults: &[Option<ActiveFault>]) -> Result<(), 
         return fault_ok(s, &[None]);
     }
     if let Some(read) = s.settings {
-        let mode = read.mode.map(|m| if sync { m.to_sync() } else { m.to_legacy() });
+        let mode = read
+            .mode
+            .map(|m| if sync { m.to_sync() } else { m.to_legacy() });
         // SYNC reads back the pressure in use; legacy units the force register as written.
         let pressure = if sync {
             sim.effective_pressure()
         } else {
             sim.force_registers().pressure
         };
-        if mode != Some(truth.mode) || read.current.raw() != truth.current || read.pressure.raw() != pressure {
+        if mode != Some(truth.mode)
+            || read.current.raw() != truth.current
+            || read.pressure.raw() != pressure
+        {
             return Err(format!("settings {read:?} vs unit {truth:?}"));
         }
     }
@@ -84,7 +92,10 @@ fn powermax_consistent(w: &World, faults: &[Option<ActiveFault>]) -> Result<(), 
         }
     }
     if s.actual_current.is_some_and(|a| a.raw() != 0) {
-        return Err(format!("actual current {:?} on an idle unit", s.actual_current));
+        return Err(format!(
+            "actual current {:?} on an idle unit",
+            s.actual_current
+        ));
     }
     if let (Some(c), Some(t)) = (s.cartridge, sim.cartridge())
         && c.uid.0 != t.uid
@@ -127,7 +138,9 @@ fn corrupted_powermax_session_with(
         })
     };
     let mut world = World::new(model, options);
-    world.wait_link_up(secs(5)).expect("link up despite corruption");
+    world
+        .wait_link_up(secs(5))
+        .expect("link up despite corruption");
     world
         .run_until(|w| w.link().status().limits.is_some(), secs(5))
         .expect("limits");
@@ -139,26 +152,39 @@ fn corrupted_powermax_session_with(
         },
         secs(5),
     );
-    assert!(matches!(result, Ok(CommandOutput::Settings(_))), "{seed}: {result:?}");
+    assert!(
+        matches!(result, Ok(CommandOutput::Settings(_))),
+        "{seed}: {result:?}"
+    );
     let none = [None];
     run_checking(&mut world, secs(15), |w| powermax_consistent(w, &none));
     world.inject_fault(300);
     let fault = Some(ActiveFault::Powermax(FaultCode(300)));
-    run_checking(&mut world, secs(10), |w| powermax_consistent(w, &[None, fault]));
+    run_checking(&mut world, secs(10), |w| {
+        powermax_consistent(w, &[None, fault])
+    });
     world
         .run_until(|w| w.link().status().active_fault == fault, secs(10))
         .unwrap_or_else(|t| panic!("{model} seed {seed}: fault never known: {t}"));
     world.clear_fault();
-    run_checking(&mut world, secs(5), |w| powermax_consistent(w, &[fault, None]));
+    run_checking(&mut world, secs(5), |w| {
+        powermax_consistent(w, &[fault, None])
+    });
     world
-        .run_until(|w| w.link().status().active_fault.is_none() && w.link().status().link_up, secs(10))
+        .run_until(
+            |w| w.link().status().active_fault.is_none() && w.link().status().link_up,
+            secs(10),
+        )
         .unwrap_or_else(|t| panic!("{model} seed {seed}: fault never cleared: {t}"));
 
     let d = world.link().diagnostics();
     let line = world.line().stats();
     assert!(line.corrupted > 100, "{model} seed {seed}: {line:?}");
     // Damage was seen and retried, never taken for a value.
-    assert!(d.retries > 50 && d.bad_checksums + d.malformed > 20, "{model} seed {seed}: {d:?}");
+    assert!(
+        d.retries > 50 && d.bad_checksums + d.malformed > 20,
+        "{model} seed {seed}: {d:?}"
+    );
     // After a link-down the settings were re-applied: the unit is still in remote mode with
     // what was asked.
     world
@@ -332,9 +358,16 @@ fn one_percent_corrupted_bytes_never_give_a_wrong_hpr_value_only_retries() {
             let s = w.link().status();
             let sim = w.sim_ref::<Hpr>();
             if s.hpr.nominal_amps.is_some_and(|a| a != sim.nominal_amps()) {
-                return Err(format!("amps {:?} vs {}", s.hpr.nominal_amps, sim.nominal_amps()));
+                return Err(format!(
+                    "amps {:?} vs {}",
+                    s.hpr.nominal_amps,
+                    sim.nominal_amps()
+                ));
             }
-            if s.hpr.state.is_some_and(|st| st != StateCode(sim.state_code())) {
+            if s.hpr
+                .state
+                .is_some_and(|st| st != StateCode(sim.state_code()))
+            {
                 return Err(format!("state {:?} vs {}", s.hpr.state, sim.state_code()));
             }
             match s.hpr.error {
@@ -347,7 +380,10 @@ fn one_percent_corrupted_bytes_never_give_a_wrong_hpr_value_only_retries() {
         world.inject_fault(44);
         run_checking(&mut world, secs(5), |w| consistent(w, &[0, 44]));
         world
-            .run_until(|w| w.link().status().hpr.error == Some(ErrorCode(44)), secs(10))
+            .run_until(
+                |w| w.link().status().hpr.error == Some(ErrorCode(44)),
+                secs(10),
+            )
             .expect("error known");
         let d = world.link().diagnostics();
         assert!(d.retries > 10 && d.bad_checksums > 5, "seed {seed}: {d:?}");
@@ -430,7 +466,11 @@ impl HostileUnit {
         let rng = &mut self.rng;
         match rng.random_range(0..4u8) {
             0 | 1 => {
-                let address = if rng.random_bool(0.8) { 1 } else { rng.random() };
+                let address = if rng.random_bool(0.8) {
+                    1
+                } else {
+                    rng.random()
+                };
                 let functions = [0x03, 0x04, 0x06, 0x10, 0x05, 0x2B, 0x83, 0x84, 0x90];
                 let mut pdu = vec![functions[rng.random_range(0..functions.len())]];
                 let len = rng.random_range(0..60usize);
@@ -552,7 +592,9 @@ fn two_wire(master_echo: bool) {
         ..WorldOptions::default()
     };
     let mut world = World::new(Model::Sync85, options);
-    world.wait_link_up(secs(2)).expect("link up despite the echo");
+    world
+        .wait_link_up(secs(2))
+        .expect("link up despite the echo");
     world.run_for(secs(3));
     assert!(world.link().status().settings.is_some());
     assert_eq!(world.link().diagnostics().link_downs, 0);
@@ -601,7 +643,10 @@ fn poll_at_never_stays_in_the_past() {
     let mut world = World::with_unit(Box::new(unit), WorldOptions::default());
     world.wait_link_up(secs(1)).expect("link up");
     world.run_for(secs(5));
-    assert!(world.link().status().cartridge.is_none(), "the scenario holds");
+    assert!(
+        world.link().status().cartridge.is_none(),
+        "the scenario holds"
+    );
     assert_eq!(
         world.stats().stale_wakeups,
         0,

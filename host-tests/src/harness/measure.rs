@@ -18,9 +18,9 @@ use plasma_firmware::time::Duration;
 use rand::rngs::Xoshiro256PlusPlus;
 use rand::{RngExt, SeedableRng};
 
+use super::WorldOptions;
 use super::trace::TraceFrame;
 use super::world::World;
-use super::WorldOptions;
 use crate::sim::powermax::{Powermax, UndocumentedAddresses};
 use crate::sim::{Family, Model};
 
@@ -160,40 +160,46 @@ pub fn bus_efficiency(setup: Setup, poll_interval: Duration, window: Duration) -
         .iter()
         .filter(|f| f.start >= from && f.end <= to)
         .collect();
-    let char_time_us = world.trace().frames()[0].port.char_time_ns() as f64 / 1000.0;
     let mut cycles = 0usize;
     let mut poll_requests = 0usize;
-    let mut poll_chars = 0usize;
     let mut other_us = 0u64;
+    let mut char_time_us = 0.0;
     let mut latency_us = Vec::new();
     let mut turnaround_us = Vec::new();
     let mut marker: Option<&[u8]> = None;
+    // Per kind of poll request: its length and the lengths of its replies.
+    let mut kinds: Vec<(&[u8], Vec<usize>)> = Vec::new();
     for (i, frame) in frames.iter().enumerate() {
-        let reply = frames.get(i + 1).filter(|r| !r.is_request());
-        if frame.is_request() {
-            if let Some(r) = reply {
-                latency_us.push(r.start.saturating_since(frame.end).as_micros());
-            }
-            if let Some(next) = frames.get(i + 2).filter(|n| n.is_request())
-                && reply.is_some()
-            {
-                turnaround_us.push(next.start.saturating_since(reply.unwrap().end).as_micros());
-            }
-        }
         if !frame.is_request() {
             continue;
         }
-        let pair_us = frame.end.saturating_since(frame.start).as_micros()
-            + reply.map_or(0, |r| r.end.saturating_since(r.start).as_micros());
+        let reply = frames.get(i + 1).filter(|r| !r.is_request());
+        if let Some(r) = reply {
+            latency_us.push(r.start.saturating_since(frame.end).as_micros());
+            if let Some(next) = frames.get(i + 2).filter(|n| n.is_request()) {
+                turnaround_us.push(next.start.saturating_since(r.end).as_micros());
+            }
+        }
         if setup.is_poll(frame) {
+            char_time_us = frame.port.char_time_ns() as f64 / 1000.0;
             let first = *marker.get_or_insert(&frame.bytes);
             if frame.bytes == first {
                 cycles += 1;
             }
             poll_requests += 1;
-            poll_chars += frame.bytes.len() + reply.map_or(0, |r| r.bytes.len());
+            let at = match kinds.iter().position(|(k, _)| *k == &frame.bytes[..]) {
+                Some(at) => at,
+                None => {
+                    kinds.push((&frame.bytes, Vec::new()));
+                    kinds.len() - 1
+                }
+            };
+            if let Some(r) = reply {
+                kinds[at].1.push(r.bytes.len());
+            }
         } else {
-            other_us += pair_us;
+            other_us += frame.end.saturating_since(frame.start).as_micros()
+                + reply.map_or(0, |r| r.end.saturating_since(r.start).as_micros());
         }
     }
     let busy_us: u64 = frames
@@ -202,7 +208,13 @@ pub fn bus_efficiency(setup: Setup, poll_interval: Duration, window: Duration) -
         .sum();
     let secs = to.saturating_since(from).as_micros() as f64 / 1e6;
     let cycles_f = cycles.max(1) as f64;
-    let chars_per_cycle = poll_chars as f64 / cycles_f;
+    let chars_per_cycle: f64 = kinds
+        .iter()
+        .map(|(request, replies)| {
+            request.len() as f64
+                + replies.iter().sum::<usize>() as f64 / replies.len().max(1) as f64
+        })
+        .sum();
     let wire_max_per_s = 1e6 / (chars_per_cycle * char_time_us);
     let cycles_per_s = cycles as f64 / secs;
     let mean = |v: &[u64]| v.iter().sum::<u64>() as f64 / v.len().max(1) as f64 / 1000.0;

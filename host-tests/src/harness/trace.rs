@@ -71,7 +71,10 @@ impl TraceFrame {
         if self.bytes.first() != Some(&b'>') {
             return None;
         }
-        std::str::from_utf8(self.bytes.get(1..4)?).ok()?.parse().ok()
+        std::str::from_utf8(self.bytes.get(1..4)?)
+            .ok()?
+            .parse()
+            .ok()
     }
 
     /// True for a Modbus ASCII frame.

@@ -3,9 +3,7 @@
 
 use std::fmt;
 
-use plasma_firmware::io::{
-    Input, Interlocks, IoEvent, SafetyMonitor, SupplyState, Transition,
-};
+use plasma_firmware::io::{Input, Interlocks, IoEvent, SafetyMonitor, SupplyState, Transition};
 use plasma_firmware::link::{
     CommandFailure, CommandOutput, LinkCommand, LinkEvent, PsLink, Refusal, Ticket,
 };
@@ -133,8 +131,9 @@ impl World<PsLink> {
         let ticket = self
             .submit(command.clone())
             .unwrap_or_else(|r| panic!("{command:?} refused: {r}"));
-        self.wait_command(ticket, timeout)
-            .unwrap_or_else(|t| panic!("{command:?} did not complete: {t}\n{}", self.trace.tail(20)))
+        self.wait_command(ticket, timeout).unwrap_or_else(|t| {
+            panic!("{command:?} did not complete: {t}\n{}", self.trace.tail(20))
+        })
     }
 }
 
