@@ -17,6 +17,7 @@ pub mod io;
 pub mod link;
 pub mod port;
 pub mod safe_state;
+pub mod settings;
 pub mod storage;
 pub mod time;
 pub mod watchdog;
