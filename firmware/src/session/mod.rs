@@ -33,7 +33,7 @@
 
 mod describe;
 #[cfg(test)]
-mod tests;
+pub(crate) mod tests;
 
 use core::fmt::{self, Display, Write};
 
@@ -46,19 +46,19 @@ use plasma_protocol::cnc::{
 };
 use plasma_protocol::hpr::{self, GasCode, GasPair};
 
-use crate::io::{Interlock, Inputs, IoEvent, Outputs};
+use crate::io::{Inputs, Interlock, IoEvent, Outputs};
 use crate::link::{
-    CommandFailure, CommandOutput, Family, HprGasFlow, LinkCommand, LinkDownReason,
-    LinkEvent, Model, PsLink, Ticket, UnitStatus,
+    CommandFailure, CommandOutput, Family, HprGasFlow, LinkCommand, LinkDownReason, LinkEvent,
+    Model, PsLink, Ticket, UnitStatus,
 };
 use crate::settings::{Process, SaveError, Settings};
-use crate::time::Instant;
+use crate::time::{Duration, Instant};
 
-pub use describe::{ModelName, cnc_mode, family_word, mode_word, unit_mode};
 use describe::{
     FaultId, OrDash, SettingsText, Text, fault_text, on_off, settings_failure_word, state_name,
     transaction_word, write_failure, write_refusal,
 };
+pub use describe::{ModelName, cnc_mode, family_word, mode_word, unit_mode};
 
 /// Command lines that can wait behind a command in progress.
 pub const QUEUE_CAPACITY: usize = 4;
@@ -68,6 +68,10 @@ pub const OUTPUT_CAPACITY: usize = 4096;
 pub const MAX_REPLY_LEN: usize = 400;
 /// Simulator commands held until the driver takes them.
 pub const SIM_QUEUE_CAPACITY: usize = 4;
+/// A Phoenix frame that stops arriving for this long is abandoned (NAK): the CNC sends a
+/// message in one go, and a stray SOH/STX in line noise must not swallow the text lines that
+/// follow.
+pub const FRAME_IDLE_TIMEOUT: Duration = Duration::from_millis(50);
 
 /// One reply or event line.
 pub type ReplyLine = String<MAX_REPLY_LEN>;
@@ -192,15 +196,17 @@ fn line(build: impl FnOnce(&mut ReplyLine) -> fmt::Result) -> ReplyLine {
     let mut line = ReplyLine::new();
     if build(&mut line).is_err() {
         line.clear();
-        let _ = write_error(&mut line, ErrorCode::State, "reply longer than the line buffer");
+        let _ = write_error(
+            &mut line,
+            ErrorCode::State,
+            "reply longer than the line buffer",
+        );
     }
     line
 }
 
 /// An `OK` line with the fields `fields` writes.
-fn ok_line(
-    fields: impl FnOnce(&mut ReplyWriter<&mut ReplyLine>) -> fmt::Result,
-) -> ReplyLine {
+fn ok_line(fields: impl FnOnce(&mut ReplyWriter<&mut ReplyLine>) -> fmt::Result) -> ReplyLine {
     line(|l| {
         let mut w = ReplyWriter::ok(l)?;
         fields(&mut w)?;
@@ -229,6 +235,8 @@ pub struct Session {
     sim: Deque<SimCommand, SIM_QUEUE_CAPACITY>,
     io_config_changed: bool,
     stats: SessionStats,
+    /// When the last CNC byte arrived.
+    last_rx: Instant,
 }
 
 impl Session {
@@ -249,6 +257,7 @@ impl Session {
             sim: Deque::new(),
             io_config_changed: false,
             stats: SessionStats::default(),
+            last_rx: Instant::ZERO,
         }
     }
 
@@ -269,6 +278,8 @@ impl Session {
 
     /// Bytes received from the CNC (any chunking).
     pub fn handle_rx(&mut self, ctx: &mut Context<'_>, bytes: &[u8]) {
+        self.poll(ctx);
+        self.last_rx = ctx.now;
         for &byte in bytes {
             self.route(ctx, byte);
         }
@@ -308,13 +319,28 @@ impl Session {
         self.pending = None;
         let reply = match result {
             Ok(()) => ok_line(|w| w.field("config", "saved")),
-            Err(e) => err_line(
-                ErrorCode::Storage,
-                format_args!("settings not saved: {e}"),
-            ),
+            Err(e) => err_line(ErrorCode::Storage, format_args!("settings not saved: {e}")),
         };
         self.send(reply);
         self.pump(ctx);
+    }
+
+    /// Let time pass: a Phoenix frame idle for [`FRAME_IDLE_TIMEOUT`] is abandoned.
+    pub fn poll(&mut self, ctx: &mut Context<'_>) {
+        if !self.deframer.in_frame() || ctx.now < self.last_rx + FRAME_IDLE_TIMEOUT {
+            return;
+        }
+        if let Some(outcome) = self.deframer.idle() {
+            let item = frame_item(outcome);
+            self.framed(ctx, item);
+        }
+    }
+
+    /// When [`Session::poll`] has something to do.
+    pub fn poll_at(&self) -> Option<Instant> {
+        self.deframer
+            .in_frame()
+            .then(|| self.last_rx + FRAME_IDLE_TIMEOUT)
     }
 
     /// Answer waiting lines while no command is in progress.
@@ -429,12 +455,13 @@ impl Session {
     fn deframe(&mut self, ctx: &mut Context<'_>, byte: u8) {
         let item = match self.deframer.push(byte) {
             None => return,
-            Some(Ok(payload)) => message_item(payload),
-            Some(Err(error)) => Item {
-                text: LineText::new(),
-                error: Some(InputError::Frame(error)),
-            },
+            Some(outcome) => frame_item(outcome),
         };
+        self.framed(ctx, item);
+    }
+
+    /// A framed message is complete: ACK or NAK it at once, answer it in turn.
+    fn framed(&mut self, ctx: &mut Context<'_>, item: Item) {
         let accepted = item.error.is_none() && self.has_room();
         self.ack(accepted);
         self.admit(ctx, item);
@@ -709,7 +736,7 @@ impl Session {
 
     fn set_hpr_amps(&mut self, ctx: &mut Context<'_>, amps: Amps) -> Option<ReplyLine> {
         let steps = amps.raw();
-        if steps % Amps::STEPS_PER_UNIT != 0 {
+        if !steps.is_multiple_of(Amps::STEPS_PER_UNIT) {
             return Some(err_line(
                 ErrorCode::Range,
                 format_args!("amps {amps}: this unit takes whole amps"),
@@ -904,6 +931,17 @@ impl Session {
     }
 }
 
+/// The item for a deframer outcome.
+fn frame_item(outcome: plasma_protocol::Result<&[u8]>) -> Item {
+    match outcome {
+        Ok(payload) => message_item(payload),
+        Err(error) => Item {
+            text: LineText::new(),
+            error: Some(InputError::Frame(error)),
+        },
+    }
+}
+
 /// The item for a framed message's payload: a command line, or why it is not one.
 fn message_item(payload: &[u8]) -> Item {
     let trimmed = payload.trim_ascii();
@@ -924,11 +962,7 @@ fn message_item(payload: &[u8]) -> Item {
             .and_then(|t| LineText::try_from(t).ok())
             .unwrap_or_default(),
     };
-    let error = error.or_else(|| {
-        Command::parse(&text)
-            .err()
-            .map(InputError::Parse)
-    });
+    let error = error.or_else(|| Command::parse(&text).err().map(InputError::Parse));
     Item { text, error }
 }
 
@@ -950,7 +984,7 @@ fn frame_error(error: plasma_protocol::Error) -> ReplyLine {
         ),
         E::Truncated => err_line(
             ErrorCode::Syntax,
-            "Phoenix message cut short by the next one (NAK sent)",
+            "Phoenix message incomplete: the next one began or the line went quiet (NAK sent)",
         ),
         _ => err_line(
             ErrorCode::Syntax,
@@ -1091,11 +1125,9 @@ fn status_line(ctx: &Context<'_>) -> ReplyLine {
         w.field("motion", on_off(inputs.motion))?;
         w.field("arc_ok", on_off(outputs.arc_ok))?;
         w.field("ready", on_off(ready))?;
-        if hpr {
-            if let Some(state) = status.hpr.state {
-                w.field("state", state.0)?;
-                w.field("state_name", state_name(state, family))?;
-            }
+        if let Some(state) = status.hpr.state.filter(|_| hpr) {
+            w.field("state", state.0)?;
+            w.field("state_name", state_name(state, family))?;
         }
         Ok(())
     })
@@ -1170,21 +1202,23 @@ fn fault(status: &UnitStatus, family: Option<Family>) -> ReplyLine {
     if family.is_none() {
         return no_link();
     }
-    ok_line(|w| match status.active_fault {
-        None => w.field("fault", "none"),
-        Some(fault) => {
-            w.field("fault", FaultId(fault))?;
-            w.field(
-                "action",
+    match status.active_fault {
+        None => ok_line(|w| w.field("fault", "none")),
+        // `text=` is the last field and runs to the end of the line: the manual's words.
+        Some(fault) => line(|l| {
+            write!(
+                l,
+                "OK fault={} action={} text={}\r\n",
+                FaultId(fault),
                 if fault.action_required() {
                     "required"
                 } else {
                     "none"
                 },
-            )?;
-            w.field("text", fault_text(fault, family))
-        }
-    })
+                Text(fault_text(fault, family))
+            )
+        }),
+    }
 }
 
 fn cartridge(status: &UnitStatus, family: Option<Family>) -> ReplyLine {
@@ -1197,7 +1231,12 @@ fn cartridge(status: &UnitStatus, family: Option<Family>) -> ReplyLine {
                 w.field("part", OrDash(c.part_number.as_str()))?;
                 w.field("rev", c.revision)?;
                 w.field("nominal_amps", c.nominal_current())?;
-                if let Some(name) = status.cartridge_name.as_ref().and_then(|n| n.as_str()) {
+                if let Some(name) = status
+                    .cartridge_name
+                    .as_ref()
+                    .and_then(|n| n.as_str())
+                    .filter(|n| !n.is_empty())
+                {
                     w.field("name", name)?;
                 }
                 w.field("starts", c.counters.starts)?;
