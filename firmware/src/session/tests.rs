@@ -1227,3 +1227,38 @@ proptest! {
         prop_assert_eq!(reply.as_str(), "OK fault=none");
     }
 }
+
+// ---------------------------------------------------------------------------------------
+// the remaining replies docs/cnc-protocol.md shows
+
+#[test]
+fn documented_replies_not_covered_above() {
+    let mut rig = Rig::sync65(Settings::default());
+    assert_eq!(
+        rig.cmd("SET MODE PLASMA"),
+        "ERR SYNTAX mode: expected CUT|CPA|EXPANDED|GOUGE"
+    );
+    assert_eq!(
+        rig.cmd("GASES XENON AIR"),
+        "ERR SYNTAX plasma gas: expected O2|CH4|H35|H5|AIR|N2|AR|N95|F5"
+    );
+    assert_eq!(
+        rig.cmd("EVENTS MAYBE"),
+        "ERR SYNTAX EVENTS argument: expected ON|OFF"
+    );
+    rig.unit.powermax().set_fault(500);
+    rig.run(300);
+    assert_eq!(rig.cmd("RESTART"), "OK restart=done quiet_ms=2000");
+    assert!(
+        rig.cmd("SET AMPS 40")
+            .starts_with("ERR BUSY the unit restarts: quiet for another "),
+    );
+
+    let mut rig = Rig::hpr(b"HYPERFORMANCE400XD");
+    // RESET only in a shutdown error (state 14, error above 79).
+    rig.unit.hpr().state = 14;
+    rig.unit.hpr().error = 80;
+    rig.run(300);
+    assert_eq!(rig.cmd("RESET"), "OK reset=done");
+    assert!(rig.cmd("STATUS").contains(" model=HPR400XD family=HPR "));
+}
