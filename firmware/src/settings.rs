@@ -536,7 +536,12 @@ impl storage::Settings for Settings {
 
     fn decode(payload: &[u8]) -> Option<Self> {
         let r: &[u8; RECORD_LEN] = payload.try_into().ok()?;
-        let u16_at = |i: usize| u16::from_le_bytes([r[i], r[i + 1]]);
+        // Offsets are constants inside the fixed-length record.
+        let u16_at = |i: usize| {
+            r.get(i..i + 2)
+                .and_then(|b| b.try_into().ok())
+                .map_or(0, u16::from_le_bytes)
+        };
         let millis = |i: usize| Duration::from_millis(u64::from(u16_at(i)));
         let flags = r[21];
         if flags & !FLAGS_KNOWN != 0 {
