@@ -20,6 +20,7 @@ use std::sync::mpsc::{Receiver, RecvTimeoutError};
 
 use plasma_firmware::settings::Settings;
 use plasma_firmware::time::{Duration, Instant};
+use plasma_protocol::cnc::phoenix::{EOT, ETX, SOH, STX};
 use plasma_protocol::powermax::FaultCode;
 
 use crate::harness::{BridgeEndpoint, CncItem, World, WorldOptions};
@@ -31,6 +32,8 @@ pub const SETTLE_TIMEOUT: Duration = Duration::from_secs(5);
 const SETTLE_EXTRA: Duration = Duration::from_millis(250);
 /// The longest wait for one reply; beyond it the console moves on (and says so).
 pub const REPLY_TIMEOUT: Duration = Duration::from_secs(10);
+/// Virtual time: how long the world runs on after the end of input.
+const LINGER: Duration = Duration::from_millis(100);
 /// Real time: the longest sleep between two looks at stdin and the clock.
 const TICK: std::time::Duration = std::time::Duration::from_millis(10);
 
@@ -78,6 +81,8 @@ pub struct Console {
     verbose: bool,
     printed: usize,
     transitions_printed: usize,
+    /// A Phoenix message has begun (SOH/STX) and not yet ended (ETX/EOT).
+    frame_open: bool,
 }
 
 impl Console {
@@ -104,6 +109,7 @@ impl Console {
             verbose: options.verbose,
             printed: 0,
             transitions_printed: 0,
+            frame_open: false,
         }
     }
 
@@ -142,7 +148,10 @@ impl Console {
             }
             self.flush(out, err)?;
         }
-        Ok(())
+        // What a last line may still bring (a cut text line's second reply, a message the
+        // input left open is abandoned after 50 ms).
+        self.world.run_for(LINGER);
+        self.flush(out, err)
     }
 
     /// Real time: lines from `input` (a reader thread's channel; closed at end of input) are
@@ -224,14 +233,24 @@ impl Console {
     }
 
     /// Hand one input line (with its terminator) to the bridge. Returns the reply count to
-    /// wait for, or `None` for a blank line (no reply).
+    /// wait for, or `None` when no reply is due: a blank line, or a line that leaves a Phoenix
+    /// message open (its CR LF is inside the frame; the reply comes once the frame ends).
     fn send(&mut self, line: &[u8]) -> Option<usize> {
-        let blank = line
-            .iter()
-            .all(|b| matches!(b, b' ' | b'\t' | b'\r' | b'\n'));
+        let mut content = false;
+        for &b in line {
+            match b {
+                SOH | STX => {
+                    self.frame_open = true;
+                    content = true;
+                }
+                ETX | EOT => self.frame_open = false,
+                b' ' | b'\t' | b'\r' | b'\n' => {}
+                _ => content = true,
+            }
+        }
         let before = self.world.cnc_reply_count();
         self.world.cnc_send(line);
-        (!blank).then_some(before + 1)
+        (content && !self.frame_open).then_some(before + 1)
     }
 
     /// Print what the CNC received since the last call (stdout) and, verbose, the output

@@ -758,7 +758,7 @@ fn phoenix_messages_get_ack_or_nak_then_their_reply() {
             .collect::<Vec<_>>(),
         [CncItem::Ack, CncItem::Line("OK fault=none".into())]
     );
-    assert_eq!(&w.cnc_bytes()[..], b"\x06OK fault=none\r\n");
+    assert_eq!(w.cnc_bytes(), b"\x06OK fault=none\r\n");
 
     // Wrong check byte: NAK, then why.
     w.cnc_send(&phoenix_113("FAULT", Some(0x4B)));
