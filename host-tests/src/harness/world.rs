@@ -607,25 +607,6 @@ impl<E: PsEndpoint> World<E> {
         self.assert_safe();
     }
 
-    /// HOLD and CORNER_CURRENT to an HPR simulator (it has no PIERCE_COMPLETE input).
-    fn pass_through_to_hpr(&mut self) {
-        let outputs = self.io.outputs();
-        let levels = (outputs.hold, outputs.corner_current);
-        if levels == self.hpr_inputs_given {
-            return;
-        }
-        let now = self.now;
-        if let Some(hpr) = self.unit.as_any_mut().downcast_mut::<Hpr>() {
-            if levels.0 != self.hpr_inputs_given.0 {
-                hpr.set_hold(now, levels.0);
-            }
-            if levels.1 != self.hpr_inputs_given.1 {
-                hpr.set_corner(now, levels.1);
-            }
-        }
-        self.hpr_inputs_given = levels;
-    }
-
     fn apply_master_port(&mut self) {
         let port = self.endpoint.ps_port_config();
         if self.line.port(End::Master) != port {
@@ -663,6 +644,25 @@ impl<E: PsEndpoint> World<E> {
         for e in self.scratch.drain(..) {
             self.events.push((now, e));
         }
+    }
+
+    /// HOLD and CORNER_CURRENT to an HPR simulator (it has no PIERCE_COMPLETE input).
+    fn pass_through_to_hpr(&mut self) {
+        let outputs = self.io.outputs();
+        let levels = (outputs.hold, outputs.corner_current);
+        if levels == self.hpr_inputs_given {
+            return;
+        }
+        let now = self.now;
+        if let Some(hpr) = self.unit.as_any_mut().downcast_mut::<Hpr>() {
+            if levels.0 != self.hpr_inputs_given.0 {
+                hpr.set_hold(now, levels.0);
+            }
+            if levels.1 != self.hpr_inputs_given.1 {
+                hpr.set_corner(now, levels.1);
+            }
+        }
+        self.hpr_inputs_given = levels;
     }
 }
 
