@@ -1117,3 +1117,24 @@ fn mode_aliases_are_answered_in_the_family_s_own_word() {
         "OK mode=CPA amps=45 psi=AUTO"
     );
 }
+
+#[test]
+fn the_bare_bridge_is_an_endpoint_too() {
+    use plasma_firmware::bridge::Bridge;
+    use plasma_firmware::time::Instant;
+    for model in [
+        Model::Sync105,
+        Model::Pm125,
+        Model::Hpr400Xd,
+        Model::MaxPro200,
+    ] {
+        let unit = model.build(&Default::default());
+        let bridge = Bridge::new(Settings::default(), Instant::ZERO);
+        let mut w = World::with_endpoint(bridge, unit, WorldOptions::default());
+        w.wait_link_up(Duration::from_secs(2))
+            .unwrap_or_else(|t| panic!("{model}: {t}"));
+        // The bridge consumes the link's events itself.
+        assert!(w.events().is_empty());
+        assert!(w.io().outputs().ready || model.family() == host_tests::sim::Family::Hpr);
+    }
+}
