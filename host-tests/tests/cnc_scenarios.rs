@@ -1103,8 +1103,6 @@ fn a_torch_on_held_through_a_bridge_power_cycle_is_ignored_until_released() {
 }
 
 #[test]
-#[ignore = "session bug: a SYNC reply echoes the mode word asked for (CPA) instead of the \
-            family's name EXPANDED that docs/cnc-protocol.md section 2 promises"]
 fn mode_aliases_are_answered_in_the_family_s_own_word() {
     let mut w = bridge_world(Model::Sync65);
     assert_eq!(

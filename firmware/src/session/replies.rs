@@ -249,14 +249,11 @@ pub(super) fn complete(
     match op {
         Op::Settings(process) => {
             let CommandOutput::Settings(read) = output else {
-                return ok_line(|w| w.field("mode", process.mode.name()));
+                return ok_line(|w| w.field("mode", mode_word(unit_mode(process.mode), family)));
             };
             ctx.settings.process = Some(process);
-            let mode = match read.mode {
-                Some(m) if m == unit_mode(process.mode) => process.mode.name(),
-                Some(m) => mode_word(m, family),
-                None => "-",
-            };
+            // The unit's word for the mode read back (SYNC: EXPANDED, legacy: CPA).
+            let mode = read.mode.map_or("-", |m| mode_word(m, family));
             ok_line(|w| {
                 w.field("mode", mode)?;
                 w.field("amps", read.current)?;
