@@ -7,8 +7,13 @@ use host_tests::sim::Model;
 
 /// Run `pbtool sim ARGS` with `input` on stdin.
 fn sim(args: &[&str], input: &str) -> Output {
+    pbtool("sim", args, input)
+}
+
+/// Run `pbtool SUBCOMMAND ARGS` with `input` on stdin.
+fn pbtool(subcommand: &str, args: &[&str], input: &str) -> Output {
     let mut child = Command::new(env!("CARGO_BIN_EXE_pbtool"))
-        .arg("sim")
+        .arg(subcommand)
         .args(args)
         .stdin(Stdio::piped())
         .stdout(Stdio::piped())
@@ -170,4 +175,26 @@ fn phoenix_frames_on_stdin_are_acked() {
         "<NAK>ERR SYNTAX Phoenix message check byte 4B, expected 4A (NAK sent)"
     );
     assert!(lines[2].starts_with("OK bridge="));
+}
+
+#[test]
+fn run_without_a_probe_runs_the_simulator() {
+    // `cargo bridge` (the README's run command) is `pbtool run`: with no debug probe attached
+    // (or probe-rs not installed, as in CI) it runs the bridge against a simulated SYNC unit.
+    let forced = pbtool("run", &["--sim", "--fast"], "ID\n");
+    assert!(forced.status.success());
+    assert_eq!(
+        stdout_lines(&forced),
+        [
+            "OK bridge=plasma-bridge version=0.1.0 reset=unknown link=UP model=Powermax65 family=SYNC product=081335"
+        ]
+    );
+    let probed = pbtool("run", &["--fast", "--ps", "pm85"], "ID\n");
+    let stderr = String::from_utf8_lossy(&probed.stderr);
+    if stderr.contains("no debug probe found") {
+        assert!(probed.status.success());
+        let lines = stdout_lines(&probed);
+        assert_eq!(lines.len(), 1, "{lines:?}");
+        assert!(lines[0].contains("family=LEGACY"), "{lines:?}");
+    }
 }

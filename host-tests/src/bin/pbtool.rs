@@ -37,13 +37,26 @@ enum Command {
     /// previous reply is out; the first once the link is up. From a pipe it prints one reply
     /// per command and exits at the end of input. Runs in real time unless `--fast`.
     Sim(SimArgs),
+    /// Run the bridge: on the board when a debug probe is attached (build, flash and run with
+    /// probe-rs, showing the log), otherwise against a simulated power supply (as `sim`).
+    Run(RunArgs),
+}
+
+#[derive(Args)]
+struct RunArgs {
+    /// Use the simulator even when a probe is attached.
+    #[arg(long)]
+    sim: bool,
+    /// Options of the simulator (used when no board is attached).
+    #[command(flatten)]
+    sim_args: SimArgs,
 }
 
 #[derive(Args)]
 struct SimArgs {
     /// The simulated unit: sync45 sync65 sync85 sync105 pm45xp pm65 pm85 pm105 pm125 hpr130
     /// hpr260 hpr400 hpr130xd hpr260xd hpr400xd maxpro200.
-    #[arg(long = "ps", value_name = "MODEL")]
+    #[arg(long = "ps", value_name = "MODEL", default_value = "sync65")]
     model: String,
     /// Start the unit with a fault: Powermax `0-50-0` (or decimal `500`), HPR error number.
     #[arg(long, value_name = "CODE")]
@@ -78,6 +91,56 @@ fn main() -> ExitCode {
     match cli.command {
         Command::Decode(args) => decode(&args),
         Command::Sim(args) => sim(&args),
+        Command::Run(args) => run(&args),
+    }
+}
+
+/// The board when a probe is attached, the simulator otherwise.
+fn run(args: &RunArgs) -> ExitCode {
+    if !args.sim {
+        if let Some(probe) = attached_probe() {
+            eprintln!("pbtool run: debug probe found ({probe}); flashing the board image");
+            return flash_board();
+        }
+        eprintln!(
+            "pbtool run: no debug probe found; running the bridge against a simulated {} \
+             (pbtool sim --ps {})",
+            Model::from_name(&args.sim_args.model).map_or("unit".to_string(), |m| m.to_string()),
+            args.sim_args.model,
+        );
+    }
+    sim(&args.sim_args)
+}
+
+/// The first probe `probe-rs list` reports, if probe-rs is installed and one is attached.
+fn attached_probe() -> Option<String> {
+    let output = std::process::Command::new("probe-rs")
+        .arg("list")
+        .output()
+        .ok()?;
+    let text = String::from_utf8_lossy(&output.stdout);
+    // Probes are listed as `[0]: STLink V2-1 -- 0483:374b:... (ST-LINK)`.
+    text.lines()
+        .map(str::trim)
+        .find(|line| line.starts_with('[') && line.contains("]:"))
+        .map(str::to_string)
+}
+
+/// `cargo flash` from the workspace root: release build, flash and run with probe-rs.
+fn flash_board() -> ExitCode {
+    let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    match std::process::Command::new(cargo)
+        .current_dir(root)
+        .arg("flash")
+        .status()
+    {
+        Ok(status) if status.success() => ExitCode::SUCCESS,
+        Ok(_) => ExitCode::FAILURE,
+        Err(e) => {
+            eprintln!("pbtool run: cannot start cargo: {e}");
+            ExitCode::FAILURE
+        }
     }
 }
 
