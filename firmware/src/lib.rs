@@ -9,13 +9,19 @@
 //! - [`time`]: caller-supplied monotonic time.
 //! - [`safe_state`], [`watchdog`], [`storage`]: the board's reset/panic policy, task-progress
 //!   watchdog feeding and power-cut-safe settings storage, as logic.
+//! - [`inputs`], [`discrete`]: input polarity and debounce in front of [`io::Interlocks`],
+//!   as the board's I/O task runs them.
+//! - [`runner`]: the async glue between the link and any `embedded-io-async` UART.
 #![cfg_attr(not(test), no_std)]
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
+pub mod discrete;
+pub mod inputs;
 pub mod io;
 pub mod link;
 pub mod port;
+pub mod runner;
 pub mod safe_state;
 pub mod storage;
 pub mod time;
