@@ -51,6 +51,10 @@
 //!     assert_eq!(loaded.settings.node_address, 7);
 //! });
 //! ```
+#![allow(
+    clippy::indexing_slicing,
+    reason = "indices are the two copy slots (0 or 1) and lengths that `emit` wrote into the same buffer"
+)]
 
 pub mod ram_flash;
 pub mod record;

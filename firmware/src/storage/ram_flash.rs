@@ -9,6 +9,10 @@
 //!
 //! Real hardware can also leave an ECC error in a torn double word, which reads as an NMI on
 //! the L4; this model returns the torn bits instead (see docs/board.md, settings store).
+#![allow(
+    clippy::indexing_slicing,
+    reason = "a test model: every offset is bounds-checked by `range` before use"
+)]
 
 use embedded_storage_async::nor_flash::{
     ErrorType, NorFlash, NorFlashError, NorFlashErrorKind, ReadNorFlash,

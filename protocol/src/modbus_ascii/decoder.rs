@@ -1,7 +1,7 @@
 //! Streaming Modbus ASCII decoder with a fixed buffer.
 
 use super::frame::{Frame, MAX_FRAME_BYTES};
-use super::hex::{CLASS, COLON, CR, LF};
+use super::hex::{COLON, CR, LF, class};
 use crate::{Error, Result};
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -125,7 +125,7 @@ impl Decoder {
         let mut stored = 0;
         for (pair, slot) in input.chunks_exact(2).zip(free) {
             let &[hi, lo] = pair else { break };
-            let (hi, lo) = (CLASS[usize::from(hi)], CLASS[usize::from(lo)]);
+            let (hi, lo) = (class(hi), class(lo));
             // Digits are 0..=15; every other class has a bit above the low four.
             if (hi | lo) >= 16 {
                 break;
@@ -140,7 +140,7 @@ impl Decoder {
     /// The state machine. `Some(Ok(n))`: a frame of `n` binary bytes (LRC included) ended.
     #[inline(always)]
     fn step(&mut self, byte: u8) -> Option<Result<usize>> {
-        let class = CLASS[usize::from(byte)];
+        let class = class(byte);
         match self.state {
             State::Idle => {
                 if class == COLON {

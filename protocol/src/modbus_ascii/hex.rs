@@ -17,6 +17,17 @@ pub(crate) const OTHER: u8 = 0xFF;
 /// A table keeps the decoder's hot loop to a load and a compare (see the modbus_decode bench).
 pub(crate) static CLASS: [u8; 256] = build_class_table();
 
+/// The class of one received character.
+#[inline]
+#[allow(clippy::indexing_slicing, reason = "a u8 indexes a 256-entry table")]
+pub(crate) fn class(byte: u8) -> u8 {
+    CLASS[usize::from(byte)]
+}
+
+#[allow(
+    clippy::indexing_slicing,
+    reason = "compile-time construction: every index is an ASCII code below 256"
+)]
 const fn build_class_table() -> [u8; 256] {
     let mut table = [OTHER; 256];
     let mut i = 0;
@@ -38,6 +49,7 @@ const fn build_class_table() -> [u8; 256] {
 
 /// The two upper-case characters of `byte`, high nibble first.
 #[inline]
+#[allow(clippy::indexing_slicing, reason = "a nibble indexes a 16-entry table")]
 pub(crate) fn encode_byte(byte: u8) -> [u8; 2] {
     [
         DIGITS[usize::from(byte >> 4)],

@@ -133,7 +133,7 @@ impl<'a> Registers<'a> {
         words.iter().copied().chain(
             bytes
                 .chunks_exact(2)
-                .map(|pair| u16::from_be_bytes([pair[0], pair[1]])),
+                .filter_map(|pair| pair.try_into().ok().map(u16::from_be_bytes)),
         )
     }
 }
