@@ -113,21 +113,21 @@ impl Default for InputConfig {
 impl InputConfig {
     /// The settings of one input.
     pub const fn get(&self, input: Input) -> InputSetting {
-        self.settings[slot(input)]
+        pick(&self.settings, input)
     }
 
     /// Change the polarity of one input.
     pub fn set_polarity(&mut self, input: Input, polarity: Polarity) {
-        self.settings[slot(input)].polarity = polarity;
+        pick_mut(&mut self.settings, input).polarity = polarity;
     }
 
     /// Change the debounce time of one input (clamped to [`MAX_DEBOUNCE`]).
     pub fn set_debounce(&mut self, input: Input, debounce: Duration) {
-        self.settings[slot(input)].debounce = debounce.min(MAX_DEBOUNCE);
+        pick_mut(&mut self.settings, input).debounce = debounce.min(MAX_DEBOUNCE);
     }
 }
 
-/// Index of an input in [`Input::ALL`] order.
+/// Bit (and position) of an input, in [`Input::ALL`] order.
 const fn slot(input: Input) -> usize {
     match input {
         Input::TorchOn => 0,
@@ -137,6 +137,34 @@ const fn slot(input: Input) -> usize {
         Input::Motion => 4,
         Input::NotReady => 5,
         Input::RampdownError => 6,
+    }
+}
+
+/// `input`'s element of a per-input array (in [`Input::ALL`] order), without indexing.
+const fn pick<T: Copy>(items: &[T; 7], input: Input) -> T {
+    let [a, b, c, d, e, f, g] = items;
+    *match input {
+        Input::TorchOn => a,
+        Input::Hold => b,
+        Input::PierceComplete => c,
+        Input::CornerCurrent => d,
+        Input::Motion => e,
+        Input::NotReady => f,
+        Input::RampdownError => g,
+    }
+}
+
+/// `input`'s element of a per-input array, to change it.
+fn pick_mut<T>(items: &mut [T; 7], input: Input) -> &mut T {
+    let [a, b, c, d, e, f, g] = items;
+    match input {
+        Input::TorchOn => a,
+        Input::Hold => b,
+        Input::PierceComplete => c,
+        Input::CornerCurrent => d,
+        Input::Motion => e,
+        Input::NotReady => f,
+        Input::RampdownError => g,
     }
 }
 
@@ -193,7 +221,7 @@ impl InputFilter {
             pending: None,
         }; 7];
         for input in Input::ALL {
-            channels[slot(input)].accepted =
+            pick_mut(&mut channels, input).accepted =
                 config.get(input).polarity.is_active(pins.is_high(input));
         }
         InputFilter {
@@ -208,7 +236,7 @@ impl InputFilter {
     pub fn inputs(&self) -> Inputs {
         let mut inputs = Inputs::NONE;
         for input in Input::ALL {
-            inputs.set(input, self.channels[slot(input)].accepted);
+            inputs.set(input, pick(&self.channels, input).accepted);
         }
         inputs
     }
@@ -223,7 +251,7 @@ impl InputFilter {
         for input in Input::ALL {
             let setting = self.config.get(input);
             let active = setting.polarity.is_active(pins.is_high(input));
-            let channel = &mut self.channels[slot(input)];
+            let channel = pick_mut(&mut self.channels, input);
             if active == channel.accepted {
                 // Back to the accepted level before the debounce time: a bounce.
                 channel.pending = None;
@@ -242,7 +270,7 @@ impl InputFilter {
     pub fn poll(&mut self, now: Instant) {
         for input in Input::ALL {
             let debounce = self.config.get(input).debounce;
-            let channel = &mut self.channels[slot(input)];
+            let channel = pick_mut(&mut self.channels, input);
             if let Some((level, since)) = channel.pending
                 && now >= since + debounce
             {
@@ -258,7 +286,7 @@ impl InputFilter {
         Input::ALL
             .iter()
             .filter_map(|&input| {
-                let (_, since) = self.channels[slot(input)].pending?;
+                let (_, since) = pick(&self.channels, input).pending?;
                 Some(since + self.config.get(input).debounce)
             })
             .min()
