@@ -25,7 +25,6 @@ use plasma_firmware::watchdog::TaskId;
 
 use crate::clock::{embassy_instant, now};
 use crate::pins::{InputPins, OutputPins, output_name};
-use crate::text;
 use crate::watchdog::report;
 
 /// The link's view of the supply, latest wins (bridge → I/O).
@@ -131,10 +130,8 @@ fn publish(io: &mut DiscreteIo) {
     }
     while let Some(event) = io.poll_event() {
         match event {
-            IoEvent::ArcOn | IoEvent::ArcOff => {
-                debug!("I/O event: {=str}", text::debug(&event).as_str())
-            }
-            _ => warn!("I/O event: {=str}", text::debug(&event).as_str()),
+            IoEvent::ArcOn | IoEvent::ArcOff => debug!("I/O event: {}", event),
+            _ => warn!("I/O event: {}", event),
         }
         if EVENTS.try_send((now(), event)).is_err() {
             warn!("I/O: event queue full, event not passed to the CNC session");

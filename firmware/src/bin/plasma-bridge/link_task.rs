@@ -7,7 +7,6 @@ use plasma_firmware::watchdog::TaskId;
 
 use crate::clock::EmbassyClock;
 use crate::ps_uart::{PsUart, describe};
-use crate::text;
 use crate::watchdog::report;
 
 #[embassy_executor::task]
@@ -29,10 +28,10 @@ pub async fn link(uart: PsUart, config: LinkConfig, progress: TaskId) {
                     describe(config)
                 )
             }
-            Err(e) => warn!("PS UART: {=str}", text::debug(&e).as_str()),
+            Err(e) => warn!("PS UART: {}", e),
         }
         while let Some(event) = link.poll_event() {
-            info!("link: {=str}", text::debug(&event).as_str());
+            info!("link: {}", event);
         }
         report(progress);
     }

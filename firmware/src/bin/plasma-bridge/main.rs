@@ -35,8 +35,6 @@ mod pins;
 #[cfg(target_os = "none")]
 mod ps_uart;
 #[cfg(target_os = "none")]
-mod text;
-#[cfg(target_os = "none")]
 mod watchdog;
 
 #[cfg(target_os = "none")]
