@@ -16,12 +16,15 @@
 //!   watchdog even on a silent line.
 //!
 //! The port's `read` must be cancel-safe (bytes that arrive while nobody reads stay in its
-//! buffer): embassy-stm32's `BufferedUart` is, since it reads from its ring buffer.
+//! buffer): embassy-stm32's `BufferedUart` is, since it reads from its ring buffer. Bytes
+//! already waiting are passed on before the endpoint is asked for frames, because asking it
+//! also checks its reply time-out: a reply that came in time must not be taken for a
+//! time-out only because the task was busy elsewhere when it arrived.
 
 use core::future::Future;
 
 use embassy_futures::select::{Either, select};
-use embedded_io_async::{Read, Write};
+use embedded_io_async::{Read, ReadReady, Write};
 use heapless::Vec;
 
 use crate::link::PsLink;
@@ -43,7 +46,7 @@ pub trait Clock {
 pub struct UnsupportedConfig;
 
 /// A serial port whose line settings can change between frames.
-pub trait ConfigurablePort: Read + Write {
+pub trait ConfigurablePort: Read + ReadReady + Write {
     /// Use `config` from now on. Only called while nothing is being transmitted.
     fn set_port_config(&mut self, config: PortConfig) -> Result<(), UnsupportedConfig>;
 }
@@ -181,6 +184,7 @@ impl<P: ConfigurablePort> PsPort<P> {
         endpoint: &mut E,
         clock: &impl Clock,
     ) -> Result<(usize, Option<PortConfig>), PortError<P::Error>> {
+        self.drain_ready(endpoint, clock).await?;
         let mut changed = None;
         let mut sent = 0;
         while sent < MAX_FRAMES_PER_TURN {
@@ -213,6 +217,34 @@ impl<P: ConfigurablePort> PsPort<P> {
         Ok((sent, changed))
     }
 
+    /// Reads what the port has (waits for at least one byte; cancel-safe if the port is).
+    pub async fn read(&mut self, buf: &mut [u8]) -> Result<usize, PortError<P::Error>> {
+        match self.port.read(buf).await {
+            Ok(0) => Err(PortError::Closed),
+            Ok(n) => {
+                self.stats.bytes_received = self.stats.bytes_received.saturating_add(n as u32);
+                Ok(n)
+            }
+            Err(e) => Err(PortError::Read(e)),
+        }
+    }
+
+    /// Passes every byte already waiting in the port to the endpoint, without waiting.
+    pub async fn drain_ready<E: PsEndpoint + ?Sized>(
+        &mut self,
+        endpoint: &mut E,
+        clock: &impl Clock,
+    ) -> Result<usize, PortError<P::Error>> {
+        let mut total = 0;
+        let mut buf = [0u8; RX_CHUNK];
+        while self.port.read_ready().map_err(PortError::Read)? {
+            let n = self.read(&mut buf).await?;
+            endpoint.handle_ps_rx(clock.now(), buf.get(..n).unwrap_or(&buf));
+            total += n;
+        }
+        Ok(total)
+    }
+
     /// Waits until bytes arrive (and passes them to the endpoint) or `deadline` passes.
     /// Returns the number of bytes received.
     pub async fn receive_until<E: PsEndpoint + ?Sized>(
@@ -222,15 +254,12 @@ impl<P: ConfigurablePort> PsPort<P> {
         deadline: Instant,
     ) -> Result<usize, PortError<P::Error>> {
         let mut buf = [0u8; RX_CHUNK];
-        match select(self.port.read(&mut buf), clock.sleep_until(deadline)).await {
-            Either::First(Ok(0)) => Err(PortError::Closed),
-            Either::First(Ok(n)) => {
-                let bytes = buf.get(..n).unwrap_or(&buf);
-                endpoint.handle_ps_rx(clock.now(), bytes);
-                self.stats.bytes_received = self.stats.bytes_received.saturating_add(n as u32);
+        match select(self.read(&mut buf), clock.sleep_until(deadline)).await {
+            Either::First(received) => {
+                let n = received?;
+                endpoint.handle_ps_rx(clock.now(), buf.get(..n).unwrap_or(&buf));
                 Ok(n)
             }
-            Either::First(Err(e)) => Err(PortError::Read(e)),
             Either::Second(()) => Ok(0),
         }
     }

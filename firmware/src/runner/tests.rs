@@ -10,7 +10,7 @@ use core::future::poll_fn;
 use core::task::Poll;
 
 use embassy_futures::block_on;
-use embedded_io_async::{ErrorKind, ErrorType, Read, Write};
+use embedded_io_async::{ErrorKind, ErrorType, Read, ReadReady, Write};
 
 use super::*;
 use crate::link::LinkConfig;
@@ -100,6 +100,13 @@ impl Read for FakePort {
             }
         })
         .await
+    }
+}
+
+impl ReadReady for FakePort {
+    fn read_ready(&mut self) -> Result<bool, ErrorKind> {
+        let w = self.world.borrow();
+        Ok(w.rx.front().is_some_and(|(t, _)| *t <= w.now_us))
     }
 }
 
@@ -373,4 +380,24 @@ fn port_errors_are_reported_not_swallowed() {
     let (_, clock, mut port) = setup();
     let result = block_on(port.turn(&mut Impossible, &clock));
     assert!(matches!(result, Err(PortError::Unsupported(c)) if c.baud == 0));
+}
+
+#[test]
+fn a_reply_waiting_in_the_port_beats_the_time_out() {
+    let (world, clock, mut port) = setup();
+    let mut link = PsLink::new(LinkConfig::default(), Instant::ZERO);
+    block_on(async {
+        let turn = port.transmit(&mut link, &clock).await.unwrap();
+        assert_eq!(turn.0, 1);
+    });
+    // The reply arrives within the 100 ms time-out, but the task only gets to it at 150 ms
+    // (busy elsewhere, e.g. writing to the CNC).
+    {
+        let mut w = world.borrow_mut();
+        w.rx.push_back((50_000, DEVICE_ID_REPLY.to_vec()));
+        w.now_us = 150_000;
+    }
+    block_on(port.turn(&mut link, &clock)).unwrap();
+    assert!(link.status().link_up);
+    assert_eq!(link.diagnostics().timeouts, 0);
 }
