@@ -1,7 +1,7 @@
 //! The power-supply UART: USART1 with hardware driver-enable for the RS-485/422 transceiver.
 
 use embassy_stm32::usart::{self, BufferedUart};
-use embedded_io_async::{ErrorType, Read, Write};
+use embedded_io_async::{ErrorType, Read, ReadReady, Write};
 use plasma_firmware::port::{self, PortConfig};
 use plasma_firmware::runner::{ConfigurablePort, UnsupportedConfig};
 
@@ -45,6 +45,12 @@ impl ErrorType for PsUart {
 impl Read for PsUart {
     async fn read(&mut self, buf: &mut [u8]) -> Result<usize, Self::Error> {
         self.0.read(buf).await
+    }
+}
+
+impl ReadReady for PsUart {
+    fn read_ready(&mut self) -> Result<bool, Self::Error> {
+        self.0.read_ready()
     }
 }
 
