@@ -11,7 +11,8 @@
 //!   watchdog feeding and power-cut-safe settings storage, as logic.
 //! - [`inputs`], [`discrete`]: input polarity and debounce in front of [`io::Interlocks`],
 //!   as the board's I/O task runs them.
-//! - [`runner`]: the async glue between the link and any `embedded-io-async` UART.
+//! - [`runner`], [`supervisor`]: the async loops around the link and the bridge, over any
+//!   `embedded-io-async` UART and clock (the board and host tests run the same code).
 #![cfg_attr(not(test), no_std)]
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
@@ -35,5 +36,6 @@ pub mod port;
 pub mod runner;
 pub mod safe_state;
 pub mod storage;
+pub mod supervisor;
 pub mod time;
 pub mod watchdog;
