@@ -8,6 +8,9 @@
 //! The exchange with the bridge (thread mode) is by small copies under a critical section:
 //! [`SUPPLY`] and [`CONFIG`] come in, [`SNAPSHOT`] and [`EVENTS`] go out.
 
+use core::future::Future;
+use core::sync::atomic::{AtomicU32, Ordering};
+
 use defmt::{debug, info, warn};
 use embassy_executor::InterruptExecutor;
 use embassy_futures::select::{Either4, select4};
@@ -19,7 +22,8 @@ use embassy_sync::signal::Signal;
 use embassy_time::Timer;
 use plasma_firmware::discrete::DiscreteIo;
 use plasma_firmware::inputs::InputConfig;
-use plasma_firmware::io::{Inputs, IoConfig, IoEvent, Outputs, SupplyState};
+use plasma_firmware::io::{Inputs, IoConfig, IoEvent, Outputs, SupplyState, Transition};
+use plasma_firmware::supervisor::IoExchange;
 use plasma_firmware::time::{Duration, Instant};
 use plasma_firmware::watchdog::TaskId;
 
@@ -85,7 +89,7 @@ async fn io_task(
         io_config.arc_ok_debounce.as_micros(),
         io_config.link_required
     );
-    publish(&mut io);
+    publish(&mut io, now());
     loop {
         let latest = now() + MAX_WAIT;
         let deadline = io.poll_at().map_or(latest, |at| at.min(latest));
@@ -110,15 +114,36 @@ async fn io_task(
         io.on_pins(now, pins.levels());
         io.poll(now);
         outputs.drive(io.outputs());
-        publish(&mut io);
+        publish(&mut io, now);
         report(progress);
     }
 }
 
-/// After the pins are set: log every transition with its reason, pass events on, publish
-/// the levels.
-fn publish(io: &mut DiscreteIo) {
-    while let Some(t) = io.poll_transition() {
+/// After the pins are set: hand transitions, events and levels to thread mode. Nothing is
+/// logged here: a defmt frame masks every interrupt while it is written, and this task
+/// should be ready for the next edge as soon as possible.
+fn publish(io: &mut DiscreteIo, now: Instant) {
+    while let Some(transition) = io.poll_transition() {
+        if TRANSITIONS.try_send(transition).is_err() {
+            LOST_TRANSITIONS.fetch_add(1, Ordering::Relaxed);
+        }
+    }
+    while let Some(event) = io.poll_event() {
+        if EVENTS.try_send((now, event)).is_err() {
+            LOST_EVENTS.fetch_add(1, Ordering::Relaxed);
+        }
+    }
+    SNAPSHOT.signal((io.inputs(), io.outputs()));
+}
+
+/// Output changes for the log (I/O → thread mode).
+static TRANSITIONS: Channel<CriticalSectionRawMutex, Transition, 32> = Channel::new();
+static LOST_TRANSITIONS: AtomicU32 = AtomicU32::new(0);
+static LOST_EVENTS: AtomicU32 = AtomicU32::new(0);
+
+/// Thread mode: logs every output change the I/O task made, with its reason.
+pub fn log_transitions() {
+    while let Ok(t) = TRANSITIONS.try_receive() {
         info!(
             "I/O {=u64}.{=u64:03} ms: {=str} {=str}: {=str}",
             t.at.as_micros() / 1000,
@@ -128,14 +153,58 @@ fn publish(io: &mut DiscreteIo) {
             t.reason.as_str()
         );
     }
-    while let Some(event) = io.poll_event() {
-        match event {
-            IoEvent::ArcOn | IoEvent::ArcOff => debug!("I/O event: {}", event),
-            _ => warn!("I/O event: {}", event),
-        }
-        if EVENTS.try_send((now(), event)).is_err() {
-            warn!("I/O: event queue full, event not passed to the CNC session");
-        }
+    let lost = LOST_TRANSITIONS.swap(0, Ordering::Relaxed);
+    if lost > 0 {
+        warn!("I/O: {} output changes not logged (log queue full)", lost);
     }
-    SNAPSHOT.signal((io.inputs(), io.outputs()));
+    let lost = LOST_EVENTS.swap(0, Ordering::Relaxed);
+    if lost > 0 {
+        warn!(
+            "I/O: {} events not passed to the CNC session (queue full)",
+            lost
+        );
+    }
+}
+
+/// Thread mode: logs an I/O event as it is passed to the CNC session.
+pub fn log_event(at: Instant, event: IoEvent) {
+    match event {
+        IoEvent::ArcOn | IoEvent::ArcOff => debug!("I/O event at {} us: {}", at.as_micros(), event),
+        _ => warn!("I/O event at {} us: {}", at.as_micros(), event),
+    }
+}
+
+/// The supervisor's side of the exchange (thread mode).
+pub struct BoardIo {
+    /// Input polarity and debounce sent along with every I/O settings change.
+    pub inputs: InputConfig,
+}
+
+impl IoExchange for BoardIo {
+    fn take_snapshot(&mut self) -> Option<(Inputs, Outputs)> {
+        log_transitions();
+        SNAPSHOT.try_take()
+    }
+
+    fn try_event(&mut self) -> Option<(Instant, IoEvent)> {
+        let (at, event) = EVENTS.try_receive().ok()?;
+        log_event(at, event);
+        Some((at, event))
+    }
+
+    fn event_ready(&mut self) -> impl Future<Output = ()> {
+        EVENTS.ready_to_receive()
+    }
+
+    fn send_supply(&mut self, supply: SupplyState) {
+        info!(
+            "supply: link {=bool}, ready {=bool}, fault {=bool} (requires action {=bool})",
+            supply.link_up, supply.unit_ready, supply.fault_active, supply.fault_requires_action
+        );
+        SUPPLY.signal(supply);
+    }
+
+    fn send_io_config(&mut self, config: IoConfig) {
+        CONFIG.signal((config, self.inputs));
+    }
 }

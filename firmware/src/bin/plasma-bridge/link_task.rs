@@ -33,6 +33,7 @@ pub async fn link(uart: PsUart, config: LinkConfig, progress: TaskId) {
         while let Some(event) = link.poll_event() {
             info!("link: {}", event);
         }
+        crate::discrete::log_transitions();
         report(progress);
     }
 }
