@@ -3,6 +3,11 @@
 //! Every piece is a sans-IO state machine that takes `now` and events and returns actions, so
 //! the board glue (src/bin) and the host simulators drive exactly the same code.
 //!
+//! - [`bridge`]: the façade the board and the host harness drive: link, CNC session and
+//!   settings behind one sans-IO object.
+//! - [`session`]: the CNC text protocol and Phoenix serial messaging.
+//! - [`settings`]: what survives a power cycle, and the `CONFIG` keys.
+//! - [`link`]: the power-supply link (Modbus ASCII and HPR).
 //! - [`io`]: torch-safe discrete I/O (START interlocks, ARC_OK, READY, FAULT) and the
 //!   independent [`io::SafetyMonitor`] used by every scenario test.
 //! - [`port`]: UART settings the link asks for.
@@ -28,6 +33,7 @@
     )
 )]
 
+pub mod bridge;
 pub mod discrete;
 pub mod inputs;
 pub mod io;
@@ -35,6 +41,8 @@ pub mod link;
 pub mod port;
 pub mod runner;
 pub mod safe_state;
+pub mod session;
+pub mod settings;
 pub mod storage;
 pub mod supervisor;
 pub mod time;
