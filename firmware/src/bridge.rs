@@ -270,9 +270,7 @@ impl Bridge {
     /// After `CONFIG SAVE`: the settings to store (once). The board writes them to flash and
     /// calls [`Bridge::save_finished`].
     pub fn take_save_request(&mut self) -> Option<Settings> {
-        self.session
-            .take_save_request()
-            .then_some(self.settings)
+        self.session.take_save_request().then_some(self.settings)
     }
 
     /// The store finished: answers `CONFIG SAVE` (`OK config=saved` or `ERR STORAGE ...`).

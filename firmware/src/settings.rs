@@ -328,9 +328,7 @@ impl Settings {
             | ConfigKey::InterlockLink
             | ConfigKey::TransferTimeoutDropsStart
             | ConfigKey::Events => Accepted::Words(ON_OFF),
-            ConfigKey::PhoenixFormat => {
-                Accepted::Words("32|33|48|49|64|65|80|81|96|97|112|113")
-            }
+            ConfigKey::PhoenixFormat => Accepted::Words("32|33|48|49|64|65|80|81|96|97|112|113"),
             other => {
                 let (min, max) = range_of(other);
                 Accepted::Range(min, max)
@@ -424,7 +422,9 @@ impl Settings {
         let process_ok = self.process.is_none_or(|p| {
             p.amps >= AMPS_MIN
                 && p.amps <= AMPS_MAX
-                && p.pressure.psi().is_none_or(|psi| psi >= PSI_MIN && psi <= PSI_MAX)
+                && p.pressure
+                    .psi()
+                    .is_none_or(|psi| psi >= PSI_MIN && psi <= PSI_MAX)
         });
         self.link.validate().is_ok()
             && within(self.io.start_gap, START_GAP_MS)
@@ -724,7 +724,10 @@ mod tests {
         );
         assert!(s.set(ConfigKey::PhoenixFormat, "300").is_err());
         assert_eq!(s, before);
-        assert_eq!(Settings::accepted(ConfigKey::PollMs).to_string(), "20..1000");
+        assert_eq!(
+            Settings::accepted(ConfigKey::PollMs).to_string(),
+            "20..1000"
+        );
     }
 
     #[test]

@@ -7,8 +7,8 @@
 //! 1. takes the I/O task's latest levels and events and passes them to the bridge;
 //! 2. passes every byte already waiting in either port to the bridge (so a reply that came in
 //!    time is not taken for a time-out when the bridge is polled);
-//! 3. polls the bridge, transmits its power-supply frames ([`PsPort`]) and writes its CNC
-//!    output;
+//! 3. polls the bridge, transmits its power-supply frames ([`PsPort`]), polls it again (the
+//!    link's time-outs run while frames are asked for) and writes its CNC output;
 //! 4. hands the supply state and the I/O settings to the I/O task when they changed, and a
 //!    save request to the settings saver;
 //! 5. waits for the first of: bytes on either port, an I/O event, the end of a save, the
@@ -21,14 +21,18 @@
 use core::future::{Future, pending};
 
 use embassy_futures::select::{Either5, select5};
+use embassy_futures::yield_now;
 use embedded_io_async::{Read, ReadReady, Write};
 
+use crate::bridge::Bridge;
 use crate::io::{Inputs, IoConfig, IoEvent, Outputs, SupplyState};
+use crate::port::PortConfig;
 use crate::runner::{Clock, ConfigurablePort, MAX_WAIT, PortError, PsEndpoint, PsPort};
+use crate::settings::{SaveError, Settings};
 use crate::time::Instant;
 
-/// What the supervisor needs from the bridge (`crate::bridge::Bridge` implements it; the
-/// names follow its API).
+/// What the supervisor needs from the bridge ([`Bridge`] implements it; the names follow
+/// its API).
 pub trait BridgeEndpoint: PsEndpoint {
     /// The settings a save request carries.
     type Settings;
@@ -52,6 +56,54 @@ pub trait BridgeEndpoint: PsEndpoint {
     fn take_save_request(&mut self) -> Option<Self::Settings>;
     /// How the store went.
     fn save_finished(&mut self, now: Instant, result: Result<(), Self::SaveError>);
+}
+
+impl PsEndpoint for Bridge {
+    fn handle_ps_rx(&mut self, now: Instant, bytes: &[u8]) {
+        Bridge::handle_ps_rx(self, now, bytes);
+    }
+    fn poll_ps_transmit(&mut self, now: Instant) -> Option<&[u8]> {
+        Bridge::poll_ps_transmit(self, now)
+    }
+    fn ps_port_config(&self) -> PortConfig {
+        Bridge::ps_port_config(self)
+    }
+    fn ps_poll_at(&self) -> Option<Instant> {
+        Bridge::poll_at(self)
+    }
+}
+
+impl BridgeEndpoint for Bridge {
+    type Settings = Settings;
+    type SaveError = SaveError;
+
+    fn handle_cnc_rx(&mut self, now: Instant, bytes: &[u8]) {
+        Bridge::handle_cnc_rx(self, now, bytes);
+    }
+    fn poll_cnc_output(&mut self) -> Option<&[u8]> {
+        Bridge::poll_cnc_output(self)
+    }
+    fn poll(&mut self, now: Instant) {
+        Bridge::poll(self, now);
+    }
+    fn supply_state(&self) -> SupplyState {
+        Bridge::supply_state(self)
+    }
+    fn io_config(&self) -> IoConfig {
+        Bridge::io_config(self)
+    }
+    fn set_io_snapshot(&mut self, inputs: Inputs, outputs: Outputs) {
+        Bridge::set_io_snapshot(self, inputs, outputs);
+    }
+    fn on_io_event(&mut self, now: Instant, event: IoEvent) {
+        Bridge::on_io_event(self, now, event);
+    }
+    fn take_save_request(&mut self) -> Option<Settings> {
+        Bridge::take_save_request(self)
+    }
+    fn save_finished(&mut self, now: Instant, result: Result<(), SaveError>) {
+        Bridge::save_finished(self, now, result);
+    }
 }
 
 /// The supervisor's side of the exchange with the I/O task.
@@ -175,6 +227,9 @@ where
             .transmit(bridge, clock)
             .await
             .map_err(TurnError::Ps)?;
+        // Asking for frames also runs the link's time-outs, whose events the bridge moves
+        // into the session (replies, event lines) only when polled.
+        bridge.poll(clock.now());
         while let Some(output) = bridge.poll_cnc_output() {
             for piece in output.chunks(self.cnc_piece) {
                 self.cnc.flush().await.map_err(TurnError::CncWrite)?;
@@ -237,7 +292,8 @@ where
         V: SettingsSaver<B::Settings, B::SaveError>,
         K: Clock,
     {
-        let latest = clock.now() + MAX_WAIT;
+        let started = clock.now();
+        let latest = started + MAX_WAIT;
         let deadline = bridge.ps_poll_at().map_or(latest, |at| at.min(latest));
         let mut ps_buf = [0u8; PS_RX_CHUNK];
         let mut cnc_buf = [0u8; CNC_RX_CHUNK];
@@ -276,7 +332,13 @@ where
                 self.saving = false;
                 bridge.save_finished(now, result);
             }
-            Either5::Fifth(()) => {}
+            Either5::Fifth(()) => {
+                if deadline <= started {
+                    // The bridge asked to be polled at a time already past and nothing else
+                    // happened: let the other tasks run before the next turn.
+                    yield_now().await;
+                }
+            }
         }
         Ok(())
     }

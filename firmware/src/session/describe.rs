@@ -56,9 +56,7 @@ impl Display for ModelName<'_> {
                 ) => write!(f, "Powermax{size}"),
                 (PowerSupplyModel::Powermax45Xp, _) => f.write_str("Powermax45XP"),
                 (PowerSupplyModel::Powermax65_85_105, _)
-                | (PowerSupplyModel::Powermax65_85_105Sync, _) => {
-                    f.write_str("Powermax65/85/105")
-                }
+                | (PowerSupplyModel::Powermax65_85_105Sync, _) => f.write_str("Powermax65/85/105"),
                 (PowerSupplyModel::Powermax125, _) => f.write_str("Powermax125"),
                 (PowerSupplyModel::Powermax45Sync, _) => f.write_str("Powermax45"),
             },
@@ -395,7 +393,11 @@ pub fn write_failure<W: Write>(
             "settings outside the unit's permitted limits",
         ),
         CommandFailure::Settings(SettingsFailure::NotAccepted) | CommandFailure::NotAccepted => {
-            write_error(out, ErrorCode::Refused, "the unit did not accept the command")
+            write_error(
+                out,
+                ErrorCode::Refused,
+                "the unit did not accept the command",
+            )
         }
         CommandFailure::LinkDown => write_error(
             out,

@@ -46,19 +46,19 @@ use plasma_protocol::cnc::{
 };
 use plasma_protocol::hpr::{self, GasCode, GasPair};
 
-use crate::io::{Interlock, Inputs, IoEvent, Outputs};
+use crate::io::{Inputs, Interlock, IoEvent, Outputs};
 use crate::link::{
-    CommandFailure, CommandOutput, Family, HprGasFlow, LinkCommand, LinkDownReason,
-    LinkEvent, Model, PsLink, Ticket, UnitStatus,
+    CommandFailure, CommandOutput, Family, HprGasFlow, LinkCommand, LinkDownReason, LinkEvent,
+    Model, PsLink, Ticket, UnitStatus,
 };
 use crate::settings::{Process, SaveError, Settings};
 use crate::time::Instant;
 
-pub use describe::{ModelName, cnc_mode, family_word, mode_word, unit_mode};
 use describe::{
     FaultId, OrDash, SettingsText, Text, fault_text, on_off, settings_failure_word, state_name,
     transaction_word, write_failure, write_refusal,
 };
+pub use describe::{ModelName, cnc_mode, family_word, mode_word, unit_mode};
 
 /// Command lines that can wait behind a command in progress.
 pub const QUEUE_CAPACITY: usize = 4;
@@ -192,15 +192,17 @@ fn line(build: impl FnOnce(&mut ReplyLine) -> fmt::Result) -> ReplyLine {
     let mut line = ReplyLine::new();
     if build(&mut line).is_err() {
         line.clear();
-        let _ = write_error(&mut line, ErrorCode::State, "reply longer than the line buffer");
+        let _ = write_error(
+            &mut line,
+            ErrorCode::State,
+            "reply longer than the line buffer",
+        );
     }
     line
 }
 
 /// An `OK` line with the fields `fields` writes.
-fn ok_line(
-    fields: impl FnOnce(&mut ReplyWriter<&mut ReplyLine>) -> fmt::Result,
-) -> ReplyLine {
+fn ok_line(fields: impl FnOnce(&mut ReplyWriter<&mut ReplyLine>) -> fmt::Result) -> ReplyLine {
     line(|l| {
         let mut w = ReplyWriter::ok(l)?;
         fields(&mut w)?;
@@ -308,10 +310,7 @@ impl Session {
         self.pending = None;
         let reply = match result {
             Ok(()) => ok_line(|w| w.field("config", "saved")),
-            Err(e) => err_line(
-                ErrorCode::Storage,
-                format_args!("settings not saved: {e}"),
-            ),
+            Err(e) => err_line(ErrorCode::Storage, format_args!("settings not saved: {e}")),
         };
         self.send(reply);
         self.pump(ctx);
@@ -924,11 +923,7 @@ fn message_item(payload: &[u8]) -> Item {
             .and_then(|t| LineText::try_from(t).ok())
             .unwrap_or_default(),
     };
-    let error = error.or_else(|| {
-        Command::parse(&text)
-            .err()
-            .map(InputError::Parse)
-    });
+    let error = error.or_else(|| Command::parse(&text).err().map(InputError::Parse));
     Item { text, error }
 }
 

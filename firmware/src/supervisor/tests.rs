@@ -309,35 +309,53 @@ impl IoExchange for FakeIo {
     }
 }
 
-/// Saves take 30 ms; every third one fails.
-#[derive(Default)]
-struct FakeSaver {
+/// Saves take 30 ms; `outcome` decides how each ends.
+struct FakeSaver<S, E> {
     world: Shared,
-    started: Vec<(u64, u32)>,
-    done_at: Option<(u64, bool)>,
+    started: Vec<(u64, S)>,
+    outcome: fn(&S) -> core::result::Result<(), E>,
+    done: Option<(u64, core::result::Result<(), E>)>,
 }
 
-impl SettingsSaver<u32, ()> for FakeSaver {
-    fn start(&mut self, settings: u32) {
+impl<S, E> FakeSaver<S, E> {
+    fn new(world: &Shared, outcome: fn(&S) -> core::result::Result<(), E>) -> Self {
+        FakeSaver {
+            world: world.clone(),
+            started: Vec::new(),
+            outcome,
+            done: None,
+        }
+    }
+}
+
+impl<S, E: Copy> SettingsSaver<S, E> for FakeSaver<S, E> {
+    fn start(&mut self, settings: S) {
         let mut w = self.world.borrow_mut();
         let now = w.now_us;
+        self.done = Some((now + 30_000, (self.outcome)(&settings)));
         self.started.push((now, settings));
-        self.done_at = Some((now + 30_000, !settings.is_multiple_of(3)));
         w.wakeups.push(now + 30_000);
     }
-    fn finished(&mut self) -> impl Future<Output = core::result::Result<(), ()>> {
+    fn finished(&mut self) -> impl Future<Output = core::result::Result<(), E>> {
         let world = self.world.clone();
-        let done = self.done_at;
+        let done = self.done;
         poll_fn(move |_| match done {
-            Some((t, ok)) if t <= world.borrow().now_us => {
-                Poll::Ready(if ok { Ok(()) } else { Err(()) })
-            }
+            Some((t, result)) if t <= world.borrow().now_us => Poll::Ready(result),
             _ => Poll::Pending,
         })
     }
 }
 
-type Sup = Supervisor<FakePort, FakePort, FakeIo, FakeSaver>;
+/// Every third save fails.
+fn every_third_fails(settings: &u32) -> core::result::Result<(), ()> {
+    if settings.is_multiple_of(3) {
+        Err(())
+    } else {
+        Ok(())
+    }
+}
+
+type Sup = Supervisor<FakePort, FakePort, FakeIo, FakeSaver<u32, ()>>;
 
 fn setup(cnc_buffer: usize) -> (Shared, FakeClock, Sup, FakeBridge) {
     let world: Shared = Rc::default();
@@ -355,10 +373,7 @@ fn setup(cnc_buffer: usize) -> (Shared, FakeClock, Sup, FakeBridge) {
             world: world.clone(),
             ..FakeIo::default()
         },
-        FakeSaver {
-            world: world.clone(),
-            ..FakeSaver::default()
-        },
+        FakeSaver::new(&world, every_third_fails),
     );
     let bridge = FakeBridge::new(&world);
     (world.clone(), FakeClock(world), sup, bridge)
@@ -484,4 +499,60 @@ fn saves_run_one_at_a_time_and_their_result_reaches_the_bridge() {
         world.borrow().written(CNC),
         b"SAVED\r\nSAVED\r\nSAVE FAILED\r\n"
     );
+}
+
+#[test]
+fn drives_the_real_bridge_end_to_end() {
+    use crate::bridge::Bridge;
+    use crate::settings::{SaveError, Settings};
+
+    let world: Shared = Rc::default();
+    let clock = FakeClock(world.clone());
+    let mut sup = Supervisor::new(
+        FakePort {
+            world: world.clone(),
+            line: PS,
+        },
+        FakePort {
+            world: world.clone(),
+            line: CNC,
+        },
+        64,
+        FakeIo {
+            world: world.clone(),
+            ..FakeIo::default()
+        },
+        FakeSaver::<Settings, SaveError>::new(&world, |_| Ok(())),
+    );
+    let mut bridge = Bridge::new(Settings::default(), Instant::ZERO);
+    // A Powermax SYNC answers the first detection request; the CNC saves the settings.
+    world.borrow_mut().lines[PS]
+        .rx
+        .push_back((20_000, b":012B0E0481000101010630383133333504\r\n".to_vec()));
+    cnc_rx(&world, 50, b"CONFIG SAVE\r\n");
+    block_on(async {
+        let mut turns = 0;
+        while clock.now() < Instant::from_millis(300) {
+            sup.turn(&mut bridge, &clock).await.unwrap();
+            turns += 1;
+            assert!(
+                turns < 10_000,
+                "stuck at {:?}, bridge poll_at {:?}",
+                clock.now(),
+                bridge.poll_at()
+            );
+        }
+    });
+    let w = world.borrow();
+    assert!(w.written(PS).starts_with(b":012B0E0401C1\r\n"));
+    // The interlocks heard that the link is up.
+    assert!(
+        sup.io().supplies.iter().any(|s| s.link_up),
+        "{:?}",
+        sup.io().supplies
+    );
+    assert_eq!(sup.saver().started.len(), 1);
+    assert_eq!(sup.saver().started[0].0, 50_000);
+    let cnc = String::from_utf8_lossy(&w.written(CNC)).into_owned();
+    assert!(cnc.contains("OK config=saved\r\n"), "{cnc}");
 }
