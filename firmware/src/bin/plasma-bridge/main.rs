@@ -6,10 +6,13 @@
 //! The image only builds peripherals and spawns tasks; what they do is the library's:
 //!
 //! - boot: outputs to safe state before anything else, reset cause, clocks (80 MHz),
-//!   settings from flash;
+//!   settings from flash ([`flash`]), the reset cause and the settings outcome handed to the
+//!   bridge for the CNC port (`!BOOT`, `ID`);
 //! - [`discrete`]: the I/O task on an interrupt executor above all serial work (input edges
 //!   to outputs);
-//! - [`link_task`]: the power-supply link on USART1 with hardware driver-enable;
+//! - [`bridge_task`]: the `Bridge` in thread mode: the power-supply link on USART1 with
+//!   hardware driver-enable ([`ps_uart`]), the CNC session on USART2 ([`cnc_uart`]);
+//! - [`flash`]: the settings task that stores `CONFIG SAVE`;
 //! - [`watchdog`]: the IWDG fed only while every task reports progress, the heartbeat LED;
 //! - [`fault`]: panic, HardFault and NMI leave every output off and reset.
 #![cfg_attr(target_os = "none", no_std)]
@@ -21,15 +24,17 @@ fn main() {
 }
 
 #[cfg(target_os = "none")]
+mod bridge_task;
+#[cfg(target_os = "none")]
 mod clock;
+#[cfg(target_os = "none")]
+mod cnc_uart;
 #[cfg(target_os = "none")]
 mod discrete;
 #[cfg(target_os = "none")]
 mod fault;
 #[cfg(target_os = "none")]
 mod flash;
-#[cfg(target_os = "none")]
-mod link_task;
 #[cfg(target_os = "none")]
 mod pins;
 #[cfg(target_os = "none")]
@@ -39,6 +44,8 @@ mod watchdog;
 
 #[cfg(target_os = "none")]
 mod image {
+    use core::fmt::Write;
+
     use defmt::{info, warn};
     use defmt_rtt as _;
     use embassy_executor::Spawner;
@@ -47,22 +54,28 @@ mod image {
     use embassy_stm32::interrupt::{self, InterruptExt};
     use embassy_stm32::usart::{self, BufferedUart};
     use embassy_stm32::{bind_interrupts, peripherals};
+    use heapless::String;
+    use plasma_firmware::bridge::Bridge;
     use plasma_firmware::inputs::InputConfig;
-    use plasma_firmware::io::{Input, IoConfig};
-    use plasma_firmware::link::LinkConfig;
-    use plasma_firmware::port::PortConfig;
+    use plasma_firmware::io::Input;
+    use plasma_firmware::link::transaction::TX_CAPACITY;
+    use plasma_firmware::safe_state::BootReport;
+    use plasma_firmware::storage::LoadOutcome;
     use plasma_firmware::time::Duration;
     use static_cell::StaticCell;
 
-    use crate::discrete::SERIAL_PRIORITY;
+    use crate::clock::now;
+    use crate::cnc_uart::CncUart;
+    use crate::discrete::{BoardIo, SERIAL_PRIORITY};
     use crate::pins::{InputPins, OutputPins, drive_safe_state, pull};
     use crate::ps_uart::{PsUart, uart_config};
     use crate::watchdog::register;
-    use crate::{discrete, fault, flash, link_task, watchdog};
+    use crate::{bridge_task, cnc_uart, discrete, fault, flash, watchdog};
 
     bind_interrupts!(struct Irqs {
         FLASH => embassy_stm32::flash::InterruptHandler;
         USART1 => usart::BufferedInterruptHandler<peripherals::USART1>;
+        USART2 => usart::BufferedInterruptHandler<peripherals::USART2>;
         EXTI0 => exti::InterruptHandler<interrupt::typelevel::EXTI0>;
         EXTI1 => exti::InterruptHandler<interrupt::typelevel::EXTI1>;
         EXTI4 => exti::InterruptHandler<interrupt::typelevel::EXTI4>;
@@ -90,9 +103,24 @@ mod image {
     }
 
     /// PS UART buffers: transmit holds the longest frame (see `PsUart`).
-    static PS_TX: StaticCell<[u8; plasma_firmware::link::transaction::TX_CAPACITY]> =
-        StaticCell::new();
+    static PS_TX: StaticCell<[u8; TX_CAPACITY]> = StaticCell::new();
     static PS_RX: StaticCell<[u8; 256]> = StaticCell::new();
+    static CNC_TX: StaticCell<[u8; cnc_uart::TX_BUFFER]> = StaticCell::new();
+    static CNC_RX: StaticCell<[u8; cnc_uart::RX_BUFFER]> = StaticCell::new();
+    static BOOT_TEXT: StaticCell<String<64>> = StaticCell::new();
+
+    /// `reset:<cause>,settings:<outcome>` for the CNC port (`!BOOT reason=...`, `ID`).
+    fn boot_text(boot: &BootReport, outcome: LoadOutcome) -> &'static str {
+        let text = BOOT_TEXT.init(String::new());
+        // 64 bytes hold the longest cause and outcome; a cut text is still a report.
+        let _ = write!(
+            text,
+            "reset:{},settings:{}",
+            boot.cause.as_str(),
+            flash::outcome_word(outcome)
+        );
+        text.as_str()
+    }
 
     #[embassy_executor::main]
     async fn main(spawner: Spawner) {
@@ -130,22 +158,10 @@ mod image {
             irq.set_priority(SERIAL_PRIORITY);
         }
 
-        let store = flash::open(embassy_stm32::flash::Flash::new(p.FLASH, Irqs));
-        if let Some(mut store) = store {
-            match store.load().await {
-                Ok(Some(record)) => info!(
-                    "settings: version {}, save #{}, {} bytes",
-                    record.version,
-                    record.sequence,
-                    record.payload.len()
-                ),
-                Ok(None) => info!("settings: none stored"),
-                Err(e) => warn!("settings: {=str}", e.as_str()),
-            }
-        }
-        flash::report_ecc_errors();
-        let link_config = LinkConfig::default();
-        let io_config = IoConfig::default();
+        let mut store = flash::open(embassy_stm32::flash::Flash::new(p.FLASH, Irqs));
+        let loaded = flash::load(store.as_mut()).await;
+        let settings = loaded.settings;
+        // Polarity and debounce of the inputs are not (yet) part of the stored settings.
         let input_config = InputConfig::default();
 
         // Inputs in Input::ALL order, each with the pull that reads inactive when open.
@@ -162,31 +178,51 @@ mod image {
         discrete::start(
             inputs,
             outputs,
-            (io_config, input_config),
+            (settings.io, input_config),
             register("io", Duration::from_millis(200)),
         );
 
-        let ps_uart = match BufferedUart::new_with_de(
+        let ps_uart = BufferedUart::new_with_de(
             p.USART1,
             p.PA10,
             p.PA9,
             p.PA12,
             Irqs,
-            PS_TX.init([0; plasma_firmware::link::transaction::TX_CAPACITY]),
+            PS_TX.init([0; TX_CAPACITY]),
             PS_RX.init([0; 256]),
-            uart_config(PortConfig::MODBUS_DEFAULT),
-        ) {
-            Ok(uart) => uart,
-            Err(e) => defmt::panic!("PS UART: {}", e),
+            uart_config(settings.link.modbus_port()),
+        );
+        let cnc_uart = BufferedUart::new(
+            p.USART2,
+            p.PA3,
+            p.PA2,
+            CNC_TX.init([0; cnc_uart::TX_BUFFER]),
+            CNC_RX.init([0; cnc_uart::RX_BUFFER]),
+            Irqs,
+            cnc_uart::uart_config(),
+        );
+        let (ps_uart, cnc_uart) = match (ps_uart, cnc_uart) {
+            (Ok(ps), Ok(cnc)) => (ps, cnc),
+            // Fixed settings the USARTs support at 80 MHz: a build mistake; panic = safe state.
+            (Err(e), _) | (_, Err(e)) => defmt::panic!("UART set-up: {}", e),
         };
+
+        let mut bridge = Bridge::new(settings, now());
+        bridge.set_boot_report(now(), boot_text(&boot, loaded.outcome));
         spawner.spawn(
-            link_task::link(
+            bridge_task::bridge(
+                bridge,
                 PsUart(ps_uart),
-                link_config,
-                register("ps-link", Duration::from_millis(500)),
+                CncUart(cnc_uart),
+                BoardIo {
+                    inputs: input_config,
+                },
+                register("bridge", Duration::from_millis(500)),
             )
             .unwrap(),
         );
+        spawner
+            .spawn(flash::settings(store, register("settings", Duration::from_secs(1))).unwrap());
 
         let led = Output::new(p.PA5, Level::Low, Speed::Low);
         spawner.spawn(
