@@ -171,7 +171,10 @@ impl Bridge {
         if self.dirty {
             return Some(self.now);
         }
-        self.link.poll_at()
+        match (self.link.poll_at(), self.session.poll_at()) {
+            (Some(a), Some(b)) => Some(a.min(b)),
+            (a, b) => a.or(b),
+        }
     }
 
     fn service(&mut self, now: Instant) {
@@ -188,6 +191,7 @@ impl Bridge {
             self.session.on_link_event(&mut ctx!(self, now), &event);
         }
         self.try_restore(now);
+        self.session.poll(&mut ctx!(self, now));
         self.session.pump(&mut ctx!(self, now));
         self.dirty = false;
     }
@@ -304,5 +308,127 @@ impl Bridge {
     /// The link (read only), e.g. for its configuration.
     pub fn link(&self) -> &PsLink {
         &self.link
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    extern crate std;
+    use std::string::ToString;
+
+    use plasma_protocol::cnc::{Amps, Mode, Pressure};
+
+    use super::*;
+    use crate::session::tests::{FakePowermax, NAK_TOKEN, Rig, Unit};
+    use crate::time::Duration;
+
+    fn with_process(amps: u16, events: bool) -> Settings {
+        Settings {
+            events,
+            process: Some(crate::settings::Process {
+                mode: Mode::Cut,
+                amps: Amps::from_raw(amps * 64),
+                pressure: Pressure::Auto,
+            }),
+            ..Settings::default()
+        }
+    }
+
+    #[test]
+    fn a_kept_process_is_applied_again_after_power_up() {
+        let mut rig = Rig::new(
+            with_process(45, true),
+            Unit::Powermax(FakePowermax::sync65()),
+        );
+        rig.run(800);
+        assert_eq!(
+            rig.unit.powermax().writes,
+            std::vec![(0x3080, std::vec![1, 2880, 0])]
+        );
+        assert!(
+            rig.received
+                .contains(&"!SETTINGS applied mode=CUT amps=45 psi=AUTO".to_string()),
+            "{:?}",
+            rig.received
+        );
+        assert!(
+            rig.received.iter().all(|t| t.starts_with('!')),
+            "no reply lines"
+        );
+        assert!(rig.bridge.status().remote);
+    }
+
+    #[test]
+    fn a_kept_process_outside_the_limits_is_reported_and_not_sent() {
+        let mut rig = Rig::new(
+            with_process(100, true),
+            Unit::Powermax(FakePowermax::sync65()),
+        );
+        rig.run(800);
+        assert!(rig.unit.powermax().writes.is_empty());
+        assert!(
+            rig.received.contains(
+                &"!SETTINGS failed reason=refused why=current_100_A_outside_20-65_A".to_string()
+            ),
+            "{:?}",
+            rig.received
+        );
+    }
+
+    #[test]
+    fn supply_state_follows_the_link() {
+        let mut rig = Rig::new(Settings::default(), Unit::Powermax(FakePowermax::sync65()));
+        assert_eq!(rig.bridge.supply_state(), SupplyState::default());
+        rig.run(600);
+        assert_eq!(rig.bridge.supply_state(), SupplyState::HEALTHY);
+        rig.unit.powermax().set_fault(500);
+        rig.run(300);
+        let state = rig.bridge.supply_state();
+        assert!(state.fault_active && state.fault_requires_action && !state.unit_ready);
+        assert_eq!(rig.cmd("RESTART"), "OK restart=done quiet_ms=2000");
+        let until = rig.bridge.supply_state().restart_blackout_until.unwrap();
+        assert!(until > rig.now);
+        assert_eq!(rig.bridge.io_config(), crate::io::IoConfig::default());
+    }
+
+    #[test]
+    fn a_phoenix_frame_that_stops_arriving_is_naked_after_the_idle_time() {
+        let mut rig = Rig::new(Settings::default(), Unit::None);
+        rig.bridge.handle_cnc_rx(rig.now, b"\x01\x02FAU");
+        let deadline = rig.now + crate::session::FRAME_IDLE_TIMEOUT;
+        assert!(rig.bridge.poll_at().is_some_and(|at| at <= deadline));
+        rig.bridge.poll(deadline - Duration::from_millis(1));
+        rig.collect();
+        assert!(rig.received.is_empty());
+        rig.bridge.poll(deadline);
+        rig.collect();
+        assert_eq!(
+            rig.received,
+            [
+                NAK_TOKEN,
+                "ERR SYNTAX Phoenix message incomplete: the next one began or the line went \
+                 quiet (NAK sent)"
+            ]
+        );
+        // Text lines work again at once.
+        assert!(rig.cmd("ID").starts_with("OK bridge=plasma-bridge"));
+    }
+
+    #[test]
+    fn the_boot_report_is_an_event_and_part_of_id() {
+        let mut rig = Rig::new(
+            Settings {
+                events: true,
+                ..Settings::default()
+            },
+            Unit::None,
+        );
+        rig.bridge.set_boot_report(rig.now, "watchdog");
+        rig.collect();
+        assert_eq!(rig.received, ["!BOOT reason=watchdog version=0.1.0"]);
+        assert_eq!(
+            rig.cmd("ID"),
+            "OK bridge=plasma-bridge version=0.1.0 reset=watchdog link=DOWN model=- family=-"
+        );
     }
 }

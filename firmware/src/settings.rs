@@ -536,7 +536,12 @@ impl storage::Settings for Settings {
 
     fn decode(payload: &[u8]) -> Option<Self> {
         let r: &[u8; RECORD_LEN] = payload.try_into().ok()?;
-        let u16_at = |i: usize| u16::from_le_bytes([r[i], r[i + 1]]);
+        // Offsets are constants inside the fixed-length record.
+        let u16_at = |i: usize| {
+            r.get(i..i + 2)
+                .and_then(|b| b.try_into().ok())
+                .map_or(0, u16::from_le_bytes)
+        };
         let millis = |i: usize| Duration::from_millis(u64::from(u16_at(i)));
         let flags = r[21];
         if flags & !FLAGS_KNOWN != 0 {
@@ -674,12 +679,14 @@ mod tests {
         assert_eq!(corrupt(22, 2), None, "no such Phoenix format");
         assert_eq!(corrupt(23, 2), None, "bad process tag");
         assert_eq!(corrupt(24, 1), None, "process bytes without a process");
-        let mut with_process = Settings::default();
-        with_process.process = Some(Process {
-            mode: Mode::Cut,
-            amps: Amps::from_raw(45 * 64),
-            pressure: Pressure::Auto,
-        });
+        let with_process = Settings {
+            process: Some(Process {
+                mode: Mode::Cut,
+                amps: Amps::from_raw(45 * 64),
+                pressure: Pressure::Auto,
+            }),
+            ..Settings::default()
+        };
         let len = with_process.encode(&mut out);
         let mut r = out;
         r[24] = 4;

@@ -4,8 +4,12 @@
 //!   seeded fault injection, 2-wire / 4-wire).
 //! - [`sim`]: simulated Hypertherm power supplies (Powermax SYNC, legacy Powermax, HPR and
 //!   MaxPro200) behind one byte-level interface, [`sim::SimulatedUnit`].
+//! - [`harness`]: the scenario harness: the bridge's power-supply side, the line and a
+//!   simulator in one deterministic discrete-event [`harness::World`], with the discrete I/O
+//!   and the safety monitor checked after every step.
 #![warn(missing_docs)]
 
 pub mod decode;
+pub mod harness;
 pub mod line;
 pub mod sim;

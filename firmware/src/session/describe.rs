@@ -336,7 +336,7 @@ pub fn write_refusal<W: Write>(
                 "not allowed in state {} ({}) with error {} ({})",
                 OrDash(state.map(|s| s.0)),
                 state.map_or("unknown", |s| state_name(s, family)),
-                OrDash(error.map(|e| HprCode(e))),
+                OrDash(error.map(HprCode)),
                 error.and_then(|e| e.name()).unwrap_or("unknown"),
             ),
         ),

@@ -32,8 +32,9 @@
 //! `ERR UNSUPPORTED TORCH is a simulator command`.
 
 mod describe;
+mod replies;
 #[cfg(test)]
-mod tests;
+pub(crate) mod tests;
 
 use core::fmt::{self, Display, Write};
 
@@ -44,21 +45,19 @@ use plasma_protocol::cnc::{
     Amps, Command, ConfigCommand, ConfigKey, ErrorCode, Gas, LineAssembler, LineError,
     MAX_LINE_LEN, Mode, ParseError, Pressure,
 };
-use plasma_protocol::hpr::{self, GasCode, GasPair};
+use plasma_protocol::hpr::{GasCode, GasPair};
 
 use crate::io::{Inputs, Interlock, IoEvent, Outputs};
-use crate::link::{
-    CommandFailure, CommandOutput, Family, HprGasFlow, LinkCommand, LinkDownReason, LinkEvent,
-    Model, PsLink, Ticket, UnitStatus,
-};
+use crate::link::{Family, HprGasFlow, LinkCommand, LinkDownReason, LinkEvent, PsLink, Ticket};
 use crate::settings::{Process, SaveError, Settings};
-use crate::time::Instant;
+use crate::time::{Duration, Instant};
 
 use describe::{
     FaultId, OrDash, SettingsText, Text, fault_text, on_off, settings_failure_word, state_name,
-    transaction_word, write_failure, write_refusal,
+    transaction_word, write_refusal,
 };
 pub use describe::{ModelName, cnc_mode, family_word, mode_word, unit_mode};
+use replies::{cartridge, complete, counters, fault, help, id, limits, status_line};
 
 /// Command lines that can wait behind a command in progress.
 pub const QUEUE_CAPACITY: usize = 4;
@@ -68,6 +67,10 @@ pub const OUTPUT_CAPACITY: usize = 4096;
 pub const MAX_REPLY_LEN: usize = 400;
 /// Simulator commands held until the driver takes them.
 pub const SIM_QUEUE_CAPACITY: usize = 4;
+/// A Phoenix frame that stops arriving for this long is abandoned (NAK): the CNC sends a
+/// message in one go, and a stray SOH/STX in line noise must not swallow the text lines that
+/// follow.
+pub const FRAME_IDLE_TIMEOUT: Duration = Duration::from_millis(50);
 
 /// One reply or event line.
 pub type ReplyLine = String<MAX_REPLY_LEN>;
@@ -231,6 +234,8 @@ pub struct Session {
     sim: Deque<SimCommand, SIM_QUEUE_CAPACITY>,
     io_config_changed: bool,
     stats: SessionStats,
+    /// When the last CNC byte arrived.
+    last_rx: Instant,
 }
 
 impl Session {
@@ -251,6 +256,7 @@ impl Session {
             sim: Deque::new(),
             io_config_changed: false,
             stats: SessionStats::default(),
+            last_rx: Instant::ZERO,
         }
     }
 
@@ -271,6 +277,8 @@ impl Session {
 
     /// Bytes received from the CNC (any chunking).
     pub fn handle_rx(&mut self, ctx: &mut Context<'_>, bytes: &[u8]) {
+        self.poll(ctx);
+        self.last_rx = ctx.now;
         for &byte in bytes {
             self.route(ctx, byte);
         }
@@ -314,6 +322,24 @@ impl Session {
         };
         self.send(reply);
         self.pump(ctx);
+    }
+
+    /// Let time pass: a Phoenix frame idle for [`FRAME_IDLE_TIMEOUT`] is abandoned.
+    pub fn poll(&mut self, ctx: &mut Context<'_>) {
+        if !self.deframer.in_frame() || ctx.now < self.last_rx + FRAME_IDLE_TIMEOUT {
+            return;
+        }
+        if let Some(outcome) = self.deframer.idle() {
+            let item = frame_item(outcome);
+            self.framed(ctx, item);
+        }
+    }
+
+    /// When [`Session::poll`] has something to do.
+    pub fn poll_at(&self) -> Option<Instant> {
+        self.deframer
+            .in_frame()
+            .then(|| self.last_rx + FRAME_IDLE_TIMEOUT)
     }
 
     /// Answer waiting lines while no command is in progress.
@@ -428,12 +454,13 @@ impl Session {
     fn deframe(&mut self, ctx: &mut Context<'_>, byte: u8) {
         let item = match self.deframer.push(byte) {
             None => return,
-            Some(Ok(payload)) => message_item(payload),
-            Some(Err(error)) => Item {
-                text: LineText::new(),
-                error: Some(InputError::Frame(error)),
-            },
+            Some(outcome) => frame_item(outcome),
         };
+        self.framed(ctx, item);
+    }
+
+    /// A framed message is complete: ACK or NAK it at once, answer it in turn.
+    fn framed(&mut self, ctx: &mut Context<'_>, item: Item) {
         let accepted = item.error.is_none() && self.has_room();
         self.ack(accepted);
         self.admit(ctx, item);
@@ -708,7 +735,7 @@ impl Session {
 
     fn set_hpr_amps(&mut self, ctx: &mut Context<'_>, amps: Amps) -> Option<ReplyLine> {
         let steps = amps.raw();
-        if steps % Amps::STEPS_PER_UNIT != 0 {
+        if !steps.is_multiple_of(Amps::STEPS_PER_UNIT) {
             return Some(err_line(
                 ErrorCode::Range,
                 format_args!("amps {amps}: this unit takes whole amps"),
@@ -903,6 +930,17 @@ impl Session {
     }
 }
 
+/// The item for a deframer outcome.
+fn frame_item(outcome: plasma_protocol::Result<&[u8]>) -> Item {
+    match outcome {
+        Ok(payload) => message_item(payload),
+        Err(error) => Item {
+            text: LineText::new(),
+            error: Some(InputError::Frame(error)),
+        },
+    }
+}
+
 /// The item for a framed message's payload: a command line, or why it is not one.
 fn message_item(payload: &[u8]) -> Item {
     let trimmed = payload.trim_ascii();
@@ -945,7 +983,7 @@ fn frame_error(error: plasma_protocol::Error) -> ReplyLine {
         ),
         E::Truncated => err_line(
             ErrorCode::Syntax,
-            "Phoenix message cut short by the next one (NAK sent)",
+            "Phoenix message incomplete: the next one began or the line went quiet (NAK sent)",
         ),
         _ => err_line(
             ErrorCode::Syntax,
@@ -1011,341 +1049,5 @@ where
             f.write_str("none")?;
         }
         Ok(())
-    }
-}
-
-fn help(sim: bool) -> ReplyLine {
-    ok_line(|w| {
-        w.field(
-            "commands",
-            "HELP,ID,STATUS,LIMITS,FAULT,FAULTLOG,COUNTERS,CARTRIDGE,SET_MODE,SET_AMPS,SET_PSI,\
-             SET_PROCESS,REMOTE_OFF,GASTEST,RESTART,GASES,CORNER,RESET,CLEARWARN,EVENTS,CONFIG,\
-             CONFIG_SAVE,RAW",
-        )?;
-        w.field("simulator_only", "TORCH")?;
-        w.field("simulator", if sim { "YES" } else { "NO" })
-    })
-}
-
-fn link_word(status: &UnitStatus) -> &'static str {
-    if status.link_up { "UP" } else { "DOWN" }
-}
-
-fn id(ctx: &Context<'_>) -> ReplyLine {
-    let status = ctx.link.status();
-    ok_line(|w| {
-        w.field("bridge", "plasma-bridge")?;
-        w.field("version", env!("CARGO_PKG_VERSION"))?;
-        w.field("reset", ctx.boot_report.unwrap_or("unknown"))?;
-        w.field("link", link_word(status))?;
-        w.field("model", ModelName(status))?;
-        w.field("family", OrDash(status.family.map(family_word)))?;
-        if let Some(Model::Powermax(model)) = status.model {
-            w.field("product", model.product_code())?;
-        }
-        Ok(())
-    })
-}
-
-fn status_line(ctx: &Context<'_>) -> ReplyLine {
-    let status = ctx.link.status();
-    let family = status.family;
-    let hpr = matches!(family, Some(Family::Hpr | Family::MaxPro200));
-    let (inputs, outputs) = ctx.io.unwrap_or((Inputs::NONE, Outputs::OFF));
-    let ready = match ctx.io {
-        Some((_, outputs)) => outputs.ready,
-        None => status.ready,
-    };
-    ok_line(|w| {
-        w.field("link", link_word(status))?;
-        w.field("model", ModelName(status))?;
-        w.field("family", OrDash(family.map(family_word)))?;
-        w.field("remote", on_off(status.remote))?;
-        if hpr {
-            w.field("mode", "-")?;
-            w.field("amps", OrDash(status.hpr.nominal_amps))?;
-            w.field("psi", "-")?;
-            w.field("out_amps", "-")?;
-            w.field("out_psi", "-")?;
-        } else {
-            let settings = status.settings;
-            w.field(
-                "mode",
-                OrDash(settings.and_then(|s| s.mode).map(|m| mode_word(m, family))),
-            )?;
-            w.field("amps", OrDash(settings.map(|s| s.current)))?;
-            w.field("psi", OrDash(settings.map(|s| s.pressure)))?;
-            w.field("out_amps", OrDash(status.actual_current))?;
-            w.field("out_psi", OrDash(status.actual_pressure))?;
-        }
-        match status.active_fault {
-            Some(fault) => w.field("fault", FaultId(fault))?,
-            None => w.field("fault", "none")?,
-        }
-        w.field("start", on_off(outputs.start))?;
-        w.field("motion", on_off(inputs.motion))?;
-        w.field("arc_ok", on_off(outputs.arc_ok))?;
-        w.field("ready", on_off(ready))?;
-        if hpr {
-            if let Some(state) = status.hpr.state {
-                w.field("state", state.0)?;
-                w.field("state_name", state_name(state, family))?;
-            }
-        }
-        Ok(())
-    })
-}
-
-fn limits(status: &UnitStatus, family: Option<Family>) -> ReplyLine {
-    match (family, status.model) {
-        (None, _) => no_link(),
-        (Some(Family::Hpr | Family::MaxPro200), Some(Model::Hpr(system))) => {
-            let max = match system {
-                hpr::SystemId::Hpr { rating, .. } => rating.max_amps(),
-                hpr::SystemId::MaxPro200 => hpr::MAX_MAXPRO_AMPS,
-            };
-            ok_line(|w| {
-                w.field("amps", format_args!("{}..{max}", hpr::MIN_AMPS))?;
-                if !system.is_maxpro200() {
-                    w.field(
-                        "corner",
-                        format_args!(
-                            "{}..{}",
-                            hpr::CORNER_PERCENT.start(),
-                            hpr::CORNER_PERCENT.end()
-                        ),
-                    )?;
-                }
-                Ok(())
-            })
-        }
-        (Some(family), _) => match status.limits {
-            None => err_line(
-                ErrorCode::State,
-                "the unit's permitted limits have not been read yet, try again",
-            ),
-            Some(limits) => ok_line(|w| {
-                match limits.modes {
-                    Some(modes) => {
-                        let low = modes.low_mode();
-                        let high = modes.high_mode().filter(|h| Some(*h) != low);
-                        w.field(
-                            "modes",
-                            List(
-                                low.into_iter()
-                                    .chain(high)
-                                    .map(|m| mode_word(m, Some(family))),
-                            ),
-                        )?;
-                    }
-                    None => w.field("modes", "CUT,CPA,GOUGE")?,
-                }
-                w.field(
-                    "amps",
-                    format_args!("{}..{}", limits.min_current, limits.max_current),
-                )?;
-                w.field(
-                    "psi",
-                    format_args!("{}..{}", limits.min_pressure, limits.max_pressure),
-                )?;
-                w.field(
-                    "scope",
-                    if family == Family::PowermaxSync {
-                        "cartridge"
-                    } else {
-                        "unit"
-                    },
-                )
-            }),
-        },
-    }
-}
-
-fn fault(status: &UnitStatus, family: Option<Family>) -> ReplyLine {
-    if family.is_none() {
-        return no_link();
-    }
-    ok_line(|w| match status.active_fault {
-        None => w.field("fault", "none"),
-        Some(fault) => {
-            w.field("fault", FaultId(fault))?;
-            w.field(
-                "action",
-                if fault.action_required() {
-                    "required"
-                } else {
-                    "none"
-                },
-            )?;
-            w.field("text", fault_text(fault, family))
-        }
-    })
-}
-
-fn cartridge(status: &UnitStatus, family: Option<Family>) -> ReplyLine {
-    match family {
-        None => no_link(),
-        Some(Family::PowermaxSync) => match status.cartridge {
-            None => err_line(ErrorCode::State, "cartridge data not read yet, try again"),
-            Some(c) => ok_line(|w| {
-                w.field("uid", Uid(&c.uid.0))?;
-                w.field("part", OrDash(c.part_number.as_str()))?;
-                w.field("rev", c.revision)?;
-                w.field("nominal_amps", c.nominal_current())?;
-                if let Some(name) = status.cartridge_name.as_ref().and_then(|n| n.as_str()) {
-                    w.field("name", name)?;
-                }
-                w.field("starts", c.counters.starts)?;
-                w.field("pilot_arc_s", c.counters.pilot_arc_seconds)?;
-                w.field("transfers", c.counters.transfers)?;
-                w.field("transfer_s", c.counters.transfer_seconds())
-            }),
-        },
-        Some(f) => unsupported(format_args!(
-            "CARTRIDGE is a Powermax SYNC function; {} has no cartridge data",
-            describe::family_name(f)
-        )),
-    }
-}
-
-fn counters(link: &PsLink) -> ReplyLine {
-    counters_with(link, |_| Ok(()))
-}
-
-/// The unit's counters (written by `unit`) followed by the link's.
-fn counters_with(
-    link: &PsLink,
-    unit: impl FnOnce(&mut ReplyWriter<&mut ReplyLine>) -> fmt::Result,
-) -> ReplyLine {
-    let d = link.diagnostics();
-    ok_line(|w| {
-        unit(w)?;
-        w.field("link_ok", d.transactions_ok)?;
-        w.field("link_failed", d.transactions_failed)?;
-        w.field("retries", d.retries)?;
-        w.field("timeouts", d.timeouts)?;
-        w.field("bad_checksums", d.bad_checksums)?;
-        w.field("link_downs", d.link_downs)
-    })
-}
-
-/// The reply of a command the link finished.
-fn complete(
-    ctx: &mut Context<'_>,
-    op: Op,
-    result: &Result<CommandOutput, CommandFailure>,
-) -> ReplyLine {
-    let family = ctx.link.status().family;
-    let output = match result {
-        Err(failure) => return line(|l| write_failure(l, failure, family)),
-        Ok(output) => *output,
-    };
-    match op {
-        Op::Settings(process) => {
-            let CommandOutput::Settings(read) = output else {
-                return ok_line(|w| w.field("mode", process.mode.name()));
-            };
-            ctx.settings.process = Some(process);
-            let mode = match read.mode {
-                Some(m) if m == unit_mode(process.mode) => process.mode.name(),
-                Some(m) => mode_word(m, family),
-                None => "-",
-            };
-            ok_line(|w| {
-                w.field("mode", mode)?;
-                w.field("amps", read.current)?;
-                match process.pressure {
-                    Pressure::Auto => w.field("psi", "AUTO"),
-                    Pressure::Set(_) => w.field("psi", read.pressure),
-                }
-            })
-        }
-        Op::RemoteOff => {
-            ctx.settings.process = None;
-            ok_line(|w| w.field("remote", "OFF"))
-        }
-        Op::GasTest(on) => ok_line(|w| w.field("gastest", on_off(on))),
-        Op::Restart => {
-            let quiet = ctx
-                .link
-                .status()
-                .restart_blackout_until
-                .map(|until| until.saturating_since(ctx.now).as_millis());
-            ok_line(|w| {
-                w.field("restart", "done")?;
-                w.field("quiet_ms", OrDash(quiet))
-            })
-        }
-        Op::HprAmps => match output {
-            CommandOutput::Value(amps) => ok_line(|w| w.field("amps", amps)),
-            _ => ok_line(|w| w.field("amps", "set")),
-        },
-        Op::Gases(plasma, shield) => ok_line(|w| {
-            w.field("plasma", plasma.name())?;
-            w.field("shield", shield.name())
-        }),
-        Op::Corner => match output {
-            CommandOutput::Value(percent) => ok_line(|w| w.field("corner", percent)),
-            _ => ok_line(|w| w.field("corner", "set")),
-        },
-        Op::Reset => ok_line(|w| w.field("reset", "done")),
-        Op::ClearWarn => ok_line(|w| w.field("clearwarn", "done")),
-        Op::Raw => {
-            let len = match output {
-                CommandOutput::Raw { len } => len,
-                _ => 0,
-            };
-            let reply = ctx.link.raw_reply();
-            let reply = reply.get(..len).unwrap_or(reply).trim_ascii_end();
-            let text = core::str::from_utf8(reply).unwrap_or("?");
-            // `reply=` is the last field and runs to the end of the line: an HPR reply may
-            // hold spaces.
-            line(|l| write!(l, "OK reply={}\r\n", Text(text)))
-        }
-        Op::FaultLog => {
-            let status = ctx.link.status();
-            match (output, status.fault_log, status.hpr.error_log) {
-                (CommandOutput::ErrorLog(log), _, _) | (_, None, Some(log)) => ok_line(|w| {
-                    let codes = log.iter().filter(|e| e.0 != 0).map(|e| HprId(e.0));
-                    w.field("log", List(codes))
-                }),
-                (_, Some(log), _) => ok_line(|w| {
-                    let codes = log.0.iter().copied().filter(|c| !c.is_none());
-                    w.field("log", List(codes))
-                }),
-                _ => err_line(ErrorCode::Link, "the fault log could not be read"),
-            }
-        }
-        Op::Counters => {
-            let status = ctx.link.status().clone();
-            counters_with(ctx.link, |w| {
-                if let Some(c) = status.ps_counters {
-                    w.field("starts", c.starts)?;
-                    w.field("pilot_arc_s", c.pilot_arc_seconds)?;
-                    w.field("transfers", c.transfers)?;
-                    w.field("transfer_s", c.transfer_seconds)?;
-                }
-                if let Some(s) = status.arc_seconds {
-                    w.field("arc_s", s)?;
-                }
-                if let Some(t) = status.hpr.timers {
-                    w.field("arc_s", t.arc_on_seconds)?;
-                    w.field("system_min", t.system_on_minutes)?;
-                    w.field("starts", t.starts)?;
-                    w.field("start_errors", t.start_errors)?;
-                    w.field("rampdown_errors", t.rampdown_errors)?;
-                }
-                Ok(())
-            })
-        }
-    }
-}
-
-/// An HPR error code in the manual's three digits.
-struct HprId(u16);
-
-impl Display for HprId {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "{:03}", self.0)
     }
 }

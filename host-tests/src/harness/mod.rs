@@ -1,0 +1,49 @@
+//! The scenario harness: the bridge's power-supply side, a serial [`Line`](crate::line::Line)
+//! and a [`SimulatedUnit`](crate::sim::SimulatedUnit) in one deterministic discrete-event
+//! [`World`], in virtual time (no sleeps, no wall clock).
+//!
+//! Each step takes the earliest instant at which anything needs attention (the endpoint's
+//! `poll_at`, the next character on the line, the simulator's wake-up, the interlocks'
+//! timers) and processes it in causal order:
+//!
+//! 1. the unit hears its characters, runs its timers and may start a reply; its HF-ignition
+//!    noise goes onto the line;
+//! 2. the unit's Motion output goes to the interlocks' MOTION input;
+//! 3. the bridge endpoint hears its characters, its events are drained, and it transmits (the
+//!    port settings it asks for are applied to the line's master end first);
+//! 4. the endpoint's [`SupplyState`](plasma_firmware::io::SupplyState) goes to the
+//!    [`Interlocks`](plasma_firmware::io::Interlocks), whose START drives the unit's Start
+//!    input;
+//! 5. the independent [`SafetyMonitor`](plasma_firmware::io::SafetyMonitor) checks TORCH_ON /
+//!    START / blackout. A broken rule panics at once (with the last frames on the wire), so
+//!    every scenario enforces the safety rules.
+//!
+//! The endpoint is anything implementing [`PsEndpoint`]: a bare
+//! [`PsLink`](plasma_firmware::link::PsLink) today, the `Bridge` façade later.
+//!
+//! ```
+//! use host_tests::harness::{World, WorldOptions};
+//! use host_tests::sim::Model;
+//! use plasma_firmware::link::{Family, LinkEvent};
+//! use plasma_firmware::time::Duration;
+//!
+//! let mut world = World::new(Model::Sync65, WorldOptions::default());
+//! world.wait_link_up(Duration::from_secs(1)).unwrap();
+//! assert!(matches!(
+//!     world.events()[0].1,
+//!     LinkEvent::LinkUp { family: Family::PowermaxSync, .. }
+//! ));
+//! // Auto-detection begins with Read Device Identification.
+//! assert_eq!(world.trace().frames()[0].bytes, b":012B0E0401C1\r\n");
+//! ```
+
+mod endpoint;
+pub mod measure;
+mod options;
+mod trace;
+mod world;
+
+pub use endpoint::{PsEndpoint, supply_state_of};
+pub use options::{RxErrors, WorldOptions};
+pub use trace::{Direction, TraceFrame, WireTrace};
+pub use world::{Timeout, World, WorldStats};

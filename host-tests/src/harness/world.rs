@@ -1,0 +1,589 @@
+//! The discrete-event loop: bridge endpoint <-> [`Line`] <-> [`SimulatedUnit`], plus the
+//! discrete I/O and the safety monitor, in virtual time.
+
+use std::fmt;
+
+use plasma_firmware::io::{Input, Interlocks, IoEvent, SafetyMonitor, SupplyState, Transition};
+use plasma_firmware::link::{
+    CommandFailure, CommandOutput, LinkCommand, LinkEvent, PsLink, Refusal, Ticket,
+};
+use plasma_firmware::time::{Duration, Instant};
+
+use super::endpoint::PsEndpoint;
+use super::options::{RxErrors, WorldOptions};
+use super::trace::{Direction, TraceFrame, WireTrace};
+use crate::line::{End, Line};
+use crate::sim::{Model, SimulatedUnit};
+
+/// Times the loop processes one instant again because something still asks for it; beyond
+/// this the request is stale and the loop moves on (and counts it).
+const MAX_REPEATS_AT_ONE_INSTANT: u32 = 2;
+
+/// While the endpoint keeps asking for an instant already processed, a board's task loop
+/// would spin; the loop models that spin as a call every millisecond, so whatever the
+/// endpoint does when time passes still happens (at most this late).
+const BUSY_LOOP_TICK: Duration = Duration::from_millis(1);
+
+/// A wait ran out of virtual time.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Timeout {
+    /// Virtual time when the wait gave up.
+    pub at: Instant,
+    /// How long it waited.
+    pub waited: Duration,
+}
+
+impl fmt::Display for Timeout {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "gave up at {} ms after waiting {} ms",
+            self.at.as_millis(),
+            self.waited.as_millis()
+        )
+    }
+}
+
+impl std::error::Error for Timeout {}
+
+/// Counters of the event loop itself.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct WorldStats {
+    /// Instants processed.
+    pub steps: u64,
+    /// Steps taken because a wake-up time at or before the current instant was still asked
+    /// for after the instant had been processed: on a board, a busy loop. Each counts one
+    /// millisecond of spinning.
+    pub stale_wakeups: u64,
+}
+
+/// One simulated installation. See the [module docs](super).
+pub struct World<E: PsEndpoint = PsLink> {
+    now: Instant,
+    endpoint: E,
+    unit: Box<dyn SimulatedUnit>,
+    line: Line,
+    io: Interlocks,
+    monitor: SafetyMonitor,
+    rx_errors: RxErrors,
+    events: Vec<(Instant, LinkEvent)>,
+    io_events: Vec<(Instant, IoEvent)>,
+    transitions: Vec<Transition>,
+    trace: WireTrace,
+    heard: Vec<(Instant, u8)>,
+    noise_bursts: Vec<(Instant, Duration)>,
+    start_given: bool,
+    last_supply: SupplyState,
+    scratch: Vec<LinkEvent>,
+    repeats: u32,
+    stats: WorldStats,
+}
+
+impl World<PsLink> {
+    /// A bare [`PsLink`] (configured by `options.link`) against a simulated `model`.
+    pub fn new(model: Model, options: WorldOptions) -> Self {
+        let unit = model.build(&options.sim);
+        Self::with_unit(unit, options)
+    }
+
+    /// A bare [`PsLink`] against a simulator built by the caller (custom configuration).
+    pub fn with_unit(unit: Box<dyn SimulatedUnit>, options: WorldOptions) -> Self {
+        let link = PsLink::new(options.link, Instant::ZERO);
+        Self::with_endpoint(link, unit, options)
+    }
+
+    /// The link.
+    pub fn link(&self) -> &PsLink {
+        &self.endpoint
+    }
+
+    /// Submit a command to the link now.
+    pub fn submit(&mut self, command: LinkCommand) -> Result<Ticket, Refusal> {
+        let now = self.now;
+        let ticket = self.endpoint.submit(now, command)?;
+        // Events of the submit (e.g. an immediate answer) belong to this instant.
+        self.process();
+        Ok(ticket)
+    }
+
+    /// Run until `ticket` completes (or has completed), returning its result.
+    pub fn wait_command(
+        &mut self,
+        ticket: Ticket,
+        timeout: Duration,
+    ) -> Result<Result<CommandOutput, CommandFailure>, Timeout> {
+        let find = |w: &World<PsLink>| {
+            w.events.iter().find_map(|(_, e)| match e {
+                LinkEvent::CommandDone { ticket: t, result } if *t == ticket => Some(*result),
+                _ => None,
+            })
+        };
+        self.run_until(|w| find(w).is_some(), timeout)?;
+        Ok(find(self).expect("found by run_until"))
+    }
+
+    /// Submit and wait for the result; panics on a refusal or a time-out.
+    pub fn command(
+        &mut self,
+        command: LinkCommand,
+        timeout: Duration,
+    ) -> Result<CommandOutput, CommandFailure> {
+        let ticket = self
+            .submit(command.clone())
+            .unwrap_or_else(|r| panic!("{command:?} refused: {r}"));
+        self.wait_command(ticket, timeout).unwrap_or_else(|t| {
+            panic!("{command:?} did not complete: {t}\n{}", self.trace.tail(20))
+        })
+    }
+}
+
+impl<E: PsEndpoint> World<E> {
+    /// Any endpoint against a simulator; the world starts at time zero.
+    pub fn with_endpoint(endpoint: E, unit: Box<dyn SimulatedUnit>, options: WorldOptions) -> Self {
+        let master_port = endpoint.ps_port_config();
+        let mut line = Line::new(master_port, unit.port(), options.wiring, options.seed);
+        line.set_corrupt_probability(options.corrupt_probability);
+        line.set_drop_probability(options.drop_probability);
+        if let Some(density) = options.noise_density {
+            line.set_noise_density(density);
+        }
+        let io = Interlocks::new(options.io, Instant::ZERO, Default::default());
+        let mut world = World {
+            now: Instant::ZERO,
+            endpoint,
+            unit,
+            line,
+            io,
+            monitor: SafetyMonitor::new(),
+            rx_errors: options.rx_errors,
+            events: Vec::new(),
+            io_events: Vec::new(),
+            transitions: Vec::new(),
+            trace: WireTrace::default(),
+            heard: Vec::new(),
+            noise_bursts: Vec::new(),
+            start_given: false,
+            last_supply: SupplyState::default(),
+            scratch: Vec::new(),
+            repeats: 0,
+            stats: WorldStats::default(),
+        };
+        world.process();
+        world
+    }
+
+    // --- time ----------------------------------------------------------------------------
+
+    /// Virtual time now.
+    pub fn now(&self) -> Instant {
+        self.now
+    }
+
+    /// Run for `duration` of virtual time.
+    pub fn run_for(&mut self, duration: Duration) {
+        let target = self.now + duration;
+        while self.step(target) {}
+        self.assert_safe();
+    }
+
+    /// Run until `pred` holds (checked now and after every step), at most `timeout`.
+    pub fn run_until(
+        &mut self,
+        mut pred: impl FnMut(&Self) -> bool,
+        timeout: Duration,
+    ) -> Result<Instant, Timeout> {
+        let began = self.now;
+        let deadline = self.now + timeout;
+        if pred(self) {
+            return Ok(self.now);
+        }
+        loop {
+            let more = self.step(deadline);
+            if pred(self) {
+                self.assert_safe();
+                return Ok(self.now);
+            }
+            if !more {
+                self.assert_safe();
+                return Err(Timeout {
+                    at: self.now,
+                    waited: self.now.saturating_since(began),
+                });
+            }
+        }
+    }
+
+    /// Run until an event after this call matches `pred`; returns it with its time.
+    pub fn wait_event(
+        &mut self,
+        mut pred: impl FnMut(&LinkEvent) -> bool,
+        timeout: Duration,
+    ) -> Result<(Instant, LinkEvent), Timeout> {
+        let mark = self.events.len();
+        let found = |w: &Self, pred: &mut dyn FnMut(&LinkEvent) -> bool| {
+            w.events[mark..].iter().find(|(_, e)| pred(e)).copied()
+        };
+        self.run_until(|w| found(w, &mut pred).is_some(), timeout)?;
+        Ok(found(self, &mut pred).expect("found by run_until"))
+    }
+
+    /// Run until the link reports itself up.
+    pub fn wait_link_up(&mut self, timeout: Duration) -> Result<Instant, Timeout> {
+        self.run_until(|w| w.endpoint.status().link_up, timeout)
+    }
+
+    // --- the discrete I/O -------------------------------------------------------------------
+
+    /// Drive the CNC's TORCH_ON input.
+    pub fn set_torch(&mut self, on: bool) {
+        let now = self.now;
+        self.io.on_input(now, Input::TorchOn, on);
+        self.process();
+    }
+
+    /// Drive another CNC input (HOLD, CORNER_CURRENT...).
+    pub fn set_input(&mut self, input: Input, on: bool) {
+        let now = self.now;
+        self.io.on_input(now, input, on);
+        self.process();
+    }
+
+    /// The interlocks.
+    pub fn io(&self) -> &Interlocks {
+        &self.io
+    }
+
+    /// Every output change of the interlocks so far.
+    pub fn transitions(&self) -> &[Transition] {
+        &self.transitions
+    }
+
+    /// Every discrete I/O event so far.
+    pub fn io_events(&self) -> &[(Instant, IoEvent)] {
+        &self.io_events
+    }
+
+    /// The safety monitor (checked after every step).
+    pub fn monitor(&self) -> &SafetyMonitor {
+        &self.monitor
+    }
+
+    /// Panics when a safety rule was broken.
+    pub fn assert_safe(&self) {
+        if !self.monitor.is_clean() {
+            panic!(
+                "safety rule broken ({} times): {:?}\nlast frames:\n{}",
+                self.monitor.count(),
+                self.monitor.violations(),
+                self.trace.tail(20)
+            );
+        }
+    }
+
+    // --- the unit and the line ------------------------------------------------------------
+
+    /// The simulated unit.
+    pub fn unit(&mut self) -> &mut dyn SimulatedUnit {
+        &mut *self.unit
+    }
+
+    /// The simulated unit, read-only.
+    pub fn unit_ref(&self) -> &dyn SimulatedUnit {
+        &*self.unit
+    }
+
+    /// The concrete simulator (e.g. [`crate::sim::powermax::Powermax`]).
+    pub fn sim<T: 'static>(&mut self) -> &mut T {
+        self.unit
+            .as_any_mut()
+            .downcast_mut::<T>()
+            .expect("the simulator is not of this type")
+    }
+
+    /// The concrete simulator, read-only.
+    pub fn sim_ref<T: 'static>(&self) -> &T {
+        self.unit
+            .as_any()
+            .downcast_ref::<T>()
+            .expect("the simulator is not of this type")
+    }
+
+    /// Raise a fault on the unit now (Powermax decimal code, HPR error id).
+    pub fn inject_fault(&mut self, code: u16) {
+        let now = self.now;
+        self.unit.inject_fault(now, code);
+        self.process();
+    }
+
+    /// Clear the unit's fault now.
+    pub fn clear_fault(&mut self) {
+        let now = self.now;
+        self.unit.clear_fault(now);
+        self.process();
+    }
+
+    /// Switch the unit off now (it neither hears nor sends).
+    pub fn power_off(&mut self) {
+        let now = self.now;
+        self.unit.power_off(now);
+        self.line.set_unit_powered(now, false);
+        self.process();
+    }
+
+    /// Switch the unit on now.
+    pub fn power_on(&mut self) {
+        let now = self.now;
+        self.line.set_unit_powered(now, true);
+        self.unit.power_on(now);
+        self.process();
+    }
+
+    /// Electrical noise on the line from now on (independent of the unit's own bursts).
+    pub fn add_noise(&mut self, length: Duration) {
+        let now = self.now;
+        self.line.add_noise_burst(now, length);
+        self.noise_bursts.push((now, length));
+        self.process();
+    }
+
+    /// The line.
+    pub fn line(&self) -> &Line {
+        &self.line
+    }
+
+    /// The line, to change fault injection mid-run.
+    pub fn line_mut(&mut self) -> &mut Line {
+        &mut self.line
+    }
+
+    /// Noise bursts so far (the unit's HF ignition and [`World::add_noise`]).
+    pub fn noise_bursts(&self) -> &[(Instant, Duration)] {
+        &self.noise_bursts
+    }
+
+    // --- the bridge side ------------------------------------------------------------------
+
+    /// The endpoint.
+    pub fn endpoint(&self) -> &E {
+        &self.endpoint
+    }
+
+    /// The endpoint, mutable (commands through its own API).
+    pub fn endpoint_mut(&mut self) -> &mut E {
+        &mut self.endpoint
+    }
+
+    /// Link events so far, with the instant they were drained.
+    pub fn events(&self) -> &[(Instant, LinkEvent)] {
+        &self.events
+    }
+
+    /// The wire trace.
+    pub fn trace(&self) -> &WireTrace {
+        &self.trace
+    }
+
+    /// Every character the endpoint was handed, with the instant (what the bridge actually
+    /// heard, after the line's damage; the trace holds what was sent).
+    pub fn heard(&self) -> &[(Instant, u8)] {
+        &self.heard
+    }
+
+    /// The characters the endpoint was handed in `[from, to)`.
+    pub fn heard_between(&self, from: Instant, to: Instant) -> Vec<u8> {
+        self.heard
+            .iter()
+            .filter(|(t, _)| *t >= from && *t < to)
+            .map(|&(_, b)| b)
+            .collect()
+    }
+
+    /// Loop counters.
+    pub fn stats(&self) -> WorldStats {
+        self.stats
+    }
+
+    // --- the loop -------------------------------------------------------------------------
+
+    fn wakeups(&self) -> [Option<Instant>; 4] {
+        [
+            self.endpoint.poll_at(),
+            self.line.next_delivery(),
+            self.unit.next_wakeup(),
+            self.io.poll_at(),
+        ]
+    }
+
+    /// Process the next instant at which something happens, if it is not after `limit`;
+    /// otherwise move to `limit`, process it and return false.
+    fn step(&mut self, limit: Instant) -> bool {
+        let wakeups = self.wakeups();
+        let mut next = wakeups.iter().flatten().min().copied();
+        if next.is_some_and(|t| t <= self.now) {
+            if self.repeats >= MAX_REPEATS_AT_ONE_INSTANT {
+                self.stats.stale_wakeups += 1;
+                let spin = self
+                    .endpoint
+                    .poll_at()
+                    .filter(|&t| t <= self.now)
+                    .map(|_| self.now + BUSY_LOOP_TICK);
+                next = wakeups
+                    .iter()
+                    .flatten()
+                    .copied()
+                    .filter(|&t| t > self.now)
+                    .chain(spin)
+                    .min();
+            } else {
+                self.repeats += 1;
+            }
+        }
+        match next {
+            Some(t) if t <= limit => {
+                self.move_to(t);
+                self.process();
+                true
+            }
+            _ => {
+                self.move_to(limit);
+                self.process();
+                false
+            }
+        }
+    }
+
+    fn move_to(&mut self, t: Instant) {
+        if t > self.now {
+            self.now = t;
+            self.repeats = 0;
+        }
+    }
+
+    /// Everything due at `self.now`, in causal order: the unit hears and answers, the bridge
+    /// hears and transmits, the discrete I/O follows, the safety rules are checked.
+    fn process(&mut self) {
+        let now = self.now;
+        self.stats.steps += 1;
+
+        // The unit side.
+        self.unit.advance(now);
+        self.take_unit_noise();
+        for b in self.line.receive(End::Unit, now) {
+            match b.error {
+                None => self.unit.receive(b.at, b.byte),
+                Some(_) => self.unit.receive_error(b.at),
+            }
+        }
+        if let Some(bytes) = self.unit.poll_transmit(now) {
+            self.send(End::Unit, &bytes);
+        }
+        self.take_unit_noise();
+        let motion = self.unit.motion();
+        if motion != self.io.inputs().motion {
+            self.io.on_input(now, Input::Motion, motion);
+        }
+
+        // The bridge side.
+        let heard: Vec<u8> = self
+            .line
+            .receive(End::Master, now)
+            .into_iter()
+            .filter_map(|b| match (b.error, self.rx_errors) {
+                (None, _) | (Some(_), RxErrors::Deliver) => Some(b.byte),
+                (Some(_), RxErrors::Drop) => None,
+                (Some(_), RxErrors::Substitute) => Some(0),
+            })
+            .collect();
+        if !heard.is_empty() {
+            self.heard.extend(heard.iter().map(|&b| (now, b)));
+            self.endpoint.handle_ps_rx(now, &heard);
+        }
+        self.drain_endpoint();
+        for _ in 0..4 {
+            self.apply_master_port();
+            let Some(frame) = self.endpoint.poll_ps_transmit(now).map(<[u8]>::to_vec) else {
+                break;
+            };
+            // The link may switch the port while choosing the frame (auto-detection).
+            self.apply_master_port();
+            self.send(End::Master, &frame);
+        }
+        self.drain_endpoint();
+
+        // The discrete I/O, from the link's view at this instant.
+        let supply = self.endpoint.supply_state();
+        if supply != self.last_supply {
+            self.io.on_supply(now, supply);
+            self.last_supply = supply;
+        }
+        self.io.poll(now);
+        let start = self.io.outputs().start;
+        if start != self.start_given {
+            self.unit.set_start(now, start);
+            self.start_given = start;
+        }
+        while let Some(t) = self.io.poll_transition() {
+            self.transitions.push(t);
+        }
+        while let Some(e) = self.io.poll_event() {
+            self.endpoint.on_io_event(now, e);
+            self.io_events.push((now, e));
+        }
+        self.endpoint
+            .set_io_snapshot(self.io.inputs(), self.io.outputs());
+        self.monitor.check(
+            now,
+            self.io.inputs().torch_on,
+            start,
+            supply.restart_blackout_until,
+        );
+        self.assert_safe();
+    }
+
+    fn apply_master_port(&mut self) {
+        let port = self.endpoint.ps_port_config();
+        if self.line.port(End::Master) != port {
+            self.line.set_port(End::Master, port);
+        }
+    }
+
+    fn send(&mut self, from: End, bytes: &[u8]) {
+        let start = self.now.max(self.line.busy_until(from));
+        let port = self.line.port(from);
+        let end = self.line.transmit(from, self.now, bytes);
+        let direction = match from {
+            End::Master => Direction::ToUnit,
+            End::Unit => Direction::ToBridge,
+        };
+        self.trace.push(TraceFrame {
+            direction,
+            start,
+            end,
+            port,
+            bytes: bytes.to_vec(),
+        });
+    }
+
+    fn take_unit_noise(&mut self) {
+        for (start, length) in self.unit.take_noise_bursts() {
+            self.line.add_noise_burst(start, length);
+            self.noise_bursts.push((start, length));
+        }
+    }
+
+    fn drain_endpoint(&mut self) {
+        let now = self.now;
+        self.endpoint.poll(now, &mut self.scratch);
+        for e in self.scratch.drain(..) {
+            self.events.push((now, e));
+        }
+    }
+}
+
+impl<E: PsEndpoint> Drop for World<E> {
+    fn drop(&mut self) {
+        if !std::thread::panicking() {
+            self.assert_safe();
+        }
+    }
+}

@@ -1,0 +1,326 @@
+//! Scenario tests on HPR / MaxPro200 units: a cut through the HF-ignition burst, the command
+//! allow-list as seen by the unit, power cycles.
+
+use host_tests::harness::{World, WorldOptions};
+use host_tests::sim::hpr::Hpr;
+use host_tests::sim::{Model, SimulatedUnit};
+use plasma_firmware::io::Interlock;
+use plasma_firmware::link::{
+    CommandOutput, HprGasFlow, LinkCommand, LinkEvent, Refusal, command::RAW_CAPACITY,
+};
+use plasma_firmware::time::Duration;
+use plasma_protocol::hpr::{self, Class, GasCode, GasPair, StateCode};
+
+fn ms(n: u64) -> Duration {
+    Duration::from_millis(n)
+}
+
+fn secs(n: u64) -> Duration {
+    Duration::from_secs(n)
+}
+
+/// A world whose HPR is past its purge and ready for a start, as the link reports it.
+fn ready(model: Model) -> World {
+    let mut world = World::new(model, WorldOptions::default());
+    world.wait_link_up(secs(2)).expect("link up");
+    world
+        .run_until(|w| w.link().status().ready, secs(6))
+        .expect("unit ready");
+    world
+}
+
+/// An HPR frame `>IDDdata CK<` with its checksum computed.
+fn hpr_frame(id: u16, data: &str) -> heapless::Vec<u8, RAW_CAPACITY> {
+    let text = format!(">{id:03}{data}{:02X}<", hpr::checksum(id, data.as_bytes()));
+    heapless::Vec::from_slice(text.as_bytes()).unwrap()
+}
+
+#[test]
+fn hf_ignition_noise_during_a_cut_causes_no_link_down_and_commands_succeed() {
+    let mut world = ready(Model::Hpr260);
+    {
+        // A full 1 s HF burst: the arc transfers only after 1 s of pilot arc.
+        let timings = &mut world.sim::<Hpr>().config_mut().timings;
+        timings.transfer_delay = Some(secs(1));
+        timings.pilot_timeout = secs(2);
+    }
+    let mark = world.events().len();
+    let errors_before = world.link().diagnostics().clone();
+    world.set_torch(true);
+    assert!(world.io().outputs().start);
+    world
+        .run_until(|w| w.sim_ref::<Hpr>().state_code() == 5, secs(2))
+        .expect("pilot arc");
+    let burst_start = world.now();
+    // Commands while the HF ignition fires.
+    let corner = world
+        .submit(LinkCommand::HprSetCornerCurrent { percent: 80 })
+        .unwrap();
+    world.run_for(ms(200));
+    let amps = world
+        .submit(LinkCommand::HprSetNominalAmps { amps: 200 })
+        .unwrap();
+    assert_eq!(
+        world.wait_command(corner, secs(5)).unwrap(),
+        Ok(CommandOutput::Value(80))
+    );
+    assert_eq!(
+        world.wait_command(amps, secs(5)).unwrap(),
+        Ok(CommandOutput::Value(200))
+    );
+    world
+        .run_until(|w| w.io().outputs().arc_ok, secs(3))
+        .expect("arc transferred, ARC_OK on");
+
+    // The burst was real: 1 s long, traffic was damaged and retried.
+    assert!(
+        world
+            .noise_bursts()
+            .iter()
+            .any(|&(at, len)| at == burst_start && len == secs(1)),
+        "{:?}",
+        world.noise_bursts()
+    );
+    assert!(world.line().stats().noise > 100);
+    let d = world.link().diagnostics();
+    let failed_attempts = (d.timeouts + d.bad_checksums + d.malformed + d.mismatches)
+        - (errors_before.timeouts
+            + errors_before.bad_checksums
+            + errors_before.malformed
+            + errors_before.mismatches);
+    assert!(failed_attempts > 0, "noise hit the traffic: {d:?}");
+    assert_eq!(d.link_downs, 0);
+
+    // Cut on, then off; the unit finishes its sequence without an error.
+    world.run_for(secs(1));
+    world.set_torch(false);
+    world
+        .run_until(
+            |w| w.link().status().hpr.state == Some(StateCode(3)),
+            secs(5),
+        )
+        .expect("back to idle");
+    let events: Vec<LinkEvent> = world.events()[mark..].iter().map(|(_, e)| *e).collect();
+    assert!(
+        !events.iter().any(|e| matches!(
+            e,
+            LinkEvent::LinkDown { .. } | LinkEvent::FaultRaised { .. }
+        )),
+        "{events:?}"
+    );
+    assert!(world.link().status().link_up);
+    let hpr = world.sim::<Hpr>();
+    assert_eq!(hpr.corner_percent(), 80);
+    assert_eq!(hpr.nominal_amps(), 200);
+    assert_eq!(hpr.counters().starts, 1);
+    assert_eq!(hpr.active_fault(), 0);
+}
+
+#[test]
+fn the_link_pauses_while_it_sees_the_pilot_arc() {
+    let mut world = ready(Model::Hpr400);
+    {
+        let timings = &mut world.sim::<Hpr>().config_mut().timings;
+        // A pilot arc long enough for a poll to see state 5, and (to isolate the pause from
+        // the retries) an ignition that makes no noise: with noise, the polls in the burst
+        // fail and the link rides through on its retry spacing instead.
+        timings.transfer_delay = Some(ms(900));
+        timings.pilot_timeout = secs(2);
+        timings.hf_max = Duration::ZERO;
+    }
+    world.set_torch(true);
+    let (seen_at, _) = world
+        .wait_event(
+            |e| {
+                matches!(
+                    e,
+                    LinkEvent::StateChanged {
+                        to: StateCode(5),
+                        ..
+                    }
+                )
+            },
+            secs(2),
+        )
+        .expect("pilot arc seen");
+    world.run_for(secs(2));
+    let during: Vec<_> = world
+        .trace()
+        .requests_between(seen_at + ms(1), seen_at + ms(999))
+        .collect();
+    assert!(during.is_empty(), "quiet during the HF burst: {during:?}");
+    assert_eq!(world.link().diagnostics().link_downs, 0);
+    world.set_torch(false);
+    world.run_for(secs(3));
+}
+
+#[test]
+fn factory_only_dangerous_and_line_control_commands_never_reach_the_unit() {
+    let mut world = ready(Model::Hpr260);
+    // Every id the allow-list refuses, through RAW: refused before anything is sent.
+    let mut refused = 0;
+    for id in 0..=150u16 {
+        if hpr::is_allowed(id) && !matches!(id, 85..=87) {
+            continue;
+        }
+        let data = if id == 85 { "0" } else { "" };
+        assert_eq!(
+            world.submit(LinkCommand::Raw(hpr_frame(id, data))),
+            Err(Refusal::RawCommandNotAllowed { id }),
+            "id {id:03}"
+        );
+        refused += 1;
+    }
+    assert!(refused > 40, "{refused}");
+    // Typed commands that the state does not allow are refused too.
+    assert!(matches!(
+        world.submit(LinkCommand::HprSoftwareReset),
+        Err(Refusal::StateForbids { .. })
+    ));
+    // The allowed ones work, RAW included.
+    let state = world.command(LinkCommand::Raw(hpr_frame(2, "")), secs(3));
+    assert!(matches!(state, Ok(CommandOutput::Raw { .. })), "{state:?}");
+    assert_eq!(world.link().raw_reply(), &hpr_frame(2, "0003")[..]);
+    for command in [
+        LinkCommand::HprSetNominalAmps { amps: 130 },
+        LinkCommand::HprSetCornerCurrent { percent: 70 },
+        LinkCommand::HprClearWarnings,
+        LinkCommand::HprReadErrorLog,
+        LinkCommand::HprReadTimers,
+        LinkCommand::HprGasTest {
+            flow: HprGasFlow::Preflow,
+            on: true,
+        },
+        LinkCommand::HprGasTest {
+            flow: HprGasFlow::Preflow,
+            on: false,
+        },
+        LinkCommand::HprSetInletGases(GasPair {
+            plasma: GasCode::OXYGEN,
+            shield: GasCode::AIR,
+        }),
+        LinkCommand::RefreshSlowData,
+    ] {
+        let result = world.command(command.clone(), secs(5));
+        assert!(result.is_ok(), "{command:?}: {result:?}");
+    }
+    world.run_for(secs(3));
+
+    // What the unit heard: allowed commands only, never a factory-only or dangerous one.
+    let received = world.sim::<Hpr>().commands_received().to_vec();
+    assert!(received.len() > 50);
+    for id in &received {
+        assert!(hpr::is_allowed(*id), "{id:03} reached the unit");
+        assert_eq!(hpr::classify(*id), Some(Class::Normal), "{id:03}");
+    }
+    for dangerous in [71, 84, 101, 102, 119, 120, 121, 123, 124] {
+        assert!(!received.contains(&dangerous), "{dangerous:03}");
+    }
+    assert_eq!(world.sim::<Hpr>().nominal_amps(), 130);
+    assert_eq!(world.sim::<Hpr>().corner_percent(), 70);
+}
+
+#[test]
+fn maxpro200_process_and_refusals() {
+    let mut world = ready(Model::MaxPro200);
+    let gases = GasPair {
+        plasma: GasCode::AIR,
+        shield: GasCode::AIR,
+    };
+    assert_eq!(
+        world.submit(LinkCommand::HprSetCornerCurrent { percent: 80 }),
+        Err(Refusal::NotSupported {
+            family: plasma_firmware::link::Family::MaxPro200
+        })
+    );
+    assert!(matches!(
+        world.submit(LinkCommand::HprSetProcess { amps: 250, gases }),
+        Err(Refusal::HprValueOutOfRange { .. })
+    ));
+    let result = world.command(LinkCommand::HprSetProcess { amps: 130, gases }, secs(3));
+    assert!(result.is_ok(), "{result:?}");
+    assert_eq!(world.sim::<Hpr>().nominal_amps(), 130);
+    assert!(
+        world
+            .sim::<Hpr>()
+            .commands_received()
+            .iter()
+            .all(|id| hpr::is_allowed(*id))
+    );
+}
+
+#[test]
+fn an_hpr_error_that_blocks_start_holds_start_off_and_is_reported() {
+    let mut world = ready(Model::Hpr130);
+    world.inject_fault(44);
+    let (at, event) = world
+        .wait_event(|e| matches!(e, LinkEvent::FaultRaised { .. }), ms(500))
+        .expect("error reported");
+    assert!(matches!(
+        event,
+        LinkEvent::FaultRaised {
+            action_required: true,
+            ..
+        }
+    ));
+    assert!(at.as_millis() > 0);
+    world.set_torch(true);
+    world.run_for(ms(300));
+    assert!(!world.io().outputs().start);
+    assert_eq!(
+        world.io().start_locked_by(),
+        Some(Interlock::FaultRequiresAction)
+    );
+    world.set_torch(false);
+    assert_eq!(world.sim::<Hpr>().counters().starts, 0);
+}
+
+#[test]
+#[ignore = "link bug: HPR settings are not kept: after the unit power-cycles (link down and \
+            back) the nominal current the CNC set (058) is not re-applied, the unit runs at \
+            its rating; the Powermax driver keeps and re-applies its settings, the HPR driver \
+            has no equivalent"]
+fn hpr_nominal_amps_are_reapplied_after_a_power_cycle() {
+    let mut world = ready(Model::Hpr260);
+    assert_eq!(
+        world.command(LinkCommand::HprSetNominalAmps { amps: 130 }, secs(3)),
+        Ok(CommandOutput::Value(130))
+    );
+    world.power_off();
+    world
+        .wait_event(|e| matches!(e, LinkEvent::LinkDown { .. }), secs(6))
+        .expect("link down");
+    world.power_on();
+    world.wait_link_up(secs(20)).expect("link back");
+    world.run_for(secs(5));
+    assert_eq!(world.sim::<Hpr>().nominal_amps(), 130);
+}
+
+#[test]
+#[ignore = "link bug: after an HPR power blip shorter than the link-down time, the link still \
+            believes REMOTE_MODE (004) was accepted (status.hpr.remote_accepted stays true), \
+            never sends 004 again, and the unit (out of remote mode) ignores 058: the command \
+            completes Ok(Value(260)) with the old value instead of setting 130"]
+fn after_an_hpr_power_blip_settings_still_take_effect() {
+    let mut world = ready(Model::Hpr260);
+    assert_eq!(
+        world.command(LinkCommand::HprSetNominalAmps { amps: 200 }, secs(3)),
+        Ok(CommandOutput::Value(200))
+    );
+    world.power_off();
+    world.run_for(ms(300));
+    world.power_on();
+    world
+        .run_until(|w| w.link().status().ready, secs(8))
+        .expect("ready again");
+    assert_eq!(
+        world.link().diagnostics().link_downs,
+        0,
+        "a blip, not a loss"
+    );
+    assert_eq!(
+        world.command(LinkCommand::HprSetNominalAmps { amps: 130 }, secs(3)),
+        Ok(CommandOutput::Value(130))
+    );
+    assert_eq!(world.sim::<Hpr>().nominal_amps(), 130);
+}
