@@ -43,10 +43,13 @@ impl DiscreteIo {
         DiscreteIo { filter, interlocks }
     }
 
-    /// New settings. If they differ from the ones in use, the logic starts over as at
-    /// power-up with the pins as they read now: START goes off, and a TORCH_ON held through
-    /// the change must be released before it fires the torch. The supply state is kept.
-    /// Returns whether anything changed.
+    /// New settings; returns whether anything changed.
+    ///
+    /// New interlock settings alone apply live ([`Interlocks::set_config`]: a stricter setting
+    /// at once, a looser one from the next TORCH_ON). New input settings (polarity, debounce)
+    /// change what the pins *mean*, so the logic starts over as at power-up with the pins as
+    /// they read now: START goes off, and a TORCH_ON that reads active under the new settings
+    /// must be released before it fires the torch. The supply state is kept.
     pub fn reconfigure(
         &mut self,
         now: Instant,
@@ -54,13 +57,17 @@ impl DiscreteIo {
         inputs: InputConfig,
         pins: PinLevels,
     ) -> bool {
-        if *self.interlocks.config() == io && *self.filter.config() == inputs {
-            return false;
+        if *self.filter.config() != inputs {
+            let supply = self.interlocks.supply();
+            *self = DiscreteIo::new(io, inputs, now, pins);
+            self.interlocks.on_supply(now, supply);
+            return true;
         }
-        let supply = self.interlocks.supply();
-        *self = DiscreteIo::new(io, inputs, now, pins);
-        self.interlocks.on_supply(now, supply);
-        true
+        if *self.interlocks.config() != io {
+            self.interlocks.set_config(now, io);
+            return true;
+        }
+        false
     }
 
     /// The input pins were read at `now`.
@@ -202,6 +209,35 @@ mod tests {
             io.config().1.get(Input::TorchOn).debounce,
             Duration::from_millis(3)
         );
+    }
+
+    #[test]
+    fn interlock_settings_apply_live() {
+        let discrete_only = IoConfig {
+            link_required: false,
+            ..IoConfig::default()
+        };
+        let mut io = DiscreteIo::new(
+            discrete_only,
+            InputConfig::default(),
+            ms(0),
+            PinLevels::ALL_HIGH,
+        );
+        io.on_pins(ms(100), TORCH);
+        io.poll(ms(101));
+        assert!(io.outputs().start, "no link needed");
+
+        // Looser: START stays on.
+        let longer_gap = IoConfig {
+            start_gap: Duration::from_millis(200),
+            ..discrete_only
+        };
+        assert!(io.reconfigure(ms(150), longer_gap, InputConfig::default(), TORCH));
+        assert!(io.outputs().start);
+        // Stricter: the link is required now and down, START drops in the same call.
+        assert!(io.reconfigure(ms(160), IoConfig::default(), InputConfig::default(), TORCH));
+        assert!(!io.outputs().start);
+        assert_eq!(io.interlocks().start_locked_by(), Some(Interlock::LinkDown));
     }
 
     #[test]

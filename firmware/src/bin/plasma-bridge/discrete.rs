@@ -106,7 +106,12 @@ async fn io_task(
             Either4::Third(supply) => io.on_supply(now, supply),
             Either4::Fourth((io_config, input_config)) => {
                 if io.reconfigure(now, io_config, input_config, pins.levels()) {
-                    warn!("I/O: new settings; START off until TORCH_ON is released");
+                    warn!(
+                        "I/O: new settings: start gap {} ms, transfer time-out {} ms, link required {=bool}",
+                        io_config.effective_start_gap().as_millis(),
+                        io_config.transfer_timeout.as_millis(),
+                        io_config.link_required
+                    );
                 }
             }
         }
