@@ -109,13 +109,14 @@ mod image {
     static CNC_RX: StaticCell<[u8; cnc_uart::RX_BUFFER]> = StaticCell::new();
     static BOOT_TEXT: StaticCell<String<64>> = StaticCell::new();
 
-    /// `reset:<cause>,settings:<outcome>` for the CNC port (`!BOOT reason=...`, `ID`).
+    /// `<reset cause>,settings:<outcome>` for the CNC port (`ID ... reset=...`,
+    /// `!BOOT reason=...`).
     fn boot_text(boot: &BootReport, outcome: LoadOutcome) -> &'static str {
         let text = BOOT_TEXT.init(String::new());
         // 64 bytes hold the longest cause and outcome; a cut text is still a report.
         let _ = write!(
             text,
-            "reset:{},settings:{}",
+            "{},settings:{}",
             boot.cause.as_str(),
             flash::outcome_word(outcome)
         );
