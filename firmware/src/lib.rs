@@ -14,6 +14,10 @@
 //! - [`time`]: caller-supplied monotonic time.
 //! - [`safe_state`], [`watchdog`], [`storage`]: the board's reset/panic policy, task-progress
 //!   watchdog feeding and power-cut-safe settings storage, as logic.
+//! - [`inputs`], [`discrete`]: input polarity and debounce in front of [`io::Interlocks`],
+//!   as the board's I/O task runs them.
+//! - [`runner`], [`supervisor`]: the async loops around the link and the bridge, over any
+//!   `embedded-io-async` UART and clock (the board and host tests run the same code).
 #![cfg_attr(not(test), no_std)]
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
@@ -30,12 +34,16 @@
 )]
 
 pub mod bridge;
+pub mod discrete;
+pub mod inputs;
 pub mod io;
 pub mod link;
 pub mod port;
+pub mod runner;
 pub mod safe_state;
 pub mod session;
 pub mod settings;
 pub mod storage;
+pub mod supervisor;
 pub mod time;
 pub mod watchdog;
