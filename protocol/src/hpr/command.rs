@@ -26,7 +26,9 @@ pub enum Class {
 pub struct CommandInfo {
     /// Command id.
     pub id: u16,
-    /// Name as printed in the manual.
+    /// Name as printed in the manual. Only host tools print it (feature `descriptions`); the
+    /// board needs the class alone.
+    #[cfg(feature = "descriptions")]
     pub name: &'static str,
     /// How the bridge treats it.
     pub class: Class,
@@ -118,8 +120,16 @@ pub mod id {
 
 use Class::{Dangerous, FactoryTestingOnly, Normal};
 
+/// A row; without the `descriptions` feature the name is dropped at compile time.
 const fn cmd(id: u16, name: &'static str, class: Class) -> CommandInfo {
-    CommandInfo { id, name, class }
+    #[cfg(not(feature = "descriptions"))]
+    let _ = name;
+    CommandInfo {
+        id,
+        #[cfg(feature = "descriptions")]
+        name,
+        class,
+    }
 }
 
 /// Every command in the manual's table, ascending id.
@@ -314,6 +324,7 @@ pub fn classify(id: u16) -> Option<Class> {
 }
 
 /// Name of command `id` as printed in the manual.
+#[cfg(feature = "descriptions")]
 pub fn command_name(id: u16) -> Option<&'static str> {
     command_info(id).map(|c| c.name)
 }
@@ -355,6 +366,7 @@ mod tests {
             assert_eq!(classify(id), None, "{id}");
             assert!(!is_allowed(id));
         }
+        #[cfg(feature = "descriptions")]
         assert_eq!(command_name(120), Some("IGNORE_ALL_INTERLOCKS"));
     }
 

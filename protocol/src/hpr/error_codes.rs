@@ -23,6 +23,7 @@ impl ErrorCode {
     }
 
     /// Description from section IV, if the manual lists this code.
+    #[cfg(feature = "descriptions")]
     pub fn description(self) -> Option<&'static str> {
         error_info(self.0).map(|e| e.description)
     }
@@ -51,452 +52,422 @@ pub struct ErrorInfo {
     pub code: u16,
     /// Name as printed.
     pub name: &'static str,
-    /// Description as printed.
+    /// Description as printed. Only host tools print it: the board shows the name, so its
+    /// image leaves the ~5 KB of descriptions out (feature `descriptions`).
+    #[cfg(feature = "descriptions")]
     pub description: &'static str,
+}
+
+/// A row; without the `descriptions` feature the text is dropped at compile time.
+const fn row(code: u16, name: &'static str, description: &'static str) -> ErrorInfo {
+    #[cfg(not(feature = "descriptions"))]
+    let _ = description;
+    ErrorInfo {
+        code,
+        name,
+        #[cfg(feature = "descriptions")]
+        description,
+    }
 }
 
 /// Section IV, in the manual's order (ascending code).
 pub const ERROR_CODES: &[ErrorInfo] = &[
-    ErrorInfo {
-        code: 0,
-        name: "NO ERROR",
-        description: "System is ready to run",
-    },
-    ErrorInfo {
-        code: 9,
-        name: "FLOW SWITCH TEST",
-        description: "When the pump is restarted after a pump timeout (30 minutes without a start signal) the system will test the flow switch to make sure there is sufficient flow before firing the torch.",
-    },
-    ErrorInfo {
-        code: 12,
-        name: "TEST IN PROGRESS",
-        description: "One in the gas test modes is running",
-    },
-    ErrorInfo {
-        code: 13,
-        name: "TEST PASSED",
-        description: "The test completed successfully",
-    },
-    ErrorInfo {
-        code: 14,
-        name: "CUT GAS CHANNEL #1 FAIL",
-        description: "The gas pressure is dropping on channel #1, indicating a leak",
-    },
-    ErrorInfo {
-        code: 15,
-        name: "CUT GAS CHANNEL #2 FAIL",
-        description: "The gas pressure is dropping on channel #2, indicating a leak",
-    },
-    ErrorInfo {
-        code: 16,
-        name: "PLASMA RAMPDOWN FAIL",
-        description: "Plasma pressure did not decrease in the allotted time",
-    },
-    ErrorInfo {
-        code: 17,
-        name: "SHIELD RAMPDOWN FAIL",
-        description: "Shield pressure did not decrease in the allotted time",
-    },
-    ErrorInfo {
-        code: 18,
-        name: "PUMP OVER PRESSURE",
-        description: "Pump output has exceeded 200 psi",
-    },
-    ErrorInfo {
-        code: 20,
-        name: "NO PILOT ARC",
-        description: "No current detected from choppers before 1-second timeout",
-    },
-    ErrorInfo {
-        code: 21,
-        name: "NO ARC TRANSFER",
-        description: "No transfer signal detected before 300-msec timeout",
-    },
-    ErrorInfo {
-        code: 24,
-        name: "LOST CURRENT CH1",
-        description: "After transfer lost chopper current signal",
-    },
-    ErrorInfo {
-        code: 25,
-        name: "LOST CURRENT CH2",
-        description: "After transfer lost chopper current signal",
-    },
-    ErrorInfo {
-        code: 26,
-        name: "LOST TRANSFER",
-        description: "After transfer lost the transfer signal",
-    },
-    ErrorInfo {
-        code: 27,
-        name: "LOST PHASE",
-        description: "When main contactor is engaged no phase ok input",
-    },
-    ErrorInfo {
-        code: 28,
-        name: "LOST CURRENT CH3",
-        description: "After transfer lost chopper current signal",
-    },
-    ErrorInfo {
-        code: 30,
-        name: "GAS SYSTEM ERROR",
-        description: "A failure had a occurred in the gas system",
-    },
-    ErrorInfo {
-        code: 31,
-        name: "START LOST",
-        description: "Start signal was removed before steady state operation",
-    },
-    ErrorInfo {
-        code: 32,
-        name: "HOLD TIMEOUT",
-        description: "Hold signal was applied for longer than 60 seconds",
-    },
-    ErrorInfo {
-        code: 33,
-        name: "PRE CHARGE TIMEOUT",
-        description: "Gas console was not able to charge the gas lines to the correct value",
-    },
-    ErrorInfo {
-        code: 34,
-        name: "LOST CURRENT CH4",
-        description: "After transfer lost chopper current signal",
-    },
-    ErrorInfo {
-        code: 42,
-        name: "N2 PURGE LOW PRESSURE ERROR",
-        description: "Low N2 gas pressure while purging because of switching from a fuel gas process to an oxidizing process or vice versa",
-    },
-    ErrorInfo {
-        code: 44,
-        name: "LOW PLASMA GAS PRESSURE",
-        description: "Gas pressure under lower limit (15 psi preflow, 50 psi outflow)",
-    },
-    ErrorInfo {
-        code: 45,
-        name: "HIGH PLASMA GAS PRESSURE",
-        description: "Gas pressure over upper limit (110 psi)",
-    },
-    ErrorInfo {
-        code: 46,
-        name: "LOW LINE VOLTAGE",
-        description: "Line voltage is under lower limit (-15%)",
-    },
-    ErrorInfo {
-        code: 47,
-        name: "HIGH LINE VOLTAGE",
-        description: "Line voltage is over upper limit (+15%)",
-    },
-    ErrorInfo {
-        code: 48,
-        name: "CAN ERROR",
-        description: "An error occurred with the CAN communication system",
-    },
-    ErrorInfo {
-        code: 50,
-        name: "START ON AT INIT",
-        description: "Start signal input is active during power up",
-    },
-    ErrorInfo {
-        code: 53,
-        name: "LOW SHIELD GAS PRESSURE",
-        description: "Gas pressure is under lower limit (2 psi)",
-    },
-    ErrorInfo {
-        code: 54,
-        name: "HIGH SHIELD GAS PRESSURE",
-        description: "Gas pressure is over upper limit (110 psi)",
-    },
-    ErrorInfo {
-        code: 55,
-        name: "MV 1 INLET PRESSURE",
-        description: "Motor valve 1 inlet pressure is less than 90 psi or greater than 130 psi.",
-    },
-    ErrorInfo {
-        code: 56,
-        name: "MV 2 INLET PRESSURE",
-        description: "Motor valve 2 inlet pressure is less than 90 psi or greater than 130 psi.",
-    },
-    ErrorInfo {
-        code: 57,
-        name: "CUT GAS 1 PRESSURE",
-        description: "In the selection console, cut gas 1 outlet pressure is less than 90 psi or greater than 130 psi.",
-    },
-    ErrorInfo {
-        code: 58,
-        name: "CUT GAS 2 PRESSURE",
-        description: "In the selection console, if cut gas 2 outlet pressure is less than 90 psi for non mixing or less than 20 psi when mixing or greater than 130 psi.",
-    },
-    ErrorInfo {
-        code: 60,
-        name: "LOW COOLANT FLOW",
-        description: "Coolant flow is present but is less than the required 0.6 gpm",
-    },
-    ErrorInfo {
-        code: 61,
-        name: "NO PLASMA GAS TYPE",
-        description: "Plasma gas has not been selected",
-    },
-    ErrorInfo {
-        code: 62,
-        name: "NO SHIELD GAS TYPE",
-        description: "Shield gas has not been selected or system is in test mode",
-    },
-    ErrorInfo {
-        code: 65,
-        name: "CHOPPER1 OVERTEMP",
-        description: "Chopper #1 overheated",
-    },
-    ErrorInfo {
-        code: 66,
-        name: "CHOPPER2 OVERTEMP",
-        description: "Chopper #2 overheated",
-    },
-    ErrorInfo {
-        code: 67,
-        name: "MAGNETICS OVERTEMP",
-        description: "Transformer has overheated",
-    },
-    ErrorInfo {
-        code: 71,
-        name: "COOLANT OVERTEMP",
-        description: "Torch coolant has overheated",
-    },
-    ErrorInfo {
-        code: 72,
-        name: "AUTOMATIC GAS CONTROL BOARD OVERTEMP",
-        description: "Control board has exceeded 90 degrees C",
-    },
-    ErrorInfo {
-        code: 73,
-        name: "CHOPPER3 OVERTEMP",
-        description: "Chopper #3 overheated",
-    },
-    ErrorInfo {
-        code: 74,
-        name: "CHOPPER4 OVERTEMP",
-        description: "Chopper #4 overheated",
-    },
-    ErrorInfo {
-        code: 75,
-        name: "LEM 3 CURRENT LOW",
-        description: "Current is less than 10 amps during the chopper test",
-    },
-    ErrorInfo {
-        code: 76,
-        name: "LEM 4 CURRENT LOW",
-        description: "Current is less than 10 amps during the chopper test",
-    },
-    ErrorInfo {
-        code: 93,
-        name: "NO COOLANT FLOW",
-        description: "Coolant flow is less than 0.6 gpm or greater than 3.0 gpm",
-    },
-    ErrorInfo {
-        code: 95,
-        name: "LEM 4 CURRENT HIGH",
-        description: "Current has exceeded 35 amps during chopper test",
-    },
-    ErrorInfo {
-        code: 99,
-        name: "CHOPPER1 OVERTEMP AT INIT",
-        description: "Chopper #1 is indicating overtemp during powerup",
-    },
-    ErrorInfo {
-        code: 100,
-        name: "CHOPPER2 OVERTEMP AT INIT",
-        description: "Chopper #2 is indicating overtemp during power up",
-    },
-    ErrorInfo {
-        code: 101,
-        name: "MAGNETICS OVERTEMP AT INIT",
-        description: "Transformer is indicating overtemp during powerup",
-    },
-    ErrorInfo {
-        code: 102,
-        name: "LEM SENSOR A FAULT",
-        description: "Chopper A current signal is invalid",
-    },
-    ErrorInfo {
-        code: 103,
-        name: "LEM 1 CURRENT HIGH",
-        description: "Current has exceeded 35 amps during chopper test",
-    },
-    ErrorInfo {
-        code: 104,
-        name: "LEM 2 CURRENT HIGH",
-        description: "Current has exceeded 35 amps during chopper test",
-    },
-    ErrorInfo {
-        code: 105,
-        name: "LEM 1 CURRENT LOW",
-        description: "Current is less than 10 amps during the chopper test",
-    },
-    ErrorInfo {
-        code: 106,
-        name: "LEM 2 CURRENT LOW",
-        description: "Current is less than 10 amps during the chopper test",
-    },
-    ErrorInfo {
-        code: 107,
-        name: "LEM 3 CURRENT HIGH",
-        description: "Current has exceeded 35 amps during chopper test",
-    },
-    ErrorInfo {
-        code: 108,
-        name: "TRANSFER AT INIT",
-        description: "The system has detected current on the work lead during power up",
-    },
-    ErrorInfo {
-        code: 109,
-        name: "COOLANT FLOW AT INIT",
-        description: "Coolant flow is greater than 0.3 gpm when pump is off.",
-    },
-    ErrorInfo {
-        code: 111,
-        name: "COOLANT OVERTEMP AT INIT",
-        description: "Coolant is indicating overtemp during powerup",
-    },
-    ErrorInfo {
-        code: 116,
-        name: "WATCHDOG INTERLOCK",
-        description: "CAN communication error",
-    },
-    ErrorInfo {
-        code: 123,
-        name: "MV 1 ERROR",
-        description: "Motor valve 1 did not move into position within 60 seconds",
-    },
-    ErrorInfo {
-        code: 124,
-        name: "MV 2 ERROR",
-        description: "Motor valve 2 did not move into position within 60 seconds",
-    },
-    ErrorInfo {
-        code: 133,
-        name: "UNKNOWN GAS CONSOLE TYPE",
-        description: "The power supply control board does not recognize the gas console installed or has not received a CAN message identifying the type of console installed",
-    },
-    ErrorInfo {
-        code: 134,
-        name: "CHOPPER 1 OVERCURRENT",
-        description: "Chopper 1 current feedback has exceeded 160 amps",
-    },
-    ErrorInfo {
-        code: 138,
-        name: "CHOPPER 2 OVERCURRENT",
-        description: "Chopper 2 current feedback has exceeded 160 amps",
-    },
-    ErrorInfo {
-        code: 139,
-        name: "PURGE TIMEOUT ERROR",
-        description: "The purge cycle did not complete within 3 minutes",
-    },
-    ErrorInfo {
-        code: 140,
-        name: "PRESSURE TRANSDUCER #1 ERROR",
-        description: "Selection Console - Motor Valve #1 inlet Metering Console - Plasma gas outlet",
-    },
-    ErrorInfo {
-        code: 141,
-        name: "PRESSURE TRANSDUCER #2 ERROR",
-        description: "Selection Console - Motor Valve #2 inlet Metering Console - Shield gas outlet",
-    },
-    ErrorInfo {
-        code: 142,
-        name: "PRESSURE TRANSDUCER #3 ERROR",
-        description: "Selection Console - Cut Gas 1 outlet Metering Console - Cut Gas 1 inlet",
-    },
-    ErrorInfo {
-        code: 143,
-        name: "PRESSURE TRANSDUCER #4 ERROR",
-        description: "Selection Console - Cut Gas 2 outlet Metering Console - Cut Gas 2 inlet",
-    },
-    ErrorInfo {
-        code: 144,
-        name: "MANUAL GAS CONSOLE INTERNAL FLASH ERROR",
-        description: "DSP memory is not working properly",
-    },
-    ErrorInfo {
-        code: 145,
-        name: "AUTO GAS CONSOLE INTERNAL FLASH ERROR",
-        description: "DSP memory is not working properly",
-    },
-    ErrorInfo {
-        code: 146,
-        name: "CHOPPER #3 OVERTEMP AT INIT",
-        description: "Chopper #3 is indicating over temp during power up",
-    },
-    ErrorInfo {
-        code: 147,
-        name: "CHOPPER #4 OVERTEMP AT INIT",
-        description: "Chopper #4 is indicating over temp during power up",
-    },
-    ErrorInfo {
-        code: 151,
-        name: "SOFTWARE FAIL",
-        description: "Software has detected an incorrect state or condition",
-    },
-    ErrorInfo {
-        code: 152,
-        name: "INTERNAL FLASH ERROR",
-        description: "DSP memory is not working properly",
-    },
-    ErrorInfo {
-        code: 153,
-        name: "PS EEPROM ERROR",
-        description: "EEPROM memory on power supply board not working",
-    },
-    ErrorInfo {
-        code: 154,
-        name: "CHOPPER 3 OVER CURRENT",
-        description: "Chopper 3 current feedback has exceeded 160 amps",
-    },
-    ErrorInfo {
-        code: 155,
-        name: "CHOPPER 4 OVER CURRENT",
-        description: "Chopper 4 current feedback has exceeded 160 amps",
-    },
-    ErrorInfo {
-        code: 156,
-        name: "CHOPPER 2 CURRENT AT INIT",
-        description: "Chopper 2 current signal is active on powerup",
-    },
-    ErrorInfo {
-        code: 157,
-        name: "CHOPPER 3 CURRENT AT INIT",
-        description: "Chopper 3 current signal is active on powerup",
-    },
-    ErrorInfo {
-        code: 158,
-        name: "CHOPPER 4 CURRENT AT INIT",
-        description: "Chopper 4 current signal is active on powerup",
-    },
-    ErrorInfo {
-        code: 159,
-        name: "MOTOR DRIVE FAULT",
-        description: "Motor drive board power module is indicating an alarm - This can be comparable to \"blowing a fuse\" - does not necessarily indicate a problem with the board.",
-    },
-    ErrorInfo {
-        code: 160,
-        name: "HPR COOLER CAN FAULT",
-        description: "Communications between the control board and the pump/motor drive board was interrupted for greater than 1 second.",
-    },
-    ErrorInfo {
-        code: 180,
-        name: "SELECTION CONSOLE CAN TIMEOUT",
-        description: "Power supply has not received a CAN message from the selection console within 1 second",
-    },
-    ErrorInfo {
-        code: 181,
-        name: "METERING CONSOLE CAN TIMEOUT",
-        description: "Power supply has not received a CAN message from the metering console within 1 second",
-    },
-    ErrorInfo {
-        code: 190,
-        name: "LEM SENSOR B FAULT",
-        description: "Chopper B current signal is invalid",
-    },
+    row(0, "NO ERROR", "System is ready to run"),
+    row(
+        9,
+        "FLOW SWITCH TEST",
+        "When the pump is restarted after a pump timeout (30 minutes without a start signal) the system will test the flow switch to make sure there is sufficient flow before firing the torch.",
+    ),
+    row(
+        12,
+        "TEST IN PROGRESS",
+        "One in the gas test modes is running",
+    ),
+    row(13, "TEST PASSED", "The test completed successfully"),
+    row(
+        14,
+        "CUT GAS CHANNEL #1 FAIL",
+        "The gas pressure is dropping on channel #1, indicating a leak",
+    ),
+    row(
+        15,
+        "CUT GAS CHANNEL #2 FAIL",
+        "The gas pressure is dropping on channel #2, indicating a leak",
+    ),
+    row(
+        16,
+        "PLASMA RAMPDOWN FAIL",
+        "Plasma pressure did not decrease in the allotted time",
+    ),
+    row(
+        17,
+        "SHIELD RAMPDOWN FAIL",
+        "Shield pressure did not decrease in the allotted time",
+    ),
+    row(18, "PUMP OVER PRESSURE", "Pump output has exceeded 200 psi"),
+    row(
+        20,
+        "NO PILOT ARC",
+        "No current detected from choppers before 1-second timeout",
+    ),
+    row(
+        21,
+        "NO ARC TRANSFER",
+        "No transfer signal detected before 300-msec timeout",
+    ),
+    row(
+        24,
+        "LOST CURRENT CH1",
+        "After transfer lost chopper current signal",
+    ),
+    row(
+        25,
+        "LOST CURRENT CH2",
+        "After transfer lost chopper current signal",
+    ),
+    row(
+        26,
+        "LOST TRANSFER",
+        "After transfer lost the transfer signal",
+    ),
+    row(
+        27,
+        "LOST PHASE",
+        "When main contactor is engaged no phase ok input",
+    ),
+    row(
+        28,
+        "LOST CURRENT CH3",
+        "After transfer lost chopper current signal",
+    ),
+    row(
+        30,
+        "GAS SYSTEM ERROR",
+        "A failure had a occurred in the gas system",
+    ),
+    row(
+        31,
+        "START LOST",
+        "Start signal was removed before steady state operation",
+    ),
+    row(
+        32,
+        "HOLD TIMEOUT",
+        "Hold signal was applied for longer than 60 seconds",
+    ),
+    row(
+        33,
+        "PRE CHARGE TIMEOUT",
+        "Gas console was not able to charge the gas lines to the correct value",
+    ),
+    row(
+        34,
+        "LOST CURRENT CH4",
+        "After transfer lost chopper current signal",
+    ),
+    row(
+        42,
+        "N2 PURGE LOW PRESSURE ERROR",
+        "Low N2 gas pressure while purging because of switching from a fuel gas process to an oxidizing process or vice versa",
+    ),
+    row(
+        44,
+        "LOW PLASMA GAS PRESSURE",
+        "Gas pressure under lower limit (15 psi preflow, 50 psi outflow)",
+    ),
+    row(
+        45,
+        "HIGH PLASMA GAS PRESSURE",
+        "Gas pressure over upper limit (110 psi)",
+    ),
+    row(
+        46,
+        "LOW LINE VOLTAGE",
+        "Line voltage is under lower limit (-15%)",
+    ),
+    row(
+        47,
+        "HIGH LINE VOLTAGE",
+        "Line voltage is over upper limit (+15%)",
+    ),
+    row(
+        48,
+        "CAN ERROR",
+        "An error occurred with the CAN communication system",
+    ),
+    row(
+        50,
+        "START ON AT INIT",
+        "Start signal input is active during power up",
+    ),
+    row(
+        53,
+        "LOW SHIELD GAS PRESSURE",
+        "Gas pressure is under lower limit (2 psi)",
+    ),
+    row(
+        54,
+        "HIGH SHIELD GAS PRESSURE",
+        "Gas pressure is over upper limit (110 psi)",
+    ),
+    row(
+        55,
+        "MV 1 INLET PRESSURE",
+        "Motor valve 1 inlet pressure is less than 90 psi or greater than 130 psi.",
+    ),
+    row(
+        56,
+        "MV 2 INLET PRESSURE",
+        "Motor valve 2 inlet pressure is less than 90 psi or greater than 130 psi.",
+    ),
+    row(
+        57,
+        "CUT GAS 1 PRESSURE",
+        "In the selection console, cut gas 1 outlet pressure is less than 90 psi or greater than 130 psi.",
+    ),
+    row(
+        58,
+        "CUT GAS 2 PRESSURE",
+        "In the selection console, if cut gas 2 outlet pressure is less than 90 psi for non mixing or less than 20 psi when mixing or greater than 130 psi.",
+    ),
+    row(
+        60,
+        "LOW COOLANT FLOW",
+        "Coolant flow is present but is less than the required 0.6 gpm",
+    ),
+    row(61, "NO PLASMA GAS TYPE", "Plasma gas has not been selected"),
+    row(
+        62,
+        "NO SHIELD GAS TYPE",
+        "Shield gas has not been selected or system is in test mode",
+    ),
+    row(65, "CHOPPER1 OVERTEMP", "Chopper #1 overheated"),
+    row(66, "CHOPPER2 OVERTEMP", "Chopper #2 overheated"),
+    row(67, "MAGNETICS OVERTEMP", "Transformer has overheated"),
+    row(71, "COOLANT OVERTEMP", "Torch coolant has overheated"),
+    row(
+        72,
+        "AUTOMATIC GAS CONTROL BOARD OVERTEMP",
+        "Control board has exceeded 90 degrees C",
+    ),
+    row(73, "CHOPPER3 OVERTEMP", "Chopper #3 overheated"),
+    row(74, "CHOPPER4 OVERTEMP", "Chopper #4 overheated"),
+    row(
+        75,
+        "LEM 3 CURRENT LOW",
+        "Current is less than 10 amps during the chopper test",
+    ),
+    row(
+        76,
+        "LEM 4 CURRENT LOW",
+        "Current is less than 10 amps during the chopper test",
+    ),
+    row(
+        93,
+        "NO COOLANT FLOW",
+        "Coolant flow is less than 0.6 gpm or greater than 3.0 gpm",
+    ),
+    row(
+        95,
+        "LEM 4 CURRENT HIGH",
+        "Current has exceeded 35 amps during chopper test",
+    ),
+    row(
+        99,
+        "CHOPPER1 OVERTEMP AT INIT",
+        "Chopper #1 is indicating overtemp during powerup",
+    ),
+    row(
+        100,
+        "CHOPPER2 OVERTEMP AT INIT",
+        "Chopper #2 is indicating overtemp during power up",
+    ),
+    row(
+        101,
+        "MAGNETICS OVERTEMP AT INIT",
+        "Transformer is indicating overtemp during powerup",
+    ),
+    row(
+        102,
+        "LEM SENSOR A FAULT",
+        "Chopper A current signal is invalid",
+    ),
+    row(
+        103,
+        "LEM 1 CURRENT HIGH",
+        "Current has exceeded 35 amps during chopper test",
+    ),
+    row(
+        104,
+        "LEM 2 CURRENT HIGH",
+        "Current has exceeded 35 amps during chopper test",
+    ),
+    row(
+        105,
+        "LEM 1 CURRENT LOW",
+        "Current is less than 10 amps during the chopper test",
+    ),
+    row(
+        106,
+        "LEM 2 CURRENT LOW",
+        "Current is less than 10 amps during the chopper test",
+    ),
+    row(
+        107,
+        "LEM 3 CURRENT HIGH",
+        "Current has exceeded 35 amps during chopper test",
+    ),
+    row(
+        108,
+        "TRANSFER AT INIT",
+        "The system has detected current on the work lead during power up",
+    ),
+    row(
+        109,
+        "COOLANT FLOW AT INIT",
+        "Coolant flow is greater than 0.3 gpm when pump is off.",
+    ),
+    row(
+        111,
+        "COOLANT OVERTEMP AT INIT",
+        "Coolant is indicating overtemp during powerup",
+    ),
+    row(116, "WATCHDOG INTERLOCK", "CAN communication error"),
+    row(
+        123,
+        "MV 1 ERROR",
+        "Motor valve 1 did not move into position within 60 seconds",
+    ),
+    row(
+        124,
+        "MV 2 ERROR",
+        "Motor valve 2 did not move into position within 60 seconds",
+    ),
+    row(
+        133,
+        "UNKNOWN GAS CONSOLE TYPE",
+        "The power supply control board does not recognize the gas console installed or has not received a CAN message identifying the type of console installed",
+    ),
+    row(
+        134,
+        "CHOPPER 1 OVERCURRENT",
+        "Chopper 1 current feedback has exceeded 160 amps",
+    ),
+    row(
+        138,
+        "CHOPPER 2 OVERCURRENT",
+        "Chopper 2 current feedback has exceeded 160 amps",
+    ),
+    row(
+        139,
+        "PURGE TIMEOUT ERROR",
+        "The purge cycle did not complete within 3 minutes",
+    ),
+    row(
+        140,
+        "PRESSURE TRANSDUCER #1 ERROR",
+        "Selection Console - Motor Valve #1 inlet Metering Console - Plasma gas outlet",
+    ),
+    row(
+        141,
+        "PRESSURE TRANSDUCER #2 ERROR",
+        "Selection Console - Motor Valve #2 inlet Metering Console - Shield gas outlet",
+    ),
+    row(
+        142,
+        "PRESSURE TRANSDUCER #3 ERROR",
+        "Selection Console - Cut Gas 1 outlet Metering Console - Cut Gas 1 inlet",
+    ),
+    row(
+        143,
+        "PRESSURE TRANSDUCER #4 ERROR",
+        "Selection Console - Cut Gas 2 outlet Metering Console - Cut Gas 2 inlet",
+    ),
+    row(
+        144,
+        "MANUAL GAS CONSOLE INTERNAL FLASH ERROR",
+        "DSP memory is not working properly",
+    ),
+    row(
+        145,
+        "AUTO GAS CONSOLE INTERNAL FLASH ERROR",
+        "DSP memory is not working properly",
+    ),
+    row(
+        146,
+        "CHOPPER #3 OVERTEMP AT INIT",
+        "Chopper #3 is indicating over temp during power up",
+    ),
+    row(
+        147,
+        "CHOPPER #4 OVERTEMP AT INIT",
+        "Chopper #4 is indicating over temp during power up",
+    ),
+    row(
+        151,
+        "SOFTWARE FAIL",
+        "Software has detected an incorrect state or condition",
+    ),
+    row(
+        152,
+        "INTERNAL FLASH ERROR",
+        "DSP memory is not working properly",
+    ),
+    row(
+        153,
+        "PS EEPROM ERROR",
+        "EEPROM memory on power supply board not working",
+    ),
+    row(
+        154,
+        "CHOPPER 3 OVER CURRENT",
+        "Chopper 3 current feedback has exceeded 160 amps",
+    ),
+    row(
+        155,
+        "CHOPPER 4 OVER CURRENT",
+        "Chopper 4 current feedback has exceeded 160 amps",
+    ),
+    row(
+        156,
+        "CHOPPER 2 CURRENT AT INIT",
+        "Chopper 2 current signal is active on powerup",
+    ),
+    row(
+        157,
+        "CHOPPER 3 CURRENT AT INIT",
+        "Chopper 3 current signal is active on powerup",
+    ),
+    row(
+        158,
+        "CHOPPER 4 CURRENT AT INIT",
+        "Chopper 4 current signal is active on powerup",
+    ),
+    row(
+        159,
+        "MOTOR DRIVE FAULT",
+        "Motor drive board power module is indicating an alarm - This can be comparable to \"blowing a fuse\" - does not necessarily indicate a problem with the board.",
+    ),
+    row(
+        160,
+        "HPR COOLER CAN FAULT",
+        "Communications between the control board and the pump/motor drive board was interrupted for greater than 1 second.",
+    ),
+    row(
+        180,
+        "SELECTION CONSOLE CAN TIMEOUT",
+        "Power supply has not received a CAN message from the selection console within 1 second",
+    ),
+    row(
+        181,
+        "METERING CONSOLE CAN TIMEOUT",
+        "Power supply has not received a CAN message from the metering console within 1 second",
+    ),
+    row(
+        190,
+        "LEM SENSOR B FAULT",
+        "Chopper B current signal is invalid",
+    ),
 ];
 
 /// The table row for `code`, if the manual lists it.
@@ -513,6 +484,7 @@ pub fn error_name(code: u16) -> Option<&'static str> {
 }
 
 /// Description of error `code`, if the manual lists it.
+#[cfg(feature = "descriptions")]
 pub fn error_description(code: u16) -> Option<&'static str> {
     error_info(code).map(|e| e.description)
 }
@@ -538,6 +510,7 @@ mod tests {
         assert_eq!(error_name(0), Some("NO ERROR"));
         assert_eq!(ErrorCode(116).name(), Some("WATCHDOG INTERLOCK"));
         assert_eq!(error_name(50), Some("START ON AT INIT"));
+        #[cfg(feature = "descriptions")]
         assert_eq!(
             error_description(190),
             Some("Chopper B current signal is invalid")

@@ -42,7 +42,9 @@ mod seed_frames;
 pub mod state;
 mod values;
 
-pub use command::{Class, CommandInfo, classify, command_info, command_name, is_allowed};
+#[cfg(feature = "descriptions")]
+pub use command::command_name;
+pub use command::{Class, CommandInfo, classify, command_info, is_allowed};
 pub use error_codes::ErrorCode;
 pub use frame::{Decoder, Frame, MAX_DATA_LEN, MAX_FRAME_LEN, checksum};
 pub use gas::GasCode;
