@@ -5,6 +5,15 @@
 //! transmits what [`PsLink::poll_transmit`] returns with the port settings of
 //! [`PsLink::port_config`], and wakes it at [`PsLink::poll_at`].
 //!
+//! # Board glue
+//! - Received characters go to [`PsLink::handle_rx`] in any chunking. A character the UART
+//!   flags with a parity or framing error goes to [`PsLink::handle_rx_error`] instead, in its
+//!   place in the stream (the characters before it first): it breaks the frame it falls in,
+//!   which the 8-bit LRC alone would not always notice.
+//! - A frame from [`PsLink::poll_transmit`] is put on the wire at once and completely, with
+//!   the port settings of [`PsLink::port_config`] applied first.
+//! - The task sleeps until [`PsLink::poll_at`] or the next received character.
+//!
 //! ```
 //! use plasma_firmware::link::{LinkConfig, PsLink};
 //! use plasma_firmware::time::Instant;
@@ -265,6 +274,35 @@ impl PsLink {
                         break;
                     }
                 }
+            }
+        }
+        self.core.status.update_ready(now);
+    }
+
+    /// A character arrived with a UART parity or framing error.
+    ///
+    /// The board glue calls this where the flagged character falls in the received stream:
+    /// `handle_rx` with the characters before it, then `handle_rx_error`, then `handle_rx`
+    /// with the rest (the flagged character itself is not handed over). A flagged character
+    /// breaks the frame in progress: the frame is rejected at once, like a reply with a bad
+    /// checksum (the attempt is retried), even when the 8-bit LRC or checksum would have let
+    /// two cancelling errors through. A flagged character between frames only counts. Every
+    /// call counts in [`Diagnostics::rx_errors`].
+    pub fn handle_rx_error(&mut self, now: Instant) {
+        self.now = now;
+        self.core.diagnostics.record_rx_error();
+        let in_frame = match self.wire {
+            Wire::Modbus => self.modbus_rx.in_frame(),
+            Wire::Hpr => self.hpr_rx.in_frame(),
+        };
+        if in_frame {
+            self.modbus_rx.reset();
+            self.hpr_rx.reset();
+            match &self.txn {
+                Some(txn) if txn.is_awaiting_reply() => {
+                    self.attempt_failed(now, TransactionError::Malformed);
+                }
+                _ => self.core.diagnostics.record_unsolicited(),
             }
         }
         self.core.status.update_ready(now);

@@ -1247,3 +1247,25 @@ fn noise_and_late_replies_do_not_disturb_the_link() {
     bench.run(&mut fake, bench.now + Duration::from_millis(300));
     assert!(bench.link.status().link_up);
 }
+
+#[test]
+fn a_uart_flagged_character_breaks_the_frame_it_falls_in() {
+    let mut bench = Bench::new(LinkConfig::default());
+    bench.next_tx(ms(0)).unwrap();
+    let reply = b":012B0E0481000101010630383133333504\r\n";
+    // The reply arrives whole and with a good LRC, but the UART flagged one character: the
+    // frame is rejected and the request sent again at once.
+    bench.rx(5, &reply[..10]);
+    bench.link.handle_rx_error(bench.now);
+    bench.link.handle_rx(bench.now, &reply[10..]);
+    assert!(!bench.link.status().link_up);
+    let d = bench.link.diagnostics();
+    assert_eq!((d.rx_errors, d.malformed, d.retries), (1, 1, 1));
+    assert_eq!(bench.next_tx(bench.now).unwrap(), b":012B0E0401C1\r\n");
+    // A flagged character between frames only counts.
+    bench.link.handle_rx_error(bench.now);
+    bench.rx(5, reply);
+    assert!(bench.link.status().link_up);
+    assert_eq!(bench.link.diagnostics().rx_errors, 2);
+    assert_eq!(bench.link.diagnostics().malformed, 1);
+}

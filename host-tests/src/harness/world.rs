@@ -484,20 +484,22 @@ impl<E: PsEndpoint> World<E> {
         }
 
         // The bridge side.
-        let heard: Vec<u8> = self
-            .line
-            .receive(End::Master, now)
-            .into_iter()
-            .filter_map(|b| match (b.error, self.rx_errors) {
+        // In order: runs of characters, and (when reported) the flagged ones in their place.
+        let mut chunk: Vec<u8> = Vec::new();
+        for b in self.line.receive(End::Master, now) {
+            let byte = match (b.error, self.rx_errors) {
                 (None, _) | (Some(_), RxErrors::Deliver) => Some(b.byte),
                 (Some(_), RxErrors::Drop) => None,
                 (Some(_), RxErrors::Substitute) => Some(0),
-            })
-            .collect();
-        if !heard.is_empty() {
-            self.heard.extend(heard.iter().map(|&b| (now, b)));
-            self.endpoint.handle_ps_rx(now, &heard);
+                (Some(_), RxErrors::Report) => {
+                    self.hand_over(now, &mut chunk);
+                    self.endpoint.handle_ps_rx_error(now);
+                    None
+                }
+            };
+            chunk.extend(byte);
         }
+        self.hand_over(now, &mut chunk);
         self.drain_endpoint();
         for _ in 0..4 {
             self.apply_master_port();
@@ -538,6 +540,16 @@ impl<E: PsEndpoint> World<E> {
             supply.restart_blackout_until,
         );
         self.assert_safe();
+    }
+
+    /// Hand the characters in `chunk` to the endpoint (and log them as heard).
+    fn hand_over(&mut self, now: Instant, chunk: &mut Vec<u8>) {
+        if chunk.is_empty() {
+            return;
+        }
+        self.heard.extend(chunk.iter().map(|&b| (now, b)));
+        self.endpoint.handle_ps_rx(now, chunk);
+        chunk.clear();
     }
 
     fn apply_master_port(&mut self) {
