@@ -591,12 +591,12 @@ fn a_hostile_unit_never_crashes_the_link_or_draws_a_write_out_of_it() {
     }
 }
 
-fn two_wire(master_echo: bool) {
+fn two_wire(model: Model, master_echo: bool) -> World {
     let options = WorldOptions {
         wiring: host_tests::line::Wiring::TwoWire { master_echo },
         ..WorldOptions::default()
     };
-    let mut world = World::new(Model::Sync85, options);
+    let mut world = World::new(model, options);
     world
         .wait_link_up(secs(2))
         .expect("link up despite the echo");
@@ -612,6 +612,7 @@ fn two_wire(master_echo: bool) {
         secs(3),
     );
     assert!(result.is_ok(), "{result:?}");
+    world
 }
 
 #[test]
@@ -662,17 +663,19 @@ fn poll_at_never_stays_in_the_past() {
 #[test]
 fn a_two_wire_half_duplex_line_works() {
     // RS-485 2-wire, the transceiver's receiver off while it drives the line.
-    two_wire(false);
+    let world = two_wire(Model::Sync85, false);
+    assert_eq!(world.link().diagnostics().echoes, 0);
 }
 
 #[test]
-#[ignore = "link bug (or board-glue requirement): on a 2-wire line whose transceiver \
-            receiver stays enabled, the link hears its own request, takes it for a \
-            malformed reply, retries at once (Modbus spacing) and never sees the unit's \
-            answer in its attempt; detection never succeeds. Either the link ignores a \
-            received frame equal to the request just sent, or the board glue must discard \
-            what arrives while it transmits (then this test should use that glue)"]
 fn a_two_wire_line_with_echo_works() {
-    // The master's receiver left on: the bridge hears its own requests.
-    two_wire(true);
+    // The master's receiver left on: the bridge hears its own requests, and ignores them.
+    for model in [Model::Sync85, Model::Pm85] {
+        let world = two_wire(model, true);
+        assert!(world.link().diagnostics().echoes > 20, "{model}");
+        assert_eq!(world.link().diagnostics().malformed, 0, "{model}");
+        // Legacy settings are 06 writes, whose replies repeat the request: the echo was
+        // told from the reply, the unit took them.
+        assert!(world.sim_ref::<Powermax>().in_remote_mode(), "{model}");
+    }
 }

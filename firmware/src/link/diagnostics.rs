@@ -41,6 +41,9 @@ pub struct Diagnostics {
     /// Characters the UART flagged with a parity or framing error
     /// ([`PsLink::handle_rx_error`](super::PsLink::handle_rx_error)).
     pub rx_errors: u32,
+    /// Frames equal to the request just sent, taken for its echo (2-wire line with the
+    /// receiver left on) and ignored.
+    pub echoes: u32,
 }
 
 fn bump(counter: &mut u32) {
@@ -120,6 +123,11 @@ impl Diagnostics {
     /// Count a frame that arrived while no reply was awaited.
     pub fn record_unsolicited(&mut self) {
         bump(&mut self.unsolicited_frames);
+    }
+
+    /// Count an echo of our own request.
+    pub fn record_echo(&mut self) {
+        bump(&mut self.echoes);
     }
 
     /// Count a character the UART flagged.

@@ -13,6 +13,11 @@
 //! - A frame from [`PsLink::poll_transmit`] is put on the wire at once and completely, with
 //!   the port settings of [`PsLink::port_config`] applied first.
 //! - The task sleeps until [`PsLink::poll_at`] or the next received character.
+//! - On 2-wire RS-485 the glue may leave the receiver on while it transmits: a received frame
+//!   equal to the request just sent is taken for its echo, counted
+//!   ([`Diagnostics::echoes`]) and ignored. A reply that repeats its request (Modbus 05/06,
+//!   some HPR settings) is told apart once the line is known to echo: the first copy in an
+//!   attempt is the echo, the second the reply.
 //!
 //! ```
 //! use plasma_firmware::link::{LinkConfig, PsLink};
@@ -165,6 +170,10 @@ pub struct PsLink {
     consecutive_failures: u8,
     next_ticket: u32,
     raw_reply: Vec<u8, TX_CAPACITY>,
+    /// The line has been heard echoing our requests (2-wire, receiver on).
+    line_echoes: bool,
+    /// The echo of the attempt on the wire has been heard.
+    echo_in_attempt: bool,
     now: Instant,
 }
 
@@ -222,6 +231,8 @@ impl PsLink {
             consecutive_failures: 0,
             next_ticket: 1,
             raw_reply: Vec::new(),
+            line_echoes: false,
+            echo_in_attempt: false,
             now,
         };
         link.start_detection(now, 0);
@@ -321,6 +332,7 @@ impl PsLink {
         let frame = self.txn.as_mut()?.poll_transmit(now)?;
         // A new attempt starts with a clean receiver: leftovers of a damaged reply must not
         // be taken for the answer.
+        self.echo_in_attempt = false;
         match wire {
             Wire::Modbus => self.modbus_rx.reset(),
             Wire::Hpr => self.hpr_rx.reset(),
@@ -764,6 +776,28 @@ impl PsLink {
         }
     }
 
+    /// True when `received` (re-encoded) is the request just sent, heard back on a 2-wire
+    /// line whose receiver stays on: it is counted and ignored. Most replies differ from
+    /// their request, so such a frame is an echo. A request whose genuine reply repeats it
+    /// (`answers`: Modbus 05/06, an HPR setting echoed unchanged) is only taken for its echo
+    /// once the line is known to echo (an unambiguous echo was heard, e.g. of the detection
+    /// request), and only the first such frame of an attempt.
+    fn is_echo(&mut self, received: &[u8], answers: bool) -> bool {
+        let Some(txn) = &self.txn else {
+            return false;
+        };
+        if received.is_empty() || received != txn.frame() {
+            return false;
+        }
+        let echo = !answers || (self.line_echoes && !self.echo_in_attempt);
+        if echo {
+            self.line_echoes = true;
+            self.echo_in_attempt = true;
+            self.core.diagnostics.record_echo();
+        }
+        echo
+    }
+
     fn on_modbus_frame(
         &mut self,
         now: Instant,
@@ -786,11 +820,17 @@ impl PsLink {
             Err(error) => return self.attempt_failed(now, modbus::classify(error)),
         };
         let frame = modbus_ascii::Frame { address, pdu: &pdu };
-        let response = match modbus_ascii::validate_reply(
+        let validated = modbus_ascii::validate_reply(
             &request.as_request(),
             self.core.config.node_address,
             &frame,
-        ) {
+        );
+        let mut own = [0u8; TX_CAPACITY];
+        let own_len = modbus_ascii::encode(address, &pdu, &mut own).unwrap_or(0);
+        if self.is_echo(own.get(..own_len).unwrap_or(&[]), validated.is_ok()) {
+            return;
+        }
+        let response = match validated {
             Ok(response) => response,
             Err(error) => return self.attempt_failed(now, modbus::classify(error)),
         };
@@ -868,6 +908,16 @@ impl PsLink {
             Tag::Hpr(purpose, HprExpect::Raw(raw_id)) => (None, Some(*raw_id), Some(*purpose)),
             _ => return,
         };
+        let answers = match (typed, raw_id) {
+            (Some(request), _) => Reply::parse_for(&request, &frame).is_ok(),
+            (None, Some(raw_id)) => id == raw_id,
+            (None, None) => false,
+        };
+        let mut own = [0u8; TX_CAPACITY];
+        let own_len = frame.emit(&mut own).unwrap_or(0);
+        if self.is_echo(own.get(..own_len).unwrap_or(&[]), answers) {
+            return;
+        }
         if id == hpr_wire::command::id::BAD_CHECKSUM {
             // The unit saw our request damaged: send it again.
             return self.attempt_failed(now, TransactionError::HprBadChecksum500);

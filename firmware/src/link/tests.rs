@@ -1269,3 +1269,60 @@ fn a_uart_flagged_character_breaks_the_frame_it_falls_in() {
     assert_eq!(bench.link.diagnostics().rx_errors, 2);
     assert_eq!(bench.link.diagnostics().malformed, 1);
 }
+
+#[test]
+fn the_echo_of_our_own_request_is_ignored() {
+    let mut bench = Bench::new(LinkConfig::default());
+    let request = bench.next_tx(ms(0)).unwrap();
+    // A 2-wire line with the receiver on: the request comes back as it goes out (16
+    // characters at 19200 8E1 take 9.2 ms).
+    bench.rx(9, &request);
+    assert_eq!(bench.link.diagnostics().echoes, 1);
+    assert_eq!(bench.link.diagnostics().malformed, 0);
+    bench.rx(12, b":012B0E0481000101010630383133333504\r\n");
+    assert!(bench.link.status().link_up);
+}
+
+#[test]
+fn a_reply_equal_to_its_request_is_told_from_the_echo_once_the_line_is_known_to_echo() {
+    // Legacy settings use function 06, whose reply repeats the request.
+    let mut bench = Bench::new(LinkConfig::default());
+    let mut fake = FakePowermax::legacy();
+    // Detection teaches the link that the line echoes.
+    let request = bench.next_tx(ms(0)).unwrap();
+    bench.rx(9, &request);
+    let reply = fake.answer(&request).unwrap();
+    bench.rx(12, &reply);
+    assert_eq!(bench.link.status().family, Some(Family::PowermaxLegacy));
+    bench.run(&mut fake, ms(300));
+    bench
+        .link
+        .submit(
+            bench.now,
+            LinkCommand::ApplySettings {
+                mode: OperatingMode::Cut,
+                current: amps(45),
+                pressure: Pressure::Auto,
+            },
+        )
+        .unwrap();
+    let write = loop {
+        let frame = bench.next_tx(bench.now + Duration::from_secs(1)).unwrap();
+        if frame[3..5] == *b"06" {
+            break frame;
+        }
+        let reply = fake.answer(&frame).unwrap();
+        bench.rx(10, &reply);
+    };
+    let reply = fake.answer(&write).unwrap();
+    assert_eq!(reply, write);
+    // The echo: ignored.
+    bench.rx(9, &write);
+    assert_eq!(bench.link.diagnostics().echoes, 2);
+    // The unit's reply, equal to it: taken.
+    bench.rx(12, &reply);
+    assert_eq!(bench.link.diagnostics().echoes, 2);
+    assert_eq!(bench.link.diagnostics().transactions_failed, 0);
+    let next = bench.next_tx(bench.now + Duration::from_secs(1)).unwrap();
+    assert_ne!(next, write, "the write was answered, the next step follows");
+}

@@ -145,6 +145,7 @@ pub struct Transaction<T> {
     expects_reply: bool,
     attempts_sent: u8,
     first_sent: Option<Instant>,
+    last_sent: Option<Instant>,
     phase: Phase,
 }
 
@@ -168,6 +169,7 @@ impl<T> Transaction<T> {
             expects_reply: true,
             attempts_sent: 0,
             first_sent: None,
+            last_sent: None,
             phase: Phase::Ready { at: ready_at },
         })
     }
@@ -200,6 +202,11 @@ impl<T> Transaction<T> {
         self.attempts_sent
     }
 
+    /// When the latest attempt was handed out for transmission.
+    pub fn last_sent(&self) -> Option<Instant> {
+        self.last_sent
+    }
+
     /// True while an attempt is on the wire and its reply is awaited.
     pub fn is_awaiting_reply(&self) -> bool {
         self.expects_reply && matches!(self.phase, Phase::AwaitingReply { .. })
@@ -221,6 +228,7 @@ impl<T> Transaction<T> {
                     self.first_sent = Some(now);
                 }
                 self.attempts_sent = self.attempts_sent.saturating_add(1);
+                self.last_sent = Some(now);
                 self.phase = Phase::AwaitingReply {
                     deadline: now + self.timeout,
                 };
