@@ -202,13 +202,6 @@ fn one_percent_corrupted_bytes_never_give_a_wrong_sync_value_only_retries() {
 }
 
 #[test]
-#[ignore = "link bug: at 1% corrupted characters a transaction whose three attempts all got \
-            damaged replies counts as a failure toward link-down, although a damaged reply \
-            proves the unit answers; a 72-character SYNC poll then fails ~13% of the time and \
-            three in a row (LinkDown, re-detection, settings re-applied) happen every few \
-            minutes; with auto-detection, a damaged device-id reply can also turn a SYNC unit \
-            into a legacy one (see the next test). Proposal: only silence (time-outs) counts \
-            toward link-down"]
 fn one_percent_corrupted_bytes_cause_only_retries_never_a_link_down() {
     for seed in [1, 2, 3, 4] {
         let world = corrupted_powermax_session(Model::Sync65, seed, 0.0);

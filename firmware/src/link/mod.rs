@@ -74,6 +74,10 @@ use crate::time::{Duration, Instant};
 
 /// Pause between two detection rounds, so a silent line is not hammered.
 pub const DETECT_ROUND_PAUSE: Duration = Duration::from_millis(250);
+/// A unit that answers, but only with damaged replies, is declared down after this many
+/// times [`LinkConfig::failures_before_down`] failed transactions in a row (a line too noisy
+/// to carry a single valid reply is no link, but a damaged reply is no silence either).
+pub const UNANSWERED_FACTOR: u8 = 4;
 /// Quiet time after HPR SLEEP (086), which no unit answers.
 pub const SLEEP_QUIET: Duration = Duration::from_millis(20);
 
@@ -167,7 +171,10 @@ pub struct PsLink {
     txn: Option<Transaction<Tag>>,
     modbus_rx: modbus_ascii::Decoder,
     hpr_rx: hpr_wire::Decoder,
+    /// Failed transactions in a row that heard nothing at all (silence).
     consecutive_failures: u8,
+    /// Failed transactions in a row, silent or with damaged replies only.
+    unanswered: u8,
     next_ticket: u32,
     raw_reply: Vec<u8, TX_CAPACITY>,
     /// The line has been heard echoing our requests (2-wire, receiver on).
@@ -229,6 +236,7 @@ impl PsLink {
             modbus_rx: modbus_ascii::Decoder::new(),
             hpr_rx: hpr_wire::Decoder::new(),
             consecutive_failures: 0,
+            unanswered: 0,
             next_ticket: 1,
             raw_reply: Vec::new(),
             line_echoes: false,
@@ -417,6 +425,7 @@ impl PsLink {
         }
         self.txn = None;
         self.consecutive_failures = 0;
+        self.unanswered = 0;
         self.modbus_rx.reset();
         self.hpr_rx.reset();
         self.start_detection(now, 0);
@@ -540,6 +549,7 @@ impl PsLink {
 
     fn link_up(&mut self, now: Instant, model: Model, family: Family) {
         self.consecutive_failures = 0;
+        self.unanswered = 0;
         self.core.status.family = Some(family);
         self.core.status.model = Some(model);
         self.core.status.link_up = true;
@@ -579,13 +589,12 @@ impl PsLink {
         }
     }
 
-    fn link_down(&mut self, now: Instant, last_error: TransactionError) {
+    fn link_down(&mut self, now: Instant, count: u8, last_error: TransactionError) {
         match &mut self.phase {
             Phase::Powermax(driver) => driver.abort(&mut self.core),
             Phase::Hpr(driver) => driver.abort(&mut self.core),
             Phase::Detecting(_) => return,
         }
-        let count = self.consecutive_failures;
         self.core.status.forget_unit();
         self.core.diagnostics.record_link_down();
         self.core.emit(LinkEvent::LinkDown {
@@ -593,6 +602,7 @@ impl PsLink {
         });
         self.txn = None;
         self.consecutive_failures = 0;
+        self.unanswered = 0;
         self.start_detection(now, 0);
     }
 
@@ -729,11 +739,17 @@ impl PsLink {
             return;
         };
         self.core.diagnostics.record_failed();
-        if error.is_retryable() {
-            self.consecutive_failures = self.consecutive_failures.saturating_add(1);
-        } else {
+        if !error.is_retryable() {
             // The unit answered (exception, unknown command): it is there.
             self.consecutive_failures = 0;
+            self.unanswered = 0;
+        } else if txn.heard_reply() {
+            // Damaged replies: the unit is there, the line is noisy. Not silence.
+            self.consecutive_failures = 0;
+            self.unanswered = self.unanswered.saturating_add(1);
+        } else {
+            self.consecutive_failures = self.consecutive_failures.saturating_add(1);
+            self.unanswered = self.unanswered.saturating_add(1);
         }
         match txn.tag().clone() {
             Tag::Detect(step, _) => match (step, error) {
@@ -754,8 +770,11 @@ impl PsLink {
                 }
             }
         }
-        if self.consecutive_failures >= self.core.config.failures_before_down {
-            self.link_down(now, error);
+        let down = self.core.config.failures_before_down;
+        if self.consecutive_failures >= down {
+            self.link_down(now, self.consecutive_failures, error);
+        } else if self.unanswered >= down.saturating_mul(UNANSWERED_FACTOR) {
+            self.link_down(now, self.unanswered, error);
         }
     }
 
@@ -763,6 +782,7 @@ impl PsLink {
         let txn = self.txn.take()?;
         self.core.diagnostics.record_ok();
         self.consecutive_failures = 0;
+        self.unanswered = 0;
         Some(txn.tag().clone())
     }
 

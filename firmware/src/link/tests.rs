@@ -1326,3 +1326,36 @@ fn a_reply_equal_to_its_request_is_told_from_the_echo_once_the_line_is_known_to_
     let next = bench.next_tx(bench.now + Duration::from_secs(1)).unwrap();
     assert_ne!(next, write, "the write was answered, the next step follows");
 }
+
+#[test]
+fn damaged_replies_are_no_silence_and_do_not_take_the_link_down_early() {
+    let (mut bench, _fake) = sync_bench();
+    bench.events();
+    let damaged = b":0104020005F0\r\n"; // LRC should be F5
+    let mut failed = 0;
+    while failed < 3 * UNANSWERED_FACTOR {
+        bench.next_tx(bench.now + Duration::from_secs(1)).unwrap();
+        bench.rx(5, damaged);
+        let d = bench.link.diagnostics();
+        if d.transactions_failed > u32::from(failed) {
+            failed += 1;
+            if failed < 3 * UNANSWERED_FACTOR {
+                assert!(
+                    bench.link.status().link_up,
+                    "after {failed} damaged transactions"
+                );
+            }
+        }
+    }
+    // A line that never carries one valid reply is no link either.
+    assert!(!bench.link.status().link_up);
+    assert!(bench.events().iter().any(|e| matches!(
+        e,
+        LinkEvent::LinkDown {
+            reason: LinkDownReason::ConsecutiveFailures {
+                count: 12,
+                last_error: TransactionError::BadChecksum
+            }
+        }
+    )));
+}

@@ -146,6 +146,7 @@ pub struct Transaction<T> {
     attempts_sent: u8,
     first_sent: Option<Instant>,
     last_sent: Option<Instant>,
+    heard_reply: bool,
     phase: Phase,
 }
 
@@ -170,6 +171,7 @@ impl<T> Transaction<T> {
             attempts_sent: 0,
             first_sent: None,
             last_sent: None,
+            heard_reply: false,
             phase: Phase::Ready { at: ready_at },
         })
     }
@@ -205,6 +207,12 @@ impl<T> Transaction<T> {
     /// When the latest attempt was handed out for transmission.
     pub fn last_sent(&self) -> Option<Instant> {
         self.last_sent
+    }
+
+    /// True when some attempt got a reply, even a damaged or unusable one: the unit is
+    /// there (only silence, [`TransactionError::Timeout`], says otherwise).
+    pub fn heard_reply(&self) -> bool {
+        self.heard_reply
     }
 
     /// True while an attempt is on the wire and its reply is awaited.
@@ -255,6 +263,9 @@ impl<T> Transaction<T> {
     /// The current attempt ended with a bad or unusable reply (or an error reply).
     /// Schedules a retry when the error allows it and attempts remain.
     pub fn attempt_failed(&mut self, now: Instant, error: TransactionError) -> Outcome {
+        if error != TransactionError::Timeout {
+            self.heard_reply = true;
+        }
         let attempts_allowed = u16::from(self.retries) + 1;
         if !error.is_retryable() || u16::from(self.attempts_sent) >= attempts_allowed {
             return Outcome::Failed(error);
