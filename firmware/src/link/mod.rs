@@ -19,6 +19,21 @@
 //!   some HPR settings) is told apart once the line is known to echo: the first copy in an
 //!   attempt is the echo, the second the reply.
 //!
+//! # Detection and link-down
+//! - Auto-detection asks Read Device Identification, then (no answer) the legacy register
+//!   probe, then HPR HELLO at 8N1, in rounds over the Modbus parity / stop-bit combinations.
+//! - A step whose replies all arrived damaged (bad LRC, garbled) is asked again, up to
+//!   [`DETECT_REASKS`] times: a damaged reply shows a unit that speaks this protocol at this
+//!   framing. Only silence or a clean exception moves detection on (a SYNC unit also answers
+//!   the legacy probe, so it must not get there by accident).
+//! - A unit the legacy probe found (no model known) is asked for its device identification
+//!   again at every slow-data refresh; a SYNC unit then changes family (pending commands fail
+//!   as on a link-down, `LinkUp` reports the unit again, kept settings are re-applied).
+//! - Only silence counts toward link-down: [`LinkConfig::failures_before_down`] failed
+//!   transactions in a row that heard nothing. Damaged replies prove the unit is there: they
+//!   are counted and retried, and only [`UNANSWERED_FACTOR`] times as many failures in a row
+//!   without a valid reply take the link down.
+//!
 //! ```
 //! use plasma_firmware::link::{LinkConfig, PsLink};
 //! use plasma_firmware::time::Instant;
@@ -78,6 +93,9 @@ pub const DETECT_ROUND_PAUSE: Duration = Duration::from_millis(250);
 /// times [`LinkConfig::failures_before_down`] failed transactions in a row (a line too noisy
 /// to carry a single valid reply is no link, but a damaged reply is no silence either).
 pub const UNANSWERED_FACTOR: u8 = 4;
+/// Times a detection step whose replies all arrived damaged is asked again before detection
+/// moves on (a damaged reply shows a unit that speaks this protocol at this framing).
+pub const DETECT_REASKS: u8 = 3;
 /// Quiet time after HPR SLEEP (086), which no unit answers.
 pub const SLEEP_QUIET: Duration = Duration::from_millis(20);
 
@@ -137,6 +155,8 @@ struct Detector {
     step: DetectStep,
     round: u32,
     not_before: Instant,
+    /// Times this step was asked again because its replies arrived damaged.
+    reasks: u8,
 }
 
 #[derive(Debug, Clone)]
@@ -229,6 +249,7 @@ impl PsLink {
                 step: DetectStep::DeviceId,
                 round: 0,
                 not_before: now,
+                reasks: 0,
             }),
             port: config.modbus_port(),
             wire: Wire::Modbus,
@@ -459,6 +480,7 @@ impl PsLink {
             step,
             round,
             not_before,
+            reasks: 0,
         });
         self.set_port_for(step, round);
     }
@@ -518,6 +540,20 @@ impl PsLink {
         }
     }
 
+    /// Ask the current detection step again (its replies were damaged), unless it has been
+    /// asked again [`DETECT_REASKS`] times already. Returns false when it has.
+    fn reask(&mut self, now: Instant) -> bool {
+        let Phase::Detecting(detector) = &mut self.phase else {
+            return false;
+        };
+        if detector.reasks >= DETECT_REASKS {
+            return false;
+        }
+        detector.reasks += 1;
+        detector.not_before = now;
+        true
+    }
+
     /// The step after `step` did not find a unit.
     fn detect_next(&mut self, now: Instant, step: DetectStep) {
         let Phase::Detecting(detector) = &self.phase else {
@@ -540,6 +576,7 @@ impl PsLink {
                     step,
                     round,
                     not_before: now,
+                    reasks: 0,
                 });
                 self.set_port_for(step, round);
             }
@@ -587,6 +624,25 @@ impl PsLink {
             // Unknown product code: the legacy register read decides.
             (None, _) => self.detect_next(now, DetectStep::DeviceId),
         }
+    }
+
+    /// A unit running as legacy (found by the register probe) answered device
+    /// identification with `model`. A SYNC unit changes family: pending commands fail as on a
+    /// link-down (kept settings stay and are re-applied), and `LinkUp` reports the unit again
+    /// with its model and family.
+    fn reidentified(&mut self, now: Instant, model: Option<PowerSupplyModel>) {
+        let Some(model) = model else {
+            return;
+        };
+        if model.addressing() != AddressingSystem::Sync {
+            self.core.status.model = Some(Model::Powermax(model));
+            return;
+        }
+        if let Phase::Powermax(driver) = &mut self.phase {
+            driver.abort(&mut self.core);
+        }
+        self.core.status.forget_unit();
+        self.link_up(now, Model::Powermax(model), Family::PowermaxSync);
     }
 
     fn link_down(&mut self, now: Instant, count: u8, last_error: TransactionError) {
@@ -739,7 +795,9 @@ impl PsLink {
             return;
         };
         self.core.diagnostics.record_failed();
-        if !error.is_retryable() {
+        if matches!(txn.tag(), Tag::Modbus(MbPurpose::Identify, _)) {
+            // Optional: a unit without device identification may stay silent to it.
+        } else if !error.is_retryable() {
             // The unit answered (exception, unknown command): it is there.
             self.consecutive_failures = 0;
             self.unanswered = 0;
@@ -757,6 +815,9 @@ impl PsLink {
                 (DetectStep::DeviceId, TransactionError::Exception(_)) => {
                     self.detected_modbus(now, None)
                 }
+                // Damaged replies: a unit answers at this framing; ask it again rather than
+                // take it for another kind (a SYNC unit also answers the legacy probe).
+                _ if txn.heard_reply() && self.reask(now) => {}
                 _ => self.detect_next(now, step),
             },
             Tag::Modbus(purpose, _) => {
@@ -897,6 +958,12 @@ impl PsLink {
                 self.link_up(now, Model::PowermaxUnidentified, family);
             }
             Tag::Detect(step, _) => self.detect_next(now, step),
+            Tag::Modbus(MbPurpose::Identify, _) => {
+                if let Response::ReadDeviceIdentification(id) = response {
+                    let model = device_id::model_from_device_id(&id).ok().flatten();
+                    self.reidentified(now, model);
+                }
+            }
             Tag::Modbus(purpose, _) => {
                 if let Phase::Powermax(driver) = &mut self.phase {
                     driver.on_response(now, purpose, &response, raw_len, &mut self.core);

@@ -5,15 +5,16 @@ use heapless::{Deque, Vec};
 use plasma_protocol::modbus_ascii::{self, Request, Response};
 use plasma_protocol::powermax::sync::{Cartridge, FaultLog, Identification, PsCounters};
 use plasma_protocol::powermax::{
-    Amps, CartridgeName, CartridgeUid, FaultCode, OperatingMode, Pressure, Psi,
+    Amps, CartridgeName, CartridgeUid, FaultCode, OperatingMode, Pressure, Psi, device_id,
 };
 
 use super::Core;
 use super::command::{LinkCommand, Refusal};
+use super::config::ProtocolChoice;
 use super::event::{CommandFailure, CommandOutput, LinkEvent, SettingsFailure, Ticket};
 use super::legacy;
 use super::modbus::{self, BlockPart, BlockPoller, MbRequest, read_values};
-use super::status::{ActiveFault, Family, Limits, PowermaxSettings};
+use super::status::{ActiveFault, Family, Limits, Model, PowermaxSettings};
 use super::sync::{self, SlowItem};
 use super::transaction::TransactionError;
 use crate::time::{Duration, Instant};
@@ -48,6 +49,9 @@ pub enum MbPurpose {
     CartridgeBlock(BlockPart),
     /// The UID read that notices a cartridge change.
     UidCheck,
+    /// Read Device Identification again for a unit detection found only by the legacy
+    /// register probe (a SYNC unit whose identification replies were lost is told apart).
+    Identify,
     /// The current step of the active command.
     Active,
 }
@@ -158,6 +162,8 @@ pub struct PowermaxDriver {
     reapply_pending: bool,
     reapply_not_before: Instant,
     blackout_until: Option<Instant>,
+    /// The unit refused device identification (an exception): it is not asked again.
+    identify_refused: bool,
     now: Instant,
 }
 
@@ -188,6 +194,7 @@ impl PowermaxDriver {
             reapply_pending: core.status.desired.is_some(),
             reapply_not_before: now,
             blackout_until: None,
+            identify_refused: false,
             now,
         }
     }
@@ -280,12 +287,28 @@ impl PowermaxDriver {
         }
         if now >= self.next_slow_at {
             self.next_slow_at = now + core.config.slow_data_interval;
-            if self.variant == Variant::Sync {
-                self.slow_pending |= SlowItem::ALL_ITEMS;
-                return self.slow_request();
+            match self.variant {
+                Variant::Sync => {
+                    self.slow_pending |= SlowItem::ALL_ITEMS;
+                    return self.slow_request();
+                }
+                Variant::Legacy if self.wants_identify(core) => {
+                    return MbRequest::from_request(&device_id::read_product_code())
+                        .map(|request| (MbPurpose::Identify, request, None));
+                }
+                Variant::Legacy => {}
             }
         }
         None
+    }
+
+    /// True while the unit runs as legacy only because the legacy register probe found it:
+    /// device identification is asked again at each slow-data refresh (auto-detection only).
+    fn wants_identify(&self, core: &Core) -> bool {
+        self.variant == Variant::Legacy
+            && !self.identify_refused
+            && core.config.protocol == ProtocolChoice::Auto
+            && core.status.model == Some(Model::PowermaxUnidentified)
     }
 
     fn active_request(
@@ -444,6 +467,8 @@ impl PowermaxDriver {
                 }
             }
             MbPurpose::Active => self.advance_active(now, response, raw_len, core),
+            // The link itself acts on the answer (it may change the family).
+            MbPurpose::Identify => {}
         }
     }
 
@@ -479,6 +504,11 @@ impl PowermaxDriver {
                 }
             }
             MbPurpose::UidCheck => {}
+            MbPurpose::Identify => {
+                if matches!(error, TransactionError::Exception(_)) {
+                    self.identify_refused = true;
+                }
+            }
             MbPurpose::Active => {
                 if let Some(active) = self.active.take() {
                     let failure = match active.job {

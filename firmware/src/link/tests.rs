@@ -1359,3 +1359,44 @@ fn damaged_replies_are_no_silence_and_do_not_take_the_link_down_early() {
         }
     )));
 }
+
+#[test]
+fn damaged_device_id_replies_are_asked_again_not_taken_for_silence() {
+    let mut bench = Bench::new(LinkConfig::default());
+    let damaged = b":012B0E0481000101010630383133333505\r\n";
+    for _ in 0..3 {
+        assert_eq!(bench.next_tx(ms(1000)).unwrap(), b":012B0E0401C1\r\n");
+        bench.rx(20, damaged);
+    }
+    // Not the legacy probe: device identification again.
+    assert_eq!(bench.next_tx(ms(1000)).unwrap(), b":012B0E0401C1\r\n");
+    bench.rx(20, b":012B0E0481000101010630383133333504\r\n");
+    assert_eq!(bench.link.status().family, Some(Family::PowermaxSync));
+}
+
+#[test]
+fn a_unit_found_by_the_legacy_probe_is_identified_again_later() {
+    let config = LinkConfig {
+        slow_data_interval: Duration::from_secs(1),
+        ..LinkConfig::default()
+    };
+    let mut bench = Bench::new(config);
+    // Device identification lost three times, the legacy probe answered.
+    for _ in 0..3 {
+        assert_eq!(bench.next_tx(ms(1000)).unwrap(), b":012B0E0401C1\r\n");
+    }
+    assert_eq!(bench.next_tx(ms(1000)).unwrap(), b":01042098000142\r\n");
+    bench.rx(5, b":010402006F8A\r\n");
+    assert_eq!(bench.link.status().family, Some(Family::PowermaxLegacy));
+    // At the next slow-data refresh the unit says it is a SYNC.
+    let mut fake = FakePowermax::sync();
+    bench.run(&mut fake, ms(2000));
+    assert_eq!(bench.link.status().family, Some(Family::PowermaxSync));
+    let ups = bench
+        .events()
+        .into_iter()
+        .filter(|e| matches!(e, LinkEvent::LinkUp { .. }))
+        .count();
+    assert_eq!(ups, 2);
+    assert_eq!(bench.link.diagnostics().link_downs, 0);
+}
