@@ -21,7 +21,13 @@
 //!
 //! # Detection and link-down
 //! - Auto-detection asks Read Device Identification, then (no answer) the legacy register
-//!   probe, then HPR HELLO at 8N1, in rounds over the Modbus parity / stop-bit combinations.
+//!   probe, then HPR HELLO at 8N1, in rounds over the Modbus parity / stop-bit combinations
+//!   (the configured one first).
+//! - Once a unit has been found, what found it (probe and port settings) is asked first after
+//!   a link-down, and again between every two probes of that search, so a unit switched off
+//!   and on is back within about half a second of its return while another kind of unit is
+//!   still found. While a Modbus unit is expected back, the HPR probe's retries follow at
+//!   once instead of riding through an HF-ignition blackout (no HPR cuts without a link).
 //! - A step whose replies all arrived damaged (bad LRC, garbled) is asked again, up to
 //!   [`DETECT_REASKS`] times: a damaged reply shows a unit that speaks this protocol at this
 //!   framing. Only silence or a clean exception moves detection on (a SYNC unit also answers
@@ -152,11 +158,25 @@ enum DetectStep {
 
 #[derive(Debug, Clone)]
 struct Detector {
+    /// The step asked now.
     step: DetectStep,
+    /// True while asking the last known-good probe ([`KnownGood`]); false in the search.
+    good: bool,
+    /// The full search: its round (which Modbus framing) and the step it asks next.
     round: u32,
+    search: DetectStep,
     not_before: Instant,
     /// Times this step was asked again because its replies arrived damaged.
     reasks: u8,
+}
+
+/// What found the unit last time: the probe (its first step) and the port settings. After a
+/// link-down it is asked first, and again between every two probes of the full search, so
+/// a unit that was switched off is found again within a probe or two of its return.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+struct KnownGood {
+    step: DetectStep,
+    port: PortConfig,
 }
 
 #[derive(Debug, Clone)]
@@ -199,6 +219,8 @@ pub struct PsLink {
     raw_reply: Vec<u8, TX_CAPACITY>,
     /// The line has been heard echoing our requests (2-wire, receiver on).
     line_echoes: bool,
+    /// What found the unit last time (kept across link-downs).
+    last_good: Option<KnownGood>,
     /// The echo of the attempt on the wire has been heard.
     echo_in_attempt: bool,
     now: Instant,
@@ -247,7 +269,9 @@ impl PsLink {
             },
             phase: Phase::Detecting(Detector {
                 step: DetectStep::DeviceId,
+                good: false,
                 round: 0,
+                search: DetectStep::DeviceId,
                 not_before: now,
                 reasks: 0,
             }),
@@ -262,6 +286,7 @@ impl PsLink {
             raw_reply: Vec::new(),
             line_echoes: false,
             echo_in_attempt: false,
+            last_good: None,
             now,
         };
         link.start_detection(now, 0);
@@ -437,7 +462,22 @@ impl PsLink {
             }
             Phase::Detecting(_) => false,
         };
-        self.core.config = sanitize(config);
+        let config = sanitize(config);
+        let old = self.core.config;
+        if (
+            config.protocol,
+            config.modbus_port(),
+            config.hpr_id,
+            config.node_address,
+        ) != (
+            old.protocol,
+            old.modbus_port(),
+            old.hpr_id,
+            old.node_address,
+        ) {
+            self.last_good = None;
+        }
+        self.core.config = config;
         self.core.status.forget_unit();
         if was_up {
             self.core.emit(LinkEvent::LinkDown {
@@ -474,25 +514,50 @@ impl PsLink {
         }
     }
 
+    /// Begin detecting from `not_before`: the last known-good probe first, if any, then the
+    /// full search from its `round`.
     fn start_detection(&mut self, not_before: Instant, round: u32) {
-        let step = self.first_step();
-        self.phase = Phase::Detecting(Detector {
-            step,
+        self.resume_detection(not_before, self.first_step(), round);
+    }
+
+    /// Like [`PsLink::start_detection`], with the search going on at `search`.
+    fn resume_detection(&mut self, not_before: Instant, search: DetectStep, round: u32) {
+        let mut detector = Detector {
+            step: search,
+            good: false,
             round,
+            search,
             not_before,
             reasks: 0,
-        });
-        self.set_port_for(step, round);
+        };
+        match self.last_good {
+            Some(good) => {
+                detector.step = good.step;
+                detector.good = true;
+                self.use_port(good.step, good.port);
+            }
+            None => self.set_port_for(search, round),
+        }
+        self.phase = Phase::Detecting(detector);
     }
 
     fn set_port_for(&mut self, step: DetectStep, round: u32) {
-        let (port, wire) = match step {
-            DetectStep::DeviceId | DetectStep::LegacyProbe => {
-                (self.modbus_framing(round), Wire::Modbus)
-            }
-            DetectStep::HprSleep | DetectStep::HprWake | DetectStep::HprHello => {
-                (PortConfig::HPR, Wire::Hpr)
-            }
+        let port = self.port_for(step, round);
+        self.use_port(step, port);
+    }
+
+    /// The port settings for `step` in search round `round`.
+    fn port_for(&self, step: DetectStep, round: u32) -> PortConfig {
+        match step {
+            DetectStep::DeviceId | DetectStep::LegacyProbe => self.modbus_framing(round),
+            DetectStep::HprSleep | DetectStep::HprWake | DetectStep::HprHello => PortConfig::HPR,
+        }
+    }
+
+    fn use_port(&mut self, step: DetectStep, port: PortConfig) {
+        let wire = match step {
+            DetectStep::DeviceId | DetectStep::LegacyProbe => Wire::Modbus,
+            DetectStep::HprSleep | DetectStep::HprWake | DetectStep::HprHello => Wire::Hpr,
         };
         self.port = port;
         if self.wire != wire {
@@ -554,14 +619,9 @@ impl PsLink {
         true
     }
 
-    /// The step after `step` did not find a unit.
-    fn detect_next(&mut self, now: Instant, step: DetectStep) {
-        let Phase::Detecting(detector) = &self.phase else {
-            return;
-        };
-        let round = detector.round;
-        let choice = self.core.config.protocol;
-        let next = match (step, choice) {
+    /// The step that follows `step` in a search round, `None` at the end of the round.
+    fn step_after(&self, step: DetectStep) -> Option<DetectStep> {
+        match (step, self.core.config.protocol) {
             (DetectStep::DeviceId, ProtocolChoice::Auto | ProtocolChoice::Legacy) => {
                 Some(DetectStep::LegacyProbe)
             }
@@ -569,22 +629,112 @@ impl PsLink {
             (DetectStep::HprSleep, _) => Some(DetectStep::HprWake),
             (DetectStep::HprWake, _) => Some(DetectStep::HprHello),
             _ => None,
-        };
-        match next {
-            Some(step) => {
-                self.phase = Phase::Detecting(Detector {
-                    step,
-                    round,
-                    not_before: now,
-                    reasks: 0,
-                });
-                self.set_port_for(step, round);
-            }
-            None => self.start_detection(now + DETECT_ROUND_PAUSE, round.wrapping_add(1)),
         }
     }
 
+    /// The search position after the probe that begins with `first` in round `round`, and
+    /// whether the round ended (a pause follows).
+    fn search_after(&self, first: DetectStep, round: u32) -> (DetectStep, u32, bool) {
+        // SLEEP, WAKE and HELLO are one probe.
+        let last = match first {
+            DetectStep::HprSleep | DetectStep::HprWake => DetectStep::HprHello,
+            other => other,
+        };
+        match self.step_after(last) {
+            Some(next) => (next, round, false),
+            None => (self.first_step(), round.wrapping_add(1), true),
+        }
+    }
+
+    /// The step `step` did not find a unit: go on with the next one.
+    fn detect_next(&mut self, now: Instant, step: DetectStep) {
+        let Phase::Detecting(detector) = &self.phase else {
+            return;
+        };
+        let (good_probe, round, search) = (detector.good, detector.round, detector.search);
+        // SLEEP and WAKE go on to HELLO whatever came of them.
+        let chained = matches!(step, DetectStep::HprSleep | DetectStep::HprWake);
+        let Some(good) = self.last_good else {
+            // No unit known yet: the search alone, a pause after each round.
+            match self.step_after(step) {
+                Some(next) => self.enter_search(now, next, round),
+                None => self.start_detection(now + DETECT_ROUND_PAUSE, round.wrapping_add(1)),
+            }
+            return;
+        };
+        if chained {
+            if let Some(next) = self.step_after(step) {
+                let port = self.port;
+                self.use_port(next, port);
+                if let Phase::Detecting(detector) = &mut self.phase {
+                    detector.step = next;
+                    detector.not_before = now;
+                    detector.reasks = 0;
+                }
+                return;
+            }
+        }
+        if good_probe {
+            // The known-good probe found nothing: one probe of the search, unless that is
+            // the known-good probe itself (then the one after it).
+            let mut position = (search, round, false);
+            if self.is_known_good(good, position.0, position.1) {
+                position = self.search_after(position.0, position.1);
+                if position.2 || self.is_known_good(good, position.0, position.1) {
+                    // Nothing else to try in this round: pause, then the known-good again.
+                    self.resume_detection(now + DETECT_ROUND_PAUSE, position.0, position.1);
+                    return;
+                }
+            }
+            self.enter_search(now, position.0, position.1);
+            return;
+        }
+        // A search probe found nothing: remember where the search stands, then the
+        // known-good probe again (after a pause at the end of a round).
+        let first = if step == DetectStep::HprHello {
+            self.hpr_first_step()
+        } else {
+            step
+        };
+        let (next, next_round, wrapped) = self.search_after(first, round);
+        let pause = if wrapped {
+            DETECT_ROUND_PAUSE
+        } else {
+            Duration::ZERO
+        };
+        self.resume_detection(now + pause, next, next_round);
+    }
+
+    /// True when the search probe `step` of round `round` is the known-good probe.
+    fn is_known_good(&self, good: KnownGood, step: DetectStep, round: u32) -> bool {
+        step == good.step && self.port_for(step, round) == good.port
+    }
+
+    fn enter_search(&mut self, now: Instant, step: DetectStep, round: u32) {
+        self.phase = Phase::Detecting(Detector {
+            step,
+            good: false,
+            round,
+            search: step,
+            not_before: now,
+            reasks: 0,
+        });
+        self.set_port_for(step, round);
+    }
+
     fn link_up(&mut self, now: Instant, model: Model, family: Family) {
+        if let Phase::Detecting(detector) = &self.phase {
+            let step = match detector.step {
+                DetectStep::HprHello | DetectStep::HprWake | DetectStep::HprSleep => {
+                    self.hpr_first_step()
+                }
+                other => other,
+            };
+            self.last_good = Some(KnownGood {
+                step,
+                port: self.port,
+            });
+        }
         self.consecutive_failures = 0;
         self.unanswered = 0;
         self.core.status.family = Some(family);
@@ -641,6 +791,9 @@ impl PsLink {
         if let Phase::Powermax(driver) = &mut self.phase {
             driver.abort(&mut self.core);
         }
+        if let Some(good) = &mut self.last_good {
+            good.step = DetectStep::DeviceId;
+        }
         self.core.status.forget_unit();
         self.link_up(now, Model::Powermax(model), Family::PowermaxSync);
     }
@@ -677,7 +830,7 @@ impl PsLink {
                 if now < detector.not_before {
                     return;
                 }
-                let step = detector.step;
+                let (step, good_probe) = (detector.step, detector.good);
                 let Some(expect) = self.detect_request(step) else {
                     return;
                 };
@@ -687,9 +840,16 @@ impl PsLink {
                         request.encode(config.node_address, &mut buf).ok(),
                         RetrySpacing::Immediate,
                     ),
+                    // While a Modbus unit is expected back, HPR is only checked for in
+                    // passing: its retries follow at once, so the known-good probe comes
+                    // round again soon (no HPR is cutting while no link is up).
                     DetectExpect::Hpr(request) => (
                         request.emit(&mut buf).ok(),
-                        RetrySpacing::RideThroughBlackout,
+                        if good_probe || self.last_good.is_none_or(|g| g.port == PortConfig::HPR) {
+                            RetrySpacing::RideThroughBlackout
+                        } else {
+                            RetrySpacing::Immediate
+                        },
                     ),
                 };
                 let Some(frame) = len

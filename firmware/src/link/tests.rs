@@ -1400,3 +1400,59 @@ fn a_unit_found_by_the_legacy_probe_is_identified_again_later() {
     assert_eq!(ups, 2);
     assert_eq!(bench.link.diagnostics().link_downs, 0);
 }
+
+#[test]
+fn after_a_link_down_the_known_good_probe_alternates_with_the_search() {
+    let (mut bench, mut fake) = sync_bench();
+    fake.silent = true;
+    bench.run(&mut fake, bench.now + Duration::from_millis(1100));
+    assert!(!bench.link.status().link_up);
+    let device_id = b":012B0E0401C1\r\n".to_vec();
+    // Probes (3 attempts each) and their ports for the next 8 s, nobody answering.
+    let mut probes: Vec<(Instant, PortConfig, Vec<u8>)> = Vec::new();
+    let until = bench.now + Duration::from_secs(8);
+    let mut last: Option<(PortConfig, Vec<u8>)> = None;
+    let mut repeats = 0;
+    while let Some(frame) = bench.next_tx(until) {
+        let port = bench.link.port_config();
+        let same = last
+            .as_ref()
+            .is_some_and(|(p, f)| *p == port && *f == frame);
+        if same && repeats < 2 {
+            repeats += 1;
+            continue;
+        }
+        repeats = 0;
+        last = Some((port, frame.clone()));
+        probes.push((bench.now, port, frame));
+    }
+    let good =
+        |p: &(Instant, PortConfig, Vec<u8>)| p.1 == PortConfig::MODBUS_DEFAULT && p.2 == device_id;
+    assert!(good(&probes[0]), "the known-good probe first");
+    // Every other probe is the known-good one; the search goes on in between.
+    for pair in probes.chunks(2) {
+        assert!(good(&pair[0]), "{:?}", pair[0]);
+        if let Some(search) = pair.get(1) {
+            assert!(!good(search), "{search:?}");
+        }
+    }
+    // The gap between two known-good probes stays short (here: under 1 s).
+    for w in probes
+        .iter()
+        .filter(|p| good(p))
+        .collect::<Vec<_>>()
+        .windows(2)
+    {
+        assert!(w[1].0.saturating_since(w[0].0) < Duration::from_secs(1));
+    }
+    // The search still covers the legacy probe, HPR and the other framings.
+    assert!(probes.iter().any(|p| p.2 == b":01042098000142\r\n"));
+    assert!(probes.iter().any(|p| p.1 == PortConfig::HPR));
+    assert!(probes.iter().any(|p| p.1.parity == Parity::Odd));
+    // Another kind of unit on the line is still found: an HPR answers HELLO.
+    while bench.link.port_config() != PortConfig::HPR {
+        bench.next_tx(bench.now + Duration::from_secs(5)).unwrap();
+    }
+    bench.rx(3, &hf(0, "HYPERFORMANCE130AUTO"));
+    assert_eq!(bench.link.status().family, Some(Family::Hpr));
+}
