@@ -324,3 +324,28 @@ fn after_an_hpr_power_blip_settings_still_take_effect() {
     );
     assert_eq!(world.sim::<Hpr>().nominal_amps(), 130);
 }
+
+#[test]
+fn continuous_polling_does_not_starve_hpr_slow_data() {
+    let link = plasma_firmware::link::LinkConfig {
+        poll_interval: plasma_firmware::link::LinkConfig::MIN_POLL_INTERVAL,
+        ..plasma_firmware::link::LinkConfig::default()
+    };
+    let mut world = World::new(Model::Hpr260, WorldOptions::with_link(link));
+    world.wait_link_up(secs(2)).expect("link up");
+    world
+        .run_until(
+            |w| {
+                let hpr = &w.link().status().hpr;
+                hpr.error_log.is_some() && hpr.timers.is_some()
+            },
+            secs(2),
+        )
+        .expect("slow data read at start");
+    assert_eq!(
+        world.command(LinkCommand::RefreshSlowData, secs(2)),
+        Ok(CommandOutput::Done)
+    );
+    let amps = world.command(LinkCommand::HprSetNominalAmps { amps: 150 }, secs(3));
+    assert_eq!(amps, Ok(CommandOutput::Value(150)));
+}

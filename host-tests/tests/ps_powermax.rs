@@ -750,14 +750,6 @@ fn a_unit_switched_off_and_on_is_found_again_within_a_second() {
 }
 
 #[test]
-#[ignore = "link bug: with a poll interval shorter than a poll transaction (allowed: 20 ms, \
-            while a SYNC poll takes ~44 ms) a poll is always due, and PowermaxDriver:: \
-            next_request serves a due poll before slow data and the cartridge-UID check, so \
-            those never run: the permitted limits are never read (every ApplySettings is \
-            refused with LimitsUnknown), RefreshSlowData never completes and a cartridge \
-            change is never noticed (the HPR driver orders its error log / timers the same \
-            way). Proposal: a due slow item goes before a poll every N polls, or the next \
-            poll is due poll_interval after the previous one *ended*"]
 fn continuous_polling_does_not_starve_slow_data_and_the_cartridge_check() {
     let link = plasma_firmware::link::LinkConfig {
         poll_interval: plasma_firmware::link::LinkConfig::MIN_POLL_INTERVAL,

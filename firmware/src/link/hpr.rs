@@ -94,6 +94,8 @@ pub struct HprDriver {
     next_slow_at: Instant,
     queue: Deque<(Ticket, HprJob), QUEUE_CAPACITY>,
     active: Option<(Ticket, HprJob)>,
+    /// The last transaction started was a poll (the next turn goes to due slow data).
+    polled_last: bool,
     now: Instant,
 }
 
@@ -131,6 +133,7 @@ impl HprDriver {
             next_slow_at: now + core.config.slow_data_interval,
             queue: Deque::new(),
             active: None,
+            polled_last: false,
             now,
         }
     }
@@ -212,22 +215,48 @@ impl HprDriver {
                 }
             };
         }
-        if now >= self.next_poll_at {
-            self.next_poll_at = now + core.config.poll_interval;
-            return typed(HprPurpose::Poll, Request::GetPsInfo);
+        // Round robin: after a poll, due slow data gets one transaction before the next
+        // poll, so a short poll interval cannot starve it.
+        let poll_due = now >= self.next_poll_at;
+        if poll_due && !self.polled_last {
+            return self.start_poll(now, core);
+        }
+        if let Some(request) = self.slow_request(now, core) {
+            self.polled_last = false;
+            return Some(request);
+        }
+        if poll_due {
+            return self.start_poll(now, core);
+        }
+        None
+    }
+
+    fn start_poll(
+        &mut self,
+        now: Instant,
+        core: &Core,
+    ) -> Option<(HprPurpose, HprExpect, Vec<u8, RAW_HPR_CAPACITY>)> {
+        self.next_poll_at = now + core.config.poll_interval;
+        self.polled_last = true;
+        typed(HprPurpose::Poll, Request::GetPsInfo)
+    }
+
+    fn slow_request(
+        &mut self,
+        now: Instant,
+        core: &Core,
+    ) -> Option<(HprPurpose, HprExpect, Vec<u8, RAW_HPR_CAPACITY>)> {
+        if now >= self.next_slow_at {
+            self.next_slow_at = now + core.config.slow_data_interval;
+            if !self.maxpro() {
+                self.slow_pending = SLOW_ERROR_LOG | SLOW_TIMERS;
+            }
         }
         if self.slow_pending & SLOW_ERROR_LOG != 0 {
             return typed(HprPurpose::SlowErrorLog, Request::ReadErrorLog);
         }
         if self.slow_pending & SLOW_TIMERS != 0 {
             return typed(HprPurpose::SlowTimers, Request::GetTimerCounter);
-        }
-        if now >= self.next_slow_at {
-            self.next_slow_at = now + core.config.slow_data_interval;
-            if !self.maxpro() {
-                self.slow_pending = SLOW_ERROR_LOG | SLOW_TIMERS;
-                return typed(HprPurpose::SlowErrorLog, Request::ReadErrorLog);
-            }
         }
         None
     }

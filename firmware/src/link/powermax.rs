@@ -164,6 +164,8 @@ pub struct PowermaxDriver {
     blackout_until: Option<Instant>,
     /// The unit refused device identification (an exception): it is not asked again.
     identify_refused: bool,
+    /// The last transaction started was a poll (the next turn goes to other due work).
+    polled_last: bool,
     now: Instant,
 }
 
@@ -195,6 +197,7 @@ impl PowermaxDriver {
             reapply_not_before: now,
             blackout_until: None,
             identify_refused: false,
+            polled_last: false,
             now,
         }
     }
@@ -267,14 +270,38 @@ impl PowermaxDriver {
         if let Some(request) = self.active_request(now, core) {
             return Some(request);
         }
-        if now >= self.next_poll_at {
-            self.poll.start();
-            self.poll_started = now;
-            return self
-                .poll
-                .request()
-                .map(|(request, part)| (MbPurpose::Poll(part), request, None));
+        // Round robin: after a poll, whatever else is due (slow data, the cartridge check)
+        // gets one transaction before the next poll, so a short poll interval cannot starve
+        // it; a poll waits for at most one such transaction.
+        let poll_due = now >= self.next_poll_at;
+        if poll_due && !self.polled_last {
+            return self.start_poll(now);
         }
+        if let Some(request) = self.other_request(now, core) {
+            self.polled_last = false;
+            return Some(request);
+        }
+        if poll_due {
+            return self.start_poll(now);
+        }
+        None
+    }
+
+    fn start_poll(&mut self, now: Instant) -> Option<(MbPurpose, MbRequest, Option<u8>)> {
+        self.poll.start();
+        self.poll_started = now;
+        self.polled_last = true;
+        self.poll
+            .request()
+            .map(|(request, part)| (MbPurpose::Poll(part), request, None))
+    }
+
+    /// Slow data, the cartridge check, the slow-data refresh: whatever is due.
+    fn other_request(
+        &mut self,
+        now: Instant,
+        core: &mut Core,
+    ) -> Option<(MbPurpose, MbRequest, Option<u8>)> {
         if let Some(request) = self.slow_request() {
             return Some(request);
         }
