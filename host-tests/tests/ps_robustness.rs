@@ -623,11 +623,6 @@ fn limits_are_known_soon_even_when_their_first_read_is_damaged() {
 }
 
 #[test]
-#[ignore = "link bug: when the SYNC cartridge block read fails (here: three damaged replies), \
-            status.cartridge stays None, the UID check is never sent, but \
-            PowermaxDriver::wake_at still returns the UID-check time: PsLink::poll_at() stays \
-            in the past, so a board task sleeping until poll_at() spins (here 2.2 s of 5 s, \
-            every millisecond between polls). wake_at should leave out what next_request will not do"]
 fn poll_at_never_stays_in_the_past() {
     let unit = DamagedReplies {
         inner: Model::Sync65.build(&host_tests::sim::SimOptions::default()),

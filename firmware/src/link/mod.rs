@@ -408,14 +408,15 @@ impl PsLink {
     }
 
     /// Earliest time at which `poll_transmit`/timers need attention. None = only new rx or
-    /// commands matter.
+    /// commands matter. After a `poll_transmit` that sent nothing, this is always later than
+    /// that call's `now`: a task sleeping until then never spins.
     pub fn poll_at(&self) -> Option<Instant> {
         if let Some(txn) = &self.txn {
             return Some(txn.poll_at());
         }
         match &self.phase {
             Phase::Detecting(d) => Some(d.not_before),
-            Phase::Powermax(d) => d.wake_at(),
+            Phase::Powermax(d) => d.wake_at(&self.core),
             Phase::Hpr(d) => d.wake_at(&self.core),
         }
     }

@@ -226,13 +226,14 @@ impl PowermaxDriver {
         self.blackout_until.is_some_and(|until| now < until)
     }
 
-    /// Earliest time the driver wants to send something.
-    pub fn wake_at(&self) -> Option<Instant> {
+    /// Earliest time the driver wants to send something. It mirrors
+    /// [`PowermaxDriver::next_request`]: a time not after the last call is only returned when
+    /// that call will send something, so a caller sleeping until then never spins.
+    pub fn wake_at(&self, core: &Core) -> Option<Instant> {
         if let Some(until) = self.blackout_until.filter(|&u| self.now < u) {
             return Some(until);
         }
         let busy = self.poll.in_cycle()
-            || self.cartridge.in_cycle()
             || self.active.is_some()
             || !self.queue.is_empty()
             || self.slow_pending != 0;
@@ -240,10 +241,12 @@ impl PowermaxDriver {
             return Some(self.now);
         }
         let mut at = self.next_poll_at.min(self.next_slow_at);
-        if self.variant == Variant::Sync {
+        // The UID check needs a cartridge read first (slow data, retried on its own).
+        if self.variant == Variant::Sync && core.status.cartridge.is_some() {
             at = at.min(self.next_uid_check_at);
         }
-        if self.reapply_pending {
+        // A re-apply waits for the limits (slow data, retried on its own).
+        if self.reapply_pending && core.status.limits.is_some() {
             at = at.min(self.reapply_not_before.max(self.now));
         }
         Some(at)
@@ -355,7 +358,21 @@ impl PowermaxDriver {
             }
         }
         let active = self.active.as_ref()?;
-        let request = self.step_request(active)?;
+        let Some(request) = self.step_request(active) else {
+            // A step that cannot be encoded (commands are validated before, so not expected):
+            // fail the command rather than leave it in the way.
+            if let Some(Active {
+                ticket: Some(ticket),
+                ..
+            }) = self.active.take()
+            {
+                core.emit(LinkEvent::CommandDone {
+                    ticket,
+                    result: Err(CommandFailure::Transaction(TransactionError::Malformed)),
+                });
+            }
+            return None;
+        };
         // The quick restart is never repeated: the unit may already be restarting.
         let retries = matches!(active.job, Job::QuickRestart).then_some(0);
         Some((MbPurpose::Active, request, retries))

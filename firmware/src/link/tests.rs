@@ -228,12 +228,9 @@ impl Bench {
                 return Some(frame);
             }
             let at = self.link.poll_at()?;
-            // Nothing to send yet although attention was asked for: let time move on.
-            let at = if at <= self.now {
-                self.now + Duration::from_millis(1)
-            } else {
-                at
-            };
+            // Nothing was sent: the link must not ask for this instant again (a board task
+            // sleeping until `poll_at` would spin).
+            assert!(at > self.now, "poll_at {at:?} not after {:?}", self.now);
             if at > limit {
                 return None;
             }
@@ -1455,4 +1452,33 @@ fn after_a_link_down_the_known_good_probe_alternates_with_the_search() {
     }
     bench.rx(3, &hf(0, "HYPERFORMANCE130AUTO"));
     assert_eq!(bench.link.status().family, Some(Family::Hpr));
+}
+
+#[test]
+fn a_reapply_waiting_for_limits_does_not_make_poll_at_spin() {
+    let (mut bench, mut fake) = sync_bench();
+    bench
+        .link
+        .submit(
+            bench.now,
+            LinkCommand::ApplySettings {
+                mode: OperatingMode::Cut,
+                current: amps(63),
+                pressure: Pressure::Auto,
+            },
+        )
+        .unwrap();
+    bench.run(&mut fake, bench.now + Duration::from_millis(300));
+    fake.silent = true;
+    bench.run(&mut fake, bench.now + Duration::from_millis(1000));
+    assert!(!bench.link.status().link_up);
+    // Back, but the limits cannot be read: the re-apply waits, and `Bench` checks that
+    // `poll_at` is never left in the past meanwhile.
+    fake.silent = false;
+    fake.undocumented.push(0x3001);
+    fake.writes.clear();
+    bench.run(&mut fake, bench.now + Duration::from_millis(3000));
+    assert!(bench.link.status().link_up);
+    assert!(bench.link.status().limits.is_none());
+    assert!(fake.writes.is_empty());
 }

@@ -53,7 +53,7 @@ pub struct WorldStats {
     pub steps: u64,
     /// Steps taken because a wake-up time at or before the current instant was still asked
     /// for after the instant had been processed: on a board, a busy loop. Each counts one
-    /// millisecond of spinning.
+    /// millisecond of spinning. A world whose count is not 0 panics when dropped.
     pub stale_wakeups: u64,
 }
 
@@ -596,6 +596,13 @@ impl<E: PsEndpoint> Drop for World<E> {
     fn drop(&mut self) {
         if !std::thread::panicking() {
             self.assert_safe();
+            // On a board, a wake-up time that stays in the past is a busy loop.
+            assert_eq!(
+                self.stats.stale_wakeups,
+                0,
+                "the endpoint kept asking for a time already processed (busy loop)\n{}",
+                self.trace.tail(10)
+            );
         }
     }
 }
