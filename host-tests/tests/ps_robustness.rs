@@ -604,10 +604,6 @@ fn two_wire(model: Model, master_echo: bool) -> World {
 }
 
 #[test]
-#[ignore = "link bug: a slow-data read that fails (all attempts damaged) is only tried again \
-            at the next slow-data refresh (30 s by default); until then the permitted limits \
-            are unknown and every ApplySettings is refused with LimitsUnknown. Proposal: \
-            retry failed slow items after a short back-off (e.g. 1 s)"]
 fn limits_are_known_soon_even_when_their_first_read_is_damaged() {
     // The three attempts at 0x3001-0x3005 (a 10-byte reply) arrive damaged.
     let unit = DamagedReplies {
@@ -624,10 +620,12 @@ fn limits_are_known_soon_even_when_their_first_read_is_damaged() {
 
 #[test]
 fn poll_at_never_stays_in_the_past() {
+    // Every cartridge block reply damaged: the read keeps failing (and is tried again with
+    // a growing wait).
     let unit = DamagedReplies {
         inner: Model::Sync65.build(&host_tests::sim::SimOptions::default()),
         prefix: b":010428",
-        damaged: 3,
+        damaged: usize::MAX,
     };
     let mut world = World::with_unit(Box::new(unit), WorldOptions::default());
     world.wait_link_up(secs(1)).expect("link up");
@@ -641,6 +639,17 @@ fn poll_at_never_stays_in_the_past() {
         0,
         "ms spent spinning on a past poll_at"
     );
+    // Tried again, with a growing wait (0.2, 0.4, 0.8, 1.6 s...): not at every turn.
+    let block = world
+        .trace()
+        .requests()
+        .filter(|f| f.modbus_function() == Some(0x04) && f.modbus_address() == Some(0x3030))
+        .count();
+    assert!(
+        (6..=21).contains(&block),
+        "{block} cartridge block requests"
+    );
+    assert!(world.link().status().limits.is_some());
 }
 
 #[test]

@@ -17,6 +17,7 @@ use plasma_protocol::hpr::{
 use super::Core;
 use super::command::{HprGasFlow, HprValue, LinkCommand, Refusal};
 use super::event::{CommandFailure, CommandOutput, LinkEvent, Ticket};
+use super::powermax::SLOW_RETRY_FIRST;
 use super::status::{ActiveFault, Family};
 use super::transaction::TransactionError;
 use crate::time::{Duration, Instant};
@@ -96,6 +97,10 @@ pub struct HprDriver {
     active: Option<(Ticket, HprJob)>,
     /// The last transaction started was a poll (the next turn goes to due slow data).
     polled_last: bool,
+    /// Slow items whose read failed on the line, read again from `slow_retry_at`.
+    slow_retry: u8,
+    slow_retry_at: Instant,
+    slow_backoff: Duration,
     now: Instant,
 }
 
@@ -134,6 +139,9 @@ impl HprDriver {
             queue: Deque::new(),
             active: None,
             polled_last: false,
+            slow_retry: 0,
+            slow_retry_at: now,
+            slow_backoff: SLOW_RETRY_FIRST,
             now,
         }
     }
@@ -181,7 +189,11 @@ impl HprDriver {
         if self.active.is_some() || !self.queue.is_empty() || self.slow_pending != 0 {
             return Some(self.now);
         }
-        Some(self.next_poll_at.min(self.next_slow_at))
+        let mut at = self.next_poll_at.min(self.next_slow_at);
+        if self.slow_retry != 0 {
+            at = at.min(self.slow_retry_at);
+        }
+        Some(at)
     }
 
     /// The next frame to send, if any, and what it is for.
@@ -252,6 +264,10 @@ impl HprDriver {
                 self.slow_pending = SLOW_ERROR_LOG | SLOW_TIMERS;
             }
         }
+        if self.slow_retry != 0 && now >= self.slow_retry_at {
+            self.slow_pending |= self.slow_retry;
+            self.slow_retry = 0;
+        }
         if self.slow_pending & SLOW_ERROR_LOG != 0 {
             return typed(HprPurpose::SlowErrorLog, Request::ReadErrorLog);
         }
@@ -307,13 +323,13 @@ impl HprDriver {
                 if let Some(Reply::ErrorLog(log)) = reply {
                     core.status.hpr.error_log = Some(*log);
                 }
-                self.slow_done(SLOW_ERROR_LOG, None, core);
+                self.slow_done(now, SLOW_ERROR_LOG, None, core);
             }
             (HprPurpose::SlowTimers, reply) => {
                 if let Some(Reply::TimerCounter(t)) = reply {
                     core.status.hpr.timers = Some(*t);
                 }
-                self.slow_done(SLOW_TIMERS, None, core);
+                self.slow_done(now, SLOW_TIMERS, None, core);
             }
             (HprPurpose::Active, reply) => {
                 let Some((ticket, job)) = self.active.take() else {
@@ -362,8 +378,8 @@ impl HprDriver {
         self.now = now;
         match purpose {
             HprPurpose::Poll | HprPurpose::State => {}
-            HprPurpose::SlowErrorLog => self.slow_done(SLOW_ERROR_LOG, Some(error), core),
-            HprPurpose::SlowTimers => self.slow_done(SLOW_TIMERS, Some(error), core),
+            HprPurpose::SlowErrorLog => self.slow_done(now, SLOW_ERROR_LOG, Some(error), core),
+            HprPurpose::SlowTimers => self.slow_done(now, SLOW_TIMERS, Some(error), core),
             HprPurpose::RemoteMode | HprPurpose::Active => {
                 if let Some((ticket, _)) = self.active.take() {
                     core.emit(LinkEvent::CommandDone {
@@ -409,8 +425,28 @@ impl HprDriver {
         core.status.active_fault = new;
     }
 
-    fn slow_done(&mut self, bit: u8, error: Option<TransactionError>, core: &mut Core) {
+    /// Like the Powermax driver: a read that failed on the line is tried again soon, with a
+    /// doubling wait; a final answer (501) waits for the next refresh.
+    fn slow_done(
+        &mut self,
+        now: Instant,
+        bit: u8,
+        error: Option<TransactionError>,
+        core: &mut Core,
+    ) {
         self.slow_pending &= !bit;
+        match error {
+            Some(e) if e.is_retryable() => {
+                if self.slow_retry == 0 {
+                    self.slow_retry_at = now + self.slow_backoff;
+                    self.slow_backoff =
+                        (self.slow_backoff + self.slow_backoff).min(core.config.slow_data_interval);
+                }
+                self.slow_retry |= bit;
+            }
+            Some(_) => {}
+            None => self.slow_backoff = SLOW_RETRY_FIRST,
+        }
         if error.is_some() {
             self.slow_error = error;
         }

@@ -48,6 +48,11 @@
 //! So even the shortest poll interval (a poll always due) starves nothing, and a poll waits
 //! for at most one other transaction (a new fault is still known within 250 ms p99 on SYNC).
 //!
+//! Slow data (limits first) is read at start, on a cartridge change, on request and at each
+//! refresh. A read that fails on the line is tried again soon, at the first turn after
+//! [`powermax::SLOW_RETRY_FIRST`], the wait doubling with each further failure up to the
+//! slow-data interval; an exception waits for the next refresh.
+//!
 //! ```
 //! use plasma_firmware::link::{LinkConfig, PsLink};
 //! use plasma_firmware::time::Instant;

@@ -26,6 +26,9 @@ pub const QUICK_RESTART_BLACKOUT: Duration = Duration::from_secs(2);
 pub const UID_CHECK_INTERVAL: Duration = Duration::from_secs(1);
 /// Wait before re-applying kept settings again after a re-apply failed.
 pub const REAPPLY_BACKOFF: Duration = Duration::from_secs(5);
+/// First wait before a slow-data read that failed on the line is tried again (doubling with
+/// each further failure, up to the slow-data interval).
+pub const SLOW_RETRY_FIRST: Duration = Duration::from_millis(200);
 /// Commands waiting behind the active one.
 const QUEUE_CAPACITY: usize = 4;
 
@@ -166,6 +169,11 @@ pub struct PowermaxDriver {
     identify_refused: bool,
     /// The last transaction started was a poll (the next turn goes to other due work).
     polled_last: bool,
+    /// Slow items whose read failed on the line, read again from `slow_retry_at`.
+    slow_retry: u8,
+    slow_retry_at: Instant,
+    /// Wait before the next retry of failed slow items.
+    slow_backoff: Duration,
     now: Instant,
 }
 
@@ -198,6 +206,9 @@ impl PowermaxDriver {
             blackout_until: None,
             identify_refused: false,
             polled_last: false,
+            slow_retry: 0,
+            slow_retry_at: now,
+            slow_backoff: SLOW_RETRY_FIRST,
             now,
         }
     }
@@ -241,6 +252,9 @@ impl PowermaxDriver {
             return Some(self.now);
         }
         let mut at = self.next_poll_at.min(self.next_slow_at);
+        if self.slow_retry != 0 {
+            at = at.min(self.slow_retry_at);
+        }
         // The UID check needs a cartridge read first (slow data, retried on its own).
         if self.variant == Variant::Sync && core.status.cartridge.is_some() {
             at = at.min(self.next_uid_check_at);
@@ -305,6 +319,10 @@ impl PowermaxDriver {
         now: Instant,
         core: &mut Core,
     ) -> Option<(MbPurpose, MbRequest, Option<u8>)> {
+        if self.slow_retry != 0 && now >= self.slow_retry_at {
+            self.slow_pending |= self.slow_retry;
+            self.slow_retry = 0;
+        }
         if let Some(request) = self.slow_request() {
             return Some(request);
         }
@@ -471,13 +489,14 @@ impl PowermaxDriver {
                 None => self.on_failed(now, purpose, TransactionError::Mismatch, core),
             },
             MbPurpose::Slow(item) => {
+                let mut error = None;
                 if let Some(values) = read_values(response) {
                     match item {
-                        SlowItem::Permitted => {
-                            if let Some(limits) = sync::limits(values) {
-                                core.status.limits = Some(limits);
-                            }
-                        }
+                        SlowItem::Permitted => match sync::limits(values) {
+                            Some(limits) => core.status.limits = Some(limits),
+                            // Settings depend on them: read them again soon.
+                            None => error = Some(TransactionError::Malformed),
+                        },
                         SlowItem::Identification => {
                             core.status.identification = Identification::decode(values).ok();
                         }
@@ -491,14 +510,14 @@ impl PowermaxDriver {
                         SlowItem::Cartridge => {}
                     }
                 }
-                self.slow_done(item, None, core);
+                self.slow_done(now, item, error, core);
             }
             MbPurpose::CartridgeBlock(part) => {
                 let Some(values) = read_values(response) else {
                     return self.on_failed(now, purpose, TransactionError::Mismatch, core);
                 };
                 if self.cartridge.on_values(part, values) {
-                    self.finish_cartridge(core);
+                    self.finish_cartridge(now, core);
                 }
             }
             MbPurpose::UidCheck => {
@@ -536,15 +555,15 @@ impl PowermaxDriver {
                     self.next_poll_at = now + core.config.poll_interval;
                 }
             }
-            MbPurpose::Slow(item) => self.slow_done(item, Some(error), core),
+            MbPurpose::Slow(item) => self.slow_done(now, item, Some(error), core),
             MbPurpose::CartridgeBlock(part) => {
                 if modbus::is_illegal_address(error) {
                     if self.cartridge.on_illegal_address(part) {
-                        self.finish_cartridge(core);
+                        self.finish_cartridge(now, core);
                     }
                 } else {
                     self.cartridge.abort();
-                    self.slow_done(SlowItem::Cartridge, Some(error), core);
+                    self.slow_done(now, SlowItem::Cartridge, Some(error), core);
                 }
             }
             MbPurpose::UidCheck => {}
@@ -656,7 +675,7 @@ impl PowermaxDriver {
         }
     }
 
-    fn finish_cartridge(&mut self, core: &mut Core) {
+    fn finish_cartridge(&mut self, now: Instant, core: &mut Core) {
         if self.cartridge.complete()
             && let Ok(cartridge) = Cartridge::decode(self.cartridge.registers())
         {
@@ -671,11 +690,33 @@ impl PowermaxDriver {
             }
             core.status.cartridge = Some(cartridge);
         }
-        self.slow_done(SlowItem::Cartridge, None, core);
+        self.slow_done(now, SlowItem::Cartridge, None, core);
     }
 
-    fn slow_done(&mut self, item: SlowItem, error: Option<TransactionError>, core: &mut Core) {
+    /// A slow-data item is read (`error` = None) or failed for good. A failure on the line
+    /// is read again soon: at the first turn after [`SLOW_RETRY_FIRST`], the wait doubling
+    /// with each failure up to the slow-data interval. A final answer (an exception) waits
+    /// for the next refresh.
+    fn slow_done(
+        &mut self,
+        now: Instant,
+        item: SlowItem,
+        error: Option<TransactionError>,
+        core: &mut Core,
+    ) {
         self.slow_pending &= !item.bit();
+        match error {
+            Some(e) if e.is_retryable() => {
+                if self.slow_retry == 0 {
+                    self.slow_retry_at = now + self.slow_backoff;
+                    self.slow_backoff =
+                        (self.slow_backoff + self.slow_backoff).min(core.config.slow_data_interval);
+                }
+                self.slow_retry |= item.bit();
+            }
+            Some(_) => {}
+            None => self.slow_backoff = SLOW_RETRY_FIRST,
+        }
         if error.is_some() {
             self.slow_error = error;
         }
