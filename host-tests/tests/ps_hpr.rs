@@ -276,10 +276,6 @@ fn an_hpr_error_that_blocks_start_holds_start_off_and_is_reported() {
 }
 
 #[test]
-#[ignore = "link bug: HPR settings are not kept: after the unit power-cycles (link down and \
-            back) the nominal current the CNC set (058) is not re-applied, the unit runs at \
-            its rating; the Powermax driver keeps and re-applies its settings, the HPR driver \
-            has no equivalent"]
 fn hpr_nominal_amps_are_reapplied_after_a_power_cycle() {
     let mut world = ready(Model::Hpr260);
     assert_eq!(
@@ -300,7 +296,7 @@ fn hpr_nominal_amps_are_reapplied_after_a_power_cycle() {
 #[ignore = "link bug: after an HPR power blip shorter than the link-down time, the link still \
             believes REMOTE_MODE (004) was accepted (status.hpr.remote_accepted stays true), \
             never sends 004 again, and the unit (out of remote mode) ignores 058: the command \
-            completes Ok(Value(260)) with the old value instead of setting 130"]
+            fails (NotAccepted: the unit answers its old value) instead of setting 130"]
 fn after_an_hpr_power_blip_settings_still_take_effect() {
     let mut world = ready(Model::Hpr260);
     assert_eq!(

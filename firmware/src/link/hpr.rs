@@ -16,7 +16,7 @@ use plasma_protocol::hpr::{
 
 use super::Core;
 use super::command::{HprGasFlow, HprValue, LinkCommand, Refusal};
-use super::event::{CommandFailure, CommandOutput, LinkEvent, Ticket};
+use super::event::{CommandFailure, CommandOutput, LinkEvent, SettingsFailure, Ticket};
 use super::powermax::SLOW_RETRY_FIRST;
 use super::status::{ActiveFault, Family};
 use super::transaction::TransactionError;
@@ -83,6 +83,93 @@ impl HprJob {
 const SLOW_ERROR_LOG: u8 = 1;
 const SLOW_TIMERS: u8 = 2;
 
+/// Wait before re-applying kept settings again after a re-apply failed.
+pub const REAPPLY_BACKOFF: Duration = Duration::from_secs(5);
+/// Kept settings requests (one per kind at most: see [`HprKept::keep`]).
+pub const KEPT_CAPACITY: usize = 6;
+
+/// What a settings request sets (bits), to tell which earlier requests a new one replaces.
+const SETS_AMPS: u8 = 1;
+const SETS_CORNER: u8 = 2;
+const SETS_GASES: u8 = 4;
+const SETS_FLOWS: u8 = 8;
+const SETS_PRESSURES: u8 = 16;
+
+/// What `request` sets; 0 for a request that is no setting.
+fn sets(request: &Request) -> u8 {
+    match request {
+        Request::SetNominalAmps { .. } => SETS_AMPS,
+        Request::SetCornerCurrent { .. } => SETS_CORNER,
+        Request::SetInletGases(_) => SETS_GASES,
+        Request::SetProcess { .. } => SETS_AMPS | SETS_GASES,
+        Request::SetAllParameters(_) => SETS_AMPS | SETS_CORNER | SETS_GASES | SETS_FLOWS,
+        Request::SetAllParametersMaxPro200(_) => SETS_AMPS | SETS_GASES | SETS_PRESSURES,
+        _ => 0,
+    }
+}
+
+/// The nominal current `request` sets, if it sets one.
+fn amps_of(request: &Request) -> Option<u16> {
+    match request {
+        Request::SetNominalAmps { amps } | Request::SetProcess { amps, .. } => Some(*amps),
+        Request::SetAllParameters(p) => Some(p.amps),
+        Request::SetAllParametersMaxPro200(p) => Some(p.amps),
+        _ => None,
+    }
+}
+
+/// The HPR / MaxPro200 settings the CNC asked for and the unit confirmed, oldest first. They
+/// are kept across link-downs and re-applied (after 004 REMOTE_MODE) when the unit returns or
+/// shows that it restarted, like the Powermax settings.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct HprKept {
+    requests: Vec<Request, KEPT_CAPACITY>,
+}
+
+impl HprKept {
+    /// The kept requests, in the order they are re-applied.
+    pub fn as_slice(&self) -> &[Request] {
+        &self.requests
+    }
+
+    /// True when nothing is kept.
+    pub fn is_empty(&self) -> bool {
+        self.requests.is_empty()
+    }
+
+    /// Keep `request` (a confirmed setting); earlier requests whose every setting it sets
+    /// again are dropped.
+    pub fn keep(&mut self, request: Request) {
+        let new = sets(&request);
+        if new == 0 {
+            return;
+        }
+        self.requests.retain(|old| sets(old) & !new != 0);
+        if self.requests.is_full() {
+            self.requests.remove(0);
+        }
+        let _ = self.requests.push(request);
+    }
+
+    /// Forget everything kept.
+    pub fn clear(&mut self) {
+        self.requests.clear();
+    }
+
+    /// The nominal current the kept settings give, if they set one.
+    pub fn amps(&self) -> Option<u16> {
+        self.requests.iter().rev().find_map(amps_of)
+    }
+}
+
+/// The command being carried out.
+#[derive(Debug, Clone, PartialEq, Eq)]
+struct ActiveJob {
+    /// `None` for a re-apply the link started itself.
+    ticket: Option<Ticket>,
+    job: HprJob,
+}
+
 /// Driver state for one detected HPR or MaxPro200.
 #[derive(Debug, Clone)]
 pub struct HprDriver {
@@ -94,7 +181,12 @@ pub struct HprDriver {
     slow_tickets: Vec<Ticket, QUEUE_CAPACITY>,
     next_slow_at: Instant,
     queue: Deque<(Ticket, HprJob), QUEUE_CAPACITY>,
-    active: Option<(Ticket, HprJob)>,
+    active: Option<ActiveJob>,
+    /// Kept settings still to re-apply in this re-apply run.
+    reapply: Deque<Request, KEPT_CAPACITY>,
+    /// Kept settings must be re-applied (from `reapply_not_before`, in state 2 or 3).
+    reapply_pending: bool,
+    reapply_not_before: Instant,
     /// The last transaction started was a poll (the next turn goes to due slow data).
     polled_last: bool,
     /// Slow items whose read failed on the line, read again from `slow_retry_at`.
@@ -138,6 +230,9 @@ impl HprDriver {
             next_slow_at: now + core.config.slow_data_interval,
             queue: Deque::new(),
             active: None,
+            reapply: Deque::new(),
+            reapply_pending: !core.hpr_kept.is_empty(),
+            reapply_not_before: now,
             polled_last: false,
             slow_retry: 0,
             slow_retry_at: now,
@@ -168,7 +263,13 @@ impl HprDriver {
 
     /// True when the active command is a RAW forward.
     pub fn active_is_raw(&self) -> bool {
-        matches!(self.active, Some((_, HprJob::Raw { .. })))
+        matches!(
+            self.active,
+            Some(ActiveJob {
+                job: HprJob::Raw { .. },
+                ..
+            })
+        )
     }
 
     fn in_pilot_arc(&self, core: &Core) -> bool {
@@ -186,10 +287,17 @@ impl HprDriver {
         if self.in_pilot_arc(core) {
             return Some(self.next_poll_at);
         }
-        if self.active.is_some() || !self.queue.is_empty() || self.slow_pending != 0 {
+        if self.active.is_some()
+            || !self.queue.is_empty()
+            || !self.reapply.is_empty()
+            || self.slow_pending != 0
+        {
             return Some(self.now);
         }
         let mut at = self.next_poll_at.min(self.next_slow_at);
+        if self.reapply_pending && self.reapply_allowed(core) {
+            at = at.min(self.reapply_not_before.max(self.now));
+        }
         if self.slow_retry != 0 {
             at = at.min(self.slow_retry_at);
         }
@@ -214,9 +322,9 @@ impl HprDriver {
             return typed(HprPurpose::State, Request::GetState);
         }
         if self.active.is_none() {
-            self.active = self.queue.pop_front();
+            self.next_job(now, core);
         }
-        if let Some((_, job)) = &self.active {
+        if let Some(ActiveJob { job, .. }) = &self.active {
             if job.needs_remote() && !core.status.hpr.remote_accepted {
                 return typed(HprPurpose::RemoteMode, Request::RemoteMode);
             }
@@ -241,6 +349,62 @@ impl HprDriver {
             return self.start_poll(now, core);
         }
         None
+    }
+
+    /// States in which kept settings are re-applied: 2 (purge) and 3 (idle / ready), the
+    /// states in which every settings command is accepted (137 and MaxPro 095 need them).
+    fn reapply_allowed(&self, core: &Core) -> bool {
+        core.status.hpr.state.is_some_and(|s| matches!(s.0, 2 | 3))
+    }
+
+    /// Pick the next job: the rest of a re-apply run (older settings first), a new re-apply
+    /// run when due, or the next command.
+    fn next_job(&mut self, now: Instant, core: &mut Core) {
+        if self.reapply.is_empty()
+            && self.reapply_pending
+            && now >= self.reapply_not_before
+            && self.reapply_allowed(core)
+        {
+            self.reapply_pending = false;
+            for request in core.hpr_kept.as_slice() {
+                let _ = self.reapply.push_back(*request);
+            }
+        }
+        if let Some(request) = self.reapply.pop_front() {
+            self.active = Some(ActiveJob {
+                ticket: None,
+                job: HprJob::Typed(request),
+            });
+            return;
+        }
+        self.active = self.queue.pop_front().map(|(ticket, job)| ActiveJob {
+            ticket: Some(ticket),
+            job,
+        });
+    }
+
+    /// A settings job (re-apply or command) did not end well: a command fails with
+    /// `failure`; a re-apply reports `reason` and is tried again later.
+    fn job_failed(
+        &mut self,
+        now: Instant,
+        job: ActiveJob,
+        failure: CommandFailure,
+        reason: SettingsFailure,
+        core: &mut Core,
+    ) {
+        match job.ticket {
+            Some(ticket) => core.emit(LinkEvent::CommandDone {
+                ticket,
+                result: Err(failure),
+            }),
+            None => {
+                core.emit(LinkEvent::SettingsFailed { reason });
+                self.reapply.clear();
+                self.reapply_pending = true;
+                self.reapply_not_before = now + REAPPLY_BACKOFF;
+            }
+        }
     }
 
     fn start_poll(
@@ -312,11 +476,14 @@ impl HprDriver {
                         core.status.remote = true;
                         core.emit(LinkEvent::RemoteModeChanged { remote: true });
                     }
-                } else if let Some((ticket, _)) = self.active.take() {
-                    core.emit(LinkEvent::CommandDone {
-                        ticket,
-                        result: Err(CommandFailure::NotAccepted),
-                    });
+                } else if let Some(job) = self.active.take() {
+                    self.job_failed(
+                        now,
+                        job,
+                        CommandFailure::NotAccepted,
+                        SettingsFailure::NotAccepted,
+                        core,
+                    );
                 }
             }
             (HprPurpose::SlowErrorLog, reply) => {
@@ -332,39 +499,97 @@ impl HprDriver {
                 self.slow_done(now, SLOW_TIMERS, None, core);
             }
             (HprPurpose::Active, reply) => {
-                let Some((ticket, job)) = self.active.take() else {
+                let Some(active) = self.active.take() else {
                     return;
                 };
-                let result = match (&job, reply) {
-                    (HprJob::Raw { .. }, _) => Ok(CommandOutput::Raw { len: raw_len }),
-                    (_, Some(Reply::NominalAmps(amps))) => {
-                        core.status.hpr.nominal_amps = Some(*amps);
-                        Ok(CommandOutput::Value(*amps))
-                    }
-                    (_, Some(Reply::CornerCurrentSet(percent))) => {
-                        Ok(CommandOutput::Value(*percent))
-                    }
-                    (_, Some(Reply::Ack { result, .. })) => {
-                        if *result == Acceptance::Accepted {
-                            Ok(CommandOutput::Done)
-                        } else {
-                            Err(CommandFailure::NotAccepted)
-                        }
-                    }
-                    (_, Some(Reply::ErrorLog(log))) => {
-                        core.status.hpr.error_log = Some(*log);
-                        Ok(CommandOutput::ErrorLog(*log))
-                    }
-                    (_, Some(Reply::TimerCounter(t))) => {
-                        core.status.hpr.timers = Some(*t);
-                        Ok(CommandOutput::Done)
-                    }
-                    _ => Ok(CommandOutput::Done),
-                };
-                core.emit(LinkEvent::CommandDone { ticket, result });
+                self.finish_job(now, active, reply, raw_len, core);
             }
             _ => {}
         }
+    }
+
+    /// The reply to the active job arrived. A setting counts as done (and is kept) only when
+    /// the unit's answer shows the value asked for; otherwise it is reported as not accepted.
+    fn finish_job(
+        &mut self,
+        now: Instant,
+        active: ActiveJob,
+        reply: Option<&Reply<'_>>,
+        raw_len: usize,
+        core: &mut Core,
+    ) {
+        let request = match &active.job {
+            HprJob::Typed(request) => Some(*request),
+            HprJob::Raw { .. } => None,
+        };
+        let Some(request) = request.filter(|r| sets(r) != 0) else {
+            return Self::finish_other(active, reply, raw_len, core);
+        };
+        // Whether the setting took effect, by the unit's answer.
+        let taken = match (request, reply) {
+            (Request::SetNominalAmps { amps }, Some(Reply::NominalAmps(set))) => {
+                core.status.hpr.nominal_amps = Some(*set);
+                *set == amps
+            }
+            (Request::SetCornerCurrent { percent }, Some(Reply::CornerCurrentSet(set))) => {
+                *set == u16::from(percent)
+            }
+            (_, Some(Reply::Ack { result, .. })) => *result == Acceptance::Accepted,
+            _ => false,
+        };
+        if taken {
+            core.hpr_kept.keep(request);
+            // A re-apply run still to come must not set older values again.
+            let new = sets(&request);
+            self.reapply.retain(|old| sets(old) & !new != 0);
+            if let Some(ticket) = active.ticket {
+                let output = match reply {
+                    Some(Reply::NominalAmps(set)) | Some(Reply::CornerCurrentSet(set)) => {
+                        CommandOutput::Value(*set)
+                    }
+                    _ => CommandOutput::Done,
+                };
+                core.emit(LinkEvent::CommandDone {
+                    ticket,
+                    result: Ok(output),
+                });
+            }
+        } else {
+            self.job_failed(
+                now,
+                active,
+                CommandFailure::NotAccepted,
+                SettingsFailure::NotAccepted,
+                core,
+            );
+        }
+    }
+
+    /// The reply to a job that sets nothing (RAW, gas tests, logs...).
+    fn finish_other(active: ActiveJob, reply: Option<&Reply<'_>>, raw_len: usize, core: &mut Core) {
+        let Some(ticket) = active.ticket else {
+            return;
+        };
+        let result = match (&active.job, reply) {
+            (HprJob::Raw { .. }, _) => Ok(CommandOutput::Raw { len: raw_len }),
+            (_, Some(Reply::Ack { result, .. })) => {
+                if *result == Acceptance::Accepted {
+                    Ok(CommandOutput::Done)
+                } else {
+                    Err(CommandFailure::NotAccepted)
+                }
+            }
+            (_, Some(Reply::ErrorLog(log))) => {
+                core.status.hpr.error_log = Some(*log);
+                Ok(CommandOutput::ErrorLog(*log))
+            }
+            (_, Some(Reply::TimerCounter(t))) => {
+                core.status.hpr.timers = Some(*t);
+                Ok(CommandOutput::Done)
+            }
+            _ => Ok(CommandOutput::Done),
+        };
+        core.emit(LinkEvent::CommandDone { ticket, result });
     }
 
     /// `purpose` failed for good.
@@ -381,11 +606,14 @@ impl HprDriver {
             HprPurpose::SlowErrorLog => self.slow_done(now, SLOW_ERROR_LOG, Some(error), core),
             HprPurpose::SlowTimers => self.slow_done(now, SLOW_TIMERS, Some(error), core),
             HprPurpose::RemoteMode | HprPurpose::Active => {
-                if let Some((ticket, _)) = self.active.take() {
-                    core.emit(LinkEvent::CommandDone {
-                        ticket,
-                        result: Err(CommandFailure::Transaction(error)),
-                    });
+                if let Some(job) = self.active.take() {
+                    self.job_failed(
+                        now,
+                        job,
+                        CommandFailure::Transaction(error),
+                        SettingsFailure::Transaction(error),
+                        core,
+                    );
                 }
             }
         }
@@ -630,12 +858,18 @@ impl HprDriver {
     /// The link went down: every pending command fails.
     pub fn abort(&mut self, core: &mut Core) {
         let failed = Err(CommandFailure::LinkDown);
-        if let Some((ticket, _)) = self.active.take() {
+        if let Some(ActiveJob {
+            ticket: Some(ticket),
+            ..
+        }) = self.active.take()
+        {
             core.emit(LinkEvent::CommandDone {
                 ticket,
                 result: failed,
             });
         }
+        // Kept settings stay (in the core) and are re-applied when the unit is back.
+        self.reapply.clear();
         while let Some((ticket, _)) = self.queue.pop_front() {
             core.emit(LinkEvent::CommandDone {
                 ticket,
@@ -731,4 +965,47 @@ fn parse_raw(bytes: &[u8]) -> Result<HprJob, Refusal> {
         id: frame.id,
         frame: frame_bytes,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use plasma_protocol::hpr::HprParameters;
+
+    #[test]
+    fn a_kept_setting_replaces_the_earlier_ones_it_sets_again() {
+        let mut kept = HprKept::default();
+        let gases = GasPair {
+            plasma: GasCode(1),
+            shield: GasCode(2),
+        };
+        kept.keep(Request::SetNominalAmps { amps: 130 });
+        kept.keep(Request::SetCornerCurrent { percent: 70 });
+        kept.keep(Request::SetInletGases(gases));
+        kept.keep(Request::SetNominalAmps { amps: 200 });
+        assert_eq!(
+            kept.as_slice(),
+            [
+                Request::SetCornerCurrent { percent: 70 },
+                Request::SetInletGases(gases),
+                Request::SetNominalAmps { amps: 200 },
+            ]
+        );
+        assert_eq!(kept.amps(), Some(200));
+        // All parameters set everything the others set.
+        let all = HprParameters {
+            amps: 260,
+            corner_percent: 80,
+            gases,
+            flows: GasFlows::default(),
+        };
+        kept.keep(Request::SetAllParameters(all));
+        assert_eq!(kept.as_slice(), [Request::SetAllParameters(all)]);
+        kept.keep(Request::SetCornerCurrent { percent: 60 });
+        assert_eq!(kept.as_slice().len(), 2);
+        assert_eq!(kept.amps(), Some(260));
+        // Not settings: not kept.
+        kept.keep(Request::ClearWarnings);
+        assert_eq!(kept.as_slice().len(), 2);
+    }
 }

@@ -40,6 +40,16 @@
 //!   are counted and retried, and only [`UNANSWERED_FACTOR`] times as many failures in a row
 //!   without a valid reply take the link down.
 //!
+//! # Kept settings
+//! Settings the CNC set and the unit confirmed are kept and re-applied after the unit
+//! power-cycles or the link returns: Powermax mode, current and pressure
+//! ([`UnitStatus::desired`]); HPR / MaxPro200 nominal current, corner current, process,
+//! all parameters and inlet gases ([`PsLink::hpr_kept_settings`], a later setting replacing
+//! what it sets again), re-applied after 004 REMOTE_MODE once the unit is in state 2 or 3.
+//! An HPR setting counts as done only when the unit's answer shows the value asked for. A
+//! re-apply that fails reports `SettingsFailed` and is tried again after a back-off: a
+//! setting is never silently lost.
+//!
 //! # Scheduling
 //! One request at a time, chosen in this order: the rest of a poll cycle split into parts,
 //! the active command (or a re-apply of kept settings), then polls and everything else in
@@ -98,6 +108,7 @@ pub use status::{ActiveFault, Family, Limits, Model, PowermaxSettings, UnitStatu
 pub use transaction::TransactionError;
 
 use event::EventQueue;
+pub use hpr::HprKept;
 use hpr::{HprDriver, HprExpect, HprPurpose};
 use modbus::MbRequest;
 use powermax::{MbPurpose, PowermaxDriver, Variant};
@@ -137,6 +148,9 @@ pub struct Core {
     pub status: UnitStatus,
     /// Counters.
     pub diagnostics: Diagnostics,
+    /// HPR / MaxPro200 settings to keep and re-apply (the Powermax ones are
+    /// [`UnitStatus::desired`]).
+    pub hpr_kept: HprKept,
     events: EventQueue,
 }
 
@@ -278,6 +292,7 @@ impl PsLink {
                 config,
                 status: UnitStatus::default(),
                 diagnostics: Diagnostics::default(),
+                hpr_kept: HprKept::default(),
                 events: EventQueue::new(),
             },
             phase: Phase::Detecting(Detector {
@@ -453,6 +468,12 @@ impl PsLink {
     /// Diagnostics counters.
     pub fn diagnostics(&self) -> &Diagnostics {
         &self.core.diagnostics
+    }
+
+    /// The HPR / MaxPro200 settings the CNC set and the unit confirmed, kept across
+    /// link-downs and re-applied (after 004 REMOTE_MODE) when the unit returns or restarts.
+    pub fn hpr_kept_settings(&self) -> &[plasma_protocol::hpr::Request] {
+        self.core.hpr_kept.as_slice()
     }
 
     /// The reply frame of the last RAW command (see [`CommandOutput::Raw`]).
