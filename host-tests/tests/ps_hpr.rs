@@ -293,10 +293,6 @@ fn hpr_nominal_amps_are_reapplied_after_a_power_cycle() {
 }
 
 #[test]
-#[ignore = "link bug: after an HPR power blip shorter than the link-down time, the link still \
-            believes REMOTE_MODE (004) was accepted (status.hpr.remote_accepted stays true), \
-            never sends 004 again, and the unit (out of remote mode) ignores 058: the command \
-            fails (NotAccepted: the unit answers its old value) instead of setting 130"]
 fn after_an_hpr_power_blip_settings_still_take_effect() {
     let mut world = ready(Model::Hpr260);
     assert_eq!(

@@ -168,6 +168,8 @@ struct ActiveJob {
     /// `None` for a re-apply the link started itself.
     ticket: Option<Ticket>,
     job: HprJob,
+    /// Sent again once after the unit did not take it (remote mode entered again first).
+    retried: bool,
 }
 
 /// Driver state for one detected HPR or MaxPro200.
@@ -203,6 +205,16 @@ fn is_pilot_arc(maxpro: bool, state: StateCode) -> bool {
         matches!(state.0, 6 | 7)
     } else {
         state.0 == 5
+    }
+}
+
+/// True for the states a unit is in right after power-up (HPR 0; MaxPro200 0 power up and
+/// 1 initial checks).
+fn is_power_up(maxpro: bool, state: StateCode) -> bool {
+    if maxpro {
+        matches!(state.0, 0 | 1)
+    } else {
+        state.0 == 0
     }
 }
 
@@ -374,13 +386,30 @@ impl HprDriver {
             self.active = Some(ActiveJob {
                 ticket: None,
                 job: HprJob::Typed(request),
+                retried: false,
             });
             return;
         }
         self.active = self.queue.pop_front().map(|(ticket, job)| ActiveJob {
             ticket: Some(ticket),
             job,
+            retried: false,
         });
+    }
+
+    /// The unit lost its settings or restarted (state back to power-up, or a set point
+    /// other than the kept one): remote mode must be entered again and the kept settings
+    /// re-applied.
+    fn settings_lost(&mut self, now: Instant, core: &mut Core) {
+        core.status.hpr.remote_accepted = false;
+        if core.status.remote {
+            core.status.remote = false;
+            core.emit(LinkEvent::RemoteModeChanged { remote: false });
+        }
+        if !core.hpr_kept.is_empty() && self.reapply.is_empty() {
+            self.reapply_pending = true;
+            self.reapply_not_before = now;
+        }
     }
 
     /// A settings job (re-apply or command) did not end well: a command fails with
@@ -458,12 +487,14 @@ impl HprDriver {
                 core.status.hpr.nominal_amps = Some(info.current_setpoint);
                 self.update_state(now, info.state, core);
                 self.update_error(info.error, core);
+                self.check_setpoint(now, info.current_setpoint, core);
             }
             (HprPurpose::Poll, Some(Reply::MaxProPsInfo(info))) => {
                 core.status.hpr.maxpro_info = Some(*info);
                 core.status.hpr.nominal_amps = Some(info.current_setpoint);
                 self.update_state(now, info.state, core);
                 self.update_error(info.error, core);
+                self.check_setpoint(now, info.current_setpoint, core);
             }
             (HprPurpose::State, Some(Reply::State(state))) => {
                 self.next_poll_at = now + core.config.poll_interval;
@@ -508,12 +539,14 @@ impl HprDriver {
         }
     }
 
-    /// The reply to the active job arrived. A setting counts as done (and is kept) only when
-    /// the unit's answer shows the value asked for; otherwise it is reported as not accepted.
+    /// The reply to the active job arrived. A setting counts as done only when the unit's
+    /// answer shows the value asked for; otherwise it is sent once more after entering remote
+    /// mode again (the unit may have restarted and left remote mode), then reported as not
+    /// accepted. Never success with another value.
     fn finish_job(
         &mut self,
         now: Instant,
-        active: ActiveJob,
+        mut active: ActiveJob,
         reply: Option<&Reply<'_>>,
         raw_len: usize,
         core: &mut Core,
@@ -554,6 +587,11 @@ impl HprDriver {
                     result: Ok(output),
                 });
             }
+        } else if !active.retried {
+            // Perhaps out of remote mode after a restart: 004 again, then once more.
+            core.status.hpr.remote_accepted = false;
+            active.retried = true;
+            self.active = Some(active);
         } else {
             self.job_failed(
                 now,
@@ -592,6 +630,19 @@ impl HprDriver {
         core.emit(LinkEvent::CommandDone { ticket, result });
     }
 
+    /// A poll shows the unit's current set point: when kept settings say otherwise (and
+    /// no setting is under way), the unit lost them (a power blip too short for a link-down,
+    /// or a change at the unit): re-apply.
+    fn check_setpoint(&mut self, now: Instant, setpoint: u16, core: &mut Core) {
+        let busy = self.active.is_some() || !self.reapply.is_empty() || self.reapply_pending;
+        if busy {
+            return;
+        }
+        if core.hpr_kept.amps().is_some_and(|kept| kept != setpoint) {
+            self.settings_lost(now, core);
+        }
+    }
+
     /// `purpose` failed for good.
     pub fn on_failed(
         &mut self,
@@ -627,6 +678,12 @@ impl HprDriver {
                 from: previous,
                 to: state,
             });
+            // Back in a power-up state: the unit restarted (a power blip shorter than a
+            // link-down, or a software reset) and forgot remote mode and its settings.
+            let maxpro = self.maxpro();
+            if is_power_up(maxpro, state) && previous.is_some_and(|p| !is_power_up(maxpro, p)) {
+                self.settings_lost(now, core);
+            }
             if is_pilot_arc(self.maxpro(), state) {
                 let until = now + PILOT_ARC_PAUSE;
                 self.pause_until = Some(until);

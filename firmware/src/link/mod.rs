@@ -46,9 +46,13 @@
 //! ([`UnitStatus::desired`]); HPR / MaxPro200 nominal current, corner current, process,
 //! all parameters and inlet gases ([`PsLink::hpr_kept_settings`], a later setting replacing
 //! what it sets again), re-applied after 004 REMOTE_MODE once the unit is in state 2 or 3.
-//! An HPR setting counts as done only when the unit's answer shows the value asked for. A
-//! re-apply that fails reports `SettingsFailed` and is tried again after a back-off: a
-//! setting is never silently lost.
+//! An HPR setting counts as done only when the unit's answer shows the value asked for;
+//! otherwise 004 is sent again and the setting once more (the unit may have restarted and
+//! left remote mode), then it fails `NotAccepted`. An HPR that shows a restart the link did
+//! not see as a link-down (a power blip: its state back to power-up, or a set point other than
+//! the kept one) has remote mode entered again and its settings re-applied. A re-apply that
+//! fails reports `SettingsFailed` and is tried again after a back-off: a setting is never
+//! silently lost.
 //!
 //! # Scheduling
 //! One request at a time, chosen in this order: the rest of a poll cycle split into parts,

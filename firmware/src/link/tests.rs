@@ -1482,3 +1482,114 @@ fn a_reapply_waiting_for_limits_does_not_make_poll_at_spin() {
     assert!(bench.link.status().limits.is_none());
     assert!(fake.writes.is_empty());
 }
+
+/// An HPR130 in state 3 that took REMOTE_MODE and 058 at 100 A.
+fn hpr_at_100_a() -> Bench {
+    let mut bench = hpr_bench("HYPERFORMANCE130AUTO");
+    // Past the first poll and the slow data (error log, timers).
+    while bench.link.status().hpr.timers.is_none() {
+        let frame = bench.next_tx(bench.now + Duration::from_secs(1)).unwrap();
+        let reply = match &frame[1..4] {
+            b"079" => ps_info_at(3, 130),
+            b"134" => hf(134, "000 000 000 000"),
+            b"125" => hf(125, &"0000000 ".repeat(7)),
+            other => panic!("unexpected {other:?}"),
+        };
+        bench.rx(2, &reply);
+    }
+    bench
+        .link
+        .submit(bench.now, LinkCommand::HprSetNominalAmps { amps: 100 })
+        .unwrap();
+    assert_eq!(bench.next_tx(bench.now).unwrap(), b">00494<");
+    bench.rx(2, b">0041C5<");
+    assert_eq!(bench.next_tx(bench.now).unwrap(), hf(58, "100"));
+    bench.rx(2, &hf(58, "0100"));
+    assert_eq!(
+        bench.link.hpr_kept_settings(),
+        [plasma_protocol::hpr::Request::SetNominalAmps { amps: 100 }]
+    );
+    bench.events();
+    bench
+}
+
+fn ps_info_at(state: u16, amps: u16) -> Vec<u8> {
+    hf(
+        79,
+        &std::format!(
+            "PC0044 PP0042 SC0034 SP0035 CS{amps:04} ST{state:04} ER0000 CG0000 CG0000 MV0000 MV0000"
+        ),
+    )
+}
+
+#[test]
+fn an_hpr_back_in_its_power_up_state_gets_remote_mode_and_its_settings_again() {
+    let mut bench = hpr_at_100_a();
+    // A blip: the next poll finds the unit powering up, at its rated current.
+    assert_eq!(
+        bench.next_tx(bench.now + Duration::from_secs(1)).unwrap(),
+        b">079A0<"
+    );
+    bench.rx(2, &ps_info_at(0, 130));
+    assert!(!bench.link.status().hpr.remote_accepted);
+    assert!(
+        bench
+            .events()
+            .contains(&LinkEvent::RemoteModeChanged { remote: false })
+    );
+    // Nothing is re-applied before the unit is in state 2 or 3.
+    assert_eq!(
+        bench.next_tx(bench.now + Duration::from_secs(1)).unwrap(),
+        b">079A0<"
+    );
+    bench.rx(2, &ps_info_at(2, 130));
+    assert_eq!(
+        bench.next_tx(bench.now + Duration::from_secs(1)).unwrap(),
+        b">00494<"
+    );
+    bench.rx(2, b">0041C5<");
+    assert_eq!(bench.next_tx(bench.now).unwrap(), hf(58, "100"));
+    bench.rx(2, &hf(58, "0100"));
+    assert!(bench.link.status().hpr.remote_accepted);
+}
+
+#[test]
+fn an_hpr_set_point_other_than_the_kept_one_is_set_again() {
+    let mut bench = hpr_at_100_a();
+    // The state never showed the restart, but the set point did.
+    bench.next_tx(bench.now + Duration::from_secs(1)).unwrap();
+    bench.rx(2, &ps_info_at(3, 130));
+    assert_eq!(
+        bench.next_tx(bench.now + Duration::from_secs(1)).unwrap(),
+        b">00494<"
+    );
+}
+
+#[test]
+fn an_hpr_setting_answered_with_another_value_is_never_a_success() {
+    let mut bench = hpr_at_100_a();
+    let ticket = bench
+        .link
+        .submit(bench.now, LinkCommand::HprSetNominalAmps { amps: 80 })
+        .unwrap();
+    assert_eq!(
+        bench.next_tx(bench.now + Duration::from_secs(1)).unwrap(),
+        hf(58, "80")
+    );
+    // The unit answers its old value (it left remote mode): 004 again, then 058 once more.
+    bench.rx(2, &hf(58, "0100"));
+    assert_eq!(bench.next_tx(bench.now).unwrap(), b">00494<");
+    bench.rx(2, b">0041C5<");
+    assert_eq!(bench.next_tx(bench.now).unwrap(), hf(58, "80"));
+    bench.rx(2, &hf(58, "0100"));
+    let events = bench.events();
+    assert!(events.contains(&LinkEvent::CommandDone {
+        ticket,
+        result: Err(CommandFailure::NotAccepted)
+    }));
+    // What is kept is what the unit confirmed.
+    assert_eq!(
+        bench.link.hpr_kept_settings(),
+        [plasma_protocol::hpr::Request::SetNominalAmps { amps: 100 }]
+    );
+}
