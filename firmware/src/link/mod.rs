@@ -701,17 +701,15 @@ impl PsLink {
             }
             return;
         };
-        if chained {
-            if let Some(next) = self.step_after(step) {
-                let port = self.port;
-                self.use_port(next, port);
-                if let Phase::Detecting(detector) = &mut self.phase {
-                    detector.step = next;
-                    detector.not_before = now;
-                    detector.reasks = 0;
-                }
-                return;
+        if chained && let Some(next) = self.step_after(step) {
+            let port = self.port;
+            self.use_port(next, port);
+            if let Phase::Detecting(detector) = &mut self.phase {
+                detector.step = next;
+                detector.not_before = now;
+                detector.reasks = 0;
             }
+            return;
         }
         if good_probe {
             // The known-good probe found nothing: one probe of the search, unless that is
