@@ -14,6 +14,13 @@ fn main() {
     if env::var("CARGO_CFG_TARGET_OS").as_deref() != Ok("none") {
         return;
     }
+    // The image always logs with defmt, and the library's types then log natively
+    // (`defmt::Format`) instead of through `core::fmt`, which is larger and slower. Cargo
+    // cannot turn on a package's own feature per target, so the MCU build sets the cfg here;
+    // the dependencies' defmt features are on in Cargo.toml's MCU-only table.
+    if env::var_os("CARGO_FEATURE_DEFMT").is_none() {
+        println!("cargo:rustc-cfg=feature=\"defmt\"");
+    }
 
     let out = PathBuf::from(env::var("OUT_DIR").unwrap());
     let text = fs::read_to_string(&memory_x)

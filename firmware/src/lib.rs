@@ -3,12 +3,21 @@
 //! Every piece is a sans-IO state machine that takes `now` and events and returns actions, so
 //! the board glue (src/bin) and the host simulators drive exactly the same code.
 //!
+//! - [`bridge`]: the façade the board and the host harness drive: link, CNC session and
+//!   settings behind one sans-IO object.
+//! - [`session`]: the CNC text protocol and Phoenix serial messaging.
+//! - [`settings`]: what survives a power cycle, and the `CONFIG` keys.
+//! - [`link`]: the power-supply link (Modbus ASCII and HPR).
 //! - [`io`]: torch-safe discrete I/O (START interlocks, ARC_OK, READY, FAULT) and the
 //!   independent [`io::SafetyMonitor`] used by every scenario test.
 //! - [`port`]: UART settings the link asks for.
 //! - [`time`]: caller-supplied monotonic time.
 //! - [`safe_state`], [`watchdog`], [`storage`]: the board's reset/panic policy, task-progress
 //!   watchdog feeding and power-cut-safe settings storage, as logic.
+//! - [`inputs`], [`discrete`]: input polarity and debounce in front of [`io::Interlocks`],
+//!   as the board's I/O task runs them.
+//! - [`runner`], [`supervisor`]: the async loops around the link and the bridge, over any
+//!   `embedded-io-async` UART and clock (the board and host tests run the same code).
 #![cfg_attr(not(test), no_std)]
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
@@ -24,10 +33,17 @@
     )
 )]
 
+pub mod bridge;
+pub mod discrete;
+pub mod inputs;
 pub mod io;
 pub mod link;
 pub mod port;
+pub mod runner;
 pub mod safe_state;
+pub mod session;
+pub mod settings;
 pub mod storage;
+pub mod supervisor;
 pub mod time;
 pub mod watchdog;

@@ -7,8 +7,11 @@
 //! - [`harness`]: the scenario harness: the bridge's power-supply side, the line and a
 //!   simulator in one deterministic discrete-event [`harness::World`], with the discrete I/O
 //!   and the safety monitor checked after every step.
+//! - [`console`]: `pbtool sim`, the bridge against a simulated unit with the CNC protocol on
+//!   stdin/stdout.
 #![warn(missing_docs)]
 
+pub mod console;
 pub mod decode;
 pub mod harness;
 pub mod line;

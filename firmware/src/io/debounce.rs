@@ -39,6 +39,11 @@ impl Debouncer {
         None
     }
 
+    /// Use a new hold time from now on (a pending level keeps the time it was first seen).
+    pub(crate) fn set_hold(&mut self, hold: Duration) {
+        self.hold = hold;
+    }
+
     /// The debounced level.
     pub(crate) fn stable(&self) -> bool {
         self.stable

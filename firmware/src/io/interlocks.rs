@@ -167,6 +167,18 @@ impl Interlocks {
         self.supply
     }
 
+    /// Apply new settings while running (a `CONFIG` change from the CNC).
+    ///
+    /// Nothing here can fire the torch: a stricter setting takes effect at once (an interlock
+    /// switched on drops START in this call if it applies), a looser one only affects the next
+    /// TORCH_ON, since every refusal latches until TORCH_ON is released.
+    pub fn set_config(&mut self, now: Instant, config: IoConfig) {
+        let now = self.advance(now);
+        self.config = config;
+        self.motion.set_hold(config.arc_ok_debounce);
+        self.step(now);
+    }
+
     /// The settings in use.
     pub fn config(&self) -> &IoConfig {
         &self.config

@@ -883,3 +883,84 @@ fn an_undrained_log_keeps_the_newest_and_counts_the_lost() {
     assert_eq!(n, 32);
     assert_eq!(last.map(|t| (t.level, t.at)), Some((false, ms(39))));
 }
+
+#[test]
+fn switching_an_interlock_on_while_running_drops_start_at_once() {
+    let config = IoConfig {
+        refuse_start_on_fault: false,
+        ..IoConfig::default()
+    };
+    let mut rig = Rig::healthy_with(config);
+    rig.supply(
+        ms(10),
+        SupplyState {
+            fault_requires_action: true,
+            fault_active: true,
+            ..SupplyState::HEALTHY
+        },
+    );
+    rig.torch(ms(100), true);
+    assert!(
+        rig.start(),
+        "the fault interlock is off: START follows TORCH_ON"
+    );
+    rig.io.set_config(ms(200), IoConfig::default());
+    rig.after(ms(200));
+    assert!(
+        !rig.start(),
+        "switching the interlock on drops START in the same call"
+    );
+    assert_eq!(
+        rig.io.start_locked_by(),
+        Some(Interlock::FaultRequiresAction)
+    );
+}
+
+#[test]
+fn loosening_an_interlock_while_running_never_fires_the_torch() {
+    let mut rig = Rig::healthy();
+    rig.supply(
+        ms(10),
+        SupplyState {
+            fault_requires_action: true,
+            fault_active: true,
+            ..SupplyState::HEALTHY
+        },
+    );
+    rig.torch(ms(100), true);
+    assert!(!rig.start());
+    let loose = IoConfig {
+        refuse_start_on_fault: false,
+        ..IoConfig::default()
+    };
+    rig.io.set_config(ms(200), loose);
+    rig.after(ms(200));
+    rig.poll(ms(300));
+    assert!(
+        !rig.start(),
+        "the refusal latches until TORCH_ON is released"
+    );
+    rig.torch(ms(400), false);
+    rig.torch(ms(500), true);
+    assert!(
+        rig.start(),
+        "a fresh TORCH_ON is honoured under the new setting"
+    );
+}
+
+#[test]
+fn a_new_debounce_time_applies_to_the_next_motion_edge() {
+    let mut rig = Rig::healthy();
+    let slow = IoConfig {
+        arc_ok_debounce: Duration::from_millis(20),
+        ..IoConfig::default()
+    };
+    rig.io.set_config(ms(1), slow);
+    rig.after(ms(1));
+    rig.torch(ms(100), true);
+    rig.motion(ms(110), true);
+    rig.poll(ms(125));
+    assert!(!rig.io.outputs().arc_ok, "20 ms have not passed");
+    rig.poll(ms(130));
+    assert!(rig.io.outputs().arc_ok);
+}

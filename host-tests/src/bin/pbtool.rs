@@ -1,12 +1,16 @@
 //! pbtool: the plasma-bridge technician's tool.
 //!
-//! `pbtool decode FRAME...` explains Modbus ASCII (`:`) and HPR (`>`) frames. Subcommands are
-//! a clap enum so more tools (a simulator) slot in next to `decode`.
+//! `pbtool decode FRAME...` explains Modbus ASCII (`:`) and HPR (`>`) frames.
+//! `pbtool sim --ps MODEL` runs the bridge against a simulated unit with the CNC text protocol
+//! on stdin/stdout (see `host_tests::console`).
 
+use std::io::{self, BufRead, IsTerminal, Write};
 use std::process::ExitCode;
 
 use clap::{Args, Parser, Subcommand};
+use host_tests::console::{Console, ConsoleOptions, parse_fault, read_line};
 use host_tests::decode::{all_valid, decode_frames, to_json, to_text};
+use host_tests::sim::Model;
 
 #[derive(Parser)]
 #[command(
@@ -26,6 +30,50 @@ enum Command {
     /// Each argument is one frame, with or without CR LF or the manuals' `<CR><LF>`. A frame
     /// right after a request is read as its reply. Exit status 1 when any frame is invalid.
     Decode(DecodeArgs),
+    /// Run the bridge against a simulated power supply; the CNC protocol on stdin/stdout.
+    ///
+    /// Type commands (`SET PROCESS CUT 45 AUTO`, `STATUS`, `HELP`); `TORCH ON` / `TORCH OFF`
+    /// drive the CNC's torch-on input (simulator only). Each command line is sent once the
+    /// previous reply is out; the first once the link is up. From a pipe it prints one reply
+    /// per command and exits at the end of input. Runs in real time unless `--fast`.
+    Sim(SimArgs),
+    /// Run the bridge: on the board when a debug probe is attached (build, flash and run with
+    /// probe-rs, showing the log), otherwise against a simulated power supply (as `sim`).
+    Run(RunArgs),
+}
+
+#[derive(Args)]
+struct RunArgs {
+    /// Use the simulator even when a probe is attached.
+    #[arg(long)]
+    sim: bool,
+    /// Options of the simulator (used when no board is attached).
+    #[command(flatten)]
+    sim_args: SimArgs,
+}
+
+#[derive(Args)]
+struct SimArgs {
+    /// The simulated unit: sync45 sync65 sync85 sync105 pm45xp pm65 pm85 pm105 pm125 hpr130
+    /// hpr260 hpr400 hpr130xd hpr260xd hpr400xd maxpro200.
+    #[arg(long = "ps", value_name = "MODEL", default_value = "sync65")]
+    model: String,
+    /// Start the unit with a fault: Powermax `0-50-0` (or decimal `500`), HPR error number.
+    #[arg(long, value_name = "CODE")]
+    fault: Option<String>,
+    /// Event lines (`!LINK UP ...`, `!ARC ON`) on from the start.
+    #[arg(long)]
+    events: bool,
+    /// Seed of the simulator's response-time jitter and the line model.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Virtual time: no waiting, the same output on every run (scripts and tests).
+    #[arg(long, alias = "virtual")]
+    fast: bool,
+    /// Log every change of the discrete outputs (START, ARC_OK, READY, FAULT) with its
+    /// reason on stderr.
+    #[arg(short, long)]
+    verbose: bool,
 }
 
 #[derive(Args)]
@@ -42,6 +90,129 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     match cli.command {
         Command::Decode(args) => decode(&args),
+        Command::Sim(args) => sim(&args),
+        Command::Run(args) => run(&args),
+    }
+}
+
+/// The board when a probe is attached, the simulator otherwise.
+fn run(args: &RunArgs) -> ExitCode {
+    if !args.sim {
+        if let Some(probe) = attached_probe() {
+            eprintln!("pbtool run: debug probe found ({probe}); flashing the board image");
+            return flash_board();
+        }
+        eprintln!(
+            "pbtool run: no debug probe found; running the bridge against a simulated {} \
+             (pbtool sim --ps {})",
+            Model::from_name(&args.sim_args.model).map_or("unit".to_string(), |m| m.to_string()),
+            args.sim_args.model,
+        );
+    }
+    sim(&args.sim_args)
+}
+
+/// The first probe `probe-rs list` reports, if probe-rs is installed and one is attached.
+fn attached_probe() -> Option<String> {
+    let output = std::process::Command::new("probe-rs")
+        .arg("list")
+        .output()
+        .ok()?;
+    let text = String::from_utf8_lossy(&output.stdout);
+    // Probes are listed as `[0]: STLink V2-1 -- 0483:374b:... (ST-LINK)`.
+    text.lines()
+        .map(str::trim)
+        .find(|line| line.starts_with('[') && line.contains("]:"))
+        .map(str::to_string)
+}
+
+/// `cargo flash` from the workspace root: release build, flash and run with probe-rs.
+fn flash_board() -> ExitCode {
+    let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    match std::process::Command::new(cargo)
+        .current_dir(root)
+        .arg("flash")
+        .status()
+    {
+        Ok(status) if status.success() => ExitCode::SUCCESS,
+        Ok(_) => ExitCode::FAILURE,
+        Err(e) => {
+            eprintln!("pbtool run: cannot start cargo: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+/// Exit status for a bad argument (as clap uses).
+const USAGE: u8 = 2;
+
+fn model_list() -> String {
+    Model::ALL.map(Model::name).join(" ")
+}
+
+fn sim(args: &SimArgs) -> ExitCode {
+    let Some(model) = Model::from_name(&args.model) else {
+        eprintln!(
+            "pbtool sim: unknown model {:?}; models: {}",
+            args.model,
+            model_list()
+        );
+        return ExitCode::from(USAGE);
+    };
+    let fault = match args
+        .fault
+        .as_deref()
+        .map(|f| parse_fault(model, f))
+        .transpose()
+    {
+        Ok(fault) => fault,
+        Err(e) => {
+            eprintln!("pbtool sim: {e}");
+            return ExitCode::from(USAGE);
+        }
+    };
+    let mut console = Console::new(ConsoleOptions {
+        model,
+        fault,
+        events: args.events,
+        seed: args.seed,
+        verbose: args.verbose,
+    });
+    let interactive = io::stdin().is_terminal();
+    if interactive || args.verbose {
+        eprintln!(
+            "pbtool sim: the bridge against a simulated {model}{}; CNC protocol on stdin/stdout. \
+             HELP lists the commands, TORCH ON|OFF drives torch-on (simulator only), \
+             end of input (Ctrl-D) quits.",
+            if args.fast { " in virtual time" } else { "" },
+        );
+    }
+    let mut out = io::stdout().lock();
+    let mut err = io::stderr();
+    let result = if args.fast {
+        console.run_virtual(&mut io::stdin().lock(), &mut out, &mut err)
+    } else {
+        let (tx, rx) = std::sync::mpsc::channel();
+        std::thread::spawn(move || {
+            let mut stdin = io::stdin().lock();
+            while let Ok(Some(line)) = read_line(&mut stdin as &mut dyn BufRead) {
+                if tx.send(line).is_err() {
+                    break;
+                }
+            }
+        });
+        console.run_realtime(rx, &mut out, &mut err)
+    };
+    let _ = out.flush();
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        // A closed stdout (`| head`) ends the simulation quietly.
+        Err(e) if e.kind() == io::ErrorKind::BrokenPipe => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("pbtool sim: {e}");
+            ExitCode::FAILURE
+        }
     }
 }
 

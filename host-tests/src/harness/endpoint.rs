@@ -5,7 +5,7 @@
 //! [`PsLink`] here; the `Bridge` façade (link + CNC session) implements it with the same
 //! names, so scenarios run unchanged against either.
 
-use plasma_firmware::io::{Inputs, IoEvent, Outputs, SupplyState};
+use plasma_firmware::io::{Inputs, IoConfig, IoEvent, Outputs, SupplyState};
 use plasma_firmware::link::{Diagnostics, LinkEvent, PsLink, UnitStatus};
 use plasma_firmware::port::PortConfig;
 use plasma_firmware::time::Instant;
@@ -35,6 +35,15 @@ pub trait PsEndpoint {
     fn set_io_snapshot(&mut self, _inputs: Inputs, _outputs: Outputs) {}
     /// An event of the discrete I/O (arc on/off, transfer time-out...).
     fn on_io_event(&mut self, _now: Instant, _event: IoEvent) {}
+    /// A new interlock configuration to apply now (the `Bridge` after `CONFIG <io key>`).
+    fn take_io_config_change(&mut self) -> Option<IoConfig> {
+        None
+    }
+    /// A level the simulated CNC's TORCH_ON input should take now (the `Bridge`'s
+    /// simulator-only `TORCH ON|OFF`), oldest first.
+    fn poll_torch_request(&mut self) -> Option<bool> {
+        None
+    }
 }
 
 /// The supply state the discrete I/O should see for `status` (what `Bridge::supply_state`

@@ -19,7 +19,9 @@
 //!    every scenario enforces the safety rules.
 //!
 //! The endpoint is anything implementing [`PsEndpoint`]: a bare
-//! [`PsLink`](plasma_firmware::link::PsLink) today, the `Bridge` façade later.
+//! [`PsLink`](plasma_firmware::link::PsLink), the `Bridge` façade, or a [`BridgeEndpoint`]
+//! (the bridge with its CNC port, settings store and the simulator's TORCH_ON), whose world
+//! is driven from the CNC side (`World::cnc_line`, `World::power_cycle_bridge`).
 //!
 //! ```
 //! use host_tests::harness::{World, WorldOptions};
@@ -37,12 +39,14 @@
 //! assert_eq!(world.trace().frames()[0].bytes, b":012B0E0401C1\r\n");
 //! ```
 
+mod bridge;
 mod endpoint;
 pub mod measure;
 mod options;
 mod trace;
 mod world;
 
+pub use bridge::{BridgeEndpoint, CNC_REPLY_TIMEOUT, CncItem, CncRecord};
 pub use endpoint::{PsEndpoint, supply_state_of};
 pub use options::{RxErrors, WorldOptions};
 pub use trace::{Direction, TraceFrame, WireTrace};

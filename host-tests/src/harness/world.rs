@@ -3,7 +3,9 @@
 
 use std::fmt;
 
-use plasma_firmware::io::{Input, Interlocks, IoEvent, SafetyMonitor, SupplyState, Transition};
+use plasma_firmware::io::{
+    Input, Interlocks, IoConfig, IoEvent, SafetyMonitor, SupplyState, Transition,
+};
 use plasma_firmware::link::{
     CommandFailure, CommandOutput, LinkCommand, LinkEvent, PsLink, Refusal, Ticket,
 };
@@ -13,6 +15,7 @@ use super::endpoint::PsEndpoint;
 use super::options::{RxErrors, WorldOptions};
 use super::trace::{Direction, TraceFrame, WireTrace};
 use crate::line::{End, Line};
+use crate::sim::hpr::Hpr;
 use crate::sim::{Model, SimulatedUnit};
 
 /// Times the loop processes one instant again because something still asks for it; beyond
@@ -65,6 +68,9 @@ pub struct World<E: PsEndpoint = PsLink> {
     line: Line,
     io: Interlocks,
     monitor: SafetyMonitor,
+    /// A second monitor started at the last [`World::reset_bridge`]: the power-up rules
+    /// (START off at reset, a held TORCH_ON ignored) apply again from there.
+    reset_monitor: Option<SafetyMonitor>,
     rx_errors: RxErrors,
     events: Vec<(Instant, LinkEvent)>,
     io_events: Vec<(Instant, IoEvent)>,
@@ -73,6 +79,8 @@ pub struct World<E: PsEndpoint = PsLink> {
     heard: Vec<(Instant, u8)>,
     noise_bursts: Vec<(Instant, Duration)>,
     start_given: bool,
+    /// HOLD and CORNER_CURRENT as last given to an HPR simulator.
+    hpr_inputs_given: (bool, bool),
     last_supply: SupplyState,
     scratch: Vec<LinkEvent>,
     repeats: u32,
@@ -155,6 +163,7 @@ impl<E: PsEndpoint> World<E> {
             line,
             io,
             monitor: SafetyMonitor::new(),
+            reset_monitor: None,
             rx_errors: options.rx_errors,
             events: Vec::new(),
             io_events: Vec::new(),
@@ -163,6 +172,7 @@ impl<E: PsEndpoint> World<E> {
             heard: Vec::new(),
             noise_bursts: Vec::new(),
             start_given: false,
+            hpr_inputs_given: (false, false),
             last_supply: SupplyState::default(),
             scratch: Vec::new(),
             repeats: 0,
@@ -211,6 +221,37 @@ impl<E: PsEndpoint> World<E> {
                 });
             }
         }
+    }
+
+    /// Act on the endpoint at the current instant (e.g. hand it CNC bytes), then let the
+    /// world react at this instant.
+    pub fn drive<R>(&mut self, act: impl FnOnce(&mut E, Instant) -> R) -> R {
+        let now = self.now;
+        let result = act(&mut self.endpoint, now);
+        self.process();
+        result
+    }
+
+    /// The earliest instant at which something is due (a real-time driver sleeps until
+    /// then).
+    pub fn next_wakeup(&self) -> Option<Instant> {
+        self.wakeups().into_iter().flatten().min()
+    }
+
+    /// The bridge's board restarts now: `reset` rebuilds the endpoint (keeping whatever
+    /// survives a power cycle), the interlocks start again from reset with `io` and the input
+    /// levels of this moment (a TORCH_ON held through the reset is ignored until released),
+    /// and the power-up safety rules are checked again from here.
+    pub fn reset_bridge(&mut self, io: IoConfig, reset: impl FnOnce(&mut E, Instant)) {
+        let now = self.now;
+        reset(&mut self.endpoint, now);
+        while let Some(t) = self.io.poll_transition() {
+            self.transitions.push(t);
+        }
+        self.io = Interlocks::new(io, now, self.io.inputs());
+        self.last_supply = SupplyState::default();
+        self.reset_monitor = Some(SafetyMonitor::new());
+        self.process();
     }
 
     /// Run until an event after this call matches `pred`; returns it with its time.
@@ -270,6 +311,14 @@ impl<E: PsEndpoint> World<E> {
 
     /// Panics when a safety rule was broken.
     pub fn assert_safe(&self) {
+        if let Some(monitor) = self.reset_monitor.as_ref().filter(|m| !m.is_clean()) {
+            panic!(
+                "safety rule broken after the bridge reset ({} times): {:?}\nlast frames:\n{}",
+                monitor.count(),
+                monitor.violations(),
+                self.trace.tail(20)
+            );
+        }
         if !self.monitor.is_clean() {
             panic!(
                 "safety rule broken ({} times): {:?}\nlast frames:\n{}",
@@ -512,6 +561,15 @@ impl<E: PsEndpoint> World<E> {
         }
         self.drain_endpoint();
 
+        // What the endpoint asks of the machine: a simulator-only TORCH_ON level, a new
+        // interlock configuration.
+        while let Some(on) = self.endpoint.poll_torch_request() {
+            self.io.on_input(now, Input::TorchOn, on);
+        }
+        if let Some(config) = self.endpoint.take_io_config_change() {
+            self.io.set_config(now, config);
+        }
+
         // The discrete I/O, from the link's view at this instant.
         let supply = self.endpoint.supply_state();
         if supply != self.last_supply {
@@ -524,6 +582,7 @@ impl<E: PsEndpoint> World<E> {
             self.unit.set_start(now, start);
             self.start_given = start;
         }
+        self.pass_through_to_hpr();
         while let Some(t) = self.io.poll_transition() {
             self.transitions.push(t);
         }
@@ -539,6 +598,14 @@ impl<E: PsEndpoint> World<E> {
             start,
             supply.restart_blackout_until,
         );
+        if let Some(monitor) = &mut self.reset_monitor {
+            monitor.check(
+                now,
+                self.io.inputs().torch_on,
+                start,
+                supply.restart_blackout_until,
+            );
+        }
         self.assert_safe();
     }
 
@@ -589,6 +656,25 @@ impl<E: PsEndpoint> World<E> {
         for e in self.scratch.drain(..) {
             self.events.push((now, e));
         }
+    }
+
+    /// HOLD and CORNER_CURRENT to an HPR simulator (it has no PIERCE_COMPLETE input).
+    fn pass_through_to_hpr(&mut self) {
+        let outputs = self.io.outputs();
+        let levels = (outputs.hold, outputs.corner_current);
+        if levels == self.hpr_inputs_given {
+            return;
+        }
+        let now = self.now;
+        if let Some(hpr) = self.unit.as_any_mut().downcast_mut::<Hpr>() {
+            if levels.0 != self.hpr_inputs_given.0 {
+                hpr.set_hold(now, levels.0);
+            }
+            if levels.1 != self.hpr_inputs_given.1 {
+                hpr.set_corner(now, levels.1);
+            }
+        }
+        self.hpr_inputs_given = levels;
     }
 }
 

@@ -414,7 +414,8 @@ impl Hpr {
         self.error_log
     }
 
-    fn actual_amps(&self) -> u16 {
+    /// The output current now (corner current applied while CORNER_CURRENT is on).
+    pub fn actual_amps(&self) -> u16 {
         match self.phase {
             Phase::Transfer | Phase::Rampup | Phase::Steady if self.corner => {
                 self.amps * self.corner_pct / 100

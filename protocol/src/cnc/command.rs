@@ -159,11 +159,12 @@ pub enum ConfigKey {
     TransferTimeoutDropsStart,
     Events,
     HprId,
+    PhoenixFormat,
 }
 
 impl ConfigKey {
     /// Every key, in the order `CONFIG` lists them.
-    pub const ALL: [ConfigKey; 14] = [
+    pub const ALL: [ConfigKey; 15] = [
         ConfigKey::Protocol,
         ConfigKey::Address,
         ConfigKey::Parity,
@@ -178,6 +179,7 @@ impl ConfigKey {
         ConfigKey::TransferTimeoutDropsStart,
         ConfigKey::Events,
         ConfigKey::HprId,
+        ConfigKey::PhoenixFormat,
     ];
 
     /// The key as written in commands and replies (lower case, `snake_case`).
@@ -197,6 +199,7 @@ impl ConfigKey {
             ConfigKey::TransferTimeoutDropsStart => "transfer_timeout_drops_start",
             ConfigKey::Events => "events",
             ConfigKey::HprId => "hpr_id",
+            ConfigKey::PhoenixFormat => "phoenix_format",
         }
     }
 
@@ -954,7 +957,7 @@ mod tests {
             text(ParseError::Binary),
             "BINARY non-printable byte in line"
         );
-        let words: heapless::Vec<&str, 8> = ErrorCode::ALL.iter().map(|c| c.as_str()).collect();
+        let words: heapless::Vec<&str, 11> = ErrorCode::ALL.iter().map(|c| c.as_str()).collect();
         assert_eq!(
             &words[..],
             &[
@@ -965,7 +968,10 @@ mod tests {
                 "STATE",
                 "LINK",
                 "UNSUPPORTED",
-                "DENIED"
+                "DENIED",
+                "BUSY",
+                "REFUSED",
+                "STORAGE"
             ]
         );
     }

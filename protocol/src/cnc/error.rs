@@ -24,11 +24,18 @@ pub enum ErrorCode {
     Unsupported,
     /// Refused by a safety interlock or because the command is locked.
     Denied,
+    /// Too many commands are waiting, or the unit is in a quiet period; send it again later.
+    Busy,
+    /// Refused by the bridge's allow-list (a RAW frame the bridge never forwards), or by the
+    /// unit itself (a setting it will not take).
+    Refused,
+    /// The settings could not be stored (`CONFIG SAVE`).
+    Storage,
 }
 
 impl ErrorCode {
     /// Every code.
-    pub const ALL: [ErrorCode; 8] = [
+    pub const ALL: [ErrorCode; 11] = [
         ErrorCode::Syntax,
         ErrorCode::Range,
         ErrorCode::TooLong,
@@ -37,10 +44,13 @@ impl ErrorCode {
         ErrorCode::Link,
         ErrorCode::Unsupported,
         ErrorCode::Denied,
+        ErrorCode::Busy,
+        ErrorCode::Refused,
+        ErrorCode::Storage,
     ];
 
     /// The word as sent: `SYNTAX`, `RANGE`, `TOOLONG`, `BINARY`, `STATE`, `LINK`,
-    /// `UNSUPPORTED`, `DENIED`.
+    /// `UNSUPPORTED`, `DENIED`, `BUSY`, `REFUSED`, `STORAGE`.
     pub const fn as_str(self) -> &'static str {
         match self {
             ErrorCode::Syntax => "SYNTAX",
@@ -51,6 +61,9 @@ impl ErrorCode {
             ErrorCode::Link => "LINK",
             ErrorCode::Unsupported => "UNSUPPORTED",
             ErrorCode::Denied => "DENIED",
+            ErrorCode::Busy => "BUSY",
+            ErrorCode::Refused => "REFUSED",
+            ErrorCode::Storage => "STORAGE",
         }
     }
 }

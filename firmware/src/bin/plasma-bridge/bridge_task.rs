@@ -1,0 +1,80 @@
+//! The bridge task (thread mode): `plasma_firmware::supervisor::Supervisor` around the
+//! `Bridge`, over the PS UART, the CNC UART, the I/O task and the settings task.
+
+use defmt::{info, warn};
+use plasma_firmware::bridge::Bridge;
+use plasma_firmware::link::UnitStatus;
+use plasma_firmware::port::PortConfig;
+use plasma_firmware::supervisor::Supervisor;
+use plasma_firmware::watchdog::TaskId;
+
+use crate::clock::EmbassyClock;
+use crate::cnc_uart::{self, CncUart};
+use crate::discrete::BoardIo;
+use crate::flash::BoardSaver;
+use crate::ps_uart::{PsUart, describe};
+use crate::watchdog::report;
+
+#[embassy_executor::task]
+pub async fn bridge(mut bridge: Bridge, ps: PsUart, cnc: CncUart, io: BoardIo, progress: TaskId) {
+    let clock = EmbassyClock;
+    let mut supervisor = Supervisor::new(ps, cnc, cnc_uart::TX_BUFFER, io, BoardSaver);
+    let mut applied: Option<PortConfig> = None;
+    let mut status = Seen::default();
+    loop {
+        if let Err(e) = supervisor.turn(&mut bridge, &clock).await {
+            warn!("serial: {}", e);
+        }
+        let now_applied = supervisor.ps().applied_config();
+        if now_applied != applied {
+            applied = now_applied;
+            if let Some(config) = now_applied {
+                info!("PS UART: {} baud {=str}", config.baud, describe(config));
+            }
+        }
+        status.log_changes(bridge.status());
+        report(progress);
+    }
+}
+
+/// What was last logged about the unit, to log changes only.
+#[derive(Default, PartialEq)]
+struct Seen {
+    link_up: bool,
+    fault: Option<plasma_firmware::link::ActiveFault>,
+    ready: bool,
+}
+
+impl Seen {
+    fn log_changes(&mut self, status: &UnitStatus) {
+        let now = Seen {
+            link_up: status.link_up,
+            fault: status.active_fault,
+            ready: status.ready,
+        };
+        if now == *self {
+            return;
+        }
+        if now.link_up != self.link_up {
+            if now.link_up {
+                info!("link up: {} ({})", status.model, status.family);
+            } else {
+                warn!("link down");
+            }
+        }
+        if now.fault != self.fault {
+            match now.fault {
+                Some(fault) => warn!(
+                    "power supply fault {} (action required: {=bool})",
+                    fault,
+                    fault.action_required()
+                ),
+                None => info!("power supply fault cleared"),
+            }
+        }
+        if now.ready != self.ready {
+            info!("power supply ready: {=bool}", now.ready);
+        }
+        *self = now;
+    }
+}

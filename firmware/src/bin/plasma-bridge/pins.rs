@@ -1,0 +1,125 @@
+//! The pin map (docs/board.md): where every discrete signal is, and the register-level safe
+//! state used before the HAL exists and from the fault handlers.
+
+use embassy_stm32::exti::ExtiInput;
+use embassy_stm32::gpio::{Level, Output, Pull};
+use embassy_stm32::mode::Async;
+use embassy_stm32::pac;
+use embassy_stm32::pac::gpio::{Gpio, vals::Moder};
+use plasma_firmware::inputs::{self, InputConfig, PinLevels};
+use plasma_firmware::io::{self, Input, Outputs};
+use plasma_firmware::safe_state::{Output as Signal, SAFE_OUTPUTS};
+
+/// Where each output is. All are active high at the MCU pin, with an external pull-down so
+/// they are off while the pin is still high-impedance after reset.
+const fn output_pin(signal: Signal) -> (Gpio, usize) {
+    match signal {
+        Signal::Start => (pac::GPIOB, 0),
+        Signal::PsHold => (pac::GPIOC, 1),
+        Signal::PsPierceComplete => (pac::GPIOC, 0),
+        Signal::PsCornerCurrent => (pac::GPIOB, 8),
+        Signal::CncArcOk => (pac::GPIOB, 9),
+        Signal::CncReady => (pac::GPIOB, 6),
+        Signal::CncFault => (pac::GPIOC, 7),
+    }
+}
+
+/// Drives every output to its safe level with plain register writes: usable before the HAL
+/// exists, and from the panic and fault handlers while tasks own the pins.
+pub fn drive_safe_state() {
+    pac::RCC.ahb2enr().modify(|w| {
+        w.set_gpioben(true);
+        w.set_gpiocen(true);
+    });
+    for (signal, on) in SAFE_OUTPUTS.levels() {
+        let (port, pin) = output_pin(signal);
+        // Level first, then output mode: the pin never drives the wrong level.
+        port.bsrr().write(|w| {
+            if on {
+                w.set_bs(pin, true)
+            } else {
+                w.set_br(pin, true)
+            }
+        });
+        port.moder().modify(|w| w.set_moder(pin, Moder::OUTPUT));
+    }
+}
+
+/// The seven outputs, owned by the I/O task.
+pub struct OutputPins {
+    /// PB0.
+    pub start: Output<'static>,
+    /// PC1.
+    pub hold: Output<'static>,
+    /// PC0.
+    pub pierce_complete: Output<'static>,
+    /// PB8.
+    pub corner_current: Output<'static>,
+    /// PB9.
+    pub arc_ok: Output<'static>,
+    /// PB6.
+    pub ready: Output<'static>,
+    /// PC7.
+    pub fault: Output<'static>,
+}
+
+fn level(on: bool) -> Level {
+    if on { Level::High } else { Level::Low }
+}
+
+impl OutputPins {
+    /// Sets every pin to `outputs` (logical = pin level: all active high). START first: it
+    /// is the one whose latency matters.
+    pub fn drive(&mut self, outputs: Outputs) {
+        self.start.set_level(level(outputs.start));
+        self.hold.set_level(level(outputs.hold));
+        self.pierce_complete
+            .set_level(level(outputs.pierce_complete));
+        self.corner_current.set_level(level(outputs.corner_current));
+        self.arc_ok.set_level(level(outputs.arc_ok));
+        self.ready.set_level(level(outputs.ready));
+        self.fault.set_level(level(outputs.fault));
+    }
+}
+
+/// The seven inputs, in [`Input::ALL`] order, each on its own EXTI line.
+pub struct InputPins(pub [ExtiInput<'static, Async>; 7]);
+
+impl InputPins {
+    /// Reads every pin now.
+    pub fn levels(&self) -> PinLevels {
+        Input::ALL
+            .iter()
+            .zip(&self.0)
+            .fold(PinLevels::ALL_LOW, |levels, (&input, pin)| {
+                levels.with(input, pin.is_high())
+            })
+    }
+
+    /// Completes on the next edge of any input (a bounce included: the caller reads levels).
+    pub async fn any_edge(&mut self) {
+        let edges = self.0.each_mut().map(|pin| pin.wait_for_any_edge());
+        embassy_futures::select::select_array(edges).await;
+    }
+}
+
+/// The HAL pull for an input: the one that reads inactive on an open wire.
+pub fn pull(config: &InputConfig, input: Input) -> Pull {
+    match config.get(input).polarity.pull() {
+        inputs::Pull::Up => Pull::Up,
+        inputs::Pull::Down => Pull::Down,
+    }
+}
+
+/// The names of the io outputs as docs/board.md writes them, for logs.
+pub fn output_name(output: io::Output) -> &'static str {
+    match output {
+        io::Output::Start => "START",
+        io::Output::Hold => "PS_HOLD",
+        io::Output::PierceComplete => "PS_PIERCE_COMPLETE",
+        io::Output::CornerCurrent => "PS_CORNER_CURRENT",
+        io::Output::ArcOk => "ARC_OK",
+        io::Output::Ready => "READY",
+        io::Output::Fault => "FAULT",
+    }
+}

@@ -1,0 +1,434 @@
+//! The bridge façade: the power-supply link, the CNC session and the settings behind one
+//! sans-IO object (see notes/BRIDGE-DESIGN.md).
+//!
+//! The discrete I/O ([`Interlocks`](crate::io::Interlocks)) is *not* inside: on the board it
+//! runs in a higher-priority context so that START never waits behind serial work. The two
+//! exchange small copies: [`Bridge::supply_state`] goes to the interlocks;
+//! [`Bridge::set_io_snapshot`] and [`Bridge::on_io_event`] come back (STATUS fields and
+//! `!ARC ON` style events).
+//!
+//! # Driving it
+//! A host loop (simulator, `pbtool sim`) or the board's tasks do, in any order and as often
+//! as they like:
+//!
+//! - bytes from the power supply → [`Bridge::handle_ps_rx`]; bytes for it ←
+//!   [`Bridge::poll_ps_transmit`] (one whole frame, with the UART settings of
+//!   [`Bridge::ps_port_config`]);
+//! - bytes from the CNC → [`Bridge::handle_cnc_rx`]; bytes for it ← [`Bridge::poll_cnc_output`];
+//! - [`Bridge::poll`] no later than [`Bridge::poll_at`];
+//! - after `CONFIG SAVE`: [`Bridge::take_save_request`], store, [`Bridge::save_finished`];
+//! - simulator only: [`Bridge::poll_sim_command`] (`TORCH ON|OFF`).
+//!
+//! ```
+//! use plasma_firmware::bridge::Bridge;
+//! use plasma_firmware::settings::Settings;
+//! use plasma_firmware::time::Instant;
+//!
+//! let mut bridge = Bridge::new(Settings::default(), Instant::ZERO);
+//! // The link starts looking for a unit at once.
+//! assert!(bridge.poll_ps_transmit(Instant::ZERO).is_some());
+//!
+//! bridge.handle_cnc_rx(Instant::from_millis(1), b"SET AMPS 45\r\n");
+//! let reply = bridge.poll_cnc_output().unwrap();
+//! assert_eq!(
+//!     reply,
+//!     b"ERR LINK no power supply connected (the bridge is looking for one)\r\n"
+//! );
+//! ```
+
+use crate::io::{Inputs, IoConfig, IoEvent, Outputs, SupplyState};
+use crate::link::{Diagnostics, LinkCommand, LinkEvent, PsLink, Refusal, Ticket, UnitStatus};
+use crate::port::PortConfig;
+use crate::session::{Context, Session, SessionStats, SimCommand};
+use crate::settings::{SaveError, Settings};
+use crate::time::Instant;
+
+/// Re-applying the process kept in the settings after power-up.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Restore {
+    /// Nothing to re-apply (or done).
+    Done,
+    /// Waiting for a Powermax with known limits.
+    Waiting,
+    /// Submitted; the link reports with `!SETTINGS applied|failed`.
+    Sent(Ticket),
+}
+
+/// The bridge: link, CNC session and settings. See the module docs.
+#[derive(Debug)]
+pub struct Bridge {
+    link: PsLink,
+    session: Session,
+    settings: Settings,
+    io: Option<(Inputs, Outputs)>,
+    boot_report: Option<&'static str>,
+    restore: Restore,
+    now: Instant,
+    /// The link may hold events that [`Bridge::poll`] has not moved yet.
+    dirty: bool,
+}
+
+/// A [`Context`] of `$bridge` at `$now` (a macro, so that the session can be borrowed at the
+/// same time as the other fields).
+macro_rules! ctx {
+    ($bridge:ident, $now:expr) => {
+        Context {
+            now: $now,
+            link: &mut $bridge.link,
+            settings: &mut $bridge.settings,
+            io: $bridge.io,
+            boot_report: $bridge.boot_report,
+        }
+    };
+}
+
+impl Bridge {
+    /// A bridge that runs with `settings` (loaded from flash, or the defaults) from `now`.
+    /// A process kept in the settings is applied again once a Powermax answers.
+    pub fn new(settings: Settings, now: Instant) -> Self {
+        Bridge {
+            link: PsLink::new(settings.link, now),
+            session: Session::new(&settings),
+            restore: if settings.process.is_some() {
+                Restore::Waiting
+            } else {
+                Restore::Done
+            },
+            settings,
+            io: None,
+            boot_report: None,
+            now,
+            dirty: false,
+        }
+    }
+
+    /// Accept simulator-only commands (`TORCH ON|OFF`, see [`Bridge::poll_sim_command`]).
+    /// Never on the board.
+    pub fn enable_sim_commands(&mut self) {
+        self.session.enable_sim_commands();
+    }
+
+    /// Why the board started (reset cause text): `ID` reports it, and with events on a
+    /// `!BOOT reason=...` line goes out.
+    pub fn set_boot_report(&mut self, now: Instant, reason: &'static str) {
+        self.boot_report = Some(reason);
+        let ctx = ctx!(self, now);
+        self.session.boot_event(&ctx, reason);
+    }
+
+    // --- power-supply side --------------------------------------------------------------
+
+    /// Bytes received from the power supply (any chunking).
+    pub fn handle_ps_rx(&mut self, now: Instant, bytes: &[u8]) {
+        self.link.handle_rx(now, bytes);
+        self.service(now);
+    }
+
+    /// The next frame to transmit to the power supply, if any (write it completely, then
+    /// call again).
+    pub fn poll_ps_transmit(&mut self, now: Instant) -> Option<&[u8]> {
+        self.service(now);
+        // Time-outs handled inside may raise events: `poll_at` asks for a poll.
+        self.dirty = true;
+        self.link.poll_transmit(now)
+    }
+
+    /// The UART settings the power-supply port must use now.
+    pub fn ps_port_config(&self) -> PortConfig {
+        self.link.port_config()
+    }
+
+    // --- CNC side -----------------------------------------------------------------------
+
+    /// Bytes received from the CNC (any chunking).
+    pub fn handle_cnc_rx(&mut self, now: Instant, bytes: &[u8]) {
+        self.service(now);
+        self.session.handle_rx(&mut ctx!(self, now), bytes);
+        self.service(now);
+    }
+
+    /// Bytes to write to the CNC UART: reply lines (CR LF), event lines, ACK/NAK bytes.
+    /// The bytes are taken: write them all before calling again.
+    pub fn poll_cnc_output(&mut self) -> Option<&[u8]> {
+        self.session.poll_output()
+    }
+
+    /// The next simulator command (`TORCH ON|OFF`) for the simulator's driver.
+    pub fn poll_sim_command(&mut self) -> Option<SimCommand> {
+        self.session.poll_sim_command()
+    }
+
+    // --- time ---------------------------------------------------------------------------
+
+    /// Move link events into the session (replies, event lines), re-apply a kept process,
+    /// answer waiting lines.
+    pub fn poll(&mut self, now: Instant) {
+        self.service(now);
+    }
+
+    /// When [`Bridge::poll`] / [`Bridge::poll_ps_transmit`] need to be called next.
+    pub fn poll_at(&self) -> Option<Instant> {
+        if self.dirty {
+            return Some(self.now);
+        }
+        match (self.link.poll_at(), self.session.poll_at()) {
+            (Some(a), Some(b)) => Some(a.min(b)),
+            (a, b) => a.or(b),
+        }
+    }
+
+    fn service(&mut self, now: Instant) {
+        self.now = now;
+        while let Some(event) = self.link.poll_event() {
+            if let (Restore::Sent(ticket), LinkEvent::CommandDone { ticket: done, .. }) =
+                (self.restore, &event)
+                && ticket == *done
+            {
+                // `!SETTINGS applied|failed` report the outcome.
+                self.restore = Restore::Done;
+                continue;
+            }
+            self.session.on_link_event(&mut ctx!(self, now), &event);
+        }
+        self.try_restore(now);
+        self.session.poll(&mut ctx!(self, now));
+        self.session.pump(&mut ctx!(self, now));
+        self.dirty = false;
+    }
+
+    fn try_restore(&mut self, now: Instant) {
+        if self.restore != Restore::Waiting {
+            return;
+        }
+        let status = self.link.status();
+        let Some(family) = status.family.filter(|_| status.link_up) else {
+            return;
+        };
+        let Some(process) = self.settings.process else {
+            self.restore = Restore::Done;
+            return;
+        };
+        // Only a Powermax keeps a process; a CNC command already set one: nothing to do.
+        if !family.is_modbus() || status.desired.is_some() {
+            self.restore = Restore::Done;
+            return;
+        }
+        if status.limits.is_none() || self.session.is_busy() {
+            return;
+        }
+        let command = LinkCommand::ApplySettings {
+            mode: crate::session::unit_mode(process.mode),
+            current: process.amps,
+            pressure: process.pressure,
+        };
+        match self.link.submit(now, command) {
+            Ok(ticket) => self.restore = Restore::Sent(ticket),
+            Err(Refusal::Blackout { .. } | Refusal::QueueFull | Refusal::LimitsUnknown) => {}
+            Err(refusal) => {
+                self.restore = Restore::Done;
+                let ctx = ctx!(self, now);
+                self.session.restore_refused(&ctx, &refusal);
+            }
+        }
+    }
+
+    // --- discrete I/O exchange ----------------------------------------------------------
+
+    /// What the interlocks need to know about the supply.
+    pub fn supply_state(&self) -> SupplyState {
+        let status = self.link.status();
+        SupplyState {
+            link_up: status.link_up,
+            fault_requires_action: status.active_fault.is_some_and(|f| f.action_required()),
+            fault_active: status.active_fault.is_some(),
+            restart_blackout_until: status.restart_blackout_until,
+            unit_ready: status.ready,
+        }
+    }
+
+    /// The interlocks' configuration (changes after `CONFIG <io key> <value>`).
+    pub fn io_config(&self) -> IoConfig {
+        self.settings.io
+    }
+
+    /// The new interlock configuration, once after a `CONFIG` change of an I/O key.
+    pub fn take_io_config_change(&mut self) -> Option<IoConfig> {
+        self.session
+            .take_io_config_change()
+            .then_some(self.settings.io)
+    }
+
+    /// The interlocks' inputs and outputs now (for STATUS).
+    pub fn set_io_snapshot(&mut self, inputs: Inputs, outputs: Outputs) {
+        self.io = Some((inputs, outputs));
+    }
+
+    /// Something the interlocks report (`!ARC ON`, `!START REFUSED ...` with events on).
+    pub fn on_io_event(&mut self, now: Instant, event: IoEvent) {
+        let ctx = ctx!(self, now);
+        self.session.on_io_event(&ctx, event);
+    }
+
+    // --- persistence --------------------------------------------------------------------
+
+    /// After `CONFIG SAVE`: the settings to store (once). The board writes them to flash and
+    /// calls [`Bridge::save_finished`].
+    pub fn take_save_request(&mut self) -> Option<Settings> {
+        self.session.take_save_request().then_some(self.settings)
+    }
+
+    /// The store finished: answers `CONFIG SAVE` (`OK config=saved` or `ERR STORAGE ...`).
+    pub fn save_finished(&mut self, now: Instant, result: Result<(), SaveError>) {
+        self.session.save_finished(&mut ctx!(self, now), result);
+        self.service(now);
+    }
+
+    // --- views --------------------------------------------------------------------------
+
+    /// The settings in use (CONFIG changes and the confirmed process included).
+    pub fn settings(&self) -> &Settings {
+        &self.settings
+    }
+
+    /// What the bridge knows about the unit.
+    pub fn status(&self) -> &UnitStatus {
+        self.link.status()
+    }
+
+    /// Link counters.
+    pub fn diagnostics(&self) -> &Diagnostics {
+        self.link.diagnostics()
+    }
+
+    /// CNC-side counters.
+    pub fn session_stats(&self) -> &SessionStats {
+        self.session.stats()
+    }
+
+    /// The link (read only), e.g. for its configuration.
+    pub fn link(&self) -> &PsLink {
+        &self.link
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    extern crate std;
+    use std::string::ToString;
+
+    use plasma_protocol::cnc::{Amps, Mode, Pressure};
+
+    use super::*;
+    use crate::session::tests::{FakePowermax, NAK_TOKEN, Rig, Unit};
+    use crate::time::Duration;
+
+    fn with_process(amps: u16, events: bool) -> Settings {
+        Settings {
+            events,
+            process: Some(crate::settings::Process {
+                mode: Mode::Cut,
+                amps: Amps::from_raw(amps * 64),
+                pressure: Pressure::Auto,
+            }),
+            ..Settings::default()
+        }
+    }
+
+    #[test]
+    fn a_kept_process_is_applied_again_after_power_up() {
+        let mut rig = Rig::new(
+            with_process(45, true),
+            Unit::Powermax(FakePowermax::sync65()),
+        );
+        rig.run(800);
+        assert_eq!(
+            rig.unit.powermax().writes,
+            std::vec![(0x3080, std::vec![1, 2880, 0])]
+        );
+        assert!(
+            rig.received
+                .contains(&"!SETTINGS applied mode=CUT amps=45 psi=AUTO".to_string()),
+            "{:?}",
+            rig.received
+        );
+        assert!(
+            rig.received.iter().all(|t| t.starts_with('!')),
+            "no reply lines"
+        );
+        assert!(rig.bridge.status().remote);
+    }
+
+    #[test]
+    fn a_kept_process_outside_the_limits_is_reported_and_not_sent() {
+        let mut rig = Rig::new(
+            with_process(100, true),
+            Unit::Powermax(FakePowermax::sync65()),
+        );
+        rig.run(800);
+        assert!(rig.unit.powermax().writes.is_empty());
+        assert!(
+            rig.received.contains(
+                &"!SETTINGS failed reason=refused why=current_100_A_outside_20-65_A".to_string()
+            ),
+            "{:?}",
+            rig.received
+        );
+    }
+
+    #[test]
+    fn supply_state_follows_the_link() {
+        let mut rig = Rig::new(Settings::default(), Unit::Powermax(FakePowermax::sync65()));
+        assert_eq!(rig.bridge.supply_state(), SupplyState::default());
+        rig.run(600);
+        assert_eq!(rig.bridge.supply_state(), SupplyState::HEALTHY);
+        rig.unit.powermax().set_fault(500);
+        rig.run(300);
+        let state = rig.bridge.supply_state();
+        assert!(state.fault_active && state.fault_requires_action && !state.unit_ready);
+        assert_eq!(rig.cmd("RESTART"), "OK restart=done quiet_ms=2000");
+        let until = rig.bridge.supply_state().restart_blackout_until.unwrap();
+        assert!(until > rig.now);
+        assert_eq!(rig.bridge.io_config(), crate::io::IoConfig::default());
+    }
+
+    #[test]
+    fn a_phoenix_frame_that_stops_arriving_is_naked_after_the_idle_time() {
+        let mut rig = Rig::new(Settings::default(), Unit::None);
+        rig.bridge.handle_cnc_rx(rig.now, b"\x01\x02FAU");
+        let deadline = rig.now + crate::session::FRAME_IDLE_TIMEOUT;
+        assert!(rig.bridge.poll_at().is_some_and(|at| at <= deadline));
+        rig.bridge.poll(deadline - Duration::from_millis(1));
+        rig.collect();
+        assert!(rig.received.is_empty());
+        rig.bridge.poll(deadline);
+        rig.collect();
+        assert_eq!(
+            rig.received,
+            [
+                NAK_TOKEN,
+                "ERR SYNTAX Phoenix message incomplete: the next one began or the line went \
+                 quiet (NAK sent)"
+            ]
+        );
+        // Text lines work again at once.
+        assert!(rig.cmd("ID").starts_with("OK bridge=plasma-bridge"));
+    }
+
+    #[test]
+    fn the_boot_report_is_an_event_and_part_of_id() {
+        let mut rig = Rig::new(
+            Settings {
+                events: true,
+                ..Settings::default()
+            },
+            Unit::None,
+        );
+        rig.bridge.set_boot_report(rig.now, "watchdog");
+        rig.collect();
+        assert_eq!(rig.received, ["!BOOT reason=watchdog version=0.1.0"]);
+        assert_eq!(
+            rig.cmd("ID"),
+            "OK bridge=plasma-bridge version=0.1.0 reset=watchdog link=DOWN model=- family=-"
+        );
+    }
+}

@@ -1,0 +1,287 @@
+//! Async glue between a sans-IO endpoint of the power-supply link and a serial port.
+//!
+//! The link ([`PsLink`], and the bridge that wraps it) never touches a UART: it hands out
+//! whole frames, says which line settings it wants and when it needs to be polled. [`PsPort`]
+//! does the rest over any [`embedded_io_async`] port and any [`Clock`], so the same code runs
+//! on the board (embassy's `BufferedUart` and timer) and in host tests (a fake port and a
+//! virtual clock):
+//!
+//! - a frame is written whole and flushed before anything else happens, so the hardware
+//!   driver-enable drops right after its last stop bit and the line settings never change
+//!   in the middle of a frame;
+//! - the line settings are applied before each frame, as the endpoint reports them *after*
+//!   handing out the frame (auto-detection switches parity when it starts a step);
+//! - between frames it waits for received bytes, but no later than the endpoint's
+//!   `poll_at` and never longer than [`MAX_WAIT`], so the caller can report progress to the
+//!   watchdog even on a silent line.
+//!
+//! The port's `read` must be cancel-safe (bytes that arrive while nobody reads stay in its
+//! buffer): embassy-stm32's `BufferedUart` is, since it reads from its ring buffer. Bytes
+//! already waiting are passed on before the endpoint is asked for frames, because asking it
+//! also checks its reply time-out: a reply that came in time must not be taken for a
+//! time-out only because the task was busy elsewhere when it arrived.
+
+use core::future::Future;
+
+use embassy_futures::select::{Either, select};
+use embedded_io_async::{Read, ReadReady, Write};
+use heapless::Vec;
+
+use crate::link::PsLink;
+use crate::link::transaction::TX_CAPACITY;
+use crate::port::PortConfig;
+use crate::time::{Duration, Instant};
+
+/// The board's clock, or a simulator's.
+pub trait Clock {
+    /// Now.
+    fn now(&self) -> Instant;
+    /// Completes at `at`, at once if `at` has passed.
+    fn sleep_until(&self, at: Instant) -> impl Future<Output = ()>;
+}
+
+/// The UART cannot run these line settings.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct UnsupportedConfig;
+
+/// A serial port whose line settings can change between frames.
+pub trait ConfigurablePort: Read + ReadReady + Write {
+    /// Use `config` from now on. Only called while nothing is being transmitted.
+    fn set_port_config(&mut self, config: PortConfig) -> Result<(), UnsupportedConfig>;
+}
+
+/// The power-supply side of a sans-IO endpoint: the link itself, or the bridge around it.
+pub trait PsEndpoint {
+    /// Bytes received from the supply.
+    fn handle_ps_rx(&mut self, now: Instant, bytes: &[u8]);
+    /// The next whole frame to transmit, if one is due.
+    fn poll_ps_transmit(&mut self, now: Instant) -> Option<&[u8]>;
+    /// The line settings the port must use now.
+    fn ps_port_config(&self) -> PortConfig;
+    /// When the endpoint must be polled again at the latest (`None`: only received bytes
+    /// matter).
+    fn ps_poll_at(&self) -> Option<Instant>;
+}
+
+impl PsEndpoint for PsLink {
+    fn handle_ps_rx(&mut self, now: Instant, bytes: &[u8]) {
+        self.handle_rx(now, bytes);
+    }
+
+    fn poll_ps_transmit(&mut self, now: Instant) -> Option<&[u8]> {
+        self.poll_transmit(now)
+    }
+
+    fn ps_port_config(&self) -> PortConfig {
+        self.port_config()
+    }
+
+    fn ps_poll_at(&self) -> Option<Instant> {
+        self.poll_at()
+    }
+}
+
+/// Longest wait in one [`PsPort::turn`], so that a task reports progress at least this often.
+pub const MAX_WAIT: Duration = Duration::from_millis(100);
+
+/// Frames written in one turn at most. The link sends one and waits for its reply; the
+/// bound only keeps a misbehaving endpoint from starving the receiver.
+const MAX_FRAMES_PER_TURN: usize = 4;
+
+/// Bytes taken from the port per read.
+const RX_CHUNK: usize = 64;
+
+/// What went wrong on the port.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum PortError<E> {
+    /// Reading failed (the bytes are lost; the link's checksums and time-outs cope).
+    Read(E),
+    /// Writing or flushing failed (the frame is lost; the link retries).
+    Write(E),
+    /// The port reported end of input.
+    Closed,
+    /// The port cannot use the line settings the endpoint asks for.
+    Unsupported(PortConfig),
+}
+
+/// Counters for diagnostics.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct PortStats {
+    /// Frames written and flushed.
+    pub frames_sent: u32,
+    /// Bytes received.
+    pub bytes_received: u32,
+    /// Line-setting changes applied.
+    pub config_changes: u32,
+}
+
+/// What one [`PsPort::turn`] did.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Turn {
+    /// Frames transmitted.
+    pub frames_sent: usize,
+    /// Bytes received and passed on.
+    pub bytes_received: usize,
+    /// The line settings changed to these.
+    pub new_config: Option<PortConfig>,
+}
+
+/// A serial port driven for a [`PsEndpoint`].
+pub struct PsPort<P> {
+    port: P,
+    applied: Option<PortConfig>,
+    frame: Vec<u8, TX_CAPACITY>,
+    stats: PortStats,
+}
+
+impl<P: ConfigurablePort> PsPort<P> {
+    /// A port whose current settings are unknown: the first turn applies the endpoint's.
+    pub fn new(port: P) -> Self {
+        PsPort {
+            port,
+            applied: None,
+            frame: Vec::new(),
+            stats: PortStats::default(),
+        }
+    }
+
+    /// The line settings last applied.
+    pub fn applied_config(&self) -> Option<PortConfig> {
+        self.applied
+    }
+
+    /// Counters.
+    pub fn stats(&self) -> PortStats {
+        self.stats
+    }
+
+    /// The port, e.g. to inspect a fake one in tests.
+    pub fn port(&mut self) -> &mut P {
+        &mut self.port
+    }
+
+    fn apply(&mut self, config: PortConfig) -> Result<bool, PortError<P::Error>> {
+        if self.applied == Some(config) {
+            return Ok(false);
+        }
+        self.port
+            .set_port_config(config)
+            .map_err(|UnsupportedConfig| PortError::Unsupported(config))?;
+        self.applied = Some(config);
+        self.stats.config_changes = self.stats.config_changes.saturating_add(1);
+        Ok(true)
+    }
+
+    /// Transmits every frame the endpoint has now, each with the line settings it asks for,
+    /// written whole and flushed. Returns the number of frames and the settings applied if
+    /// they changed.
+    pub async fn transmit<E: PsEndpoint + ?Sized>(
+        &mut self,
+        endpoint: &mut E,
+        clock: &impl Clock,
+    ) -> Result<(usize, Option<PortConfig>), PortError<P::Error>> {
+        self.drain_ready(endpoint, clock).await?;
+        let mut changed = None;
+        let mut sent = 0;
+        while sent < MAX_FRAMES_PER_TURN {
+            let Some(frame) = endpoint.poll_ps_transmit(clock.now()) else {
+                break;
+            };
+            // Copied out so the endpoint can be asked for the settings that go with it.
+            self.frame.clear();
+            if self.frame.extend_from_slice(frame).is_err() {
+                // Longer than any frame the link builds; nothing sensible to send.
+                continue;
+            }
+            let config = endpoint.ps_port_config();
+            if self.apply(config)? {
+                changed = Some(config);
+            }
+            self.port
+                .write_all(&self.frame)
+                .await
+                .map_err(PortError::Write)?;
+            self.port.flush().await.map_err(PortError::Write)?;
+            self.stats.frames_sent = self.stats.frames_sent.saturating_add(1);
+            sent += 1;
+        }
+        // Listen with the settings the endpoint expects its next reply in.
+        let config = endpoint.ps_port_config();
+        if self.apply(config)? {
+            changed = Some(config);
+        }
+        Ok((sent, changed))
+    }
+
+    /// Reads what the port has (waits for at least one byte; cancel-safe if the port is).
+    pub async fn read(&mut self, buf: &mut [u8]) -> Result<usize, PortError<P::Error>> {
+        match self.port.read(buf).await {
+            Ok(0) => Err(PortError::Closed),
+            Ok(n) => {
+                self.stats.bytes_received = self.stats.bytes_received.saturating_add(n as u32);
+                Ok(n)
+            }
+            Err(e) => Err(PortError::Read(e)),
+        }
+    }
+
+    /// Passes every byte already waiting in the port to the endpoint, without waiting.
+    pub async fn drain_ready<E: PsEndpoint + ?Sized>(
+        &mut self,
+        endpoint: &mut E,
+        clock: &impl Clock,
+    ) -> Result<usize, PortError<P::Error>> {
+        let mut total = 0;
+        let mut buf = [0u8; RX_CHUNK];
+        while self.port.read_ready().map_err(PortError::Read)? {
+            let n = self.read(&mut buf).await?;
+            endpoint.handle_ps_rx(clock.now(), buf.get(..n).unwrap_or(&buf));
+            total += n;
+        }
+        Ok(total)
+    }
+
+    /// Waits until bytes arrive (and passes them to the endpoint) or `deadline` passes.
+    /// Returns the number of bytes received.
+    pub async fn receive_until<E: PsEndpoint + ?Sized>(
+        &mut self,
+        endpoint: &mut E,
+        clock: &impl Clock,
+        deadline: Instant,
+    ) -> Result<usize, PortError<P::Error>> {
+        let mut buf = [0u8; RX_CHUNK];
+        match select(self.read(&mut buf), clock.sleep_until(deadline)).await {
+            Either::First(received) => {
+                let n = received?;
+                endpoint.handle_ps_rx(clock.now(), buf.get(..n).unwrap_or(&buf));
+                Ok(n)
+            }
+            Either::Second(()) => Ok(0),
+        }
+    }
+
+    /// One turn: transmit what is due, then wait for bytes until the endpoint's `poll_at`
+    /// (at most [`MAX_WAIT`]).
+    pub async fn turn<E: PsEndpoint + ?Sized>(
+        &mut self,
+        endpoint: &mut E,
+        clock: &impl Clock,
+    ) -> Result<Turn, PortError<P::Error>> {
+        let (frames_sent, new_config) = self.transmit(endpoint, clock).await?;
+        let latest = clock.now() + MAX_WAIT;
+        let deadline = endpoint.ps_poll_at().map_or(latest, |at| at.min(latest));
+        let bytes_received = self.receive_until(endpoint, clock, deadline).await?;
+        Ok(Turn {
+            frames_sent,
+            bytes_received,
+            new_config,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,354 @@
+//! The reply lines of the commands that read what the bridge knows (HELP, ID, STATUS,
+//! LIMITS, FAULT, CARTRIDGE, COUNTERS) and of the commands the link finished.
+
+use core::fmt::{self, Display, Write};
+
+use plasma_protocol::cnc::reply::ReplyWriter;
+use plasma_protocol::cnc::{ErrorCode, Pressure};
+use plasma_protocol::hpr;
+
+use super::describe::{
+    FaultId, ModelName, OrDash, Text, family_name, family_word, fault_text, mode_word, on_off,
+    state_name, unit_mode, write_failure,
+};
+use super::{Context, List, Op, ReplyLine, Uid, err_line, line, no_link, ok_line, unsupported};
+use crate::io::{Inputs, Outputs};
+use crate::link::{CommandFailure, CommandOutput, Family, Model, PsLink, UnitStatus};
+
+pub(super) fn help(sim: bool) -> ReplyLine {
+    ok_line(|w| {
+        w.field(
+            "commands",
+            "HELP,ID,STATUS,LIMITS,FAULT,FAULTLOG,COUNTERS,CARTRIDGE,SET_MODE,SET_AMPS,SET_PSI,\
+             SET_PROCESS,REMOTE_OFF,GASTEST,RESTART,GASES,CORNER,RESET,CLEARWARN,EVENTS,CONFIG,\
+             CONFIG_SAVE,RAW",
+        )?;
+        w.field("simulator_only", "TORCH")?;
+        w.field("simulator", if sim { "YES" } else { "NO" })
+    })
+}
+
+pub(super) fn link_word(status: &UnitStatus) -> &'static str {
+    if status.link_up { "UP" } else { "DOWN" }
+}
+
+pub(super) fn id(ctx: &Context<'_>) -> ReplyLine {
+    let status = ctx.link.status();
+    ok_line(|w| {
+        w.field("bridge", "plasma-bridge")?;
+        w.field("version", env!("CARGO_PKG_VERSION"))?;
+        w.field("reset", ctx.boot_report.unwrap_or("unknown"))?;
+        w.field("link", link_word(status))?;
+        w.field("model", ModelName(status))?;
+        w.field("family", OrDash(status.family.map(family_word)))?;
+        if let Some(Model::Powermax(model)) = status.model {
+            w.field("product", model.product_code())?;
+        }
+        Ok(())
+    })
+}
+
+pub(super) fn status_line(ctx: &Context<'_>) -> ReplyLine {
+    let status = ctx.link.status();
+    let family = status.family;
+    let hpr = matches!(family, Some(Family::Hpr | Family::MaxPro200));
+    let (inputs, outputs) = ctx.io.unwrap_or((Inputs::NONE, Outputs::OFF));
+    let ready = match ctx.io {
+        Some((_, outputs)) => outputs.ready,
+        None => status.ready,
+    };
+    ok_line(|w| {
+        w.field("link", link_word(status))?;
+        w.field("model", ModelName(status))?;
+        w.field("family", OrDash(family.map(family_word)))?;
+        w.field("remote", on_off(status.remote))?;
+        if hpr {
+            w.field("mode", "-")?;
+            w.field("amps", OrDash(status.hpr.nominal_amps))?;
+            w.field("psi", "-")?;
+            w.field("out_amps", "-")?;
+            w.field("out_psi", "-")?;
+        } else {
+            let settings = status.settings;
+            w.field(
+                "mode",
+                OrDash(settings.and_then(|s| s.mode).map(|m| mode_word(m, family))),
+            )?;
+            w.field("amps", OrDash(settings.map(|s| s.current)))?;
+            w.field("psi", OrDash(settings.map(|s| s.pressure)))?;
+            w.field("out_amps", OrDash(status.actual_current))?;
+            w.field("out_psi", OrDash(status.actual_pressure))?;
+        }
+        match status.active_fault {
+            Some(fault) => w.field("fault", FaultId(fault))?,
+            None => w.field("fault", "none")?,
+        }
+        w.field("start", on_off(outputs.start))?;
+        w.field("motion", on_off(inputs.motion))?;
+        w.field("arc_ok", on_off(outputs.arc_ok))?;
+        w.field("ready", on_off(ready))?;
+        if let Some(state) = status.hpr.state.filter(|_| hpr) {
+            w.field("state", state.0)?;
+            w.field("state_name", state_name(state, family))?;
+        }
+        Ok(())
+    })
+}
+
+pub(super) fn limits(status: &UnitStatus, family: Option<Family>) -> ReplyLine {
+    match (family, status.model) {
+        (None, _) => no_link(),
+        (Some(Family::Hpr | Family::MaxPro200), Some(Model::Hpr(system))) => {
+            let max = match system {
+                hpr::SystemId::Hpr { rating, .. } => rating.max_amps(),
+                hpr::SystemId::MaxPro200 => hpr::MAX_MAXPRO_AMPS,
+            };
+            ok_line(|w| {
+                w.field("amps", format_args!("{}..{max}", hpr::MIN_AMPS))?;
+                if !system.is_maxpro200() {
+                    w.field(
+                        "corner",
+                        format_args!(
+                            "{}..{}",
+                            hpr::CORNER_PERCENT.start(),
+                            hpr::CORNER_PERCENT.end()
+                        ),
+                    )?;
+                }
+                Ok(())
+            })
+        }
+        (Some(family), _) => match status.limits {
+            None => err_line(
+                ErrorCode::State,
+                "the unit's permitted limits have not been read yet, try again",
+            ),
+            Some(limits) => ok_line(|w| {
+                match limits.modes {
+                    Some(modes) => {
+                        let low = modes.low_mode();
+                        let high = modes.high_mode().filter(|h| Some(*h) != low);
+                        w.field(
+                            "modes",
+                            List(
+                                low.into_iter()
+                                    .chain(high)
+                                    .map(|m| mode_word(m, Some(family))),
+                            ),
+                        )?;
+                    }
+                    None => w.field("modes", "CUT,CPA,GOUGE")?,
+                }
+                w.field(
+                    "amps",
+                    format_args!("{}..{}", limits.min_current, limits.max_current),
+                )?;
+                w.field(
+                    "psi",
+                    format_args!("{}..{}", limits.min_pressure, limits.max_pressure),
+                )?;
+                w.field(
+                    "scope",
+                    if family == Family::PowermaxSync {
+                        "cartridge"
+                    } else {
+                        "unit"
+                    },
+                )
+            }),
+        },
+    }
+}
+
+pub(super) fn fault(status: &UnitStatus, family: Option<Family>) -> ReplyLine {
+    if family.is_none() {
+        return no_link();
+    }
+    match status.active_fault {
+        None => ok_line(|w| w.field("fault", "none")),
+        // `text=` is the last field and runs to the end of the line: the manual's words.
+        Some(fault) => line(|l| {
+            write!(
+                l,
+                "OK fault={} action={} text={}\r\n",
+                FaultId(fault),
+                if fault.action_required() {
+                    "required"
+                } else {
+                    "none"
+                },
+                Text(fault_text(fault, family))
+            )
+        }),
+    }
+}
+
+pub(super) fn cartridge(status: &UnitStatus, family: Option<Family>) -> ReplyLine {
+    match family {
+        None => no_link(),
+        Some(Family::PowermaxSync) => match status.cartridge {
+            None => err_line(ErrorCode::State, "cartridge data not read yet, try again"),
+            Some(c) => ok_line(|w| {
+                w.field("uid", Uid(&c.uid.0))?;
+                w.field("part", OrDash(c.part_number.as_str()))?;
+                w.field("rev", c.revision)?;
+                w.field("nominal_amps", c.nominal_current())?;
+                if let Some(name) = status
+                    .cartridge_name
+                    .as_ref()
+                    .and_then(|n| n.as_str())
+                    .filter(|n| !n.is_empty())
+                {
+                    w.field("name", name)?;
+                }
+                w.field("starts", c.counters.starts)?;
+                w.field("pilot_arc_s", c.counters.pilot_arc_seconds)?;
+                w.field("transfers", c.counters.transfers)?;
+                w.field("transfer_s", c.counters.transfer_seconds())
+            }),
+        },
+        Some(f) => unsupported(format_args!(
+            "CARTRIDGE is a Powermax SYNC function; {} has no cartridge data",
+            family_name(f)
+        )),
+    }
+}
+
+pub(super) fn counters(link: &PsLink) -> ReplyLine {
+    counters_with(link, |_| Ok(()))
+}
+
+/// The unit's counters (written by `unit`) followed by the link's.
+pub(super) fn counters_with(
+    link: &PsLink,
+    unit: impl FnOnce(&mut ReplyWriter<&mut ReplyLine>) -> fmt::Result,
+) -> ReplyLine {
+    let d = link.diagnostics();
+    ok_line(|w| {
+        unit(w)?;
+        w.field("link_ok", d.transactions_ok)?;
+        w.field("link_failed", d.transactions_failed)?;
+        w.field("retries", d.retries)?;
+        w.field("timeouts", d.timeouts)?;
+        w.field("bad_checksums", d.bad_checksums)?;
+        w.field("link_downs", d.link_downs)
+    })
+}
+
+/// The reply of a command the link finished.
+pub(super) fn complete(
+    ctx: &mut Context<'_>,
+    op: Op,
+    result: &Result<CommandOutput, CommandFailure>,
+) -> ReplyLine {
+    let family = ctx.link.status().family;
+    let output = match result {
+        Err(failure) => return line(|l| write_failure(l, failure, family)),
+        Ok(output) => *output,
+    };
+    match op {
+        Op::Settings(process) => {
+            let CommandOutput::Settings(read) = output else {
+                return ok_line(|w| w.field("mode", mode_word(unit_mode(process.mode), family)));
+            };
+            ctx.settings.process = Some(process);
+            // The unit's word for the mode read back (SYNC: EXPANDED, legacy: CPA).
+            let mode = read.mode.map_or("-", |m| mode_word(m, family));
+            ok_line(|w| {
+                w.field("mode", mode)?;
+                w.field("amps", read.current)?;
+                match process.pressure {
+                    Pressure::Auto => w.field("psi", "AUTO"),
+                    Pressure::Set(_) => w.field("psi", read.pressure),
+                }
+            })
+        }
+        Op::RemoteOff => {
+            ctx.settings.process = None;
+            ok_line(|w| w.field("remote", "OFF"))
+        }
+        Op::GasTest(on) => ok_line(|w| w.field("gastest", on_off(on))),
+        Op::Restart => {
+            let quiet = ctx
+                .link
+                .status()
+                .restart_blackout_until
+                .map(|until| until.saturating_since(ctx.now).as_millis());
+            ok_line(|w| {
+                w.field("restart", "done")?;
+                w.field("quiet_ms", OrDash(quiet))
+            })
+        }
+        Op::HprAmps => match output {
+            CommandOutput::Value(amps) => ok_line(|w| w.field("amps", amps)),
+            _ => ok_line(|w| w.field("amps", "set")),
+        },
+        Op::Gases(plasma, shield) => ok_line(|w| {
+            w.field("plasma", plasma.name())?;
+            w.field("shield", shield.name())
+        }),
+        Op::Corner => match output {
+            CommandOutput::Value(percent) => ok_line(|w| w.field("corner", percent)),
+            _ => ok_line(|w| w.field("corner", "set")),
+        },
+        Op::Reset => ok_line(|w| w.field("reset", "done")),
+        Op::ClearWarn => ok_line(|w| w.field("clearwarn", "done")),
+        Op::Raw => {
+            let len = match output {
+                CommandOutput::Raw { len } => len,
+                _ => 0,
+            };
+            let reply = ctx.link.raw_reply();
+            let reply = reply.get(..len).unwrap_or(reply).trim_ascii_end();
+            let text = core::str::from_utf8(reply).unwrap_or("?");
+            // `reply=` is the last field and runs to the end of the line: an HPR reply may
+            // hold spaces.
+            line(|l| write!(l, "OK reply={}\r\n", Text(text)))
+        }
+        Op::FaultLog => {
+            let status = ctx.link.status();
+            match (output, status.fault_log, status.hpr.error_log) {
+                (CommandOutput::ErrorLog(log), _, _) | (_, None, Some(log)) => ok_line(|w| {
+                    let codes = log.iter().filter(|e| e.0 != 0).map(|e| HprId(e.0));
+                    w.field("log", List(codes))
+                }),
+                (_, Some(log), _) => ok_line(|w| {
+                    let codes = log.0.iter().copied().filter(|c| !c.is_none());
+                    w.field("log", List(codes))
+                }),
+                _ => err_line(ErrorCode::Link, "the fault log could not be read"),
+            }
+        }
+        Op::Counters => {
+            let status = ctx.link.status().clone();
+            counters_with(ctx.link, |w| {
+                if let Some(c) = status.ps_counters {
+                    w.field("starts", c.starts)?;
+                    w.field("pilot_arc_s", c.pilot_arc_seconds)?;
+                    w.field("transfers", c.transfers)?;
+                    w.field("transfer_s", c.transfer_seconds)?;
+                }
+                if let Some(s) = status.arc_seconds {
+                    w.field("arc_s", s)?;
+                }
+                if let Some(t) = status.hpr.timers {
+                    w.field("arc_s", t.arc_on_seconds)?;
+                    w.field("system_min", t.system_on_minutes)?;
+                    w.field("starts", t.starts)?;
+                    w.field("start_errors", t.start_errors)?;
+                    w.field("rampdown_errors", t.rampdown_errors)?;
+                }
+                Ok(())
+            })
+        }
+    }
+}
+
+/// An HPR error code in the manual's three digits.
+pub(super) struct HprId(pub(super) u16);
+
+impl Display for HprId {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{:03}", self.0)
+    }
+}

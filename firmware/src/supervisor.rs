@@ -1,0 +1,359 @@
+//! The bridge's thread-mode loop: both serial ports, the exchange with the I/O task, and
+//! settings saves, around a sans-IO bridge.
+//!
+//! The board runs one [`Supervisor::turn`] after another in a task; host tests run it with
+//! fake ports and a virtual clock. One turn:
+//!
+//! 1. takes the I/O task's latest levels and events and passes them to the bridge;
+//! 2. passes every byte already waiting in either port to the bridge (so a reply that came in
+//!    time is not taken for a time-out when the bridge is polled);
+//! 3. polls the bridge, transmits its power-supply frames ([`PsPort`]), polls it again (the
+//!    link's time-outs run while frames are asked for) and writes its CNC output;
+//! 4. hands the supply state and the I/O settings to the I/O task when they changed, and a
+//!    save request to the settings saver;
+//! 5. waits for the first of: bytes on either port, an I/O event, the end of a save, the
+//!    bridge's `poll_at` (at most [`MAX_WAIT`], so the caller reports progress regularly).
+//!
+//! CNC output is written in pieces of at most the port's buffer size, each after the
+//! previous one has left (`flush`): embassy-stm32 0.6's `BufferedUart` rejects a write larger
+//! than its buffer and does not wake a writer waiting for buffer space.
+
+use core::future::{Future, pending};
+
+use embassy_futures::select::{Either5, select5};
+use embassy_futures::yield_now;
+use embedded_io_async::{Read, ReadReady, Write};
+
+use crate::bridge::Bridge;
+use crate::io::{Inputs, IoConfig, IoEvent, Outputs, SupplyState};
+use crate::port::PortConfig;
+use crate::runner::{Clock, ConfigurablePort, MAX_WAIT, PortError, PsEndpoint, PsPort};
+use crate::settings::{SaveError, Settings};
+use crate::time::Instant;
+
+/// What the supervisor needs from the bridge ([`Bridge`] implements it; the names follow
+/// its API).
+pub trait BridgeEndpoint: PsEndpoint {
+    /// The settings a save request carries.
+    type Settings;
+    /// Why a save failed.
+    type SaveError;
+    /// Bytes from the CNC.
+    fn handle_cnc_rx(&mut self, now: Instant, bytes: &[u8]);
+    /// Bytes to write to the CNC.
+    fn poll_cnc_output(&mut self) -> Option<&[u8]>;
+    /// Let time pass.
+    fn poll(&mut self, now: Instant);
+    /// What the I/O task must know about the supply.
+    fn supply_state(&self) -> SupplyState;
+    /// The I/O settings (they change with CONFIG commands).
+    fn io_config(&self) -> IoConfig;
+    /// The I/O task's latest levels.
+    fn set_io_snapshot(&mut self, inputs: Inputs, outputs: Outputs);
+    /// An event from the I/O task.
+    fn on_io_event(&mut self, now: Instant, event: IoEvent);
+    /// Settings to store, after a CONFIG SAVE.
+    fn take_save_request(&mut self) -> Option<Self::Settings>;
+    /// How the store went.
+    fn save_finished(&mut self, now: Instant, result: Result<(), Self::SaveError>);
+}
+
+impl PsEndpoint for Bridge {
+    fn handle_ps_rx(&mut self, now: Instant, bytes: &[u8]) {
+        Bridge::handle_ps_rx(self, now, bytes);
+    }
+    fn poll_ps_transmit(&mut self, now: Instant) -> Option<&[u8]> {
+        Bridge::poll_ps_transmit(self, now)
+    }
+    fn ps_port_config(&self) -> PortConfig {
+        Bridge::ps_port_config(self)
+    }
+    fn ps_poll_at(&self) -> Option<Instant> {
+        Bridge::poll_at(self)
+    }
+}
+
+impl BridgeEndpoint for Bridge {
+    type Settings = Settings;
+    type SaveError = SaveError;
+
+    fn handle_cnc_rx(&mut self, now: Instant, bytes: &[u8]) {
+        Bridge::handle_cnc_rx(self, now, bytes);
+    }
+    fn poll_cnc_output(&mut self) -> Option<&[u8]> {
+        Bridge::poll_cnc_output(self)
+    }
+    fn poll(&mut self, now: Instant) {
+        Bridge::poll(self, now);
+    }
+    fn supply_state(&self) -> SupplyState {
+        Bridge::supply_state(self)
+    }
+    fn io_config(&self) -> IoConfig {
+        Bridge::io_config(self)
+    }
+    fn set_io_snapshot(&mut self, inputs: Inputs, outputs: Outputs) {
+        Bridge::set_io_snapshot(self, inputs, outputs);
+    }
+    fn on_io_event(&mut self, now: Instant, event: IoEvent) {
+        Bridge::on_io_event(self, now, event);
+    }
+    fn take_save_request(&mut self) -> Option<Settings> {
+        Bridge::take_save_request(self)
+    }
+    fn save_finished(&mut self, now: Instant, result: Result<(), SaveError>) {
+        Bridge::save_finished(self, now, result);
+    }
+}
+
+/// The supervisor's side of the exchange with the I/O task.
+pub trait IoExchange {
+    /// The latest levels, if new ones were published since the last call.
+    fn take_snapshot(&mut self) -> Option<(Inputs, Outputs)>;
+    /// The next event, if one is waiting.
+    fn try_event(&mut self) -> Option<(Instant, IoEvent)>;
+    /// Completes when an event is waiting (without taking it).
+    fn event_ready(&mut self) -> impl Future<Output = ()>;
+    /// Hand a new supply state to the I/O task.
+    fn send_supply(&mut self, supply: SupplyState);
+    /// Hand new I/O settings to the I/O task.
+    fn send_io_config(&mut self, config: IoConfig);
+}
+
+/// Stores settings in the background (the board: a flash task).
+pub trait SettingsSaver<S, E> {
+    /// Start storing `settings`.
+    fn start(&mut self, settings: S);
+    /// Completes with the result of the save started last (cancel-safe).
+    fn finished(&mut self) -> impl Future<Output = Result<(), E>>;
+}
+
+/// A port failed during a turn (the turn ends there; the next one starts afresh).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum TurnError<PsError, CncError> {
+    /// The power-supply port.
+    Ps(PortError<PsError>),
+    /// The CNC port failed to read.
+    CncRead(CncError),
+    /// The CNC port failed to write (the output is lost).
+    CncWrite(CncError),
+    /// The CNC port reported end of input.
+    CncClosed,
+}
+
+/// Bytes taken from the CNC port per read.
+const CNC_RX_CHUNK: usize = 64;
+/// Bytes taken from the PS port per read.
+const PS_RX_CHUNK: usize = 64;
+
+/// The loop around a bridge.
+pub struct Supervisor<P, C, I, V> {
+    ps: PsPort<P>,
+    cnc: C,
+    cnc_piece: usize,
+    io: I,
+    saver: V,
+    sent_supply: Option<SupplyState>,
+    sent_io_config: Option<IoConfig>,
+    saving: bool,
+}
+
+type TurnResult<T, P, C> = core::result::Result<
+    T,
+    TurnError<
+        <P as embedded_io_async::ErrorType>::Error,
+        <C as embedded_io_async::ErrorType>::Error,
+    >,
+>;
+
+impl<P, C, I, V> Supervisor<P, C, I, V>
+where
+    P: ConfigurablePort,
+    C: Read + ReadReady + Write,
+    I: IoExchange,
+{
+    /// A supervisor over the PS port, the CNC port (whose transmit buffer holds
+    /// `cnc_tx_buffer` bytes), the I/O exchange and the settings saver.
+    pub fn new(ps: P, cnc: C, cnc_tx_buffer: usize, io: I, saver: V) -> Self {
+        Supervisor {
+            ps: PsPort::new(ps),
+            cnc,
+            cnc_piece: cnc_tx_buffer.max(1),
+            io,
+            saver,
+            sent_supply: None,
+            sent_io_config: None,
+            saving: false,
+        }
+    }
+
+    /// The power-supply port (line settings, counters).
+    pub fn ps(&mut self) -> &mut PsPort<P> {
+        &mut self.ps
+    }
+
+    /// The I/O exchange.
+    pub fn io(&mut self) -> &mut I {
+        &mut self.io
+    }
+
+    /// The settings saver.
+    pub fn saver(&mut self) -> &mut V {
+        &mut self.saver
+    }
+
+    /// True while a save is under way.
+    pub fn is_saving(&self) -> bool {
+        self.saving
+    }
+
+    /// One turn (see the module documentation).
+    pub async fn turn<B, K>(&mut self, bridge: &mut B, clock: &K) -> TurnResult<(), P, C>
+    where
+        B: BridgeEndpoint,
+        V: SettingsSaver<B::Settings, B::SaveError>,
+        K: Clock,
+    {
+        self.exchange_in(bridge);
+        self.ps
+            .drain_ready(bridge, clock)
+            .await
+            .map_err(TurnError::Ps)?;
+        self.drain_cnc(bridge, clock).await?;
+
+        bridge.poll(clock.now());
+        self.ps
+            .transmit(bridge, clock)
+            .await
+            .map_err(TurnError::Ps)?;
+        // Asking for frames also runs the link's time-outs, whose events the bridge moves
+        // into the session (replies, event lines) only when polled.
+        bridge.poll(clock.now());
+        while let Some(output) = bridge.poll_cnc_output() {
+            for piece in output.chunks(self.cnc_piece) {
+                self.cnc.flush().await.map_err(TurnError::CncWrite)?;
+                self.cnc
+                    .write_all(piece)
+                    .await
+                    .map_err(TurnError::CncWrite)?;
+            }
+        }
+
+        self.exchange_out(bridge);
+        if !self.saving
+            && let Some(settings) = bridge.take_save_request()
+        {
+            self.saver.start(settings);
+            self.saving = true;
+        }
+
+        self.wait(bridge, clock).await
+    }
+
+    fn exchange_in<B: BridgeEndpoint>(&mut self, bridge: &mut B) {
+        if let Some((inputs, outputs)) = self.io.take_snapshot() {
+            bridge.set_io_snapshot(inputs, outputs);
+        }
+        while let Some((at, event)) = self.io.try_event() {
+            bridge.on_io_event(at, event);
+        }
+    }
+
+    fn exchange_out<B: BridgeEndpoint>(&mut self, bridge: &B) {
+        let supply = bridge.supply_state();
+        if self.sent_supply != Some(supply) {
+            self.io.send_supply(supply);
+            self.sent_supply = Some(supply);
+        }
+        let config = bridge.io_config();
+        if self.sent_io_config != Some(config) {
+            self.io.send_io_config(config);
+            self.sent_io_config = Some(config);
+        }
+    }
+
+    async fn drain_cnc<B: BridgeEndpoint, K: Clock>(
+        &mut self,
+        bridge: &mut B,
+        clock: &K,
+    ) -> TurnResult<(), P, C> {
+        let mut buf = [0u8; CNC_RX_CHUNK];
+        while self.cnc.read_ready().map_err(TurnError::CncRead)? {
+            let n = read_cnc(&mut self.cnc, &mut buf).await?;
+            bridge.handle_cnc_rx(clock.now(), buf.get(..n).unwrap_or(&buf));
+        }
+        Ok(())
+    }
+
+    async fn wait<B, K>(&mut self, bridge: &mut B, clock: &K) -> TurnResult<(), P, C>
+    where
+        B: BridgeEndpoint,
+        V: SettingsSaver<B::Settings, B::SaveError>,
+        K: Clock,
+    {
+        let started = clock.now();
+        let latest = started + MAX_WAIT;
+        let deadline = bridge.ps_poll_at().map_or(latest, |at| at.min(latest));
+        let mut ps_buf = [0u8; PS_RX_CHUNK];
+        let mut cnc_buf = [0u8; CNC_RX_CHUNK];
+        let saving = self.saving;
+        let Supervisor {
+            ps, cnc, io, saver, ..
+        } = self;
+        let save_done = async {
+            if saving {
+                saver.finished().await
+            } else {
+                pending().await
+            }
+        };
+        let woke = select5(
+            ps.read(&mut ps_buf),
+            read_cnc(cnc, &mut cnc_buf),
+            io.event_ready(),
+            save_done,
+            clock.sleep_until(deadline),
+        )
+        .await;
+        let now = clock.now();
+        match woke {
+            Either5::First(read) => {
+                let n = read.map_err(TurnError::Ps)?;
+                bridge.handle_ps_rx(now, ps_buf.get(..n).unwrap_or(&ps_buf));
+            }
+            Either5::Second(read) => {
+                let n = read?;
+                bridge.handle_cnc_rx(now, cnc_buf.get(..n).unwrap_or(&cnc_buf));
+            }
+            // Taken at the start of the next turn.
+            Either5::Third(()) => {}
+            Either5::Fourth(result) => {
+                self.saving = false;
+                bridge.save_finished(now, result);
+            }
+            Either5::Fifth(()) => {
+                if deadline <= started {
+                    // The bridge asked to be polled at a time already past and nothing else
+                    // happened: let the other tasks run before the next turn.
+                    yield_now().await;
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+async fn read_cnc<C: Read, PE>(
+    cnc: &mut C,
+    buf: &mut [u8],
+) -> core::result::Result<usize, TurnError<PE, C::Error>> {
+    match cnc.read(buf).await {
+        Ok(0) => Err(TurnError::CncClosed),
+        Ok(n) => Ok(n),
+        Err(e) => Err(TurnError::CncRead(e)),
+    }
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,558 @@
+//! The supervisor with a fake bridge, two fake UARTs, a fake I/O task and a fake flash saver,
+//! in virtual time.
+
+use std::cell::RefCell;
+use std::collections::VecDeque;
+use std::rc::Rc;
+use std::vec::Vec;
+
+use core::future::poll_fn;
+use core::task::Poll;
+
+use embassy_futures::block_on;
+use embedded_io_async::{ErrorKind, ErrorType};
+
+use super::*;
+use crate::port::PortConfig;
+use crate::runner::UnsupportedConfig;
+
+const PS: usize = 0;
+const CNC: usize = 1;
+
+#[derive(Debug, Clone, PartialEq, Eq)]
+enum Seen {
+    Write(u64, Vec<u8>),
+    Flush(u64),
+}
+
+#[derive(Default)]
+struct Line {
+    rx: VecDeque<(u64, Vec<u8>)>,
+    seen: Vec<Seen>,
+}
+
+#[derive(Default)]
+struct World {
+    now_us: u64,
+    lines: [Line; 2],
+    /// Times at which something other than received bytes becomes ready.
+    wakeups: Vec<u64>,
+}
+
+type Shared = Rc<RefCell<World>>;
+
+impl World {
+    fn next_event_after_now(&self) -> Option<u64> {
+        let rx = self
+            .lines
+            .iter()
+            .filter_map(|l| l.rx.front().map(|(t, _)| *t));
+        rx.chain(self.wakeups.iter().copied())
+            .filter(|&t| t > self.now_us)
+            .min()
+    }
+
+    fn written(&self, line: usize) -> Vec<u8> {
+        self.lines[line]
+            .seen
+            .iter()
+            .flat_map(|s| match s {
+                Seen::Write(_, b) => b.clone(),
+                Seen::Flush(_) => Vec::new(),
+            })
+            .collect()
+    }
+}
+
+struct FakeClock(Shared);
+
+impl Clock for FakeClock {
+    fn now(&self) -> Instant {
+        Instant::from_micros(self.0.borrow().now_us)
+    }
+
+    fn sleep_until(&self, at: Instant) -> impl Future<Output = ()> {
+        let world = self.0.clone();
+        poll_fn(move |cx| {
+            let mut w = world.borrow_mut();
+            let at = at.as_micros();
+            if w.now_us >= at {
+                return Poll::Ready(());
+            }
+            match w.next_event_after_now() {
+                Some(t) if t < at => {
+                    w.now_us = t;
+                    cx.waker().wake_by_ref();
+                    Poll::Pending
+                }
+                _ => {
+                    w.now_us = at;
+                    Poll::Ready(())
+                }
+            }
+        })
+    }
+}
+
+struct FakePort {
+    world: Shared,
+    line: usize,
+}
+
+impl ErrorType for FakePort {
+    type Error = ErrorKind;
+}
+
+impl Read for FakePort {
+    async fn read(&mut self, buf: &mut [u8]) -> core::result::Result<usize, ErrorKind> {
+        poll_fn(|_| {
+            let mut w = self.world.borrow_mut();
+            let now = w.now_us;
+            let line = &mut w.lines[self.line];
+            match line.rx.front_mut() {
+                Some((t, bytes)) if *t <= now => {
+                    let n = bytes.len().min(buf.len());
+                    buf[..n].copy_from_slice(&bytes[..n]);
+                    bytes.drain(..n);
+                    if bytes.is_empty() {
+                        line.rx.pop_front();
+                    }
+                    Poll::Ready(Ok(n))
+                }
+                _ => Poll::Pending,
+            }
+        })
+        .await
+    }
+}
+
+impl ReadReady for FakePort {
+    fn read_ready(&mut self) -> core::result::Result<bool, ErrorKind> {
+        let w = self.world.borrow();
+        Ok(w.lines[self.line]
+            .rx
+            .front()
+            .is_some_and(|(t, _)| *t <= w.now_us))
+    }
+}
+
+impl Write for FakePort {
+    async fn write(&mut self, buf: &[u8]) -> core::result::Result<usize, ErrorKind> {
+        let mut w = self.world.borrow_mut();
+        let now = w.now_us;
+        w.lines[self.line].seen.push(Seen::Write(now, buf.to_vec()));
+        Ok(buf.len())
+    }
+
+    async fn flush(&mut self) -> core::result::Result<(), ErrorKind> {
+        let mut w = self.world.borrow_mut();
+        let now = w.now_us;
+        w.lines[self.line].seen.push(Seen::Flush(now));
+        Ok(())
+    }
+}
+
+impl ConfigurablePort for FakePort {
+    fn set_port_config(&mut self, _: PortConfig) -> core::result::Result<(), UnsupportedConfig> {
+        Ok(())
+    }
+}
+
+/// A bridge that echoes CNC lines, answers `SAVE` with a save request and `BIG` with 300
+/// bytes, and sends one PS frame when told to.
+struct FakeBridge {
+    world: Shared,
+    line: Vec<u8>,
+    output: VecDeque<Vec<u8>>,
+    current: Vec<u8>,
+    ps_frame_due: bool,
+    ps_rx: Vec<u8>,
+    supply: SupplyState,
+    io_config: IoConfig,
+    snapshots: Vec<(Inputs, Outputs)>,
+    /// (event time, event, time the bridge got it)
+    events: Vec<(Instant, IoEvent, u64)>,
+    save_request: Option<u32>,
+    next_settings: u32,
+}
+
+impl FakeBridge {
+    fn new(world: &Shared) -> Self {
+        FakeBridge {
+            world: world.clone(),
+            line: Vec::new(),
+            output: VecDeque::new(),
+            current: Vec::new(),
+            ps_frame_due: false,
+            ps_rx: Vec::new(),
+            supply: SupplyState::default(),
+            io_config: IoConfig::default(),
+            snapshots: Vec::new(),
+            events: Vec::new(),
+            save_request: None,
+            next_settings: 1,
+        }
+    }
+}
+
+impl PsEndpoint for FakeBridge {
+    fn handle_ps_rx(&mut self, _: Instant, bytes: &[u8]) {
+        self.ps_rx.extend_from_slice(bytes);
+    }
+    fn poll_ps_transmit(&mut self, _: Instant) -> Option<&[u8]> {
+        if !self.ps_frame_due {
+            return None;
+        }
+        self.ps_frame_due = false;
+        Some(b"PING\r\n")
+    }
+    fn ps_port_config(&self) -> PortConfig {
+        PortConfig::HPR
+    }
+    fn ps_poll_at(&self) -> Option<Instant> {
+        None
+    }
+}
+
+impl BridgeEndpoint for FakeBridge {
+    type Settings = u32;
+    type SaveError = ();
+
+    fn handle_cnc_rx(&mut self, _: Instant, bytes: &[u8]) {
+        for &b in bytes {
+            if b != b'\r' {
+                self.line.push(b);
+                continue;
+            }
+            let line = core::mem::take(&mut self.line);
+            match line.as_slice() {
+                b"SAVE" => {
+                    self.save_request = Some(self.next_settings);
+                    self.next_settings += 1;
+                }
+                b"BIG" => self.output.push_back(vec![b'x'; 300]),
+                b"PING" => self.ps_frame_due = true,
+                _ => {
+                    let mut reply = line.clone();
+                    reply.extend_from_slice(b"\r\n");
+                    self.output.push_back(reply);
+                }
+            }
+        }
+    }
+    fn poll_cnc_output(&mut self) -> Option<&[u8]> {
+        self.current = self.output.pop_front()?;
+        Some(&self.current)
+    }
+    fn poll(&mut self, _: Instant) {}
+    fn supply_state(&self) -> SupplyState {
+        self.supply
+    }
+    fn io_config(&self) -> IoConfig {
+        self.io_config
+    }
+    fn set_io_snapshot(&mut self, inputs: Inputs, outputs: Outputs) {
+        self.snapshots.push((inputs, outputs));
+    }
+    fn on_io_event(&mut self, now: Instant, event: IoEvent) {
+        let seen_at = self.world.borrow().now_us;
+        self.events.push((now, event, seen_at));
+    }
+    fn take_save_request(&mut self) -> Option<u32> {
+        self.save_request.take()
+    }
+    fn save_finished(&mut self, _: Instant, result: core::result::Result<(), ()>) {
+        self.output.push_back(match result {
+            Ok(()) => b"SAVED\r\n".to_vec(),
+            Err(()) => b"SAVE FAILED\r\n".to_vec(),
+        });
+    }
+}
+
+#[derive(Default)]
+struct FakeIo {
+    world: Shared,
+    snapshot: Option<(Inputs, Outputs)>,
+    /// (ready at, event time, event)
+    events: VecDeque<(u64, Instant, IoEvent)>,
+    supplies: Vec<SupplyState>,
+    configs: Vec<IoConfig>,
+}
+
+impl IoExchange for FakeIo {
+    fn take_snapshot(&mut self) -> Option<(Inputs, Outputs)> {
+        self.snapshot.take()
+    }
+    fn try_event(&mut self) -> Option<(Instant, IoEvent)> {
+        let now = self.world.borrow().now_us;
+        match self.events.front() {
+            Some(&(ready, at, event)) if ready <= now => {
+                self.events.pop_front();
+                Some((at, event))
+            }
+            _ => None,
+        }
+    }
+    fn event_ready(&mut self) -> impl Future<Output = ()> {
+        let world = self.world.clone();
+        let ready = self.events.front().map(|e| e.0);
+        poll_fn(move |_| match ready {
+            Some(t) if t <= world.borrow().now_us => Poll::Ready(()),
+            _ => Poll::Pending,
+        })
+    }
+    fn send_supply(&mut self, supply: SupplyState) {
+        self.supplies.push(supply);
+    }
+    fn send_io_config(&mut self, config: IoConfig) {
+        self.configs.push(config);
+    }
+}
+
+/// Saves take 30 ms; `outcome` decides how each ends.
+struct FakeSaver<S, E> {
+    world: Shared,
+    started: Vec<(u64, S)>,
+    outcome: fn(&S) -> core::result::Result<(), E>,
+    done: Option<(u64, core::result::Result<(), E>)>,
+}
+
+impl<S, E> FakeSaver<S, E> {
+    fn new(world: &Shared, outcome: fn(&S) -> core::result::Result<(), E>) -> Self {
+        FakeSaver {
+            world: world.clone(),
+            started: Vec::new(),
+            outcome,
+            done: None,
+        }
+    }
+}
+
+impl<S, E: Copy> SettingsSaver<S, E> for FakeSaver<S, E> {
+    fn start(&mut self, settings: S) {
+        let mut w = self.world.borrow_mut();
+        let now = w.now_us;
+        self.done = Some((now + 30_000, (self.outcome)(&settings)));
+        self.started.push((now, settings));
+        w.wakeups.push(now + 30_000);
+    }
+    fn finished(&mut self) -> impl Future<Output = core::result::Result<(), E>> {
+        let world = self.world.clone();
+        let done = self.done;
+        poll_fn(move |_| match done {
+            Some((t, result)) if t <= world.borrow().now_us => Poll::Ready(result),
+            _ => Poll::Pending,
+        })
+    }
+}
+
+/// Every third save fails.
+fn every_third_fails(settings: &u32) -> core::result::Result<(), ()> {
+    if settings.is_multiple_of(3) {
+        Err(())
+    } else {
+        Ok(())
+    }
+}
+
+type Sup = Supervisor<FakePort, FakePort, FakeIo, FakeSaver<u32, ()>>;
+
+fn setup(cnc_buffer: usize) -> (Shared, FakeClock, Sup, FakeBridge) {
+    let world: Shared = Rc::default();
+    let sup = Supervisor::new(
+        FakePort {
+            world: world.clone(),
+            line: PS,
+        },
+        FakePort {
+            world: world.clone(),
+            line: CNC,
+        },
+        cnc_buffer,
+        FakeIo {
+            world: world.clone(),
+            ..FakeIo::default()
+        },
+        FakeSaver::new(&world, every_third_fails),
+    );
+    let bridge = FakeBridge::new(&world);
+    (world.clone(), FakeClock(world), sup, bridge)
+}
+
+fn cnc_rx(world: &Shared, at_ms: u64, bytes: &[u8]) {
+    world.borrow_mut().lines[CNC]
+        .rx
+        .push_back((at_ms * 1000, bytes.to_vec()));
+}
+
+fn run_until(sup: &mut Sup, bridge: &mut FakeBridge, clock: &FakeClock, until_ms: u64) {
+    block_on(async {
+        while clock.now() < Instant::from_millis(until_ms) {
+            sup.turn(bridge, clock).await.unwrap();
+        }
+    });
+}
+
+#[test]
+fn cnc_commands_reach_the_bridge_and_its_frames_the_supply() {
+    let (world, clock, mut sup, mut bridge) = setup(256);
+    cnc_rx(&world, 10, b"HEL");
+    cnc_rx(&world, 12, b"LO\rPING\r");
+    world.borrow_mut().lines[PS]
+        .rx
+        .push_back((40_000, b"PONG".to_vec()));
+    run_until(&mut sup, &mut bridge, &clock, 100);
+    let w = world.borrow();
+    assert_eq!(w.written(CNC), b"HELLO\r\n");
+    assert_eq!(w.written(PS), b"PING\r\n");
+    // The PING frame went out in the turn that received the command, at 12 ms.
+    assert!(
+        w.lines[PS]
+            .seen
+            .contains(&Seen::Write(12_000, b"PING\r\n".to_vec()))
+    );
+    assert_eq!(bridge.ps_rx, b"PONG");
+}
+
+#[test]
+fn long_output_goes_out_in_pieces_each_after_the_last_has_left() {
+    let (world, clock, mut sup, mut bridge) = setup(64);
+    cnc_rx(&world, 5, b"BIG\r");
+    run_until(&mut sup, &mut bridge, &clock, 20);
+    let w = world.borrow();
+    assert_eq!(w.written(CNC), vec![b'x'; 300]);
+    let seen = &w.lines[CNC].seen;
+    let mut last_was_flush = false;
+    for s in seen {
+        match s {
+            Seen::Write(_, bytes) => {
+                assert!(bytes.len() <= 64);
+                assert!(last_was_flush, "a write must follow a flush: {seen:?}");
+                last_was_flush = false;
+            }
+            Seen::Flush(_) => last_was_flush = true,
+        }
+    }
+}
+
+#[test]
+fn supply_state_and_io_settings_go_to_the_io_task_only_when_they_change() {
+    let (world, clock, mut sup, mut bridge) = setup(256);
+    run_until(&mut sup, &mut bridge, &clock, 300);
+    assert_eq!(sup.io().supplies.len(), 1, "sent once, not every turn");
+    bridge.supply = SupplyState::HEALTHY;
+    bridge.io_config.link_required = false;
+    cnc_rx(&world, 310, b"x\r");
+    run_until(&mut sup, &mut bridge, &clock, 1_000);
+    assert_eq!(
+        sup.io().supplies,
+        [SupplyState::default(), SupplyState::HEALTHY]
+    );
+    assert_eq!(sup.io().configs.len(), 2);
+    assert!(!sup.io().configs[1].link_required);
+}
+
+#[test]
+fn io_events_wake_the_loop_and_reach_the_bridge_in_order() {
+    let (world, clock, mut sup, mut bridge) = setup(256);
+    sup.io().snapshot = Some((Inputs::NONE, Outputs::OFF));
+    sup.io().events.extend([
+        (20_000, Instant::from_micros(19_990), IoEvent::ArcOn),
+        (
+            20_000,
+            Instant::from_micros(19_995),
+            IoEvent::TransferTimeout,
+        ),
+    ]);
+    world.borrow_mut().wakeups.push(20_000);
+    run_until(&mut sup, &mut bridge, &clock, 200);
+    assert_eq!(bridge.snapshots, [(Inputs::NONE, Outputs::OFF)]);
+    let got: Vec<(Instant, IoEvent)> = bridge.events.iter().map(|e| (e.0, e.1)).collect();
+    assert_eq!(
+        got,
+        [
+            (Instant::from_micros(19_990), IoEvent::ArcOn),
+            (Instant::from_micros(19_995), IoEvent::TransferTimeout)
+        ]
+    );
+    // Woken by the event, not by the 100 ms idle wait.
+    assert!(
+        bridge.events.iter().all(|e| e.2 == 20_000),
+        "{:?}",
+        bridge.events
+    );
+}
+
+#[test]
+fn saves_run_one_at_a_time_and_their_result_reaches_the_bridge() {
+    let (world, clock, mut sup, mut bridge) = setup(256);
+    cnc_rx(&world, 10, b"SAVE\r");
+    cnc_rx(&world, 20, b"SAVE\r"); // while the first save runs
+    cnc_rx(&world, 150, b"SAVE\r"); // the third one fails
+    run_until(&mut sup, &mut bridge, &clock, 400);
+    assert_eq!(
+        sup.saver().started,
+        [(10_000, 1), (40_000, 2), (150_000, 3)]
+    );
+    assert!(!sup.is_saving());
+    assert_eq!(
+        world.borrow().written(CNC),
+        b"SAVED\r\nSAVED\r\nSAVE FAILED\r\n"
+    );
+}
+
+#[test]
+fn drives_the_real_bridge_end_to_end() {
+    use crate::bridge::Bridge;
+    use crate::settings::{SaveError, Settings};
+
+    let world: Shared = Rc::default();
+    let clock = FakeClock(world.clone());
+    let mut sup = Supervisor::new(
+        FakePort {
+            world: world.clone(),
+            line: PS,
+        },
+        FakePort {
+            world: world.clone(),
+            line: CNC,
+        },
+        64,
+        FakeIo {
+            world: world.clone(),
+            ..FakeIo::default()
+        },
+        FakeSaver::<Settings, SaveError>::new(&world, |_| Ok(())),
+    );
+    let mut bridge = Bridge::new(Settings::default(), Instant::ZERO);
+    // A Powermax SYNC answers the first detection request; the CNC saves the settings.
+    world.borrow_mut().lines[PS]
+        .rx
+        .push_back((20_000, b":012B0E0481000101010630383133333504\r\n".to_vec()));
+    cnc_rx(&world, 50, b"CONFIG SAVE\r\n");
+    block_on(async {
+        let mut turns = 0;
+        while clock.now() < Instant::from_millis(300) {
+            sup.turn(&mut bridge, &clock).await.unwrap();
+            turns += 1;
+            assert!(
+                turns < 10_000,
+                "stuck at {:?}, bridge poll_at {:?}",
+                clock.now(),
+                bridge.poll_at()
+            );
+        }
+    });
+    let w = world.borrow();
+    assert!(w.written(PS).starts_with(b":012B0E0401C1\r\n"));
+    // The interlocks heard that the link is up.
+    assert!(
+        sup.io().supplies.iter().any(|s| s.link_up),
+        "{:?}",
+        sup.io().supplies
+    );
+    assert_eq!(sup.saver().started.len(), 1);
+    assert_eq!(sup.saver().started[0].0, 50_000);
+    let cnc = String::from_utf8_lossy(&w.written(CNC)).into_owned();
+    assert!(cnc.contains("OK config=saved\r\n"), "{cnc}");
+}

@@ -1,0 +1,458 @@
+//! The whole bridge in the [`World`]: [`PsEndpoint`] for the firmware's
+//! [`Bridge`](plasma_firmware::bridge::Bridge), and [`BridgeEndpoint`], which adds what a
+//! board does around it: the CNC port (bytes in, lines/ACK/NAK out), the settings store for
+//! `CONFIG SAVE` (in memory, through the real record encoding), and the simulator-only
+//! `TORCH ON|OFF`.
+//!
+//! ```
+//! use host_tests::harness::{World, WorldOptions};
+//! use host_tests::sim::Model;
+//! use plasma_firmware::settings::Settings;
+//! use plasma_firmware::time::Duration;
+//!
+//! let mut world = World::with_bridge(Model::Sync65, WorldOptions::default(), Settings::default());
+//! world.wait_link_up(Duration::from_secs(1)).unwrap();
+//! assert!(world.cnc_line("ID").starts_with("OK bridge=plasma-bridge"));
+//! ```
+
+use std::collections::VecDeque;
+
+use plasma_firmware::bridge::Bridge;
+use plasma_firmware::io::{Inputs, IoConfig, IoEvent, Outputs, SupplyState};
+use plasma_firmware::link::{Diagnostics, LinkEvent, UnitStatus};
+use plasma_firmware::port::PortConfig;
+use plasma_firmware::session::SimCommand;
+use plasma_firmware::settings::{SaveError, Settings};
+use plasma_firmware::storage::{MAX_PAYLOAD, Settings as _};
+use plasma_firmware::time::{Duration, Instant};
+use plasma_protocol::cnc::phoenix::{ACK, NAK};
+
+use super::endpoint::PsEndpoint;
+use super::options::WorldOptions;
+use super::world::{Timeout, World};
+use crate::sim::{Model, SimulatedUnit};
+
+/// How long [`World::cnc_line`] waits for its reply (virtual time): longer than any command
+/// takes (a settings write with retries, a restart's quiet time).
+pub const CNC_REPLY_TIMEOUT: Duration = Duration::from_secs(10);
+
+/// The bare bridge: forwards to the firmware's API. The bridge consumes the link's events
+/// itself (they become replies and `!` lines), so [`PsEndpoint::poll`] reports none. Its CNC
+/// output is left for the caller; [`BridgeEndpoint`] collects it.
+impl PsEndpoint for Bridge {
+    fn handle_ps_rx(&mut self, now: Instant, bytes: &[u8]) {
+        Bridge::handle_ps_rx(self, now, bytes);
+    }
+
+    fn poll_ps_transmit(&mut self, now: Instant) -> Option<&[u8]> {
+        Bridge::poll_ps_transmit(self, now)
+    }
+
+    fn ps_port_config(&self) -> PortConfig {
+        Bridge::ps_port_config(self)
+    }
+
+    fn poll(&mut self, now: Instant, _events: &mut Vec<LinkEvent>) {
+        Bridge::poll(self, now);
+    }
+
+    fn poll_at(&self) -> Option<Instant> {
+        Bridge::poll_at(self)
+    }
+
+    fn supply_state(&self) -> SupplyState {
+        Bridge::supply_state(self)
+    }
+
+    fn status(&self) -> &UnitStatus {
+        Bridge::status(self)
+    }
+
+    fn diagnostics(&self) -> &Diagnostics {
+        Bridge::diagnostics(self)
+    }
+
+    fn set_io_snapshot(&mut self, inputs: Inputs, outputs: Outputs) {
+        Bridge::set_io_snapshot(self, inputs, outputs);
+    }
+
+    fn on_io_event(&mut self, now: Instant, event: IoEvent) {
+        Bridge::on_io_event(self, now, event);
+    }
+
+    fn take_io_config_change(&mut self) -> Option<IoConfig> {
+        Bridge::take_io_config_change(self)
+    }
+
+    fn poll_torch_request(&mut self) -> Option<bool> {
+        match self.poll_sim_command()? {
+            SimCommand::Torch(on) => Some(on),
+        }
+    }
+}
+
+/// One thing the CNC received.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum CncItem {
+    /// The ACK byte (0x06): a Phoenix message was accepted.
+    Ack,
+    /// The NAK byte (0x15): a Phoenix message was refused.
+    Nak,
+    /// A reply (`OK ...`, `ERR ...`) or event (`!...`) line, without CR LF.
+    Line(String),
+}
+
+impl CncItem {
+    /// The line, if this is one.
+    pub fn line(&self) -> Option<&str> {
+        match self {
+            CncItem::Line(line) => Some(line),
+            _ => None,
+        }
+    }
+
+    /// True for a reply line (`OK` / `ERR`), false for an event line or ACK/NAK.
+    pub fn is_reply(&self) -> bool {
+        self.line().is_some_and(|l| !l.starts_with('!'))
+    }
+}
+
+/// What the CNC received, with the instant it was taken from the bridge.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct CncRecord {
+    /// When the bridge handed it out.
+    pub at: Instant,
+    /// What it was.
+    pub item: CncItem,
+}
+
+/// The result of the next `CONFIG SAVE`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+enum SaveOutcome {
+    #[default]
+    Store,
+    Fail(SaveError),
+}
+
+/// The bridge as a board runs it: the [`Bridge`] plus its CNC port, settings store and the
+/// simulator's TORCH_ON. Every CNC byte the bridge writes is collected in order.
+#[derive(Debug)]
+pub struct BridgeEndpoint {
+    bridge: Bridge,
+    sim_commands: bool,
+    /// Every byte written to the CNC.
+    raw: Vec<u8>,
+    /// The bytes split into ACK, NAK and lines.
+    records: Vec<CncRecord>,
+    partial: Vec<u8>,
+    torch: VecDeque<bool>,
+    /// The stored record payload (what the flash would hold).
+    stored: Option<Vec<u8>>,
+    saves: u32,
+    next_save: SaveOutcome,
+}
+
+impl BridgeEndpoint {
+    /// A bridge started at `now` with `settings`; `sim_commands` accepts `TORCH ON|OFF`.
+    pub fn new(settings: Settings, now: Instant, sim_commands: bool) -> Self {
+        let mut bridge = Bridge::new(settings, now);
+        if sim_commands {
+            bridge.enable_sim_commands();
+        }
+        BridgeEndpoint {
+            bridge,
+            sim_commands,
+            raw: Vec::new(),
+            records: Vec::new(),
+            partial: Vec::new(),
+            torch: VecDeque::new(),
+            stored: None,
+            saves: 0,
+            next_save: SaveOutcome::Store,
+        }
+    }
+
+    /// The bridge.
+    pub fn bridge(&self) -> &Bridge {
+        &self.bridge
+    }
+
+    /// The bridge, mutable.
+    pub fn bridge_mut(&mut self) -> &mut Bridge {
+        &mut self.bridge
+    }
+
+    /// Bytes from the CNC.
+    pub fn cnc_rx(&mut self, now: Instant, bytes: &[u8]) {
+        self.bridge.handle_cnc_rx(now, bytes);
+        self.collect(now);
+    }
+
+    /// Everything written to the CNC so far, split up.
+    pub fn records(&self) -> &[CncRecord] {
+        &self.records
+    }
+
+    /// Every byte written to the CNC so far.
+    pub fn raw(&self) -> &[u8] {
+        &self.raw
+    }
+
+    /// The settings stored by the last successful `CONFIG SAVE`, decoded from the stored
+    /// record.
+    pub fn saved_settings(&self) -> Option<Settings> {
+        self.stored.as_deref().and_then(Settings::decode)
+    }
+
+    /// Completed `CONFIG SAVE`s (successful or not).
+    pub fn saves(&self) -> u32 {
+        self.saves
+    }
+
+    /// Make the next `CONFIG SAVE` fail with `error`.
+    pub fn fail_next_save(&mut self, error: SaveError) {
+        self.next_save = SaveOutcome::Fail(error);
+    }
+
+    /// Power cycle: a new [`Bridge`] from the stored settings (the defaults if none were
+    /// saved); the CNC output so far is kept, a partial line is lost.
+    pub fn power_cycle(&mut self, now: Instant) {
+        let settings = self.saved_settings().unwrap_or_default();
+        self.bridge = Bridge::new(settings, now);
+        if self.sim_commands {
+            self.bridge.enable_sim_commands();
+        }
+        self.partial.clear();
+        self.torch.clear();
+    }
+
+    /// Take the bridge's output, serve a save request and simulator commands.
+    fn collect(&mut self, now: Instant) {
+        loop {
+            while let Some(bytes) = self.bridge.poll_cnc_output() {
+                let bytes = bytes.to_vec();
+                self.absorb(now, &bytes);
+            }
+            while let Some(command) = self.bridge.poll_sim_command() {
+                match command {
+                    SimCommand::Torch(on) => self.torch.push_back(on),
+                }
+            }
+            let Some(settings) = self.bridge.take_save_request() else {
+                break;
+            };
+            let result = self.store(&settings);
+            self.saves += 1;
+            self.bridge.save_finished(now, result);
+        }
+    }
+
+    fn store(&mut self, settings: &Settings) -> Result<(), SaveError> {
+        if let SaveOutcome::Fail(error) = std::mem::take(&mut self.next_save) {
+            return Err(error);
+        }
+        let mut payload = vec![0u8; MAX_PAYLOAD];
+        let len = settings.encode(&mut payload);
+        if len > payload.len() {
+            return Err(SaveError::TooLarge);
+        }
+        payload.truncate(len);
+        self.stored = Some(payload);
+        Ok(())
+    }
+
+    fn absorb(&mut self, now: Instant, bytes: &[u8]) {
+        self.raw.extend_from_slice(bytes);
+        for &b in bytes {
+            let item = match b {
+                // The session writes control bytes only as ACK/NAK, never inside a line.
+                ACK if self.partial.is_empty() => CncItem::Ack,
+                NAK if self.partial.is_empty() => CncItem::Nak,
+                b'\n' if self.partial.last() == Some(&b'\r') => {
+                    self.partial.pop();
+                    let line = String::from_utf8_lossy(&self.partial).into_owned();
+                    self.partial.clear();
+                    CncItem::Line(line)
+                }
+                _ => {
+                    self.partial.push(b);
+                    continue;
+                }
+            };
+            self.records.push(CncRecord { at: now, item });
+        }
+    }
+}
+
+impl PsEndpoint for BridgeEndpoint {
+    fn handle_ps_rx(&mut self, now: Instant, bytes: &[u8]) {
+        self.bridge.handle_ps_rx(now, bytes);
+    }
+
+    fn poll_ps_transmit(&mut self, now: Instant) -> Option<&[u8]> {
+        self.bridge.poll_ps_transmit(now)
+    }
+
+    fn ps_port_config(&self) -> PortConfig {
+        self.bridge.ps_port_config()
+    }
+
+    fn poll(&mut self, now: Instant, _events: &mut Vec<LinkEvent>) {
+        self.bridge.poll(now);
+        self.collect(now);
+    }
+
+    fn poll_at(&self) -> Option<Instant> {
+        self.bridge.poll_at()
+    }
+
+    fn supply_state(&self) -> SupplyState {
+        self.bridge.supply_state()
+    }
+
+    fn status(&self) -> &UnitStatus {
+        self.bridge.status()
+    }
+
+    fn diagnostics(&self) -> &Diagnostics {
+        self.bridge.diagnostics()
+    }
+
+    fn set_io_snapshot(&mut self, inputs: Inputs, outputs: Outputs) {
+        self.bridge.set_io_snapshot(inputs, outputs);
+    }
+
+    fn on_io_event(&mut self, now: Instant, event: IoEvent) {
+        self.bridge.on_io_event(now, event);
+        // `!ARC ON` reaches the CNC at this instant, not at the next poll.
+        self.collect(now);
+    }
+
+    fn take_io_config_change(&mut self) -> Option<IoConfig> {
+        self.bridge.take_io_config_change()
+    }
+
+    fn poll_torch_request(&mut self) -> Option<bool> {
+        self.torch.pop_front()
+    }
+}
+
+/// The whole bridge against a simulated unit, driven from the CNC side.
+impl World<BridgeEndpoint> {
+    /// The bridge with `settings` (simulator commands on) against a simulated `model`; the
+    /// interlocks use `settings.io` (`options.io` is ignored).
+    pub fn with_bridge(model: Model, options: WorldOptions, settings: Settings) -> Self {
+        let unit = model.build(&options.sim);
+        Self::with_bridge_unit(unit, options, settings)
+    }
+
+    /// The bridge against a simulator built by the caller.
+    pub fn with_bridge_unit(
+        unit: Box<dyn SimulatedUnit>,
+        options: WorldOptions,
+        settings: Settings,
+    ) -> Self {
+        let options = WorldOptions {
+            io: settings.io,
+            link: settings.link,
+            ..options
+        };
+        let endpoint = BridgeEndpoint::new(settings, Instant::ZERO, true);
+        World::with_endpoint(endpoint, unit, options)
+    }
+
+    /// The bridge.
+    pub fn bridge(&self) -> &Bridge {
+        self.endpoint().bridge()
+    }
+
+    /// The bridge, mutable (its own API; call [`World::drive`] to let the world react).
+    pub fn bridge_mut(&mut self) -> &mut Bridge {
+        self.endpoint_mut().bridge_mut()
+    }
+
+    /// Bytes from the CNC, now (any chunking: half lines, frames, garbage).
+    pub fn cnc_send(&mut self, bytes: &[u8]) {
+        self.drive(|e, now| e.cnc_rx(now, bytes));
+    }
+
+    /// Send `line` (CR LF appended) and run until its one reply line arrives; returns it.
+    /// Event lines and ACK/NAK that come meanwhile stay in [`World::cnc_output`]. Panics
+    /// when no reply comes within [`CNC_REPLY_TIMEOUT`].
+    pub fn cnc_line(&mut self, line: &str) -> String {
+        let mark = self.cnc_reply_count();
+        let mut bytes = line.as_bytes().to_vec();
+        bytes.extend_from_slice(b"\r\n");
+        self.cnc_send(&bytes);
+        self.wait_cnc_replies(mark + 1, CNC_REPLY_TIMEOUT)
+            .unwrap_or_else(|t| panic!("no reply to {line:?}: {t}\n{}", self.trace().tail(10)));
+        let reply = self.cnc_replies().nth(mark).expect("waited for it");
+        reply.to_string()
+    }
+
+    /// Run until `count` reply lines have arrived in all; returns the instant.
+    pub fn wait_cnc_replies(
+        &mut self,
+        count: usize,
+        timeout: Duration,
+    ) -> Result<Instant, Timeout> {
+        self.run_until(|w| w.cnc_reply_count() >= count, timeout)
+    }
+
+    /// Run until a line starting with `prefix` arrives (after this call); returns it.
+    pub fn wait_cnc_line(&mut self, prefix: &str, timeout: Duration) -> Result<String, Timeout> {
+        let mark = self.cnc_output().len();
+        let find = |w: &Self| {
+            w.cnc_output()[mark..]
+                .iter()
+                .filter_map(|r| r.item.line())
+                .find(|l| l.starts_with(prefix))
+                .map(str::to_string)
+        };
+        self.run_until(|w| find(w).is_some(), timeout)?;
+        Ok(find(self).expect("found by run_until"))
+    }
+
+    /// Everything the CNC received, in order.
+    pub fn cnc_output(&self) -> &[CncRecord] {
+        self.endpoint().records()
+    }
+
+    /// Every byte the CNC received.
+    pub fn cnc_bytes(&self) -> &[u8] {
+        self.endpoint().raw()
+    }
+
+    /// Every line the CNC received (replies and events).
+    pub fn cnc_lines(&self) -> impl Iterator<Item = &str> {
+        self.cnc_output().iter().filter_map(|r| r.item.line())
+    }
+
+    /// The reply lines (`OK` / `ERR`) the CNC received.
+    pub fn cnc_replies(&self) -> impl Iterator<Item = &str> {
+        self.cnc_lines().filter(|l| !l.starts_with('!'))
+    }
+
+    /// How many reply lines the CNC has received.
+    pub fn cnc_reply_count(&self) -> usize {
+        self.cnc_replies().count()
+    }
+
+    /// The event lines (`!...`) the CNC received.
+    pub fn cnc_events(&self) -> impl Iterator<Item = &str> {
+        self.cnc_lines().filter(|l| l.starts_with('!'))
+    }
+
+    /// The settings the last successful `CONFIG SAVE` stored.
+    pub fn saved_settings(&self) -> Option<Settings> {
+        self.endpoint().saved_settings()
+    }
+
+    /// Switch the bridge's board off and on: the bridge starts again from the stored
+    /// settings, the interlocks from reset (see [`World::reset_bridge`]). The unit keeps
+    /// running.
+    pub fn power_cycle_bridge(&mut self) {
+        let io = self.saved_settings().unwrap_or_default().io;
+        self.reset_bridge(io, |e, now| e.power_cycle(now));
+    }
+}

@@ -1,0 +1,1138 @@
+//! The CNC side end to end: the firmware's `Bridge` in the scenario `World`, driven with CNC
+//! bytes against the simulated units, with the discrete I/O, the line and the safety monitor
+//! (checked after every step; a broken rule fails the test) in the loop.
+
+mod common;
+
+use common::{
+    bridge_world, bridge_world_with, field, hpr, modbus, phoenix_113, ready_hpr, settle,
+    well_formed,
+};
+use host_tests::harness::{CncItem, World, WorldOptions};
+use host_tests::sim::Model;
+use host_tests::sim::hpr::Hpr;
+use host_tests::sim::powermax::Powermax;
+use plasma_firmware::io::{Input, Interlock, IoEvent, Output, Reason};
+use plasma_firmware::settings::{SaveError, Settings};
+use plasma_firmware::time::Duration;
+
+fn ms(n: u64) -> Duration {
+    Duration::from_millis(n)
+}
+
+/// Every reply so far is well formed, and there are `count` of them.
+fn assert_replies(world: &World<host_tests::harness::BridgeEndpoint>, count: usize) {
+    let replies: Vec<&str> = world.cnc_replies().collect();
+    assert_eq!(replies.len(), count, "{replies:#?}");
+    for line in world.cnc_lines() {
+        assert!(well_formed(line), "malformed line {line:?}");
+    }
+}
+
+/// True when `text` matches `pattern`, where `*` stands for any run of characters.
+fn glob(pattern: &str, text: &str) -> bool {
+    let mut parts = pattern.split('*');
+    let first = parts.next().unwrap_or("");
+    let Some(mut rest) = text.strip_prefix(first) else {
+        return false;
+    };
+    let parts: Vec<&str> = parts.collect();
+    let Some((last, middle)) = parts.split_last() else {
+        return rest.is_empty();
+    };
+    for part in middle {
+        match rest.find(part) {
+            Some(at) => rest = &rest[at + part.len()..],
+            None => return false,
+        }
+    }
+    rest.len() >= last.len() && rest.ends_with(last)
+}
+
+/// Run each (command, expected) pair; `*` in the expected text stands for any characters.
+fn expect_all(world: &mut World<host_tests::harness::BridgeEndpoint>, table: &[(&str, &str)]) {
+    for &(command, expected) in table {
+        let reply = world.cnc_line(command);
+        assert!(
+            glob(expected, &reply),
+            "{command}: {reply:?} does not match {expected:?}"
+        );
+    }
+}
+
+// --- a cut -------------------------------------------------------------------------------
+
+#[test]
+fn a_sync_session_sets_a_process_and_cuts() {
+    let mut w = bridge_world(Model::Sync65);
+    assert_eq!(w.cnc_line("EVENTS ON"), "OK events=ON");
+    assert_eq!(
+        w.cnc_line("SET PROCESS CUT 45 AUTO"),
+        "OK mode=CUT amps=45 psi=AUTO"
+    );
+    // The unit got all three in one write and is in remote mode.
+    let unit = w.sim_ref::<Powermax>();
+    assert!(w.unit_ref().in_remote_mode());
+    assert_eq!(unit.settings().current, 45 * 64);
+    assert_eq!(unit.settings().pressure, 0);
+
+    assert_eq!(w.cnc_line("TORCH ON"), "OK torch=ON");
+    assert!(w.io().outputs().start);
+    w.wait_cnc_line("!ARC ON", Duration::from_secs(2)).unwrap();
+    let status = w.cnc_line("STATUS");
+    for (key, value) in [
+        ("link", "UP"),
+        ("remote", "ON"),
+        ("mode", "CUT"),
+        ("amps", "45"),
+        ("start", "ON"),
+        ("motion", "ON"),
+        ("arc_ok", "ON"),
+        ("ready", "ON"),
+        ("fault", "none"),
+    ] {
+        assert_eq!(field(&status, key), Some(value), "{key} in {status}");
+    }
+    w.run_for(ms(500));
+    assert_eq!(
+        field(&w.cnc_line("STATUS"), "out_amps"),
+        Some("45"),
+        "the unit cuts at 45 A"
+    );
+
+    assert_eq!(w.cnc_line("TORCH OFF"), "OK torch=OFF");
+    assert!(!w.io().outputs().start);
+    w.wait_cnc_line("!ARC OFF", Duration::from_secs(2)).unwrap();
+    let status = w.cnc_line("STATUS");
+    assert_eq!(field(&status, "start"), Some("OFF"));
+    assert_eq!(field(&status, "arc_ok"), Some("OFF"));
+
+    // The output log says why START moved.
+    let start: Vec<_> = w
+        .transitions()
+        .iter()
+        .filter(|t| t.output == Output::Start)
+        .map(|t| (t.level, t.reason))
+        .collect();
+    assert_eq!(start, [(true, Reason::TorchOn), (false, Reason::TorchOff)]);
+    assert_eq!(
+        w.sim_ref::<Powermax>().counters().transfers,
+        1,
+        "one transfer on the unit"
+    );
+    assert_replies(&w, 7);
+}
+
+#[test]
+fn an_hpr_session_sets_amps_gases_corner_and_cuts() {
+    let mut w = ready_hpr(Model::Hpr260);
+    expect_all(
+        &mut w,
+        &[
+            ("EVENTS ON", "OK events=ON"),
+            ("SET AMPS 200", "OK amps=200"),
+            ("CORNER 80", "OK corner=80"),
+        ],
+    );
+    assert_eq!(w.sim_ref::<Hpr>().nominal_amps(), 200);
+    assert_eq!(w.sim_ref::<Hpr>().corner_percent(), 80);
+    // A gas change purges the unit: wait for it to be ready again.
+    assert_eq!(w.cnc_line("GASES O2 AIR"), "OK plasma=O2 shield=AIR");
+    w.run_until(|w| w.bridge().status().ready, Duration::from_secs(10))
+        .unwrap();
+
+    assert_eq!(w.cnc_line("TORCH ON"), "OK torch=ON");
+    // Preflow, HF ignition (the link rides through its noise), pilot arc, transfer.
+    w.wait_cnc_line("!ARC ON", Duration::from_secs(5)).unwrap();
+    let status = w.cnc_line("STATUS");
+    assert_eq!(field(&status, "start"), Some("ON"), "{status}");
+    assert_eq!(field(&status, "motion"), Some("ON"), "{status}");
+    assert_eq!(field(&status, "arc_ok"), Some("ON"), "{status}");
+    // Steady state; corner current from the CNC reaches the unit: 80 % of 200 A.
+    w.run_until(
+        |w| w.sim_ref::<Hpr>().state_code() == 8,
+        Duration::from_secs(2),
+    )
+    .unwrap();
+    w.set_input(Input::CornerCurrent, true);
+    w.run_for(ms(50));
+    assert!(w.io().outputs().corner_current);
+    assert_eq!(w.sim_ref::<Hpr>().actual_amps(), 160);
+    w.set_input(Input::CornerCurrent, false);
+    w.run_for(ms(50));
+    assert_eq!(w.sim_ref::<Hpr>().actual_amps(), 200);
+
+    assert_eq!(w.cnc_line("TORCH OFF"), "OK torch=OFF");
+    w.wait_cnc_line("!ARC OFF", Duration::from_secs(2)).unwrap();
+    w.run_until(|w| w.bridge().status().ready, Duration::from_secs(10))
+        .unwrap();
+    assert_eq!(w.sim_ref::<Hpr>().counters().starts, 1);
+    assert_eq!(w.unit_ref().active_fault(), 0, "a clean cut, no error");
+    assert_eq!(w.cnc_line("FAULTLOG"), "OK log=none");
+}
+
+#[test]
+fn hold_from_the_cnc_keeps_the_hpr_in_preflow() {
+    let mut w = ready_hpr(Model::Hpr130);
+    w.set_input(Input::Hold, true);
+    assert_eq!(w.cnc_line("TORCH ON"), "OK torch=ON");
+    w.run_for(ms(2_000));
+    assert_eq!(w.sim_ref::<Hpr>().state_code(), 4, "held in preflow");
+    assert!(!w.unit_ref().motion());
+    w.set_input(Input::Hold, false);
+    w.run_until(|w| w.io().outputs().arc_ok, Duration::from_secs(5))
+        .expect("ignites and transfers once HOLD is released");
+    assert_eq!(w.cnc_line("TORCH OFF"), "OK torch=OFF");
+}
+
+// --- every command, OK and ERR -------------------------------------------------------------
+
+#[test]
+fn sync_commands_ok_and_err() {
+    let mut w = bridge_world(Model::Sync65);
+    expect_all(
+        &mut w,
+        &[
+            ("HELP", "OK commands=HELP,ID,STATUS,*"),
+            ("help", "OK commands=HELP,ID,STATUS,*"),
+            (
+                "ID",
+                "OK bridge=plasma-bridge version=0.1.0 reset=unknown link=UP model=Powermax65 family=SYNC product=081335",
+            ),
+            ("ID now", "ERR SYNTAX too many arguments"),
+            (
+                "STATUS",
+                "OK link=UP model=Powermax65 family=SYNC remote=OFF *",
+            ),
+            (
+                "LIMITS",
+                "OK modes=CUT,EXPANDED amps=20..65 psi=58..78 scope=cartridge",
+            ),
+            ("FAULT", "OK fault=none"),
+            ("FAULTLOG", "OK log=none"),
+            (
+                "COUNTERS",
+                "OK starts=0 pilot_arc_s=0 transfers=0 transfer_s=0 link_ok=*",
+            ),
+            (
+                "CARTRIDGE",
+                "OK uid=E00401D0036FB25D part=428930 rev=1 nominal_amps=65 *",
+            ),
+            ("SET PROCESS CUT 45 AUTO", "OK mode=CUT amps=45 psi=AUTO"),
+            (
+                "SET PROCESS CUT 120 AUTO",
+                "ERR RANGE amps 120 outside 20..65 for this cartridge",
+            ),
+            (
+                "SET PROCESS CUT 45 80",
+                "ERR RANGE psi 80 outside 58..78 for this cartridge",
+            ),
+            (
+                "SET PROCESS GOUGE 45 AUTO",
+                "ERR RANGE mode GOUGE not permitted for this cartridge (permitted: CUT EXPANDED)",
+            ),
+            (
+                "SET PROCESS CUT 500 AUTO",
+                "ERR RANGE amps out of range 5..400",
+            ),
+            (
+                "SET PROCESS CUT 45.01 AUTO",
+                "ERR RANGE amps must be a multiple of 1/64",
+            ),
+            (
+                "SET PROCESS FLY 45 AUTO",
+                "ERR SYNTAX mode: expected CUT|CPA|EXPANDED|GOUGE",
+            ),
+            ("SET PROCESS CUT 45", "ERR SYNTAX missing *"),
+            ("SET AMPS 40", "OK mode=CUT amps=40 psi=AUTO"),
+            (
+                "SET AMPS 66",
+                "ERR RANGE amps 66 outside 20..65 for this cartridge",
+            ),
+            ("SET AMPS", "ERR SYNTAX missing *"),
+            ("SET AMPS forty", "ERR SYNTAX *"),
+            ("SET PSI 70.5", "OK mode=CUT amps=40 psi=70.5"),
+            ("SET PSI AUTO", "OK mode=CUT amps=40 psi=AUTO"),
+            (
+                "SET PSI 10",
+                "ERR RANGE psi 10 outside 58..78 for this cartridge",
+            ),
+            ("SET MODE EXPANDED", "OK mode=EXPANDED amps=40 psi=AUTO"),
+            ("SET MODE GOUGE", "ERR RANGE mode GOUGE not permitted *"),
+            ("SET MODE", "ERR SYNTAX missing *"),
+            ("SET", "ERR SYNTAX missing *"),
+            ("GASTEST ON", "OK gastest=ON"),
+            ("GASTEST OFF", "OK gastest=OFF"),
+            ("GASTEST MAYBE", "ERR SYNTAX *"),
+            (
+                "RESTART",
+                "ERR STATE quick restart needs fault 0-50-0, no fault active",
+            ),
+            (
+                "GASES O2 AIR",
+                "ERR UNSUPPORTED GASES is an HPR/MaxPro200 command; a Powermax SYNC runs on air and sets no gases",
+            ),
+            (
+                "CORNER 80",
+                "ERR UNSUPPORTED CORNER is an HPR command (070 corner current), not available on a Powermax SYNC",
+            ),
+            (
+                "RESET",
+                "ERR UNSUPPORTED RESET is an HPR/MaxPro200 command *",
+            ),
+            (
+                "CLEARWARN",
+                "ERR UNSUPPORTED CLEARWARN is an HPR command (131 clear warnings), not available on a Powermax SYNC",
+            ),
+            ("EVENTS ON", "OK events=ON"),
+            ("EVENTS OFF", "OK events=OFF"),
+            (
+                "EVENTS MAYBE",
+                "ERR SYNTAX EVENTS argument: expected ON|OFF",
+            ),
+            (
+                "CONFIG",
+                "OK protocol=AUTO address=1 parity=EVEN stop_bits=1 timeout_ms=100 *",
+            ),
+            ("CONFIG timeout_ms", "OK timeout_ms=100"),
+            (
+                "CONFIG timeout_ms 30",
+                "ERR RANGE timeout_ms 30 outside 60..1000",
+            ),
+            (
+                "CONFIG parity mark",
+                "ERR SYNTAX parity: expected NONE|EVEN|ODD",
+            ),
+            (
+                "CONFIG baud 9600",
+                "ERR SYNTAX config key: expected SAVE or a key listed by CONFIG",
+            ),
+            ("CONFIG SAVE", "OK config=saved"),
+            ("RAW :0104301A0001B0", "OK reply=:010402*"),
+            ("RAW", "ERR SYNTAX missing frame"),
+            (
+                "RAW :0104301A0001B1",
+                "ERR REFUSED raw frame rejected: bad checksum: expected B0, found B1",
+            ),
+            ("TORCH MAYBE", "ERR SYNTAX *"),
+            ("REMOTE OFF", "OK remote=OFF"),
+            ("REMOTE ON", "ERR SYNTAX *"),
+            ("FLY", "ERR SYNTAX unknown command"),
+        ],
+    );
+    assert!(!w.unit_ref().in_remote_mode());
+    // The failing settings commands sent nothing: the unit is as REMOTE OFF left it.
+    assert_eq!(w.sim_ref::<Powermax>().force_registers().current, 0);
+}
+
+#[test]
+fn sync_restart_clears_0_50_0_and_keeps_start_off_through_the_quiet_time() {
+    let mut w = World::with_bridge(Model::Sync85, WorldOptions::default(), Settings::default());
+    w.inject_fault(500);
+    settle(&mut w);
+    assert_eq!(field(&w.cnc_line("STATUS"), "fault"), Some("0-50-0"));
+    assert!(
+        w.cnc_line("FAULT")
+            .starts_with("OK fault=0-50-0 action=required text=The cartridge is off")
+    );
+    assert!(w.io().outputs().fault);
+    assert!(!w.io().outputs().ready);
+    // START refused while the fault requires action (`interlock_fault` is on).
+    w.cnc_line("TORCH ON");
+    assert!(!w.io().outputs().start);
+    assert_eq!(
+        w.io().start_locked_by(),
+        Some(Interlock::FaultRequiresAction)
+    );
+    w.cnc_line("TORCH OFF");
+
+    assert_eq!(w.cnc_line("RESTART"), "OK restart=done quiet_ms=2000");
+    // Commands that need the unit wait out the quiet time.
+    assert!(
+        w.cnc_line("SET AMPS 40")
+            .starts_with("ERR BUSY the unit restarts: quiet for another")
+    );
+    // TORCH_ON during the quiet time is refused (the monitor checks the blackout too).
+    w.run_for(ms(100));
+    w.cnc_line("TORCH ON");
+    assert!(!w.io().outputs().start);
+    w.cnc_line("TORCH OFF");
+    w.run_for(ms(2_500));
+    let status = w.cnc_line("STATUS");
+    assert_eq!(field(&status, "fault"), Some("none"), "{status}");
+    assert_eq!(field(&status, "ready"), Some("ON"), "{status}");
+    assert_eq!(w.cnc_line("FAULTLOG"), "OK log=0-50-0");
+    w.cnc_line("TORCH ON");
+    assert!(w.io().outputs().start, "cuts again after the quiet time");
+    w.cnc_line("TORCH OFF");
+}
+
+#[test]
+fn legacy_commands_ok_and_err() {
+    let mut w = bridge_world(Model::Pm85);
+    expect_all(
+        &mut w,
+        &[
+            (
+                "ID",
+                "OK bridge=plasma-bridge version=0.1.0 reset=unknown link=UP model=* family=LEGACY *",
+            ),
+            ("STATUS", "OK link=UP model=* family=LEGACY remote=OFF *"),
+            ("LIMITS", "OK modes=CUT,CPA,GOUGE amps=*scope=unit"),
+            ("FAULT", "OK fault=none"),
+            (
+                "FAULTLOG",
+                "ERR UNSUPPORTED FAULTLOG: a Powermax (legacy registers) keeps no fault log the bridge can read; FAULT shows the active fault",
+            ),
+            ("COUNTERS", "OK arc_s=0 link_ok=*"),
+            (
+                "CARTRIDGE",
+                "ERR UNSUPPORTED CARTRIDGE is a Powermax SYNC function; a Powermax (legacy registers) has no cartridge data",
+            ),
+            (
+                "SET AMPS 45",
+                "ERR STATE the unit's settings are not known yet: use SET PROCESS <mode> <A> <psi|AUTO>",
+            ),
+            ("SET PROCESS CPA 45 AUTO", "OK mode=CPA amps=45 psi=AUTO"),
+            ("SET AMPS 50", "OK mode=CPA amps=50 psi=AUTO"),
+            (
+                "SET PROCESS CUT 200 AUTO",
+                "ERR RANGE amps 200 outside *for this unit",
+            ),
+            ("SET MODE GOUGE", "OK mode=GOUGE amps=50 psi=AUTO"),
+            ("GASTEST ON", "OK gastest=ON"),
+            ("GASTEST OFF", "OK gastest=OFF"),
+            (
+                "RESTART",
+                "ERR UNSUPPORTED RESTART (quick restart, clears 0-50-0) is a Powermax SYNC function, not available on a Powermax (legacy registers)",
+            ),
+            (
+                "GASES N2 N2",
+                "ERR UNSUPPORTED GASES is an HPR/MaxPro200 command; *",
+            ),
+            ("CORNER 80", "ERR UNSUPPORTED CORNER *"),
+            ("RESET", "ERR UNSUPPORTED RESET *"),
+            ("CLEARWARN", "ERR UNSUPPORTED CLEARWARN *"),
+            (
+                "RAW :010420900001*",
+                "ERR REFUSED raw frame rejected: non-hex character",
+            ),
+            ("REMOTE OFF", "OK remote=OFF"),
+        ],
+    );
+    assert!(!w.unit_ref().in_remote_mode());
+    // RAW read of a documented legacy register (0x2098 fault code).
+    let frame = modbus("010320980001");
+    assert!(
+        w.cnc_line(&format!("RAW {frame}"))
+            .starts_with("OK reply=:010302"),
+        "{frame}"
+    );
+}
+
+#[test]
+fn hpr_commands_ok_and_err() {
+    let mut w = ready_hpr(Model::Hpr260);
+    expect_all(
+        &mut w,
+        &[
+            (
+                "ID",
+                "OK bridge=plasma-bridge version=0.1.0 reset=unknown link=UP model=HPR260 family=HPR",
+            ),
+            (
+                "STATUS",
+                "OK link=UP model=HPR260 family=HPR remote=* state=3 state_name=IDLE2",
+            ),
+            ("LIMITS", "OK amps=5..260 corner=50..100"),
+            ("FAULT", "OK fault=none"),
+            ("FAULTLOG", "OK log=none"),
+            (
+                "COUNTERS",
+                "OK arc_s=0 system_min=0 starts=0 start_errors=0 rampdown_errors=0 link_ok=*",
+            ),
+            (
+                "CARTRIDGE",
+                "ERR UNSUPPORTED CARTRIDGE is a Powermax SYNC function; an HPR has no cartridge data",
+            ),
+            ("SET AMPS 130", "OK amps=130"),
+            (
+                "SET AMPS 261",
+                "ERR RANGE amps 261 outside 5..260 for this unit",
+            ),
+            (
+                "SET AMPS 45.5",
+                "ERR RANGE amps 45.5: this unit takes whole amps",
+            ),
+            (
+                "SET MODE CUT",
+                "ERR UNSUPPORTED SET MODE is a Powermax command; an HPR takes SET AMPS and GASES",
+            ),
+            (
+                "SET PSI 70",
+                "ERR UNSUPPORTED SET PSI is a Powermax command; an HPR takes SET AMPS and GASES",
+            ),
+            (
+                "SET PROCESS CUT 45 AUTO",
+                "ERR UNSUPPORTED SET PROCESS is a Powermax command; an HPR takes SET AMPS and GASES",
+            ),
+            (
+                "REMOTE OFF",
+                "ERR UNSUPPORTED REMOTE OFF is a Powermax command; an HPR stays in remote mode while the bridge talks to it",
+            ),
+            (
+                "RESTART",
+                "ERR UNSUPPORTED RESTART (quick restart, clears 0-50-0) is a Powermax SYNC function, not available on an HPR",
+            ),
+            ("CORNER 80", "OK corner=80"),
+            ("CORNER 120", "ERR RANGE percent out of range 50..100"),
+            ("CORNER", "ERR SYNTAX missing *"),
+            ("GASES O2", "ERR SYNTAX missing *"),
+            (
+                "GASES XE AIR",
+                "ERR SYNTAX plasma gas: expected O2|CH4|H35|H5|AIR|N2|AR|N95|F5",
+            ),
+            (
+                "RESET",
+                "ERR STATE not allowed in state 3 (IDLE2) with error 000 (NO ERROR)",
+            ),
+            ("CLEARWARN", "OK clearwarn=done"),
+            ("GASTEST ON", "OK gastest=ON"),
+            ("GASTEST OFF", "OK gastest=OFF"),
+            ("RAW >00292<", "OK reply=>002*"),
+            (
+                "RAW >00293<",
+                "ERR REFUSED raw frame rejected: bad checksum*",
+            ),
+        ],
+    );
+    assert_eq!(w.sim_ref::<Hpr>().nominal_amps(), 130);
+
+    // An error above 79 shuts the unit down; RESET (068) is allowed then.
+    w.inject_fault(80);
+    w.run_until(
+        |w| w.bridge().status().hpr.state.is_some_and(|s| s.0 == 14),
+        Duration::from_secs(2),
+    )
+    .unwrap();
+    assert!(
+        w.cnc_line("FAULT")
+            .starts_with("OK fault=080 action=required text=")
+    );
+    assert_eq!(w.cnc_line("RESET"), "OK reset=done");
+    assert_eq!(w.cnc_line("FAULTLOG"), "OK log=080");
+}
+
+#[test]
+fn maxpro200_commands_ok_and_err() {
+    let mut w = ready_hpr(Model::MaxPro200);
+    expect_all(
+        &mut w,
+        &[
+            (
+                "ID",
+                "OK bridge=plasma-bridge version=0.1.0 reset=unknown link=UP model=MaxPro200 family=MAXPRO200",
+            ),
+            (
+                "STATUS",
+                "OK link=UP model=MaxPro200 family=MAXPRO200 *state=3 state_name=READY_FOR_START",
+            ),
+            ("LIMITS", "OK amps=5..200"),
+            (
+                "FAULTLOG",
+                "ERR UNSUPPORTED FAULTLOG: a MaxPro200 keeps no fault log the bridge can read; FAULT shows the active fault",
+            ),
+            ("COUNTERS", "OK link_ok=*"),
+            ("SET AMPS 200", "OK amps=200"),
+            (
+                "SET AMPS 201",
+                "ERR RANGE amps 201 outside 5..200 for this unit",
+            ),
+            (
+                "SET MODE CUT",
+                "ERR UNSUPPORTED SET MODE is a Powermax command; a MaxPro200 takes SET AMPS and GASES",
+            ),
+            ("GASTEST ON", "ERR UNSUPPORTED not supported by a MaxPro200"),
+            (
+                "CORNER 80",
+                "ERR UNSUPPORTED CORNER is an HPR command (070 corner current), not available on a MaxPro200",
+            ),
+            (
+                "CLEARWARN",
+                "ERR UNSUPPORTED CLEARWARN is an HPR command (131 clear warnings), not available on a MaxPro200",
+            ),
+            ("GASES O2 AIR", "OK plasma=O2 shield=AIR"),
+            ("RESET", "OK reset=done"),
+        ],
+    );
+}
+
+#[test]
+fn without_a_unit_commands_that_need_one_answer_err_link() {
+    let mut w = World::with_bridge(Model::Sync65, WorldOptions::default(), Settings::default());
+    w.power_off();
+    w.run_for(ms(1_000));
+    expect_all(
+        &mut w,
+        &[
+            (
+                "ID",
+                "OK bridge=plasma-bridge version=0.1.0 reset=unknown link=DOWN model=- family=-",
+            ),
+            (
+                "STATUS",
+                "OK link=DOWN model=- family=- remote=OFF mode=- amps=- psi=- out_amps=- out_psi=- fault=none start=OFF motion=OFF arc_ok=OFF ready=OFF",
+            ),
+            (
+                "SET AMPS 45",
+                "ERR LINK no power supply connected (the bridge is looking for one)",
+            ),
+            (
+                "SET PROCESS CUT 45 AUTO",
+                "ERR LINK no power supply connected (the bridge is looking for one)",
+            ),
+            (
+                "GASES O2 AIR",
+                "ERR LINK no power supply connected (the bridge is looking for one)",
+            ),
+            ("RAW :0104301A0001B0", "ERR LINK no power supply connected"),
+            (
+                "FAULT",
+                "ERR LINK no power supply connected (the bridge is looking for one)",
+            ),
+            ("TORCH ON", "OK torch=ON"),
+        ],
+    );
+    // The link is down: the interlocks refuse START.
+    assert!(!w.io().outputs().start);
+    assert!(w.io().outputs().fault);
+    assert_eq!(w.io().start_locked_by(), Some(Interlock::LinkDown));
+    w.cnc_line("TORCH OFF");
+}
+
+#[test]
+fn a_full_queue_answers_busy_at_once_and_the_rest_in_order() {
+    let mut w = bridge_world(Model::Sync65);
+    w.cnc_send(b"SET PROCESS CUT 45 AUTO\r\nFAULT\r\nLIMITS\r\nFLY\r\nEVENTS OFF\r\nFAULT\r\n");
+    w.wait_cnc_replies(6, Duration::from_secs(2)).unwrap();
+    let replies: Vec<&str> = w.cnc_replies().collect();
+    assert_eq!(
+        replies,
+        [
+            "ERR BUSY 4 commands are already waiting, line dropped",
+            "OK mode=CUT amps=45 psi=AUTO",
+            "OK fault=none",
+            "OK modes=CUT,EXPANDED amps=20..65 psi=58..78 scope=cartridge",
+            "ERR SYNTAX unknown command",
+            "OK events=OFF",
+        ]
+    );
+}
+
+// --- events --------------------------------------------------------------------------------
+
+#[test]
+fn events_report_link_fault_remote_and_arc() {
+    let mut w = World::with_bridge(
+        Model::Sync65,
+        WorldOptions::default(),
+        Settings {
+            events: true,
+            ..Settings::default()
+        },
+    );
+    w.wait_cnc_line(
+        "!LINK UP model=Powermax65/85/105 SYNC",
+        Duration::from_secs(1),
+    )
+    .unwrap();
+    settle(&mut w);
+    w.inject_fault(200);
+    assert!(
+        w.wait_cnc_line("!FAULT 0-20-0 ", Duration::from_secs(1))
+            .unwrap()
+            .contains("gas pressure")
+    );
+    assert!(w.io().outputs().fault);
+    w.clear_fault();
+    w.wait_cnc_line("!FAULT CLEARED code=0-20-0", Duration::from_secs(1))
+        .unwrap();
+
+    w.cnc_line("SET PROCESS CUT 45 AUTO");
+    let events: Vec<&str> = w.cnc_events().collect();
+    assert!(events.contains(&"!REMOTE ON"), "{events:?}");
+    assert!(
+        events
+            .iter()
+            .any(|e| e.starts_with("!SETTINGS applied mode=CUT amps=45")),
+        "{events:?}"
+    );
+
+    w.cnc_line("TORCH ON");
+    w.wait_cnc_line("!ARC ON", Duration::from_secs(1)).unwrap();
+    w.cnc_line("TORCH OFF");
+    w.wait_cnc_line("!ARC OFF", Duration::from_secs(1)).unwrap();
+    w.run_for(ms(100));
+
+    // START within 50 ms of the last: delayed, then on.
+    w.cnc_line("TORCH ON");
+    assert!(
+        !w.cnc_events().any(|e| e.starts_with("!START DELAYED")),
+        "the last START fell long ago"
+    );
+    w.cnc_line("TORCH OFF");
+    w.cnc_line("TORCH ON");
+    let delayed = w.cnc_events().last().unwrap().to_string();
+    assert!(delayed.starts_with("!START DELAYED ms="), "{delayed}");
+    w.run_for(ms(60));
+    assert!(w.io().outputs().start);
+    w.cnc_line("TORCH OFF");
+
+    // The unit goes away and comes back.
+    w.power_off();
+    w.wait_cnc_line("!LINK DOWN reason=no_answer", Duration::from_secs(3))
+        .unwrap();
+    let status = w.cnc_line("STATUS");
+    assert_eq!(field(&status, "link"), Some("DOWN"));
+    w.power_on();
+    w.wait_cnc_line("!LINK UP", Duration::from_secs(5)).unwrap();
+    // The link puts the kept process back on the unit.
+    w.wait_cnc_line("!SETTINGS applied mode=CUT amps=45", Duration::from_secs(5))
+        .unwrap();
+    assert!(w.unit_ref().in_remote_mode());
+
+    // Off: no more event lines.
+    assert_eq!(w.cnc_line("EVENTS OFF"), "OK events=OFF");
+    let before = w.cnc_events().count();
+    w.inject_fault(200);
+    w.run_for(ms(1_000));
+    assert_eq!(w.cnc_events().count(), before);
+    assert_eq!(field(&w.cnc_line("STATUS"), "fault"), Some("0-20-0"));
+}
+
+#[test]
+fn hpr_events_report_state_changes_and_a_transfer_timeout() {
+    let mut w = ready_hpr(Model::Hpr130);
+    w.cnc_line("EVENTS ON");
+    // The torch never reaches the plate.
+    w.sim::<Hpr>().config_mut().timings.transfer_delay = None;
+    w.cnc_line("TORCH ON");
+    w.wait_cnc_line("!STATE 4 name=PREFLOW from=3", Duration::from_secs(1))
+        .unwrap();
+    w.wait_cnc_line("!TRANSFER TIMEOUT", Duration::from_secs(4))
+        .unwrap();
+    assert!(
+        w.cnc_events()
+            .any(|e| e == "!START DROPPED reason=transfer_timeout"),
+        "{:?}",
+        w.cnc_events().collect::<Vec<_>>()
+    );
+    assert!(!w.io().outputs().start);
+    assert!(
+        w.io_events()
+            .iter()
+            .any(|(_, e)| *e == IoEvent::TransferTimeout)
+    );
+    w.cnc_line("TORCH OFF");
+}
+
+// --- Phoenix serial messaging ----------------------------------------------------------------
+
+#[test]
+fn phoenix_messages_get_ack_or_nak_then_their_reply() {
+    let mut w = bridge_world(Model::Sync65);
+    let fault = phoenix_113("FAULT", None);
+    assert_eq!(
+        *fault.last().unwrap(),
+        0x4A,
+        "the manual's example check byte"
+    );
+
+    let mark = w.cnc_output().len();
+    w.cnc_send(&fault);
+    w.wait_cnc_replies(1, Duration::from_secs(1)).unwrap();
+    assert_eq!(
+        w.cnc_output()[mark..]
+            .iter()
+            .map(|r| r.item.clone())
+            .collect::<Vec<_>>(),
+        [CncItem::Ack, CncItem::Line("OK fault=none".into())]
+    );
+    assert_eq!(w.cnc_bytes(), b"\x06OK fault=none\r\n");
+
+    // Wrong check byte: NAK, then why.
+    w.cnc_send(&phoenix_113("FAULT", Some(0x4B)));
+    w.wait_cnc_replies(2, Duration::from_secs(1)).unwrap();
+    // Not a command: NAK.
+    w.cnc_send(&phoenix_113("FLY", None));
+    w.wait_cnc_replies(3, Duration::from_secs(1)).unwrap();
+    // A command that needs the unit: ACK at once, the reply when the unit confirmed.
+    let mark = w.cnc_output().len();
+    w.cnc_send(&phoenix_113("SET PROCESS CUT 45 AUTO", None));
+    assert_eq!(
+        w.cnc_output()[mark..].first().map(|r| &r.item),
+        Some(&CncItem::Ack)
+    );
+    let acked_at = w.cnc_output()[mark].at;
+    w.wait_cnc_replies(4, Duration::from_secs(2)).unwrap();
+    let reply = w.cnc_output().last().unwrap();
+    assert!(
+        reply.at > acked_at,
+        "the reply follows after the unit answered"
+    );
+    // A text line between messages works as ever.
+    assert_eq!(
+        w.cnc_line("LIMITS"),
+        "OK modes=CUT,EXPANDED amps=20..65 psi=58..78 scope=cartridge"
+    );
+
+    let items: Vec<CncItem> = w.cnc_output().iter().map(|r| r.item.clone()).collect();
+    assert_eq!(
+        items,
+        [
+            CncItem::Ack,
+            CncItem::Line("OK fault=none".into()),
+            CncItem::Nak,
+            CncItem::Line(
+                "ERR SYNTAX Phoenix message check byte 4B, expected 4A (NAK sent)".into()
+            ),
+            CncItem::Nak,
+            CncItem::Line("ERR SYNTAX unknown command".into()),
+            CncItem::Ack,
+            CncItem::Line("OK mode=CUT amps=45 psi=AUTO".into()),
+            CncItem::Line("OK modes=CUT,EXPANDED amps=20..65 psi=58..78 scope=cartridge".into()),
+        ]
+    );
+    assert_eq!(w.bridge().session_stats().acks, 2);
+    assert_eq!(w.bridge().session_stats().naks, 2);
+}
+
+#[test]
+fn a_phoenix_message_that_stops_arriving_is_naked_and_text_goes_on() {
+    let mut w = bridge_world(Model::Sync65);
+    w.cnc_send(b"\x01\x02FAU");
+    w.wait_cnc_replies(1, Duration::from_secs(1)).unwrap();
+    assert_eq!(w.cnc_output()[0].item, CncItem::Nak);
+    assert_eq!(
+        w.cnc_replies().next(),
+        Some(
+            "ERR SYNTAX Phoenix message incomplete: the next one began or the line went quiet (NAK sent)"
+        )
+    );
+    assert_eq!(w.cnc_line("FAULT"), "OK fault=none");
+}
+
+// --- the allow-list --------------------------------------------------------------------------
+
+#[test]
+fn raw_refuses_dangerous_hpr_commands_and_they_never_reach_the_unit() {
+    let mut w = ready_hpr(Model::Hpr260);
+    // 120 IGNORE_ALL_INTERLOCKS, 102 gas valves (factory testing), 086 SLEEP (the link's).
+    for (frame, id) in [(hpr("120"), 120), (hpr("1020001"), 102), (hpr("086"), 86)] {
+        let reply = w.cnc_line(&format!("RAW {frame}"));
+        assert_eq!(
+            reply,
+            format!("ERR REFUSED raw command {id:03} not allowed"),
+            "{frame}"
+        );
+    }
+    // An allowed one does arrive.
+    assert!(
+        w.cnc_line(&format!("RAW {}", hpr("002")))
+            .starts_with("OK reply=>002")
+    );
+    let received = w.sim_ref::<Hpr>().commands_received();
+    for id in [120, 102, 86] {
+        assert!(
+            !received.contains(&id),
+            "{id} reached the unit: {received:?}"
+        );
+    }
+    assert!(received.contains(&2));
+    assert!(
+        !w.trace()
+            .requests()
+            .any(|f| f.bytes.starts_with(b">120") || f.bytes.starts_with(b">102")),
+        "on the wire"
+    );
+}
+
+#[test]
+fn raw_refuses_a_modbus_write_to_an_undocumented_register_and_it_never_reaches_the_unit() {
+    let mut w = bridge_world(Model::Sync65);
+    // 0x3013 lies between the settings and the actual outputs: undocumented.
+    let undocumented = modbus("010630130001");
+    assert_eq!(
+        w.cnc_line(&format!("RAW {undocumented}")),
+        "ERR REFUSED raw write to 3013 not allowed"
+    );
+    // Also a write to a documented read-only register.
+    let read_only = modbus("010630100001");
+    assert!(
+        w.cnc_line(&format!("RAW {read_only}"))
+            .starts_with("ERR REFUSED raw write to 3010")
+    );
+    // A frame for another node address.
+    let other_node = modbus("0204301A0001");
+    assert!(
+        w.cnc_line(&format!("RAW {other_node}"))
+            .starts_with("ERR REFUSED")
+    );
+    // A documented read passes.
+    assert!(
+        w.cnc_line(&format!("RAW {}", modbus("0104301A0001")))
+            .starts_with("OK reply=:0104")
+    );
+    let sent: Vec<&[u8]> = w.trace().requests().map(|f| &f.bytes[..]).collect();
+    assert!(
+        !sent.iter().any(|f| f.starts_with(b":01063013")
+            || f.starts_with(b":01063010")
+            || f.starts_with(b":02")),
+        "never on the wire"
+    );
+}
+
+// --- bad input -------------------------------------------------------------------------------
+
+#[test]
+fn overlong_lines_binary_garbage_and_half_lines_get_a_clear_err_and_the_session_goes_on() {
+    let mut w = bridge_world(Model::Sync65);
+    let long = "A".repeat(200);
+    assert_eq!(
+        w.cnc_line(&long),
+        "ERR TOOLONG line longer than 128 characters"
+    );
+    assert_eq!(w.cnc_line("ID").split(' ').next(), Some("OK"));
+
+    w.cnc_send(b"\x80\xff\x00junk\x1b[A\r\n");
+    w.wait_cnc_replies(3, Duration::from_secs(1)).unwrap();
+    assert_eq!(
+        w.cnc_replies().nth(2),
+        Some("ERR BINARY non-printable byte in line")
+    );
+
+    // A half line waits for the rest.
+    w.cnc_send(b"FAU");
+    w.run_for(ms(500));
+    assert_eq!(w.cnc_reply_count(), 3);
+    w.cnc_send(b"LT\r");
+    w.wait_cnc_replies(4, Duration::from_secs(1)).unwrap();
+    assert_eq!(w.cnc_replies().nth(3), Some("OK fault=none"));
+    // LF after the CR is the same line end, not an empty line.
+    w.cnc_send(b"\n");
+    w.run_for(ms(100));
+    assert_eq!(w.cnc_reply_count(), 4);
+
+    // A text line cut by a Phoenix message.
+    w.cnc_send(b"SET AMP");
+    w.cnc_send(&phoenix_113("FAULT", None));
+    w.wait_cnc_replies(6, Duration::from_secs(1)).unwrap();
+    let replies: Vec<&str> = w.cnc_replies().skip(4).collect();
+    assert_eq!(
+        replies,
+        [
+            "ERR SYNTAX incomplete line dropped: a Phoenix message (SOH/STX) began before its CR/LF",
+            "OK fault=none"
+        ]
+    );
+
+    // A burst of random bytes without SOH/STX: each line gets at most one ERR.
+    let garbage: Vec<u8> = (0..2_000u32)
+        .map(|i| (i.wrapping_mul(2_654_435_761) >> 13) as u8)
+        .filter(|b| *b != 0x01 && *b != 0x02)
+        .collect();
+    w.cnc_send(&garbage);
+    w.cnc_send(b"\r\n");
+    w.run_for(ms(2_000));
+    let after = w.cnc_reply_count();
+    assert!(after > 6);
+    assert!(w.cnc_replies().skip(6).all(|l| l.starts_with("ERR ")));
+    assert!(w.cnc_line("ID").starts_with("OK bridge=plasma-bridge"));
+    for line in w.cnc_lines() {
+        assert!(well_formed(line), "{line:?}");
+    }
+}
+
+// --- CONFIG, SAVE, power cycles ------------------------------------------------------------
+
+#[test]
+fn a_config_change_of_an_io_key_applies_live() {
+    let mut w = bridge_world(Model::Sync65);
+    let arc_delay = |w: &mut World<host_tests::harness::BridgeEndpoint>| {
+        w.cnc_line("TORCH ON");
+        let on = w.now();
+        w.run_until(|w| w.io().outputs().arc_ok, Duration::from_secs(2))
+            .unwrap();
+        let delay = w.now().saturating_since(on);
+        w.cnc_line("TORCH OFF");
+        w.run_for(ms(300));
+        delay
+    };
+    let default = arc_delay(&mut w);
+    assert_eq!(
+        w.cnc_line("CONFIG arc_ok_debounce_ms 60"),
+        "OK arc_ok_debounce_ms=60"
+    );
+    assert_eq!(w.io().config().arc_ok_debounce, ms(60));
+    let slower = arc_delay(&mut w);
+    assert_eq!(
+        slower.as_micros() - default.as_micros(),
+        58_000,
+        "debounce 2 ms -> 60 ms: {default:?} {slower:?}"
+    );
+
+    // interlock_fault OFF: a fault that requires action (0-50-0) no longer refuses START.
+    w.inject_fault(500);
+    w.run_for(ms(300));
+    w.cnc_line("TORCH ON");
+    assert!(!w.io().outputs().start);
+    w.cnc_line("TORCH OFF");
+    assert_eq!(
+        w.cnc_line("CONFIG interlock_fault OFF"),
+        "OK interlock_fault=OFF"
+    );
+    assert!(!w.io().config().refuse_start_on_fault);
+    w.run_for(ms(100));
+    w.cnc_line("TORCH ON");
+    assert!(
+        w.io().outputs().start,
+        "START follows with the interlock off"
+    );
+    // And back on: stricter at once, START drops.
+    assert_eq!(
+        w.cnc_line("CONFIG interlock_fault ON"),
+        "OK interlock_fault=ON"
+    );
+    assert!(!w.io().outputs().start);
+    w.cnc_line("TORCH OFF");
+}
+
+#[test]
+fn config_save_and_a_power_cycle_keep_the_config_and_reapply_the_process() {
+    let mut w = bridge_world(Model::Sync65);
+    expect_all(
+        &mut w,
+        &[
+            ("SET PROCESS CUT 40 AUTO", "OK mode=CUT amps=40 psi=AUTO"),
+            ("CONFIG arc_ok_debounce_ms 7", "OK arc_ok_debounce_ms=7"),
+            ("EVENTS ON", "OK events=ON"),
+            ("CONFIG SAVE", "OK config=saved"),
+        ],
+    );
+    let saved = w.saved_settings().expect("stored");
+    assert!(saved.events);
+    assert_eq!(saved.io.arc_ok_debounce, ms(7));
+    assert_eq!(saved.process.map(|p| p.amps.raw()), Some(40 * 64));
+
+    // The whole installation loses power; the bridge comes back first.
+    w.power_off();
+    w.power_cycle_bridge();
+    assert_eq!(
+        w.io().config().arc_ok_debounce,
+        ms(7),
+        "the interlocks use the stored io settings"
+    );
+    w.run_for(ms(500));
+    w.power_on();
+    w.wait_cnc_line("!SETTINGS applied mode=CUT amps=40", Duration::from_secs(5))
+        .unwrap();
+    assert!(w.unit_ref().in_remote_mode());
+    assert_eq!(w.sim_ref::<Powermax>().settings().current, 40 * 64);
+    assert_eq!(
+        w.cnc_line("CONFIG arc_ok_debounce_ms"),
+        "OK arc_ok_debounce_ms=7"
+    );
+    assert_eq!(w.cnc_line("CONFIG events"), "OK events=ON");
+
+    // Unsaved changes do not survive.
+    assert_eq!(
+        w.cnc_line("CONFIG arc_ok_debounce_ms 9"),
+        "OK arc_ok_debounce_ms=9"
+    );
+    w.power_cycle_bridge();
+    settle(&mut w);
+    assert_eq!(
+        w.cnc_line("CONFIG arc_ok_debounce_ms"),
+        "OK arc_ok_debounce_ms=7"
+    );
+}
+
+#[test]
+fn a_failed_save_says_so_and_keeps_the_old_record() {
+    let mut w = bridge_world(Model::Sync65);
+    assert_eq!(w.cnc_line("CONFIG SAVE"), "OK config=saved");
+    w.cnc_line("CONFIG poll_ms 200");
+    w.endpoint_mut().fail_next_save(SaveError::Flash);
+    assert_eq!(
+        w.cnc_line("CONFIG SAVE"),
+        "ERR STORAGE settings not saved: flash write failed"
+    );
+    assert_eq!(w.saved_settings(), Some(Settings::default()));
+    assert_eq!(w.endpoint().saves(), 2);
+}
+
+#[test]
+fn a_torch_on_held_through_a_bridge_power_cycle_is_ignored_until_released() {
+    let mut w = bridge_world_with(
+        Model::Pm65,
+        Settings {
+            events: true,
+            ..Settings::default()
+        },
+    );
+    w.cnc_line("CONFIG SAVE");
+    w.set_torch(true);
+    w.run_for(ms(200));
+    assert!(w.io().outputs().start);
+    w.power_cycle_bridge();
+    assert!(!w.io().outputs().start, "off at reset");
+    settle(&mut w);
+    assert!(!w.io().outputs().start, "a held TORCH_ON is ignored");
+    assert_eq!(w.io().start_locked_by(), Some(Interlock::TorchOnAtPowerUp));
+    assert!(
+        w.cnc_events()
+            .any(|e| e == "!START REFUSED reason=torch_on_at_power_up"),
+        "{:?}",
+        w.cnc_events().collect::<Vec<_>>()
+    );
+    w.set_torch(false);
+    w.run_for(ms(100));
+    w.set_torch(true);
+    assert!(w.io().outputs().start, "a fresh TORCH_ON works");
+    w.set_torch(false);
+}
+
+#[test]
+fn mode_aliases_are_answered_in_the_family_s_own_word() {
+    let mut w = bridge_world(Model::Sync65);
+    assert_eq!(
+        w.cnc_line("SET PROCESS CPA 45 AUTO"),
+        "OK mode=EXPANDED amps=45 psi=AUTO"
+    );
+    let mut w = bridge_world(Model::Pm65);
+    assert_eq!(
+        w.cnc_line("SET PROCESS EXPANDED 45 AUTO"),
+        "OK mode=CPA amps=45 psi=AUTO"
+    );
+}
+
+#[test]
+fn the_bare_bridge_is_an_endpoint_too() {
+    use plasma_firmware::bridge::Bridge;
+    use plasma_firmware::time::Instant;
+    for model in [
+        Model::Sync105,
+        Model::Pm125,
+        Model::Hpr400Xd,
+        Model::MaxPro200,
+    ] {
+        let unit = model.build(&Default::default());
+        let bridge = Bridge::new(Settings::default(), Instant::ZERO);
+        let mut w = World::with_endpoint(bridge, unit, WorldOptions::default());
+        w.wait_link_up(Duration::from_secs(2))
+            .unwrap_or_else(|t| panic!("{model}: {t}"));
+        // The bridge consumes the link's events itself.
+        assert!(w.events().is_empty());
+        assert!(w.io().outputs().ready || model.family() == host_tests::sim::Family::Hpr);
+    }
+}

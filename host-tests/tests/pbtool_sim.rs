@@ -1,0 +1,200 @@
+//! `pbtool sim`: the binary, fed through a pipe as a script or a person would.
+
+use std::io::Write;
+use std::process::{Command, Output, Stdio};
+
+use host_tests::sim::Model;
+
+/// Run `pbtool sim ARGS` with `input` on stdin.
+fn sim(args: &[&str], input: &str) -> Output {
+    pbtool("sim", args, input)
+}
+
+/// Run `pbtool SUBCOMMAND ARGS` with `input` on stdin.
+fn pbtool(subcommand: &str, args: &[&str], input: &str) -> Output {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_pbtool"))
+        .arg(subcommand)
+        .args(args)
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("pbtool runs");
+    child
+        .stdin
+        .take()
+        .unwrap()
+        .write_all(input.as_bytes())
+        .unwrap();
+    child.wait_with_output().unwrap()
+}
+
+fn stdout_lines(output: &Output) -> Vec<String> {
+    String::from_utf8(output.stdout.clone())
+        .unwrap()
+        .lines()
+        .map(str::to_string)
+        .collect()
+}
+
+#[test]
+fn a_piped_script_gets_one_reply_per_command() {
+    let output = sim(&["--ps", "sync65", "--fast"], "ID\nSTATUS\n");
+    assert!(output.status.success());
+    let lines = stdout_lines(&output);
+    assert_eq!(lines.len(), 2, "{lines:?}");
+    assert!(lines.iter().all(|l| l.starts_with("OK")), "{lines:?}");
+    assert_eq!(
+        lines[0],
+        "OK bridge=plasma-bridge version=0.1.0 reset=unknown link=UP model=Powermax65 family=SYNC product=081335"
+    );
+    assert!(lines[1].starts_with("OK link=UP model=Powermax65 family=SYNC "));
+    assert!(output.stderr.is_empty(), "quiet from a pipe");
+}
+
+#[test]
+fn virtual_time_is_deterministic() {
+    let script = "SET PROCESS CUT 45 AUTO\nTORCH ON\nSTATUS\nTORCH OFF\nCOUNTERS\n";
+    let first = sim(&["--ps", "sync85", "--fast", "--seed", "7"], script);
+    let second = sim(&["--ps", "sync85", "--fast", "--seed", "7"], script);
+    assert_eq!(first.stdout, second.stdout);
+    assert_eq!(stdout_lines(&first).len(), 5);
+}
+
+#[test]
+fn real_time_from_a_pipe_waits_for_the_link_and_exits_at_the_end() {
+    let began = std::time::Instant::now();
+    let output = sim(&["--ps", "pm65"], "ID\nSTATUS\n\nLIMITS");
+    assert!(output.status.success());
+    let lines = stdout_lines(&output);
+    assert_eq!(lines.len(), 3, "a blank line gets no reply: {lines:?}");
+    assert!(
+        lines[0].contains(" link=UP ") && lines[0].contains(" family=LEGACY"),
+        "{lines:?}"
+    );
+    assert!(
+        lines[2].starts_with("OK modes=CUT,CPA,GOUGE"),
+        "the last line without LF counts"
+    );
+    assert!(began.elapsed() < std::time::Duration::from_secs(5));
+}
+
+#[test]
+fn a_fault_at_start_shows_in_status() {
+    let output = sim(
+        &["--ps", "sync65", "--fast", "--fault", "0-50-0"],
+        "STATUS\nFAULT\n",
+    );
+    let lines = stdout_lines(&output);
+    assert!(lines[0].contains(" fault=0-50-0 "), "{lines:?}");
+    assert!(lines[0].contains(" ready=OFF"), "{lines:?}");
+    assert!(lines[1].starts_with("OK fault=0-50-0 action=required text="));
+    // The same in decimal, and an HPR error number.
+    let lines = stdout_lines(&sim(
+        &["--ps", "sync65", "--fast", "--fault", "500"],
+        "STATUS\n",
+    ));
+    assert!(lines[0].contains(" fault=0-50-0 "), "{lines:?}");
+    let lines = stdout_lines(&sim(
+        &["--ps", "hpr130", "--fast", "--fault", "44"],
+        "FAULT\n",
+    ));
+    assert_eq!(
+        lines,
+        ["OK fault=044 action=required text=LOW PLASMA GAS PRESSURE"]
+    );
+}
+
+#[test]
+fn bad_arguments_exit_2_and_say_why() {
+    let output = sim(&["--ps", "hd4070"], "");
+    assert_eq!(output.status.code(), Some(2));
+    let err = String::from_utf8(output.stderr).unwrap();
+    assert!(err.contains("unknown model \"hd4070\""), "{err}");
+    for model in Model::ALL {
+        assert!(err.contains(model.name()), "{model} listed: {err}");
+    }
+    let output = sim(&["--ps", "hpr260", "--fault", "0-50-0"], "");
+    assert_eq!(output.status.code(), Some(2));
+    let output = sim(&["--ps", "sync65", "--fault", "0-5-0"], "");
+    assert_eq!(output.status.code(), Some(2));
+    assert!(
+        String::from_utf8(output.stderr)
+            .unwrap()
+            .contains("expected X-YY-Z")
+    );
+}
+
+#[test]
+fn every_model_is_found_by_the_bridge() {
+    for model in Model::ALL {
+        let lines = stdout_lines(&sim(&["--ps", model.name(), "--fast"], "ID\n"));
+        assert_eq!(lines.len(), 1, "{model}: {lines:?}");
+        assert!(lines[0].contains(" link=UP "), "{model}: {lines:?}");
+    }
+}
+
+#[test]
+fn torch_is_a_simulator_command_marked_in_help_and_cuts() {
+    let script = "HELP\nSET PROCESS CUT 45 AUTO\nTORCH ON\n\nTORCH OFF\n";
+    let output = sim(
+        &["--ps", "sync65", "--fast", "--events", "--verbose"],
+        script,
+    );
+    let lines = stdout_lines(&output);
+    assert!(lines[0].starts_with("!LINK UP model="), "{lines:?}");
+    let help = lines
+        .iter()
+        .find(|l| l.starts_with("OK commands="))
+        .unwrap();
+    assert!(
+        help.ends_with(" simulator_only=TORCH simulator=YES"),
+        "{help}"
+    );
+    assert!(lines.contains(&"OK torch=ON".to_string()), "{lines:?}");
+    assert!(lines.contains(&"OK torch=OFF".to_string()), "{lines:?}");
+    let err = String::from_utf8(output.stderr).unwrap();
+    assert!(err.contains("START on: torch-on from CNC"), "{err}");
+    assert!(err.contains("START off: torch-on released by CNC"), "{err}");
+    assert!(
+        err.contains("READY on: link up, no fault, supply ready"),
+        "{err}"
+    );
+}
+
+#[test]
+fn phoenix_frames_on_stdin_are_acked() {
+    let good = "\x01\x02FAULT\r\n\x03\x04\x4A\n";
+    let bad = "\x01\x02FAULT\r\n\x03\x04\x4B\n";
+    let output = sim(&["--ps", "sync65", "--fast"], &format!("{good}{bad}ID\n"));
+    let lines = stdout_lines(&output);
+    assert_eq!(lines.len(), 3, "{lines:?}");
+    assert_eq!(lines[0], "<ACK>OK fault=none");
+    assert_eq!(
+        lines[1],
+        "<NAK>ERR SYNTAX Phoenix message check byte 4B, expected 4A (NAK sent)"
+    );
+    assert!(lines[2].starts_with("OK bridge="));
+}
+
+#[test]
+fn run_without_a_probe_runs_the_simulator() {
+    // `cargo bridge` (the README's run command) is `pbtool run`: with no debug probe attached
+    // (or probe-rs not installed, as in CI) it runs the bridge against a simulated SYNC unit.
+    let forced = pbtool("run", &["--sim", "--fast"], "ID\n");
+    assert!(forced.status.success());
+    assert_eq!(
+        stdout_lines(&forced),
+        [
+            "OK bridge=plasma-bridge version=0.1.0 reset=unknown link=UP model=Powermax65 family=SYNC product=081335"
+        ]
+    );
+    let probed = pbtool("run", &["--fast", "--ps", "pm85"], "ID\n");
+    let stderr = String::from_utf8_lossy(&probed.stderr);
+    if stderr.contains("no debug probe found") {
+        assert!(probed.status.success());
+        let lines = stdout_lines(&probed);
+        assert_eq!(lines.len(), 1, "{lines:?}");
+        assert!(lines[0].contains("family=LEGACY"), "{lines:?}");
+    }
+}
