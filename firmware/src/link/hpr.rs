@@ -124,6 +124,8 @@ fn amps_of(request: &Request) -> Option<u16> {
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
 pub struct HprKept {
     requests: Vec<Request, KEPT_CAPACITY>,
+    /// The unit that confirmed them (another unit does not get them).
+    system: Option<SystemId>,
 }
 
 impl HprKept {
@@ -137,12 +139,21 @@ impl HprKept {
         self.requests.is_empty()
     }
 
-    /// Keep `request` (a confirmed setting); earlier requests whose every setting it sets
-    /// again are dropped.
-    pub fn keep(&mut self, request: Request) {
+    /// The unit that confirmed the kept settings.
+    pub fn system(&self) -> Option<SystemId> {
+        self.system
+    }
+
+    /// Keep `request` (a setting `system` confirmed); earlier requests whose every setting
+    /// it sets again are dropped, and so is everything another unit confirmed.
+    pub fn keep(&mut self, system: SystemId, request: Request) {
         let new = sets(&request);
         if new == 0 {
             return;
+        }
+        if self.system != Some(system) {
+            self.clear();
+            self.system = Some(system);
         }
         self.requests.retain(|old| sets(old) & !new != 0);
         if self.requests.is_full() {
@@ -154,6 +165,7 @@ impl HprKept {
     /// Forget everything kept.
     pub fn clear(&mut self) {
         self.requests.clear();
+        self.system = None;
     }
 
     /// The nominal current the kept settings give, if they set one.
@@ -226,8 +238,15 @@ fn is_cutting(state: Option<StateCode>) -> bool {
 
 impl HprDriver {
     /// A driver for a unit that answered HELLO with `system`.
-    pub fn new(system: SystemId, now: Instant, core: &Core) -> Self {
+    pub fn new(system: SystemId, now: Instant, core: &mut Core) -> Self {
         let maxpro = system == SystemId::MaxPro200;
+        if !core.hpr_kept.is_empty() && core.hpr_kept.system() != Some(system) {
+            // Another unit is on the line: the kept settings were meant for the one before.
+            core.hpr_kept.clear();
+            core.emit(LinkEvent::SettingsFailed {
+                reason: SettingsFailure::OutsideLimits,
+            });
+        }
         HprDriver {
             system,
             next_poll_at: now,
@@ -571,7 +590,7 @@ impl HprDriver {
             _ => false,
         };
         if taken {
-            core.hpr_kept.keep(request);
+            core.hpr_kept.keep(self.system, request);
             // A re-apply run still to come must not set older values again.
             let new = sets(&request);
             self.reapply.retain(|old| sets(old) & !new != 0);
@@ -1029,6 +1048,8 @@ mod tests {
     use super::*;
     use plasma_protocol::hpr::HprParameters;
 
+    const SYSTEM: SystemId = SystemId::MaxPro200;
+
     #[test]
     fn a_kept_setting_replaces_the_earlier_ones_it_sets_again() {
         let mut kept = HprKept::default();
@@ -1036,10 +1057,10 @@ mod tests {
             plasma: GasCode(1),
             shield: GasCode(2),
         };
-        kept.keep(Request::SetNominalAmps { amps: 130 });
-        kept.keep(Request::SetCornerCurrent { percent: 70 });
-        kept.keep(Request::SetInletGases(gases));
-        kept.keep(Request::SetNominalAmps { amps: 200 });
+        kept.keep(SYSTEM, Request::SetNominalAmps { amps: 130 });
+        kept.keep(SYSTEM, Request::SetCornerCurrent { percent: 70 });
+        kept.keep(SYSTEM, Request::SetInletGases(gases));
+        kept.keep(SYSTEM, Request::SetNominalAmps { amps: 200 });
         assert_eq!(
             kept.as_slice(),
             [
@@ -1056,13 +1077,22 @@ mod tests {
             gases,
             flows: GasFlows::default(),
         };
-        kept.keep(Request::SetAllParameters(all));
+        kept.keep(SYSTEM, Request::SetAllParameters(all));
         assert_eq!(kept.as_slice(), [Request::SetAllParameters(all)]);
-        kept.keep(Request::SetCornerCurrent { percent: 60 });
+        kept.keep(SYSTEM, Request::SetCornerCurrent { percent: 60 });
         assert_eq!(kept.as_slice().len(), 2);
         assert_eq!(kept.amps(), Some(260));
         // Not settings: not kept.
-        kept.keep(Request::ClearWarnings);
+        kept.keep(SYSTEM, Request::ClearWarnings);
         assert_eq!(kept.as_slice().len(), 2);
+        // Settings another unit confirmed replace everything.
+        let hpr130 = SystemId::Hpr {
+            rating: hpr::HprRating::Hpr130,
+            console: Some(hpr::GasConsole::Auto),
+            xd: false,
+        };
+        kept.keep(hpr130, Request::SetNominalAmps { amps: 100 });
+        assert_eq!(kept.as_slice(), [Request::SetNominalAmps { amps: 100 }]);
+        assert_eq!(kept.system(), Some(hpr130));
     }
 }

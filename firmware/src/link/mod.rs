@@ -45,7 +45,8 @@
 //! power-cycles or the link returns: Powermax mode, current and pressure
 //! ([`UnitStatus::desired`]); HPR / MaxPro200 nominal current, corner current, process,
 //! all parameters and inlet gases ([`PsLink::hpr_kept_settings`], a later setting replacing
-//! what it sets again), re-applied after 004 REMOTE_MODE once the unit is in state 2 or 3.
+//! what it sets again), re-applied after 004 REMOTE_MODE once the unit is in state 2 or 3
+//! (another HPR model on the line does not get them: `SettingsFailed { OutsideLimits }`).
 //! An HPR setting counts as done only when the unit's answer shows the value asked for;
 //! otherwise 004 is sent again and the setting once more (the unit may have restarted and
 //! left remote mode), then it fails `NotAccepted`. An HPR that shows a restart the link did
@@ -790,7 +791,7 @@ impl PsLink {
                     Model::Hpr(system) => system,
                     _ => SystemId::MaxPro200,
                 };
-                Phase::Hpr(HprDriver::new(system, now, &self.core))
+                Phase::Hpr(HprDriver::new(system, now, &mut self.core))
             }
         };
     }

@@ -1593,3 +1593,30 @@ fn an_hpr_setting_answered_with_another_value_is_never_a_success() {
         [plasma_protocol::hpr::Request::SetNominalAmps { amps: 100 }]
     );
 }
+
+#[test]
+fn kept_hpr_settings_are_not_given_to_another_model() {
+    let mut bench = hpr_at_100_a();
+    // The HPR130 goes silent: link down.
+    while bench.link.status().link_up {
+        bench.next_tx(bench.now + Duration::from_secs(10)).unwrap();
+    }
+    assert!(
+        !bench.link.hpr_kept_settings().is_empty(),
+        "kept across the link-down"
+    );
+    // An HPR260 answers HELLO instead.
+    loop {
+        let frame = bench.next_tx(bench.now + Duration::from_secs(10)).unwrap();
+        if frame == b">00090<" {
+            break;
+        }
+    }
+    bench.events();
+    bench.rx(3, &hf(0, "HYPERFORMANCE260AUTO"));
+    assert!(bench.link.status().link_up);
+    assert!(bench.link.hpr_kept_settings().is_empty());
+    assert!(bench.events().contains(&LinkEvent::SettingsFailed {
+        reason: SettingsFailure::OutsideLimits
+    }));
+}
