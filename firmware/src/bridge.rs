@@ -124,6 +124,14 @@ impl Bridge {
         self.service(now);
     }
 
+    /// A character from the power supply that the UART flagged with a parity or framing
+    /// error, in its place among the received bytes (see
+    /// [`PsLink::handle_rx_error`](crate::link::PsLink::handle_rx_error)).
+    pub fn handle_ps_rx_error(&mut self, now: Instant) {
+        self.link.handle_rx_error(now);
+        self.service(now);
+    }
+
     /// The next frame to transmit to the power supply, if any (write it completely, then
     /// call again).
     pub fn poll_ps_transmit(&mut self, now: Instant) -> Option<&[u8]> {

@@ -18,7 +18,12 @@ fn continuous_polling_uses_at_least_90_percent_of_the_wire() {
         Setup::MaxPro200,
     ] {
         let e = bus_efficiency(setup, LinkConfig::MIN_POLL_INTERVAL, WINDOW);
-        assert!(e.efficiency >= 0.90, "{setup:?}: {e:?}");
+        assert!(e.bus_busy >= 0.90, "{setup:?}: {e:?}");
+        // Polling does not starve the rest: the SYNC cartridge check still runs every
+        // second (a few percent of the wire), and the polls use the remainder.
+        assert!(e.other_traffic < 0.05, "{setup:?}: {e:?}");
+        let polls_share = e.efficiency / (1.0 - e.other_traffic);
+        assert!(polls_share >= 0.90, "{setup:?}: {e:?}");
         // What is lost is the unit's response time: the link sends its next request the
         // moment a reply is complete.
         assert_eq!(e.turnaround_ms, 0.0, "{setup:?}");
@@ -26,7 +31,7 @@ fn continuous_polling_uses_at_least_90_percent_of_the_wire() {
             / (e.chars_per_cycle * e.char_time_us
                 + e.requests_per_cycle * e.unit_latency_ms * 1000.0);
         assert!(
-            (e.efficiency - bound).abs() < 0.01,
+            (polls_share - bound).abs() < 0.01,
             "{setup:?}: {e:?} vs {bound}"
         );
     }

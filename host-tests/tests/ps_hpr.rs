@@ -276,10 +276,6 @@ fn an_hpr_error_that_blocks_start_holds_start_off_and_is_reported() {
 }
 
 #[test]
-#[ignore = "link bug: HPR settings are not kept: after the unit power-cycles (link down and \
-            back) the nominal current the CNC set (058) is not re-applied, the unit runs at \
-            its rating; the Powermax driver keeps and re-applies its settings, the HPR driver \
-            has no equivalent"]
 fn hpr_nominal_amps_are_reapplied_after_a_power_cycle() {
     let mut world = ready(Model::Hpr260);
     assert_eq!(
@@ -297,10 +293,6 @@ fn hpr_nominal_amps_are_reapplied_after_a_power_cycle() {
 }
 
 #[test]
-#[ignore = "link bug: after an HPR power blip shorter than the link-down time, the link still \
-            believes REMOTE_MODE (004) was accepted (status.hpr.remote_accepted stays true), \
-            never sends 004 again, and the unit (out of remote mode) ignores 058: the command \
-            completes Ok(Value(260)) with the old value instead of setting 130"]
 fn after_an_hpr_power_blip_settings_still_take_effect() {
     let mut world = ready(Model::Hpr260);
     assert_eq!(
@@ -323,4 +315,29 @@ fn after_an_hpr_power_blip_settings_still_take_effect() {
         Ok(CommandOutput::Value(130))
     );
     assert_eq!(world.sim::<Hpr>().nominal_amps(), 130);
+}
+
+#[test]
+fn continuous_polling_does_not_starve_hpr_slow_data() {
+    let link = plasma_firmware::link::LinkConfig {
+        poll_interval: plasma_firmware::link::LinkConfig::MIN_POLL_INTERVAL,
+        ..plasma_firmware::link::LinkConfig::default()
+    };
+    let mut world = World::new(Model::Hpr260, WorldOptions::with_link(link));
+    world.wait_link_up(secs(2)).expect("link up");
+    world
+        .run_until(
+            |w| {
+                let hpr = &w.link().status().hpr;
+                hpr.error_log.is_some() && hpr.timers.is_some()
+            },
+            secs(2),
+        )
+        .expect("slow data read at start");
+    assert_eq!(
+        world.command(LinkCommand::RefreshSlowData, secs(2)),
+        Ok(CommandOutput::Done)
+    );
+    let amps = world.command(LinkCommand::HprSetNominalAmps { amps: 150 }, secs(3));
+    assert_eq!(amps, Ok(CommandOutput::Value(150)));
 }

@@ -542,10 +542,9 @@ fn power_cycle_reapplies(model: Model, pressure: Pressure, expected_sim: Setting
                     }
                 )
             },
-            // Auto-detection may be in another framing's round when power returns: a full
-            // rotation through the six Modbus framings takes about 13 s (see the ignored
-            // test below).
-            secs(20),
+            // The last known-good framing is asked first and between every two probes of
+            // the search (see a_unit_switched_off_and_on_is_found_again_within_a_second).
+            secs(3),
         )
         .unwrap_or_else(|t| panic!("{model}: not re-applied: {t}\n{}", world.trace().tail(30)));
 
@@ -737,10 +736,6 @@ fn reconnect_time(model: Model, off: Duration) -> Duration {
 }
 
 #[test]
-#[ignore = "link bug: after a link-down, auto-detection rotates through the other Modbus \
-            framings (8O1, 8N1, 8E2, 8O2, 8N2: one ~2.2 s round each, HPR HELLO included) \
-            before it tries the last known-good 8E1 again, so a Powermax switched off and on \
-            is found again only up to ~13 s after its power returns"]
 fn a_unit_switched_off_and_on_is_found_again_within_a_second() {
     for model in [Model::Sync65, Model::Pm85] {
         for off_ms in [1_500u64, 2_000, 3_000, 4_000, 6_000, 8_000, 10_000] {
@@ -755,14 +750,6 @@ fn a_unit_switched_off_and_on_is_found_again_within_a_second() {
 }
 
 #[test]
-#[ignore = "link bug: with a poll interval shorter than a poll transaction (allowed: 20 ms, \
-            while a SYNC poll takes ~44 ms) a poll is always due, and PowermaxDriver:: \
-            next_request serves a due poll before slow data and the cartridge-UID check, so \
-            those never run: the permitted limits are never read (every ApplySettings is \
-            refused with LimitsUnknown), RefreshSlowData never completes and a cartridge \
-            change is never noticed (the HPR driver orders its error log / timers the same \
-            way). Proposal: a due slow item goes before a poll every N polls, or the next \
-            poll is due poll_interval after the previous one *ended*"]
 fn continuous_polling_does_not_starve_slow_data_and_the_cartridge_check() {
     let link = plasma_firmware::link::LinkConfig {
         poll_interval: plasma_firmware::link::LinkConfig::MIN_POLL_INTERVAL,

@@ -107,14 +107,13 @@ fn powermax_consistent(w: &World, faults: &[Option<ActiveFault>]) -> Result<(), 
 
 /// A Powermax session on a line that corrupts 1% of the characters (and drops `drop`): the
 /// link's picture is checked against the unit after every step. At 8E1 every flipped bit
-/// raises a UART parity error; the board glue turns a flagged character into a NUL, which
-/// breaks its frame (the LRC alone misses two errors that cancel, see the ignored test
-/// `lrc_alone_lets_cancelling_errors_through`). The protocol is pinned: with
-/// auto-detection a re-detection after a link-down can misidentify the unit (see the ignored
-/// test below). Link-downs are allowed here (values are then unknown, never wrong); that they
-/// happen at all is the subject of another ignored test.
+/// raises a UART parity error, which the board glue reports to the link
+/// (`PsLink::handle_rx_error`): the frame it falls in is broken (the LRC alone misses two
+/// errors that cancel, see `uart_errors_reported_to_the_link_catch_what_the_lrc_misses`).
+/// The protocol is pinned here; `one_percent_corrupted_bytes_cause_only_retries_never_a_link_down`
+/// checks that no link-down happens at all.
 fn corrupted_powermax_session(model: Model, seed: u64, drop: f64) -> World {
-    corrupted_powermax_session_with(model, seed, drop, RxErrors::Substitute)
+    corrupted_powermax_session_with(model, seed, drop, RxErrors::Report)
 }
 
 fn corrupted_powermax_session_with(
@@ -203,13 +202,6 @@ fn one_percent_corrupted_bytes_never_give_a_wrong_sync_value_only_retries() {
 }
 
 #[test]
-#[ignore = "link bug: at 1% corrupted characters a transaction whose three attempts all got \
-            damaged replies counts as a failure toward link-down, although a damaged reply \
-            proves the unit answers; a 72-character SYNC poll then fails ~13% of the time and \
-            three in a row (LinkDown, re-detection, settings re-applied) happen every few \
-            minutes; with auto-detection, a damaged device-id reply can also turn a SYNC unit \
-            into a legacy one (see the next test). Proposal: only silence (time-outs) counts \
-            toward link-down"]
 fn one_percent_corrupted_bytes_cause_only_retries_never_a_link_down() {
     for seed in [1, 2, 3, 4] {
         let world = corrupted_powermax_session(Model::Sync65, seed, 0.0);
@@ -217,16 +209,22 @@ fn one_percent_corrupted_bytes_cause_only_retries_never_a_link_down() {
     }
 }
 
+/// With the characters handed over as received (`RxErrors::Deliver`), the 8-bit LRC alone
+/// misses two errors that cancel: at 1% corruption (seed 7, 13 s in) a poll reply whose mode
+/// word 0x0001 arrived as 0x8081 passed the LRC. The board glue reports the UART's parity
+/// errors to the link (`PsLink::handle_rx_error`, the harness default), which breaks the frame
+/// they fall in: the same session then never shows a wrong value.
 #[test]
-#[ignore = "link bug: the link cannot be told about UART parity/framing errors, so with the \
-            characters handed over as received it relies on the 8-bit LRC alone, which misses \
-            two errors that cancel: at 1% corruption (seed 7, 13 s in) a poll reply whose mode \
-            word 0x0001 arrived as 0x8081 passed the LRC, the status showed mode None and the \
-            link re-applied settings it believed lost. Proposal: PsLink::handle_rx_error(now) \
-            that breaks the frame in progress (the harness's RxErrors::Substitute does that \
-            from outside)"]
-fn lrc_alone_lets_cancelling_errors_through() {
-    corrupted_powermax_session_with(Model::Sync105, 7, 0.005, RxErrors::Deliver);
+fn uart_errors_reported_to_the_link_catch_what_the_lrc_misses() {
+    let world = corrupted_powermax_session_with(Model::Sync105, 7, 0.005, RxErrors::Report);
+    assert!(world.link().diagnostics().rx_errors > 100);
+}
+
+/// The other ways a UART driver may treat flagged characters keep values right too (a NUL
+/// in their place breaks the frame from outside the link).
+#[test]
+fn a_board_that_substitutes_flagged_characters_works_too() {
+    corrupted_powermax_session_with(Model::Sync65, 3, 0.0, RxErrors::Substitute);
 }
 
 /// A unit whose first `damaged` replies starting with `prefix` arrive with a bad LRC (noise at
@@ -303,11 +301,6 @@ impl SimulatedUnit for DamagedReplies {
 }
 
 #[test]
-#[ignore = "link bug: when the three device-identification replies of a detection round \
-            arrive damaged (bad LRC), auto-detection moves on to the legacy register probe, \
-            which a SYNC unit also answers, and the SYNC unit is run as a legacy unit \
-            (Family::PowermaxLegacy, 0x2xxx registers) for good; damaged replies show a \
-            unit that answers device identification, so it should be asked again"]
 fn damaged_device_id_replies_do_not_make_a_sync_unit_legacy() {
     let unit = DamagedReplies {
         inner: Model::Sync65.build(&host_tests::sim::SimOptions::default()),
@@ -586,12 +579,12 @@ fn a_hostile_unit_never_crashes_the_link_or_draws_a_write_out_of_it() {
     }
 }
 
-fn two_wire(master_echo: bool) {
+fn two_wire(model: Model, master_echo: bool) -> World {
     let options = WorldOptions {
         wiring: host_tests::line::Wiring::TwoWire { master_echo },
         ..WorldOptions::default()
     };
-    let mut world = World::new(Model::Sync85, options);
+    let mut world = World::new(model, options);
     world
         .wait_link_up(secs(2))
         .expect("link up despite the echo");
@@ -607,13 +600,10 @@ fn two_wire(master_echo: bool) {
         secs(3),
     );
     assert!(result.is_ok(), "{result:?}");
+    world
 }
 
 #[test]
-#[ignore = "link bug: a slow-data read that fails (all attempts damaged) is only tried again \
-            at the next slow-data refresh (30 s by default); until then the permitted limits \
-            are unknown and every ApplySettings is refused with LimitsUnknown. Proposal: \
-            retry failed slow items after a short back-off (e.g. 1 s)"]
 fn limits_are_known_soon_even_when_their_first_read_is_damaged() {
     // The three attempts at 0x3001-0x3005 (a 10-byte reply) arrive damaged.
     let unit = DamagedReplies {
@@ -629,16 +619,13 @@ fn limits_are_known_soon_even_when_their_first_read_is_damaged() {
 }
 
 #[test]
-#[ignore = "link bug: when the SYNC cartridge block read fails (here: three damaged replies), \
-            status.cartridge stays None, the UID check is never sent, but \
-            PowermaxDriver::wake_at still returns the UID-check time: PsLink::poll_at() stays \
-            in the past, so a board task sleeping until poll_at() spins (here 2.2 s of 5 s, \
-            every millisecond between polls). wake_at should leave out what next_request will not do"]
 fn poll_at_never_stays_in_the_past() {
+    // Every cartridge block reply damaged: the read keeps failing (and is tried again with
+    // a growing wait).
     let unit = DamagedReplies {
         inner: Model::Sync65.build(&host_tests::sim::SimOptions::default()),
         prefix: b":010428",
-        damaged: 3,
+        damaged: usize::MAX,
     };
     let mut world = World::with_unit(Box::new(unit), WorldOptions::default());
     world.wait_link_up(secs(1)).expect("link up");
@@ -652,22 +639,35 @@ fn poll_at_never_stays_in_the_past() {
         0,
         "ms spent spinning on a past poll_at"
     );
+    // Tried again, with a growing wait (0.2, 0.4, 0.8, 1.6 s...): not at every turn.
+    let block = world
+        .trace()
+        .requests()
+        .filter(|f| f.modbus_function() == Some(0x04) && f.modbus_address() == Some(0x3030))
+        .count();
+    assert!(
+        (6..=21).contains(&block),
+        "{block} cartridge block requests"
+    );
+    assert!(world.link().status().limits.is_some());
 }
 
 #[test]
 fn a_two_wire_half_duplex_line_works() {
     // RS-485 2-wire, the transceiver's receiver off while it drives the line.
-    two_wire(false);
+    let world = two_wire(Model::Sync85, false);
+    assert_eq!(world.link().diagnostics().echoes, 0);
 }
 
 #[test]
-#[ignore = "link bug (or board-glue requirement): on a 2-wire line whose transceiver \
-            receiver stays enabled, the link hears its own request, takes it for a \
-            malformed reply, retries at once (Modbus spacing) and never sees the unit's \
-            answer in its attempt; detection never succeeds. Either the link ignores a \
-            received frame equal to the request just sent, or the board glue must discard \
-            what arrives while it transmits (then this test should use that glue)"]
 fn a_two_wire_line_with_echo_works() {
-    // The master's receiver left on: the bridge hears its own requests.
-    two_wire(true);
+    // The master's receiver left on: the bridge hears its own requests, and ignores them.
+    for model in [Model::Sync85, Model::Pm85] {
+        let world = two_wire(model, true);
+        assert!(world.link().diagnostics().echoes > 20, "{model}");
+        assert_eq!(world.link().diagnostics().malformed, 0, "{model}");
+        // Legacy settings are 06 writes, whose replies repeat the request: the echo was
+        // told from the reply, the unit took them.
+        assert!(world.sim_ref::<Powermax>().in_remote_mode(), "{model}");
+    }
 }

@@ -45,8 +45,11 @@ pub struct LinkConfig {
     pub slow_data_interval: Duration,
     /// HPR multi-drop system id 0-3 (dip switches); ids other than 0 need SLEEP/WAKE.
     pub hpr_id: u8,
-    /// Consecutive failed transactions (all retries used) before the link is declared down,
-    /// 1-[`LinkConfig::MAX_FAILURES_BEFORE_DOWN`] (default 3).
+    /// Consecutive failed transactions (all retries used) that heard nothing at all before
+    /// the link is declared down, 1-[`LinkConfig::MAX_FAILURES_BEFORE_DOWN`] (default 3).
+    /// Damaged replies are no silence: they are counted and retried, and only
+    /// [`UNANSWERED_FACTOR`](super::UNANSWERED_FACTOR) times as many failures in a row
+    /// without one valid reply take the link down.
     pub failures_before_down: u8,
 }
 

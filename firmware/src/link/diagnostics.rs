@@ -38,6 +38,12 @@ pub struct Diagnostics {
     pub events_dropped: u32,
     /// Frames (or damaged frames) received while no reply was awaited (late replies, noise).
     pub unsolicited_frames: u32,
+    /// Characters the UART flagged with a parity or framing error
+    /// ([`PsLink::handle_rx_error`](super::PsLink::handle_rx_error)).
+    pub rx_errors: u32,
+    /// Frames equal to the request just sent, taken for its echo (2-wire line with the
+    /// receiver left on) and ignored.
+    pub echoes: u32,
 }
 
 fn bump(counter: &mut u32) {
@@ -117,6 +123,16 @@ impl Diagnostics {
     /// Count a frame that arrived while no reply was awaited.
     pub fn record_unsolicited(&mut self) {
         bump(&mut self.unsolicited_frames);
+    }
+
+    /// Count an echo of our own request.
+    pub fn record_echo(&mut self) {
+        bump(&mut self.echoes);
+    }
+
+    /// Count a character the UART flagged.
+    pub fn record_rx_error(&mut self) {
+        bump(&mut self.rx_errors);
     }
 }
 

@@ -16,7 +16,8 @@ use plasma_protocol::hpr::{
 
 use super::Core;
 use super::command::{HprGasFlow, HprValue, LinkCommand, Refusal};
-use super::event::{CommandFailure, CommandOutput, LinkEvent, Ticket};
+use super::event::{CommandFailure, CommandOutput, LinkEvent, SettingsFailure, Ticket};
+use super::powermax::SLOW_RETRY_FIRST;
 use super::status::{ActiveFault, Family};
 use super::transaction::TransactionError;
 use crate::time::{Duration, Instant};
@@ -82,6 +83,107 @@ impl HprJob {
 const SLOW_ERROR_LOG: u8 = 1;
 const SLOW_TIMERS: u8 = 2;
 
+/// Wait before re-applying kept settings again after a re-apply failed.
+pub const REAPPLY_BACKOFF: Duration = Duration::from_secs(5);
+/// Kept settings requests (one per kind at most: see [`HprKept::keep`]).
+pub const KEPT_CAPACITY: usize = 6;
+
+/// What a settings request sets (bits), to tell which earlier requests a new one replaces.
+const SETS_AMPS: u8 = 1;
+const SETS_CORNER: u8 = 2;
+const SETS_GASES: u8 = 4;
+const SETS_FLOWS: u8 = 8;
+const SETS_PRESSURES: u8 = 16;
+
+/// What `request` sets; 0 for a request that is no setting.
+fn sets(request: &Request) -> u8 {
+    match request {
+        Request::SetNominalAmps { .. } => SETS_AMPS,
+        Request::SetCornerCurrent { .. } => SETS_CORNER,
+        Request::SetInletGases(_) => SETS_GASES,
+        Request::SetProcess { .. } => SETS_AMPS | SETS_GASES,
+        Request::SetAllParameters(_) => SETS_AMPS | SETS_CORNER | SETS_GASES | SETS_FLOWS,
+        Request::SetAllParametersMaxPro200(_) => SETS_AMPS | SETS_GASES | SETS_PRESSURES,
+        _ => 0,
+    }
+}
+
+/// The nominal current `request` sets, if it sets one.
+fn amps_of(request: &Request) -> Option<u16> {
+    match request {
+        Request::SetNominalAmps { amps } | Request::SetProcess { amps, .. } => Some(*amps),
+        Request::SetAllParameters(p) => Some(p.amps),
+        Request::SetAllParametersMaxPro200(p) => Some(p.amps),
+        _ => None,
+    }
+}
+
+/// The HPR / MaxPro200 settings the CNC asked for and the unit confirmed, oldest first. They
+/// are kept across link-downs and re-applied (after 004 REMOTE_MODE) when the unit returns or
+/// shows that it restarted, like the Powermax settings.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct HprKept {
+    requests: Vec<Request, KEPT_CAPACITY>,
+    /// The unit that confirmed them (another unit does not get them).
+    system: Option<SystemId>,
+}
+
+impl HprKept {
+    /// The kept requests, in the order they are re-applied.
+    pub fn as_slice(&self) -> &[Request] {
+        &self.requests
+    }
+
+    /// True when nothing is kept.
+    pub fn is_empty(&self) -> bool {
+        self.requests.is_empty()
+    }
+
+    /// The unit that confirmed the kept settings.
+    pub fn system(&self) -> Option<SystemId> {
+        self.system
+    }
+
+    /// Keep `request` (a setting `system` confirmed); earlier requests whose every setting
+    /// it sets again are dropped, and so is everything another unit confirmed.
+    pub fn keep(&mut self, system: SystemId, request: Request) {
+        let new = sets(&request);
+        if new == 0 {
+            return;
+        }
+        if self.system != Some(system) {
+            self.clear();
+            self.system = Some(system);
+        }
+        self.requests.retain(|old| sets(old) & !new != 0);
+        if self.requests.is_full() {
+            self.requests.remove(0);
+        }
+        let _ = self.requests.push(request);
+    }
+
+    /// Forget everything kept.
+    pub fn clear(&mut self) {
+        self.requests.clear();
+        self.system = None;
+    }
+
+    /// The nominal current the kept settings give, if they set one.
+    pub fn amps(&self) -> Option<u16> {
+        self.requests.iter().rev().find_map(amps_of)
+    }
+}
+
+/// The command being carried out.
+#[derive(Debug, Clone, PartialEq, Eq)]
+struct ActiveJob {
+    /// `None` for a re-apply the link started itself.
+    ticket: Option<Ticket>,
+    job: HprJob,
+    /// Sent again once after the unit did not take it (remote mode entered again first).
+    retried: bool,
+}
+
 /// Driver state for one detected HPR or MaxPro200.
 #[derive(Debug, Clone)]
 pub struct HprDriver {
@@ -93,7 +195,18 @@ pub struct HprDriver {
     slow_tickets: Vec<Ticket, QUEUE_CAPACITY>,
     next_slow_at: Instant,
     queue: Deque<(Ticket, HprJob), QUEUE_CAPACITY>,
-    active: Option<(Ticket, HprJob)>,
+    active: Option<ActiveJob>,
+    /// Kept settings still to re-apply in this re-apply run.
+    reapply: Deque<Request, KEPT_CAPACITY>,
+    /// Kept settings must be re-applied (from `reapply_not_before`, in state 2 or 3).
+    reapply_pending: bool,
+    reapply_not_before: Instant,
+    /// The last transaction started was a poll (the next turn goes to due slow data).
+    polled_last: bool,
+    /// Slow items whose read failed on the line, read again from `slow_retry_at`.
+    slow_retry: u8,
+    slow_retry_at: Instant,
+    slow_backoff: Duration,
     now: Instant,
 }
 
@@ -107,6 +220,16 @@ fn is_pilot_arc(maxpro: bool, state: StateCode) -> bool {
     }
 }
 
+/// True for the states a unit is in right after power-up (HPR 0; MaxPro200 0 power up and
+/// 1 initial checks).
+fn is_power_up(maxpro: bool, state: StateCode) -> bool {
+    if maxpro {
+        matches!(state.0, 0 | 1)
+    } else {
+        state.0 == 0
+    }
+}
+
 /// True while cutting (states 4-10 on both families: preflow to rampdown), when the manual
 /// forbids gas changes, gas tests and resets.
 fn is_cutting(state: Option<StateCode>) -> bool {
@@ -115,8 +238,15 @@ fn is_cutting(state: Option<StateCode>) -> bool {
 
 impl HprDriver {
     /// A driver for a unit that answered HELLO with `system`.
-    pub fn new(system: SystemId, now: Instant, core: &Core) -> Self {
+    pub fn new(system: SystemId, now: Instant, core: &mut Core) -> Self {
         let maxpro = system == SystemId::MaxPro200;
+        if !core.hpr_kept.is_empty() && core.hpr_kept.system() != Some(system) {
+            // Another unit is on the line: the kept settings were meant for the one before.
+            core.hpr_kept.clear();
+            core.emit(LinkEvent::SettingsFailed {
+                reason: SettingsFailure::OutsideLimits,
+            });
+        }
         HprDriver {
             system,
             next_poll_at: now,
@@ -131,6 +261,13 @@ impl HprDriver {
             next_slow_at: now + core.config.slow_data_interval,
             queue: Deque::new(),
             active: None,
+            reapply: Deque::new(),
+            reapply_pending: !core.hpr_kept.is_empty(),
+            reapply_not_before: now,
+            polled_last: false,
+            slow_retry: 0,
+            slow_retry_at: now,
+            slow_backoff: SLOW_RETRY_FIRST,
             now,
         }
     }
@@ -157,7 +294,13 @@ impl HprDriver {
 
     /// True when the active command is a RAW forward.
     pub fn active_is_raw(&self) -> bool {
-        matches!(self.active, Some((_, HprJob::Raw { .. })))
+        matches!(
+            self.active,
+            Some(ActiveJob {
+                job: HprJob::Raw { .. },
+                ..
+            })
+        )
     }
 
     fn in_pilot_arc(&self, core: &Core) -> bool {
@@ -175,10 +318,21 @@ impl HprDriver {
         if self.in_pilot_arc(core) {
             return Some(self.next_poll_at);
         }
-        if self.active.is_some() || !self.queue.is_empty() || self.slow_pending != 0 {
+        if self.active.is_some()
+            || !self.queue.is_empty()
+            || !self.reapply.is_empty()
+            || self.slow_pending != 0
+        {
             return Some(self.now);
         }
-        Some(self.next_poll_at.min(self.next_slow_at))
+        let mut at = self.next_poll_at.min(self.next_slow_at);
+        if self.reapply_pending && self.reapply_allowed(core) {
+            at = at.min(self.reapply_not_before.max(self.now));
+        }
+        if self.slow_retry != 0 {
+            at = at.min(self.slow_retry_at);
+        }
+        Some(at)
     }
 
     /// The next frame to send, if any, and what it is for.
@@ -199,9 +353,9 @@ impl HprDriver {
             return typed(HprPurpose::State, Request::GetState);
         }
         if self.active.is_none() {
-            self.active = self.queue.pop_front();
+            self.next_job(now, core);
         }
-        if let Some((_, job)) = &self.active {
+        if let Some(ActiveJob { job, .. }) = &self.active {
             if job.needs_remote() && !core.status.hpr.remote_accepted {
                 return typed(HprPurpose::RemoteMode, Request::RemoteMode);
             }
@@ -212,22 +366,125 @@ impl HprDriver {
                 }
             };
         }
-        if now >= self.next_poll_at {
-            self.next_poll_at = now + core.config.poll_interval;
-            return typed(HprPurpose::Poll, Request::GetPsInfo);
+        // Round robin: after a poll, due slow data gets one transaction before the next
+        // poll, so a short poll interval cannot starve it.
+        let poll_due = now >= self.next_poll_at;
+        if poll_due && !self.polled_last {
+            return self.start_poll(now, core);
+        }
+        if let Some(request) = self.slow_request(now, core) {
+            self.polled_last = false;
+            return Some(request);
+        }
+        if poll_due {
+            return self.start_poll(now, core);
+        }
+        None
+    }
+
+    /// States in which kept settings are re-applied: 2 (purge) and 3 (idle / ready), the
+    /// states in which every settings command is accepted (137 and MaxPro 095 need them).
+    fn reapply_allowed(&self, core: &Core) -> bool {
+        core.status.hpr.state.is_some_and(|s| matches!(s.0, 2 | 3))
+    }
+
+    /// Pick the next job: the rest of a re-apply run (older settings first), a new re-apply
+    /// run when due, or the next command.
+    fn next_job(&mut self, now: Instant, core: &mut Core) {
+        if self.reapply.is_empty()
+            && self.reapply_pending
+            && now >= self.reapply_not_before
+            && self.reapply_allowed(core)
+        {
+            self.reapply_pending = false;
+            for request in core.hpr_kept.as_slice() {
+                let _ = self.reapply.push_back(*request);
+            }
+        }
+        if let Some(request) = self.reapply.pop_front() {
+            self.active = Some(ActiveJob {
+                ticket: None,
+                job: HprJob::Typed(request),
+                retried: false,
+            });
+            return;
+        }
+        self.active = self.queue.pop_front().map(|(ticket, job)| ActiveJob {
+            ticket: Some(ticket),
+            job,
+            retried: false,
+        });
+    }
+
+    /// The unit lost its settings or restarted (state back to power-up, or a set point
+    /// other than the kept one): remote mode must be entered again and the kept settings
+    /// re-applied.
+    fn settings_lost(&mut self, now: Instant, core: &mut Core) {
+        core.status.hpr.remote_accepted = false;
+        if core.status.remote {
+            core.status.remote = false;
+            core.emit(LinkEvent::RemoteModeChanged { remote: false });
+        }
+        if !core.hpr_kept.is_empty() && self.reapply.is_empty() {
+            self.reapply_pending = true;
+            self.reapply_not_before = now;
+        }
+    }
+
+    /// A settings job (re-apply or command) did not end well: a command fails with
+    /// `failure`; a re-apply reports `reason` and is tried again later.
+    fn job_failed(
+        &mut self,
+        now: Instant,
+        job: ActiveJob,
+        failure: CommandFailure,
+        reason: SettingsFailure,
+        core: &mut Core,
+    ) {
+        match job.ticket {
+            Some(ticket) => core.emit(LinkEvent::CommandDone {
+                ticket,
+                result: Err(failure),
+            }),
+            None => {
+                core.emit(LinkEvent::SettingsFailed { reason });
+                self.reapply.clear();
+                self.reapply_pending = true;
+                self.reapply_not_before = now + REAPPLY_BACKOFF;
+            }
+        }
+    }
+
+    fn start_poll(
+        &mut self,
+        now: Instant,
+        core: &Core,
+    ) -> Option<(HprPurpose, HprExpect, Vec<u8, RAW_HPR_CAPACITY>)> {
+        self.next_poll_at = now + core.config.poll_interval;
+        self.polled_last = true;
+        typed(HprPurpose::Poll, Request::GetPsInfo)
+    }
+
+    fn slow_request(
+        &mut self,
+        now: Instant,
+        core: &Core,
+    ) -> Option<(HprPurpose, HprExpect, Vec<u8, RAW_HPR_CAPACITY>)> {
+        if now >= self.next_slow_at {
+            self.next_slow_at = now + core.config.slow_data_interval;
+            if !self.maxpro() {
+                self.slow_pending = SLOW_ERROR_LOG | SLOW_TIMERS;
+            }
+        }
+        if self.slow_retry != 0 && now >= self.slow_retry_at {
+            self.slow_pending |= self.slow_retry;
+            self.slow_retry = 0;
         }
         if self.slow_pending & SLOW_ERROR_LOG != 0 {
             return typed(HprPurpose::SlowErrorLog, Request::ReadErrorLog);
         }
         if self.slow_pending & SLOW_TIMERS != 0 {
             return typed(HprPurpose::SlowTimers, Request::GetTimerCounter);
-        }
-        if now >= self.next_slow_at {
-            self.next_slow_at = now + core.config.slow_data_interval;
-            if !self.maxpro() {
-                self.slow_pending = SLOW_ERROR_LOG | SLOW_TIMERS;
-                return typed(HprPurpose::SlowErrorLog, Request::ReadErrorLog);
-            }
         }
         None
     }
@@ -249,12 +506,14 @@ impl HprDriver {
                 core.status.hpr.nominal_amps = Some(info.current_setpoint);
                 self.update_state(now, info.state, core);
                 self.update_error(info.error, core);
+                self.check_setpoint(now, info.current_setpoint, core);
             }
             (HprPurpose::Poll, Some(Reply::MaxProPsInfo(info))) => {
                 core.status.hpr.maxpro_info = Some(*info);
                 core.status.hpr.nominal_amps = Some(info.current_setpoint);
                 self.update_state(now, info.state, core);
                 self.update_error(info.error, core);
+                self.check_setpoint(now, info.current_setpoint, core);
             }
             (HprPurpose::State, Some(Reply::State(state))) => {
                 self.next_poll_at = now + core.config.poll_interval;
@@ -267,58 +526,139 @@ impl HprDriver {
                         core.status.remote = true;
                         core.emit(LinkEvent::RemoteModeChanged { remote: true });
                     }
-                } else if let Some((ticket, _)) = self.active.take() {
-                    core.emit(LinkEvent::CommandDone {
-                        ticket,
-                        result: Err(CommandFailure::NotAccepted),
-                    });
+                } else if let Some(job) = self.active.take() {
+                    self.job_failed(
+                        now,
+                        job,
+                        CommandFailure::NotAccepted,
+                        SettingsFailure::NotAccepted,
+                        core,
+                    );
                 }
             }
             (HprPurpose::SlowErrorLog, reply) => {
                 if let Some(Reply::ErrorLog(log)) = reply {
                     core.status.hpr.error_log = Some(*log);
                 }
-                self.slow_done(SLOW_ERROR_LOG, None, core);
+                self.slow_done(now, SLOW_ERROR_LOG, None, core);
             }
             (HprPurpose::SlowTimers, reply) => {
                 if let Some(Reply::TimerCounter(t)) = reply {
                     core.status.hpr.timers = Some(*t);
                 }
-                self.slow_done(SLOW_TIMERS, None, core);
+                self.slow_done(now, SLOW_TIMERS, None, core);
             }
             (HprPurpose::Active, reply) => {
-                let Some((ticket, job)) = self.active.take() else {
+                let Some(active) = self.active.take() else {
                     return;
                 };
-                let result = match (&job, reply) {
-                    (HprJob::Raw { .. }, _) => Ok(CommandOutput::Raw { len: raw_len }),
-                    (_, Some(Reply::NominalAmps(amps))) => {
-                        core.status.hpr.nominal_amps = Some(*amps);
-                        Ok(CommandOutput::Value(*amps))
-                    }
-                    (_, Some(Reply::CornerCurrentSet(percent))) => {
-                        Ok(CommandOutput::Value(*percent))
-                    }
-                    (_, Some(Reply::Ack { result, .. })) => {
-                        if *result == Acceptance::Accepted {
-                            Ok(CommandOutput::Done)
-                        } else {
-                            Err(CommandFailure::NotAccepted)
-                        }
-                    }
-                    (_, Some(Reply::ErrorLog(log))) => {
-                        core.status.hpr.error_log = Some(*log);
-                        Ok(CommandOutput::ErrorLog(*log))
-                    }
-                    (_, Some(Reply::TimerCounter(t))) => {
-                        core.status.hpr.timers = Some(*t);
-                        Ok(CommandOutput::Done)
-                    }
-                    _ => Ok(CommandOutput::Done),
-                };
-                core.emit(LinkEvent::CommandDone { ticket, result });
+                self.finish_job(now, active, reply, raw_len, core);
             }
             _ => {}
+        }
+    }
+
+    /// The reply to the active job arrived. A setting counts as done only when the unit's
+    /// answer shows the value asked for; otherwise it is sent once more after entering remote
+    /// mode again (the unit may have restarted and left remote mode), then reported as not
+    /// accepted. Never success with another value.
+    fn finish_job(
+        &mut self,
+        now: Instant,
+        mut active: ActiveJob,
+        reply: Option<&Reply<'_>>,
+        raw_len: usize,
+        core: &mut Core,
+    ) {
+        let request = match &active.job {
+            HprJob::Typed(request) => Some(*request),
+            HprJob::Raw { .. } => None,
+        };
+        let Some(request) = request.filter(|r| sets(r) != 0) else {
+            return Self::finish_other(active, reply, raw_len, core);
+        };
+        // Whether the setting took effect, by the unit's answer.
+        let taken = match (request, reply) {
+            (Request::SetNominalAmps { amps }, Some(Reply::NominalAmps(set))) => {
+                core.status.hpr.nominal_amps = Some(*set);
+                *set == amps
+            }
+            (Request::SetCornerCurrent { percent }, Some(Reply::CornerCurrentSet(set))) => {
+                *set == u16::from(percent)
+            }
+            (_, Some(Reply::Ack { result, .. })) => *result == Acceptance::Accepted,
+            _ => false,
+        };
+        if taken {
+            core.hpr_kept.keep(self.system, request);
+            // A re-apply run still to come must not set older values again.
+            let new = sets(&request);
+            self.reapply.retain(|old| sets(old) & !new != 0);
+            if let Some(ticket) = active.ticket {
+                let output = match reply {
+                    Some(Reply::NominalAmps(set)) | Some(Reply::CornerCurrentSet(set)) => {
+                        CommandOutput::Value(*set)
+                    }
+                    _ => CommandOutput::Done,
+                };
+                core.emit(LinkEvent::CommandDone {
+                    ticket,
+                    result: Ok(output),
+                });
+            }
+        } else if !active.retried {
+            // Perhaps out of remote mode after a restart: 004 again, then once more.
+            core.status.hpr.remote_accepted = false;
+            active.retried = true;
+            self.active = Some(active);
+        } else {
+            self.job_failed(
+                now,
+                active,
+                CommandFailure::NotAccepted,
+                SettingsFailure::NotAccepted,
+                core,
+            );
+        }
+    }
+
+    /// The reply to a job that sets nothing (RAW, gas tests, logs...).
+    fn finish_other(active: ActiveJob, reply: Option<&Reply<'_>>, raw_len: usize, core: &mut Core) {
+        let Some(ticket) = active.ticket else {
+            return;
+        };
+        let result = match (&active.job, reply) {
+            (HprJob::Raw { .. }, _) => Ok(CommandOutput::Raw { len: raw_len }),
+            (_, Some(Reply::Ack { result, .. })) => {
+                if *result == Acceptance::Accepted {
+                    Ok(CommandOutput::Done)
+                } else {
+                    Err(CommandFailure::NotAccepted)
+                }
+            }
+            (_, Some(Reply::ErrorLog(log))) => {
+                core.status.hpr.error_log = Some(*log);
+                Ok(CommandOutput::ErrorLog(*log))
+            }
+            (_, Some(Reply::TimerCounter(t))) => {
+                core.status.hpr.timers = Some(*t);
+                Ok(CommandOutput::Done)
+            }
+            _ => Ok(CommandOutput::Done),
+        };
+        core.emit(LinkEvent::CommandDone { ticket, result });
+    }
+
+    /// A poll shows the unit's current set point: when kept settings say otherwise (and
+    /// no setting is under way), the unit lost them (a power blip too short for a link-down,
+    /// or a change at the unit): re-apply.
+    fn check_setpoint(&mut self, now: Instant, setpoint: u16, core: &mut Core) {
+        let busy = self.active.is_some() || !self.reapply.is_empty() || self.reapply_pending;
+        if busy {
+            return;
+        }
+        if core.hpr_kept.amps().is_some_and(|kept| kept != setpoint) {
+            self.settings_lost(now, core);
         }
     }
 
@@ -333,14 +673,17 @@ impl HprDriver {
         self.now = now;
         match purpose {
             HprPurpose::Poll | HprPurpose::State => {}
-            HprPurpose::SlowErrorLog => self.slow_done(SLOW_ERROR_LOG, Some(error), core),
-            HprPurpose::SlowTimers => self.slow_done(SLOW_TIMERS, Some(error), core),
+            HprPurpose::SlowErrorLog => self.slow_done(now, SLOW_ERROR_LOG, Some(error), core),
+            HprPurpose::SlowTimers => self.slow_done(now, SLOW_TIMERS, Some(error), core),
             HprPurpose::RemoteMode | HprPurpose::Active => {
-                if let Some((ticket, _)) = self.active.take() {
-                    core.emit(LinkEvent::CommandDone {
-                        ticket,
-                        result: Err(CommandFailure::Transaction(error)),
-                    });
+                if let Some(job) = self.active.take() {
+                    self.job_failed(
+                        now,
+                        job,
+                        CommandFailure::Transaction(error),
+                        SettingsFailure::Transaction(error),
+                        core,
+                    );
                 }
             }
         }
@@ -354,6 +697,12 @@ impl HprDriver {
                 from: previous,
                 to: state,
             });
+            // Back in a power-up state: the unit restarted (a power blip shorter than a
+            // link-down, or a software reset) and forgot remote mode and its settings.
+            let maxpro = self.maxpro();
+            if is_power_up(maxpro, state) && previous.is_some_and(|p| !is_power_up(maxpro, p)) {
+                self.settings_lost(now, core);
+            }
             if is_pilot_arc(self.maxpro(), state) {
                 let until = now + PILOT_ARC_PAUSE;
                 self.pause_until = Some(until);
@@ -380,8 +729,28 @@ impl HprDriver {
         core.status.active_fault = new;
     }
 
-    fn slow_done(&mut self, bit: u8, error: Option<TransactionError>, core: &mut Core) {
+    /// Like the Powermax driver: a read that failed on the line is tried again soon, with a
+    /// doubling wait; a final answer (501) waits for the next refresh.
+    fn slow_done(
+        &mut self,
+        now: Instant,
+        bit: u8,
+        error: Option<TransactionError>,
+        core: &mut Core,
+    ) {
         self.slow_pending &= !bit;
+        match error {
+            Some(e) if e.is_retryable() => {
+                if self.slow_retry == 0 {
+                    self.slow_retry_at = now + self.slow_backoff;
+                    self.slow_backoff =
+                        (self.slow_backoff + self.slow_backoff).min(core.config.slow_data_interval);
+                }
+                self.slow_retry |= bit;
+            }
+            Some(_) => {}
+            None => self.slow_backoff = SLOW_RETRY_FIRST,
+        }
         if error.is_some() {
             self.slow_error = error;
         }
@@ -565,12 +934,18 @@ impl HprDriver {
     /// The link went down: every pending command fails.
     pub fn abort(&mut self, core: &mut Core) {
         let failed = Err(CommandFailure::LinkDown);
-        if let Some((ticket, _)) = self.active.take() {
+        if let Some(ActiveJob {
+            ticket: Some(ticket),
+            ..
+        }) = self.active.take()
+        {
             core.emit(LinkEvent::CommandDone {
                 ticket,
                 result: failed,
             });
         }
+        // Kept settings stay (in the core) and are re-applied when the unit is back.
+        self.reapply.clear();
         while let Some((ticket, _)) = self.queue.pop_front() {
             core.emit(LinkEvent::CommandDone {
                 ticket,
@@ -666,4 +1041,58 @@ fn parse_raw(bytes: &[u8]) -> Result<HprJob, Refusal> {
         id: frame.id,
         frame: frame_bytes,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use plasma_protocol::hpr::HprParameters;
+
+    const SYSTEM: SystemId = SystemId::MaxPro200;
+
+    #[test]
+    fn a_kept_setting_replaces_the_earlier_ones_it_sets_again() {
+        let mut kept = HprKept::default();
+        let gases = GasPair {
+            plasma: GasCode(1),
+            shield: GasCode(2),
+        };
+        kept.keep(SYSTEM, Request::SetNominalAmps { amps: 130 });
+        kept.keep(SYSTEM, Request::SetCornerCurrent { percent: 70 });
+        kept.keep(SYSTEM, Request::SetInletGases(gases));
+        kept.keep(SYSTEM, Request::SetNominalAmps { amps: 200 });
+        assert_eq!(
+            kept.as_slice(),
+            [
+                Request::SetCornerCurrent { percent: 70 },
+                Request::SetInletGases(gases),
+                Request::SetNominalAmps { amps: 200 },
+            ]
+        );
+        assert_eq!(kept.amps(), Some(200));
+        // All parameters set everything the others set.
+        let all = HprParameters {
+            amps: 260,
+            corner_percent: 80,
+            gases,
+            flows: GasFlows::default(),
+        };
+        kept.keep(SYSTEM, Request::SetAllParameters(all));
+        assert_eq!(kept.as_slice(), [Request::SetAllParameters(all)]);
+        kept.keep(SYSTEM, Request::SetCornerCurrent { percent: 60 });
+        assert_eq!(kept.as_slice().len(), 2);
+        assert_eq!(kept.amps(), Some(260));
+        // Not settings: not kept.
+        kept.keep(SYSTEM, Request::ClearWarnings);
+        assert_eq!(kept.as_slice().len(), 2);
+        // Settings another unit confirmed replace everything.
+        let hpr130 = SystemId::Hpr {
+            rating: hpr::HprRating::Hpr130,
+            console: Some(hpr::GasConsole::Auto),
+            xd: false,
+        };
+        kept.keep(hpr130, Request::SetNominalAmps { amps: 100 });
+        assert_eq!(kept.as_slice(), [Request::SetNominalAmps { amps: 100 }]);
+        assert_eq!(kept.system(), Some(hpr130));
+    }
 }

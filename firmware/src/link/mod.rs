@@ -5,6 +5,69 @@
 //! transmits what [`PsLink::poll_transmit`] returns with the port settings of
 //! [`PsLink::port_config`], and wakes it at [`PsLink::poll_at`].
 //!
+//! # Board glue
+//! - Received characters go to [`PsLink::handle_rx`] in any chunking. A character the UART
+//!   flags with a parity or framing error goes to [`PsLink::handle_rx_error`] instead, in its
+//!   place in the stream (the characters before it first): it breaks the frame it falls in,
+//!   which the 8-bit LRC alone would not always notice.
+//! - A frame from [`PsLink::poll_transmit`] is put on the wire at once and completely, with
+//!   the port settings of [`PsLink::port_config`] applied first.
+//! - The task sleeps until [`PsLink::poll_at`] or the next received character.
+//! - On 2-wire RS-485 the glue may leave the receiver on while it transmits: a received frame
+//!   equal to the request just sent is taken for its echo, counted
+//!   ([`Diagnostics::echoes`]) and ignored. A reply that repeats its request (Modbus 05/06,
+//!   some HPR settings) is told apart once the line is known to echo: the first copy in an
+//!   attempt is the echo, the second the reply.
+//!
+//! # Detection and link-down
+//! - Auto-detection asks Read Device Identification, then (no answer) the legacy register
+//!   probe, then HPR HELLO at 8N1, in rounds over the Modbus parity / stop-bit combinations
+//!   (the configured one first).
+//! - Once a unit has been found, what found it (probe and port settings) is asked first after
+//!   a link-down, and again between every two probes of that search, so a unit switched off
+//!   and on is back within about half a second of its return while another kind of unit is
+//!   still found. While a Modbus unit is expected back, the HPR probe's retries follow at
+//!   once instead of riding through an HF-ignition blackout (no HPR cuts without a link).
+//! - A step whose replies all arrived damaged (bad LRC, garbled) is asked again, up to
+//!   [`DETECT_REASKS`] times: a damaged reply shows a unit that speaks this protocol at this
+//!   framing. Only silence or a clean exception moves detection on (a SYNC unit also answers
+//!   the legacy probe, so it must not get there by accident).
+//! - A unit the legacy probe found (no model known) is asked for its device identification
+//!   again at every slow-data refresh; a SYNC unit then changes family (pending commands fail
+//!   as on a link-down, `LinkUp` reports the unit again, kept settings are re-applied).
+//! - Only silence counts toward link-down: [`LinkConfig::failures_before_down`] failed
+//!   transactions in a row that heard nothing. Damaged replies prove the unit is there: they
+//!   are counted and retried, and only [`UNANSWERED_FACTOR`] times as many failures in a row
+//!   without a valid reply take the link down.
+//!
+//! # Kept settings
+//! Settings the CNC set and the unit confirmed are kept and re-applied after the unit
+//! power-cycles or the link returns: Powermax mode, current and pressure
+//! ([`UnitStatus::desired`]); HPR / MaxPro200 nominal current, corner current, process,
+//! all parameters and inlet gases ([`PsLink::hpr_kept_settings`], a later setting replacing
+//! what it sets again), re-applied after 004 REMOTE_MODE once the unit is in state 2 or 3
+//! (another HPR model on the line does not get them: `SettingsFailed { OutsideLimits }`).
+//! An HPR setting counts as done only when the unit's answer shows the value asked for;
+//! otherwise 004 is sent again and the setting once more (the unit may have restarted and
+//! left remote mode), then it fails `NotAccepted`. An HPR that shows a restart the link did
+//! not see as a link-down (a power blip: its state back to power-up, or a set point other than
+//! the kept one) has remote mode entered again and its settings re-applied. A re-apply that
+//! fails reports `SettingsFailed` and is tried again after a back-off: a setting is never
+//! silently lost.
+//!
+//! # Scheduling
+//! One request at a time, chosen in this order: the rest of a poll cycle split into parts,
+//! the active command (or a re-apply of kept settings), then polls and everything else in
+//! turn: after a poll, whatever else is due (slow data, the SYNC cartridge check, the
+//! slow-data refresh, HPR error log and timers) gets one transaction before the next poll.
+//! So even the shortest poll interval (a poll always due) starves nothing, and a poll waits
+//! for at most one other transaction (a new fault is still known within 250 ms p99 on SYNC).
+//!
+//! Slow data (limits first) is read at start, on a cartridge change, on request and at each
+//! refresh. A read that fails on the line is tried again soon, at the first turn after
+//! [`powermax::SLOW_RETRY_FIRST`], the wait doubling with each further failure up to the
+//! slow-data interval; an exception waits for the next refresh.
+//!
 //! ```
 //! use plasma_firmware::link::{LinkConfig, PsLink};
 //! use plasma_firmware::time::Instant;
@@ -50,6 +113,7 @@ pub use status::{ActiveFault, Family, Limits, Model, PowermaxSettings, UnitStatu
 pub use transaction::TransactionError;
 
 use event::EventQueue;
+pub use hpr::HprKept;
 use hpr::{HprDriver, HprExpect, HprPurpose};
 use modbus::MbRequest;
 use powermax::{MbPurpose, PowermaxDriver, Variant};
@@ -60,6 +124,13 @@ use crate::time::{Duration, Instant};
 
 /// Pause between two detection rounds, so a silent line is not hammered.
 pub const DETECT_ROUND_PAUSE: Duration = Duration::from_millis(250);
+/// A unit that answers, but only with damaged replies, is declared down after this many
+/// times [`LinkConfig::failures_before_down`] failed transactions in a row (a line too noisy
+/// to carry a single valid reply is no link, but a damaged reply is no silence either).
+pub const UNANSWERED_FACTOR: u8 = 4;
+/// Times a detection step whose replies all arrived damaged is asked again before detection
+/// moves on (a damaged reply shows a unit that speaks this protocol at this framing).
+pub const DETECT_REASKS: u8 = 3;
 /// Quiet time after HPR SLEEP (086), which no unit answers.
 pub const SLEEP_QUIET: Duration = Duration::from_millis(20);
 
@@ -82,6 +153,9 @@ pub struct Core {
     pub status: UnitStatus,
     /// Counters.
     pub diagnostics: Diagnostics,
+    /// HPR / MaxPro200 settings to keep and re-apply (the Powermax ones are
+    /// [`UnitStatus::desired`]).
+    pub hpr_kept: HprKept,
     events: EventQueue,
 }
 
@@ -116,9 +190,25 @@ enum DetectStep {
 
 #[derive(Debug, Clone)]
 struct Detector {
+    /// The step asked now.
     step: DetectStep,
+    /// True while asking the last known-good probe ([`KnownGood`]); false in the search.
+    good: bool,
+    /// The full search: its round (which Modbus framing) and the step it asks next.
     round: u32,
+    search: DetectStep,
     not_before: Instant,
+    /// Times this step was asked again because its replies arrived damaged.
+    reasks: u8,
+}
+
+/// What found the unit last time: the probe (its first step) and the port settings. After a
+/// link-down it is asked first, and again between every two probes of the full search, so
+/// a unit that was switched off is found again within a probe or two of its return.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+struct KnownGood {
+    step: DetectStep,
+    port: PortConfig,
 }
 
 #[derive(Debug, Clone)]
@@ -153,9 +243,18 @@ pub struct PsLink {
     txn: Option<Transaction<Tag>>,
     modbus_rx: modbus_ascii::Decoder,
     hpr_rx: hpr_wire::Decoder,
+    /// Failed transactions in a row that heard nothing at all (silence).
     consecutive_failures: u8,
+    /// Failed transactions in a row, silent or with damaged replies only.
+    unanswered: u8,
     next_ticket: u32,
     raw_reply: Vec<u8, TX_CAPACITY>,
+    /// The line has been heard echoing our requests (2-wire, receiver on).
+    line_echoes: bool,
+    /// What found the unit last time (kept across link-downs).
+    last_good: Option<KnownGood>,
+    /// The echo of the attempt on the wire has been heard.
+    echo_in_attempt: bool,
     now: Instant,
 }
 
@@ -198,12 +297,16 @@ impl PsLink {
                 config,
                 status: UnitStatus::default(),
                 diagnostics: Diagnostics::default(),
+                hpr_kept: HprKept::default(),
                 events: EventQueue::new(),
             },
             phase: Phase::Detecting(Detector {
                 step: DetectStep::DeviceId,
+                good: false,
                 round: 0,
+                search: DetectStep::DeviceId,
                 not_before: now,
+                reasks: 0,
             }),
             port: config.modbus_port(),
             wire: Wire::Modbus,
@@ -211,8 +314,12 @@ impl PsLink {
             modbus_rx: modbus_ascii::Decoder::new(),
             hpr_rx: hpr_wire::Decoder::new(),
             consecutive_failures: 0,
+            unanswered: 0,
             next_ticket: 1,
             raw_reply: Vec::new(),
+            line_echoes: false,
+            echo_in_attempt: false,
+            last_good: None,
             now,
         };
         link.start_detection(now, 0);
@@ -270,6 +377,35 @@ impl PsLink {
         self.core.status.update_ready(now);
     }
 
+    /// A character arrived with a UART parity or framing error.
+    ///
+    /// The board glue calls this where the flagged character falls in the received stream:
+    /// `handle_rx` with the characters before it, then `handle_rx_error`, then `handle_rx`
+    /// with the rest (the flagged character itself is not handed over). A flagged character
+    /// breaks the frame in progress: the frame is rejected at once, like a reply with a bad
+    /// checksum (the attempt is retried), even when the 8-bit LRC or checksum would have let
+    /// two cancelling errors through. A flagged character between frames only counts. Every
+    /// call counts in [`Diagnostics::rx_errors`].
+    pub fn handle_rx_error(&mut self, now: Instant) {
+        self.now = now;
+        self.core.diagnostics.record_rx_error();
+        let in_frame = match self.wire {
+            Wire::Modbus => self.modbus_rx.in_frame(),
+            Wire::Hpr => self.hpr_rx.in_frame(),
+        };
+        if in_frame {
+            self.modbus_rx.reset();
+            self.hpr_rx.reset();
+            match &self.txn {
+                Some(txn) if txn.is_awaiting_reply() => {
+                    self.attempt_failed(now, TransactionError::Malformed);
+                }
+                _ => self.core.diagnostics.record_unsolicited(),
+            }
+        }
+        self.core.status.update_ready(now);
+    }
+
     /// Bytes to put on the wire now (one whole frame), if any. The caller transmits them
     /// completely before calling again. Returns None while waiting for a reply/time-out.
     pub fn poll_transmit(&mut self, now: Instant) -> Option<&[u8]> {
@@ -283,6 +419,7 @@ impl PsLink {
         let frame = self.txn.as_mut()?.poll_transmit(now)?;
         // A new attempt starts with a clean receiver: leftovers of a damaged reply must not
         // be taken for the answer.
+        self.echo_in_attempt = false;
         match wire {
             Wire::Modbus => self.modbus_rx.reset(),
             Wire::Hpr => self.hpr_rx.reset(),
@@ -296,14 +433,15 @@ impl PsLink {
     }
 
     /// Earliest time at which `poll_transmit`/timers need attention. None = only new rx or
-    /// commands matter.
+    /// commands matter. After a `poll_transmit` that sent nothing, this is always later than
+    /// that call's `now`: a task sleeping until then never spins.
     pub fn poll_at(&self) -> Option<Instant> {
         if let Some(txn) = &self.txn {
             return Some(txn.poll_at());
         }
         match &self.phase {
             Phase::Detecting(d) => Some(d.not_before),
-            Phase::Powermax(d) => d.wake_at(),
+            Phase::Powermax(d) => d.wake_at(&self.core),
             Phase::Hpr(d) => d.wake_at(&self.core),
         }
     }
@@ -337,6 +475,12 @@ impl PsLink {
         &self.core.diagnostics
     }
 
+    /// The HPR / MaxPro200 settings the CNC set and the unit confirmed, kept across
+    /// link-downs and re-applied (after 004 REMOTE_MODE) when the unit returns or restarts.
+    pub fn hpr_kept_settings(&self) -> &[plasma_protocol::hpr::Request] {
+        self.core.hpr_kept.as_slice()
+    }
+
     /// The reply frame of the last RAW command (see [`CommandOutput::Raw`]).
     pub fn raw_reply(&self) -> &[u8] {
         &self.raw_reply
@@ -358,7 +502,22 @@ impl PsLink {
             }
             Phase::Detecting(_) => false,
         };
-        self.core.config = sanitize(config);
+        let config = sanitize(config);
+        let old = self.core.config;
+        if (
+            config.protocol,
+            config.modbus_port(),
+            config.hpr_id,
+            config.node_address,
+        ) != (
+            old.protocol,
+            old.modbus_port(),
+            old.hpr_id,
+            old.node_address,
+        ) {
+            self.last_good = None;
+        }
+        self.core.config = config;
         self.core.status.forget_unit();
         if was_up {
             self.core.emit(LinkEvent::LinkDown {
@@ -367,6 +526,7 @@ impl PsLink {
         }
         self.txn = None;
         self.consecutive_failures = 0;
+        self.unanswered = 0;
         self.modbus_rx.reset();
         self.hpr_rx.reset();
         self.start_detection(now, 0);
@@ -394,24 +554,50 @@ impl PsLink {
         }
     }
 
+    /// Begin detecting from `not_before`: the last known-good probe first, if any, then the
+    /// full search from its `round`.
     fn start_detection(&mut self, not_before: Instant, round: u32) {
-        let step = self.first_step();
-        self.phase = Phase::Detecting(Detector {
-            step,
+        self.resume_detection(not_before, self.first_step(), round);
+    }
+
+    /// Like [`PsLink::start_detection`], with the search going on at `search`.
+    fn resume_detection(&mut self, not_before: Instant, search: DetectStep, round: u32) {
+        let mut detector = Detector {
+            step: search,
+            good: false,
             round,
+            search,
             not_before,
-        });
-        self.set_port_for(step, round);
+            reasks: 0,
+        };
+        match self.last_good {
+            Some(good) => {
+                detector.step = good.step;
+                detector.good = true;
+                self.use_port(good.step, good.port);
+            }
+            None => self.set_port_for(search, round),
+        }
+        self.phase = Phase::Detecting(detector);
     }
 
     fn set_port_for(&mut self, step: DetectStep, round: u32) {
-        let (port, wire) = match step {
-            DetectStep::DeviceId | DetectStep::LegacyProbe => {
-                (self.modbus_framing(round), Wire::Modbus)
-            }
-            DetectStep::HprSleep | DetectStep::HprWake | DetectStep::HprHello => {
-                (PortConfig::HPR, Wire::Hpr)
-            }
+        let port = self.port_for(step, round);
+        self.use_port(step, port);
+    }
+
+    /// The port settings for `step` in search round `round`.
+    fn port_for(&self, step: DetectStep, round: u32) -> PortConfig {
+        match step {
+            DetectStep::DeviceId | DetectStep::LegacyProbe => self.modbus_framing(round),
+            DetectStep::HprSleep | DetectStep::HprWake | DetectStep::HprHello => PortConfig::HPR,
+        }
+    }
+
+    fn use_port(&mut self, step: DetectStep, port: PortConfig) {
+        let wire = match step {
+            DetectStep::DeviceId | DetectStep::LegacyProbe => Wire::Modbus,
+            DetectStep::HprSleep | DetectStep::HprWake | DetectStep::HprHello => Wire::Hpr,
         };
         self.port = port;
         if self.wire != wire {
@@ -459,14 +645,23 @@ impl PsLink {
         }
     }
 
-    /// The step after `step` did not find a unit.
-    fn detect_next(&mut self, now: Instant, step: DetectStep) {
-        let Phase::Detecting(detector) = &self.phase else {
-            return;
+    /// Ask the current detection step again (its replies were damaged), unless it has been
+    /// asked again [`DETECT_REASKS`] times already. Returns false when it has.
+    fn reask(&mut self, now: Instant) -> bool {
+        let Phase::Detecting(detector) = &mut self.phase else {
+            return false;
         };
-        let round = detector.round;
-        let choice = self.core.config.protocol;
-        let next = match (step, choice) {
+        if detector.reasks >= DETECT_REASKS {
+            return false;
+        }
+        detector.reasks += 1;
+        detector.not_before = now;
+        true
+    }
+
+    /// The step that follows `step` in a search round, `None` at the end of the round.
+    fn step_after(&self, step: DetectStep) -> Option<DetectStep> {
+        match (step, self.core.config.protocol) {
             (DetectStep::DeviceId, ProtocolChoice::Auto | ProtocolChoice::Legacy) => {
                 Some(DetectStep::LegacyProbe)
             }
@@ -474,22 +669,112 @@ impl PsLink {
             (DetectStep::HprSleep, _) => Some(DetectStep::HprWake),
             (DetectStep::HprWake, _) => Some(DetectStep::HprHello),
             _ => None,
-        };
-        match next {
-            Some(step) => {
-                self.phase = Phase::Detecting(Detector {
-                    step,
-                    round,
-                    not_before: now,
-                });
-                self.set_port_for(step, round);
-            }
-            None => self.start_detection(now + DETECT_ROUND_PAUSE, round.wrapping_add(1)),
         }
     }
 
+    /// The search position after the probe that begins with `first` in round `round`, and
+    /// whether the round ended (a pause follows).
+    fn search_after(&self, first: DetectStep, round: u32) -> (DetectStep, u32, bool) {
+        // SLEEP, WAKE and HELLO are one probe.
+        let last = match first {
+            DetectStep::HprSleep | DetectStep::HprWake => DetectStep::HprHello,
+            other => other,
+        };
+        match self.step_after(last) {
+            Some(next) => (next, round, false),
+            None => (self.first_step(), round.wrapping_add(1), true),
+        }
+    }
+
+    /// The step `step` did not find a unit: go on with the next one.
+    fn detect_next(&mut self, now: Instant, step: DetectStep) {
+        let Phase::Detecting(detector) = &self.phase else {
+            return;
+        };
+        let (good_probe, round, search) = (detector.good, detector.round, detector.search);
+        // SLEEP and WAKE go on to HELLO whatever came of them.
+        let chained = matches!(step, DetectStep::HprSleep | DetectStep::HprWake);
+        let Some(good) = self.last_good else {
+            // No unit known yet: the search alone, a pause after each round.
+            match self.step_after(step) {
+                Some(next) => self.enter_search(now, next, round),
+                None => self.start_detection(now + DETECT_ROUND_PAUSE, round.wrapping_add(1)),
+            }
+            return;
+        };
+        if chained && let Some(next) = self.step_after(step) {
+            let port = self.port;
+            self.use_port(next, port);
+            if let Phase::Detecting(detector) = &mut self.phase {
+                detector.step = next;
+                detector.not_before = now;
+                detector.reasks = 0;
+            }
+            return;
+        }
+        if good_probe {
+            // The known-good probe found nothing: one probe of the search, unless that is
+            // the known-good probe itself (then the one after it).
+            let mut position = (search, round, false);
+            if self.is_known_good(good, position.0, position.1) {
+                position = self.search_after(position.0, position.1);
+                if position.2 || self.is_known_good(good, position.0, position.1) {
+                    // Nothing else to try in this round: pause, then the known-good again.
+                    self.resume_detection(now + DETECT_ROUND_PAUSE, position.0, position.1);
+                    return;
+                }
+            }
+            self.enter_search(now, position.0, position.1);
+            return;
+        }
+        // A search probe found nothing: remember where the search stands, then the
+        // known-good probe again (after a pause at the end of a round).
+        let first = if step == DetectStep::HprHello {
+            self.hpr_first_step()
+        } else {
+            step
+        };
+        let (next, next_round, wrapped) = self.search_after(first, round);
+        let pause = if wrapped {
+            DETECT_ROUND_PAUSE
+        } else {
+            Duration::ZERO
+        };
+        self.resume_detection(now + pause, next, next_round);
+    }
+
+    /// True when the search probe `step` of round `round` is the known-good probe.
+    fn is_known_good(&self, good: KnownGood, step: DetectStep, round: u32) -> bool {
+        step == good.step && self.port_for(step, round) == good.port
+    }
+
+    fn enter_search(&mut self, now: Instant, step: DetectStep, round: u32) {
+        self.phase = Phase::Detecting(Detector {
+            step,
+            good: false,
+            round,
+            search: step,
+            not_before: now,
+            reasks: 0,
+        });
+        self.set_port_for(step, round);
+    }
+
     fn link_up(&mut self, now: Instant, model: Model, family: Family) {
+        if let Phase::Detecting(detector) = &self.phase {
+            let step = match detector.step {
+                DetectStep::HprHello | DetectStep::HprWake | DetectStep::HprSleep => {
+                    self.hpr_first_step()
+                }
+                other => other,
+            };
+            self.last_good = Some(KnownGood {
+                step,
+                port: self.port,
+            });
+        }
         self.consecutive_failures = 0;
+        self.unanswered = 0;
         self.core.status.family = Some(family);
         self.core.status.model = Some(model);
         self.core.status.link_up = true;
@@ -506,7 +791,7 @@ impl PsLink {
                     Model::Hpr(system) => system,
                     _ => SystemId::MaxPro200,
                 };
-                Phase::Hpr(HprDriver::new(system, now, &self.core))
+                Phase::Hpr(HprDriver::new(system, now, &mut self.core))
             }
         };
     }
@@ -529,13 +814,34 @@ impl PsLink {
         }
     }
 
-    fn link_down(&mut self, now: Instant, last_error: TransactionError) {
+    /// A unit running as legacy (found by the register probe) answered device
+    /// identification with `model`. A SYNC unit changes family: pending commands fail as on a
+    /// link-down (kept settings stay and are re-applied), and `LinkUp` reports the unit again
+    /// with its model and family.
+    fn reidentified(&mut self, now: Instant, model: Option<PowerSupplyModel>) {
+        let Some(model) = model else {
+            return;
+        };
+        if model.addressing() != AddressingSystem::Sync {
+            self.core.status.model = Some(Model::Powermax(model));
+            return;
+        }
+        if let Phase::Powermax(driver) = &mut self.phase {
+            driver.abort(&mut self.core);
+        }
+        if let Some(good) = &mut self.last_good {
+            good.step = DetectStep::DeviceId;
+        }
+        self.core.status.forget_unit();
+        self.link_up(now, Model::Powermax(model), Family::PowermaxSync);
+    }
+
+    fn link_down(&mut self, now: Instant, count: u8, last_error: TransactionError) {
         match &mut self.phase {
             Phase::Powermax(driver) => driver.abort(&mut self.core),
             Phase::Hpr(driver) => driver.abort(&mut self.core),
             Phase::Detecting(_) => return,
         }
-        let count = self.consecutive_failures;
         self.core.status.forget_unit();
         self.core.diagnostics.record_link_down();
         self.core.emit(LinkEvent::LinkDown {
@@ -543,6 +849,7 @@ impl PsLink {
         });
         self.txn = None;
         self.consecutive_failures = 0;
+        self.unanswered = 0;
         self.start_detection(now, 0);
     }
 
@@ -561,7 +868,7 @@ impl PsLink {
                 if now < detector.not_before {
                     return;
                 }
-                let step = detector.step;
+                let (step, good_probe) = (detector.step, detector.good);
                 let Some(expect) = self.detect_request(step) else {
                     return;
                 };
@@ -571,9 +878,16 @@ impl PsLink {
                         request.encode(config.node_address, &mut buf).ok(),
                         RetrySpacing::Immediate,
                     ),
+                    // While a Modbus unit is expected back, HPR is only checked for in
+                    // passing: its retries follow at once, so the known-good probe comes
+                    // round again soon (no HPR is cutting while no link is up).
                     DetectExpect::Hpr(request) => (
                         request.emit(&mut buf).ok(),
-                        RetrySpacing::RideThroughBlackout,
+                        if good_probe || self.last_good.is_none_or(|g| g.port == PortConfig::HPR) {
+                            RetrySpacing::RideThroughBlackout
+                        } else {
+                            RetrySpacing::Immediate
+                        },
                     ),
                 };
                 let Some(frame) = len
@@ -679,11 +993,19 @@ impl PsLink {
             return;
         };
         self.core.diagnostics.record_failed();
-        if error.is_retryable() {
-            self.consecutive_failures = self.consecutive_failures.saturating_add(1);
-        } else {
+        if matches!(txn.tag(), Tag::Modbus(MbPurpose::Identify, _)) {
+            // Optional: a unit without device identification may stay silent to it.
+        } else if !error.is_retryable() {
             // The unit answered (exception, unknown command): it is there.
             self.consecutive_failures = 0;
+            self.unanswered = 0;
+        } else if txn.heard_reply() {
+            // Damaged replies: the unit is there, the line is noisy. Not silence.
+            self.consecutive_failures = 0;
+            self.unanswered = self.unanswered.saturating_add(1);
+        } else {
+            self.consecutive_failures = self.consecutive_failures.saturating_add(1);
+            self.unanswered = self.unanswered.saturating_add(1);
         }
         match txn.tag().clone() {
             Tag::Detect(step, _) => match (step, error) {
@@ -691,6 +1013,9 @@ impl PsLink {
                 (DetectStep::DeviceId, TransactionError::Exception(_)) => {
                     self.detected_modbus(now, None)
                 }
+                // Damaged replies: a unit answers at this framing; ask it again rather than
+                // take it for another kind (a SYNC unit also answers the legacy probe).
+                _ if txn.heard_reply() && self.reask(now) => {}
                 _ => self.detect_next(now, step),
             },
             Tag::Modbus(purpose, _) => {
@@ -704,8 +1029,11 @@ impl PsLink {
                 }
             }
         }
-        if self.consecutive_failures >= self.core.config.failures_before_down {
-            self.link_down(now, error);
+        let down = self.core.config.failures_before_down;
+        if self.consecutive_failures >= down {
+            self.link_down(now, self.consecutive_failures, error);
+        } else if self.unanswered >= down.saturating_mul(UNANSWERED_FACTOR) {
+            self.link_down(now, self.unanswered, error);
         }
     }
 
@@ -713,6 +1041,7 @@ impl PsLink {
         let txn = self.txn.take()?;
         self.core.diagnostics.record_ok();
         self.consecutive_failures = 0;
+        self.unanswered = 0;
         Some(txn.tag().clone())
     }
 
@@ -724,6 +1053,28 @@ impl PsLink {
                 None
             }
         }
+    }
+
+    /// True when `received` (re-encoded) is the request just sent, heard back on a 2-wire
+    /// line whose receiver stays on: it is counted and ignored. Most replies differ from
+    /// their request, so such a frame is an echo. A request whose genuine reply repeats it
+    /// (`answers`: Modbus 05/06, an HPR setting echoed unchanged) is only taken for its echo
+    /// once the line is known to echo (an unambiguous echo was heard, e.g. of the detection
+    /// request), and only the first such frame of an attempt.
+    fn is_echo(&mut self, received: &[u8], answers: bool) -> bool {
+        let Some(txn) = &self.txn else {
+            return false;
+        };
+        if received.is_empty() || received != txn.frame() {
+            return false;
+        }
+        let echo = !answers || (self.line_echoes && !self.echo_in_attempt);
+        if echo {
+            self.line_echoes = true;
+            self.echo_in_attempt = true;
+            self.core.diagnostics.record_echo();
+        }
+        echo
     }
 
     fn on_modbus_frame(
@@ -748,11 +1099,17 @@ impl PsLink {
             Err(error) => return self.attempt_failed(now, modbus::classify(error)),
         };
         let frame = modbus_ascii::Frame { address, pdu: &pdu };
-        let response = match modbus_ascii::validate_reply(
+        let validated = modbus_ascii::validate_reply(
             &request.as_request(),
             self.core.config.node_address,
             &frame,
-        ) {
+        );
+        let mut own = [0u8; TX_CAPACITY];
+        let own_len = modbus_ascii::encode(address, &pdu, &mut own).unwrap_or(0);
+        if self.is_echo(own.get(..own_len).unwrap_or(&[]), validated.is_ok()) {
+            return;
+        }
+        let response = match validated {
             Ok(response) => response,
             Err(error) => return self.attempt_failed(now, modbus::classify(error)),
         };
@@ -799,6 +1156,12 @@ impl PsLink {
                 self.link_up(now, Model::PowermaxUnidentified, family);
             }
             Tag::Detect(step, _) => self.detect_next(now, step),
+            Tag::Modbus(MbPurpose::Identify, _) => {
+                if let Response::ReadDeviceIdentification(id) = response {
+                    let model = device_id::model_from_device_id(&id).ok().flatten();
+                    self.reidentified(now, model);
+                }
+            }
             Tag::Modbus(purpose, _) => {
                 if let Phase::Powermax(driver) = &mut self.phase {
                     driver.on_response(now, purpose, &response, raw_len, &mut self.core);
@@ -830,6 +1193,16 @@ impl PsLink {
             Tag::Hpr(purpose, HprExpect::Raw(raw_id)) => (None, Some(*raw_id), Some(*purpose)),
             _ => return,
         };
+        let answers = match (typed, raw_id) {
+            (Some(request), _) => Reply::parse_for(&request, &frame).is_ok(),
+            (None, Some(raw_id)) => id == raw_id,
+            (None, None) => false,
+        };
+        let mut own = [0u8; TX_CAPACITY];
+        let own_len = frame.emit(&mut own).unwrap_or(0);
+        if self.is_echo(own.get(..own_len).unwrap_or(&[]), answers) {
+            return;
+        }
         if id == hpr_wire::command::id::BAD_CHECKSUM {
             // The unit saw our request damaged: send it again.
             return self.attempt_failed(now, TransactionError::HprBadChecksum500);

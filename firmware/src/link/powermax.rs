@@ -5,15 +5,16 @@ use heapless::{Deque, Vec};
 use plasma_protocol::modbus_ascii::{self, Request, Response};
 use plasma_protocol::powermax::sync::{Cartridge, FaultLog, Identification, PsCounters};
 use plasma_protocol::powermax::{
-    Amps, CartridgeName, CartridgeUid, FaultCode, OperatingMode, Pressure, Psi,
+    Amps, CartridgeName, CartridgeUid, FaultCode, OperatingMode, Pressure, Psi, device_id,
 };
 
 use super::Core;
 use super::command::{LinkCommand, Refusal};
+use super::config::ProtocolChoice;
 use super::event::{CommandFailure, CommandOutput, LinkEvent, SettingsFailure, Ticket};
 use super::legacy;
 use super::modbus::{self, BlockPart, BlockPoller, MbRequest, read_values};
-use super::status::{ActiveFault, Family, Limits, PowermaxSettings};
+use super::status::{ActiveFault, Family, Limits, Model, PowermaxSettings};
 use super::sync::{self, SlowItem};
 use super::transaction::TransactionError;
 use crate::time::{Duration, Instant};
@@ -25,6 +26,9 @@ pub const QUICK_RESTART_BLACKOUT: Duration = Duration::from_secs(2);
 pub const UID_CHECK_INTERVAL: Duration = Duration::from_secs(1);
 /// Wait before re-applying kept settings again after a re-apply failed.
 pub const REAPPLY_BACKOFF: Duration = Duration::from_secs(5);
+/// First wait before a slow-data read that failed on the line is tried again (doubling with
+/// each further failure, up to the slow-data interval).
+pub const SLOW_RETRY_FIRST: Duration = Duration::from_millis(200);
 /// Commands waiting behind the active one.
 const QUEUE_CAPACITY: usize = 4;
 
@@ -48,6 +52,9 @@ pub enum MbPurpose {
     CartridgeBlock(BlockPart),
     /// The UID read that notices a cartridge change.
     UidCheck,
+    /// Read Device Identification again for a unit detection found only by the legacy
+    /// register probe (a SYNC unit whose identification replies were lost is told apart).
+    Identify,
     /// The current step of the active command.
     Active,
 }
@@ -158,6 +165,15 @@ pub struct PowermaxDriver {
     reapply_pending: bool,
     reapply_not_before: Instant,
     blackout_until: Option<Instant>,
+    /// The unit refused device identification (an exception): it is not asked again.
+    identify_refused: bool,
+    /// The last transaction started was a poll (the next turn goes to other due work).
+    polled_last: bool,
+    /// Slow items whose read failed on the line, read again from `slow_retry_at`.
+    slow_retry: u8,
+    slow_retry_at: Instant,
+    /// Wait before the next retry of failed slow items.
+    slow_backoff: Duration,
     now: Instant,
 }
 
@@ -188,6 +204,11 @@ impl PowermaxDriver {
             reapply_pending: core.status.desired.is_some(),
             reapply_not_before: now,
             blackout_until: None,
+            identify_refused: false,
+            polled_last: false,
+            slow_retry: 0,
+            slow_retry_at: now,
+            slow_backoff: SLOW_RETRY_FIRST,
             now,
         }
     }
@@ -216,13 +237,14 @@ impl PowermaxDriver {
         self.blackout_until.is_some_and(|until| now < until)
     }
 
-    /// Earliest time the driver wants to send something.
-    pub fn wake_at(&self) -> Option<Instant> {
+    /// Earliest time the driver wants to send something. It mirrors
+    /// [`PowermaxDriver::next_request`]: a time not after the last call is only returned when
+    /// that call will send something, so a caller sleeping until then never spins.
+    pub fn wake_at(&self, core: &Core) -> Option<Instant> {
         if let Some(until) = self.blackout_until.filter(|&u| self.now < u) {
             return Some(until);
         }
         let busy = self.poll.in_cycle()
-            || self.cartridge.in_cycle()
             || self.active.is_some()
             || !self.queue.is_empty()
             || self.slow_pending != 0;
@@ -230,10 +252,15 @@ impl PowermaxDriver {
             return Some(self.now);
         }
         let mut at = self.next_poll_at.min(self.next_slow_at);
-        if self.variant == Variant::Sync {
+        if self.slow_retry != 0 {
+            at = at.min(self.slow_retry_at);
+        }
+        // The UID check needs a cartridge read first (slow data, retried on its own).
+        if self.variant == Variant::Sync && core.status.cartridge.is_some() {
             at = at.min(self.next_uid_check_at);
         }
-        if self.reapply_pending {
+        // A re-apply waits for the limits (slow data, retried on its own).
+        if self.reapply_pending && core.status.limits.is_some() {
             at = at.min(self.reapply_not_before.max(self.now));
         }
         Some(at)
@@ -260,13 +287,41 @@ impl PowermaxDriver {
         if let Some(request) = self.active_request(now, core) {
             return Some(request);
         }
-        if now >= self.next_poll_at {
-            self.poll.start();
-            self.poll_started = now;
-            return self
-                .poll
-                .request()
-                .map(|(request, part)| (MbPurpose::Poll(part), request, None));
+        // Round robin: after a poll, whatever else is due (slow data, the cartridge check)
+        // gets one transaction before the next poll, so a short poll interval cannot starve
+        // it; a poll waits for at most one such transaction.
+        let poll_due = now >= self.next_poll_at;
+        if poll_due && !self.polled_last {
+            return self.start_poll(now);
+        }
+        if let Some(request) = self.other_request(now, core) {
+            self.polled_last = false;
+            return Some(request);
+        }
+        if poll_due {
+            return self.start_poll(now);
+        }
+        None
+    }
+
+    fn start_poll(&mut self, now: Instant) -> Option<(MbPurpose, MbRequest, Option<u8>)> {
+        self.poll.start();
+        self.poll_started = now;
+        self.polled_last = true;
+        self.poll
+            .request()
+            .map(|(request, part)| (MbPurpose::Poll(part), request, None))
+    }
+
+    /// Slow data, the cartridge check, the slow-data refresh: whatever is due.
+    fn other_request(
+        &mut self,
+        now: Instant,
+        core: &mut Core,
+    ) -> Option<(MbPurpose, MbRequest, Option<u8>)> {
+        if self.slow_retry != 0 && now >= self.slow_retry_at {
+            self.slow_pending |= self.slow_retry;
+            self.slow_retry = 0;
         }
         if let Some(request) = self.slow_request() {
             return Some(request);
@@ -280,12 +335,28 @@ impl PowermaxDriver {
         }
         if now >= self.next_slow_at {
             self.next_slow_at = now + core.config.slow_data_interval;
-            if self.variant == Variant::Sync {
-                self.slow_pending |= SlowItem::ALL_ITEMS;
-                return self.slow_request();
+            match self.variant {
+                Variant::Sync => {
+                    self.slow_pending |= SlowItem::ALL_ITEMS;
+                    return self.slow_request();
+                }
+                Variant::Legacy if self.wants_identify(core) => {
+                    return MbRequest::from_request(&device_id::read_product_code())
+                        .map(|request| (MbPurpose::Identify, request, None));
+                }
+                Variant::Legacy => {}
             }
         }
         None
+    }
+
+    /// True while the unit runs as legacy only because the legacy register probe found it:
+    /// device identification is asked again at each slow-data refresh (auto-detection only).
+    fn wants_identify(&self, core: &Core) -> bool {
+        self.variant == Variant::Legacy
+            && !self.identify_refused
+            && core.config.protocol == ProtocolChoice::Auto
+            && core.status.model == Some(Model::PowermaxUnidentified)
     }
 
     fn active_request(
@@ -305,7 +376,21 @@ impl PowermaxDriver {
             }
         }
         let active = self.active.as_ref()?;
-        let request = self.step_request(active)?;
+        let Some(request) = self.step_request(active) else {
+            // A step that cannot be encoded (commands are validated before, so not expected):
+            // fail the command rather than leave it in the way.
+            if let Some(Active {
+                ticket: Some(ticket),
+                ..
+            }) = self.active.take()
+            {
+                core.emit(LinkEvent::CommandDone {
+                    ticket,
+                    result: Err(CommandFailure::Transaction(TransactionError::Malformed)),
+                });
+            }
+            return None;
+        };
         // The quick restart is never repeated: the unit may already be restarting.
         let retries = matches!(active.job, Job::QuickRestart).then_some(0);
         Some((MbPurpose::Active, request, retries))
@@ -404,13 +489,14 @@ impl PowermaxDriver {
                 None => self.on_failed(now, purpose, TransactionError::Mismatch, core),
             },
             MbPurpose::Slow(item) => {
+                let mut error = None;
                 if let Some(values) = read_values(response) {
                     match item {
-                        SlowItem::Permitted => {
-                            if let Some(limits) = sync::limits(values) {
-                                core.status.limits = Some(limits);
-                            }
-                        }
+                        SlowItem::Permitted => match sync::limits(values) {
+                            Some(limits) => core.status.limits = Some(limits),
+                            // Settings depend on them: read them again soon.
+                            None => error = Some(TransactionError::Malformed),
+                        },
                         SlowItem::Identification => {
                             core.status.identification = Identification::decode(values).ok();
                         }
@@ -424,14 +510,14 @@ impl PowermaxDriver {
                         SlowItem::Cartridge => {}
                     }
                 }
-                self.slow_done(item, None, core);
+                self.slow_done(now, item, error, core);
             }
             MbPurpose::CartridgeBlock(part) => {
                 let Some(values) = read_values(response) else {
                     return self.on_failed(now, purpose, TransactionError::Mismatch, core);
                 };
                 if self.cartridge.on_values(part, values) {
-                    self.finish_cartridge(core);
+                    self.finish_cartridge(now, core);
                 }
             }
             MbPurpose::UidCheck => {
@@ -444,6 +530,8 @@ impl PowermaxDriver {
                 }
             }
             MbPurpose::Active => self.advance_active(now, response, raw_len, core),
+            // The link itself acts on the answer (it may change the family).
+            MbPurpose::Identify => {}
         }
     }
 
@@ -467,18 +555,23 @@ impl PowermaxDriver {
                     self.next_poll_at = now + core.config.poll_interval;
                 }
             }
-            MbPurpose::Slow(item) => self.slow_done(item, Some(error), core),
+            MbPurpose::Slow(item) => self.slow_done(now, item, Some(error), core),
             MbPurpose::CartridgeBlock(part) => {
                 if modbus::is_illegal_address(error) {
                     if self.cartridge.on_illegal_address(part) {
-                        self.finish_cartridge(core);
+                        self.finish_cartridge(now, core);
                     }
                 } else {
                     self.cartridge.abort();
-                    self.slow_done(SlowItem::Cartridge, Some(error), core);
+                    self.slow_done(now, SlowItem::Cartridge, Some(error), core);
                 }
             }
             MbPurpose::UidCheck => {}
+            MbPurpose::Identify => {
+                if matches!(error, TransactionError::Exception(_)) {
+                    self.identify_refused = true;
+                }
+            }
             MbPurpose::Active => {
                 if let Some(active) = self.active.take() {
                     let failure = match active.job {
@@ -582,7 +675,7 @@ impl PowermaxDriver {
         }
     }
 
-    fn finish_cartridge(&mut self, core: &mut Core) {
+    fn finish_cartridge(&mut self, now: Instant, core: &mut Core) {
         if self.cartridge.complete()
             && let Ok(cartridge) = Cartridge::decode(self.cartridge.registers())
         {
@@ -597,11 +690,33 @@ impl PowermaxDriver {
             }
             core.status.cartridge = Some(cartridge);
         }
-        self.slow_done(SlowItem::Cartridge, None, core);
+        self.slow_done(now, SlowItem::Cartridge, None, core);
     }
 
-    fn slow_done(&mut self, item: SlowItem, error: Option<TransactionError>, core: &mut Core) {
+    /// A slow-data item is read (`error` = None) or failed for good. A failure on the line
+    /// is read again soon: at the first turn after [`SLOW_RETRY_FIRST`], the wait doubling
+    /// with each failure up to the slow-data interval. A final answer (an exception) waits
+    /// for the next refresh.
+    fn slow_done(
+        &mut self,
+        now: Instant,
+        item: SlowItem,
+        error: Option<TransactionError>,
+        core: &mut Core,
+    ) {
         self.slow_pending &= !item.bit();
+        match error {
+            Some(e) if e.is_retryable() => {
+                if self.slow_retry == 0 {
+                    self.slow_retry_at = now + self.slow_backoff;
+                    self.slow_backoff =
+                        (self.slow_backoff + self.slow_backoff).min(core.config.slow_data_interval);
+                }
+                self.slow_retry |= item.bit();
+            }
+            Some(_) => {}
+            None => self.slow_backoff = SLOW_RETRY_FIRST,
+        }
         if error.is_some() {
             self.slow_error = error;
         }

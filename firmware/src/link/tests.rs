@@ -228,12 +228,9 @@ impl Bench {
                 return Some(frame);
             }
             let at = self.link.poll_at()?;
-            // Nothing to send yet although attention was asked for: let time move on.
-            let at = if at <= self.now {
-                self.now + Duration::from_millis(1)
-            } else {
-                at
-            };
+            // Nothing was sent: the link must not ask for this instant again (a board task
+            // sleeping until `poll_at` would spin).
+            assert!(at > self.now, "poll_at {at:?} not after {:?}", self.now);
             if at > limit {
                 return None;
             }
@@ -1246,4 +1243,380 @@ fn noise_and_late_replies_do_not_disturb_the_link() {
     assert_eq!(bench.link.diagnostics().unsolicited_frames, 1);
     bench.run(&mut fake, bench.now + Duration::from_millis(300));
     assert!(bench.link.status().link_up);
+}
+
+#[test]
+fn a_uart_flagged_character_breaks_the_frame_it_falls_in() {
+    let mut bench = Bench::new(LinkConfig::default());
+    bench.next_tx(ms(0)).unwrap();
+    let reply = b":012B0E0481000101010630383133333504\r\n";
+    // The reply arrives whole and with a good LRC, but the UART flagged one character: the
+    // frame is rejected and the request sent again at once.
+    bench.rx(5, &reply[..10]);
+    bench.link.handle_rx_error(bench.now);
+    bench.link.handle_rx(bench.now, &reply[10..]);
+    assert!(!bench.link.status().link_up);
+    let d = bench.link.diagnostics();
+    assert_eq!((d.rx_errors, d.malformed, d.retries), (1, 1, 1));
+    assert_eq!(bench.next_tx(bench.now).unwrap(), b":012B0E0401C1\r\n");
+    // A flagged character between frames only counts.
+    bench.link.handle_rx_error(bench.now);
+    bench.rx(5, reply);
+    assert!(bench.link.status().link_up);
+    assert_eq!(bench.link.diagnostics().rx_errors, 2);
+    assert_eq!(bench.link.diagnostics().malformed, 1);
+}
+
+#[test]
+fn the_echo_of_our_own_request_is_ignored() {
+    let mut bench = Bench::new(LinkConfig::default());
+    let request = bench.next_tx(ms(0)).unwrap();
+    // A 2-wire line with the receiver on: the request comes back as it goes out (16
+    // characters at 19200 8E1 take 9.2 ms).
+    bench.rx(9, &request);
+    assert_eq!(bench.link.diagnostics().echoes, 1);
+    assert_eq!(bench.link.diagnostics().malformed, 0);
+    bench.rx(12, b":012B0E0481000101010630383133333504\r\n");
+    assert!(bench.link.status().link_up);
+}
+
+#[test]
+fn a_reply_equal_to_its_request_is_told_from_the_echo_once_the_line_is_known_to_echo() {
+    // Legacy settings use function 06, whose reply repeats the request.
+    let mut bench = Bench::new(LinkConfig::default());
+    let mut fake = FakePowermax::legacy();
+    // Detection teaches the link that the line echoes.
+    let request = bench.next_tx(ms(0)).unwrap();
+    bench.rx(9, &request);
+    let reply = fake.answer(&request).unwrap();
+    bench.rx(12, &reply);
+    assert_eq!(bench.link.status().family, Some(Family::PowermaxLegacy));
+    bench.run(&mut fake, ms(300));
+    bench
+        .link
+        .submit(
+            bench.now,
+            LinkCommand::ApplySettings {
+                mode: OperatingMode::Cut,
+                current: amps(45),
+                pressure: Pressure::Auto,
+            },
+        )
+        .unwrap();
+    let write = loop {
+        let frame = bench.next_tx(bench.now + Duration::from_secs(1)).unwrap();
+        if frame[3..5] == *b"06" {
+            break frame;
+        }
+        let reply = fake.answer(&frame).unwrap();
+        bench.rx(10, &reply);
+    };
+    let reply = fake.answer(&write).unwrap();
+    assert_eq!(reply, write);
+    // The echo: ignored.
+    bench.rx(9, &write);
+    assert_eq!(bench.link.diagnostics().echoes, 2);
+    // The unit's reply, equal to it: taken.
+    bench.rx(12, &reply);
+    assert_eq!(bench.link.diagnostics().echoes, 2);
+    assert_eq!(bench.link.diagnostics().transactions_failed, 0);
+    let next = bench.next_tx(bench.now + Duration::from_secs(1)).unwrap();
+    assert_ne!(next, write, "the write was answered, the next step follows");
+}
+
+#[test]
+fn damaged_replies_are_no_silence_and_do_not_take_the_link_down_early() {
+    let (mut bench, _fake) = sync_bench();
+    bench.events();
+    let damaged = b":0104020005F0\r\n"; // LRC should be F5
+    let mut failed = 0;
+    while failed < 3 * UNANSWERED_FACTOR {
+        bench.next_tx(bench.now + Duration::from_secs(1)).unwrap();
+        bench.rx(5, damaged);
+        let d = bench.link.diagnostics();
+        if d.transactions_failed > u32::from(failed) {
+            failed += 1;
+            if failed < 3 * UNANSWERED_FACTOR {
+                assert!(
+                    bench.link.status().link_up,
+                    "after {failed} damaged transactions"
+                );
+            }
+        }
+    }
+    // A line that never carries one valid reply is no link either.
+    assert!(!bench.link.status().link_up);
+    assert!(bench.events().iter().any(|e| matches!(
+        e,
+        LinkEvent::LinkDown {
+            reason: LinkDownReason::ConsecutiveFailures {
+                count: 12,
+                last_error: TransactionError::BadChecksum
+            }
+        }
+    )));
+}
+
+#[test]
+fn damaged_device_id_replies_are_asked_again_not_taken_for_silence() {
+    let mut bench = Bench::new(LinkConfig::default());
+    let damaged = b":012B0E0481000101010630383133333505\r\n";
+    for _ in 0..3 {
+        assert_eq!(bench.next_tx(ms(1000)).unwrap(), b":012B0E0401C1\r\n");
+        bench.rx(20, damaged);
+    }
+    // Not the legacy probe: device identification again.
+    assert_eq!(bench.next_tx(ms(1000)).unwrap(), b":012B0E0401C1\r\n");
+    bench.rx(20, b":012B0E0481000101010630383133333504\r\n");
+    assert_eq!(bench.link.status().family, Some(Family::PowermaxSync));
+}
+
+#[test]
+fn a_unit_found_by_the_legacy_probe_is_identified_again_later() {
+    let config = LinkConfig {
+        slow_data_interval: Duration::from_secs(1),
+        ..LinkConfig::default()
+    };
+    let mut bench = Bench::new(config);
+    // Device identification lost three times, the legacy probe answered.
+    for _ in 0..3 {
+        assert_eq!(bench.next_tx(ms(1000)).unwrap(), b":012B0E0401C1\r\n");
+    }
+    assert_eq!(bench.next_tx(ms(1000)).unwrap(), b":01042098000142\r\n");
+    bench.rx(5, b":010402006F8A\r\n");
+    assert_eq!(bench.link.status().family, Some(Family::PowermaxLegacy));
+    // At the next slow-data refresh the unit says it is a SYNC.
+    let mut fake = FakePowermax::sync();
+    bench.run(&mut fake, ms(2000));
+    assert_eq!(bench.link.status().family, Some(Family::PowermaxSync));
+    let ups = bench
+        .events()
+        .into_iter()
+        .filter(|e| matches!(e, LinkEvent::LinkUp { .. }))
+        .count();
+    assert_eq!(ups, 2);
+    assert_eq!(bench.link.diagnostics().link_downs, 0);
+}
+
+#[test]
+fn after_a_link_down_the_known_good_probe_alternates_with_the_search() {
+    let (mut bench, mut fake) = sync_bench();
+    fake.silent = true;
+    bench.run(&mut fake, bench.now + Duration::from_millis(1100));
+    assert!(!bench.link.status().link_up);
+    let device_id = b":012B0E0401C1\r\n".to_vec();
+    // Probes (3 attempts each) and their ports for the next 8 s, nobody answering.
+    let mut probes: Vec<(Instant, PortConfig, Vec<u8>)> = Vec::new();
+    let until = bench.now + Duration::from_secs(8);
+    let mut last: Option<(PortConfig, Vec<u8>)> = None;
+    let mut repeats = 0;
+    while let Some(frame) = bench.next_tx(until) {
+        let port = bench.link.port_config();
+        let same = last
+            .as_ref()
+            .is_some_and(|(p, f)| *p == port && *f == frame);
+        if same && repeats < 2 {
+            repeats += 1;
+            continue;
+        }
+        repeats = 0;
+        last = Some((port, frame.clone()));
+        probes.push((bench.now, port, frame));
+    }
+    let good =
+        |p: &(Instant, PortConfig, Vec<u8>)| p.1 == PortConfig::MODBUS_DEFAULT && p.2 == device_id;
+    assert!(good(&probes[0]), "the known-good probe first");
+    // Every other probe is the known-good one; the search goes on in between.
+    for pair in probes.chunks(2) {
+        assert!(good(&pair[0]), "{:?}", pair[0]);
+        if let Some(search) = pair.get(1) {
+            assert!(!good(search), "{search:?}");
+        }
+    }
+    // The gap between two known-good probes stays short (here: under 1 s).
+    for w in probes
+        .iter()
+        .filter(|p| good(p))
+        .collect::<Vec<_>>()
+        .windows(2)
+    {
+        assert!(w[1].0.saturating_since(w[0].0) < Duration::from_secs(1));
+    }
+    // The search still covers the legacy probe, HPR and the other framings.
+    assert!(probes.iter().any(|p| p.2 == b":01042098000142\r\n"));
+    assert!(probes.iter().any(|p| p.1 == PortConfig::HPR));
+    assert!(probes.iter().any(|p| p.1.parity == Parity::Odd));
+    // Another kind of unit on the line is still found: an HPR answers HELLO.
+    while bench.link.port_config() != PortConfig::HPR {
+        bench.next_tx(bench.now + Duration::from_secs(5)).unwrap();
+    }
+    bench.rx(3, &hf(0, "HYPERFORMANCE130AUTO"));
+    assert_eq!(bench.link.status().family, Some(Family::Hpr));
+}
+
+#[test]
+fn a_reapply_waiting_for_limits_does_not_make_poll_at_spin() {
+    let (mut bench, mut fake) = sync_bench();
+    bench
+        .link
+        .submit(
+            bench.now,
+            LinkCommand::ApplySettings {
+                mode: OperatingMode::Cut,
+                current: amps(63),
+                pressure: Pressure::Auto,
+            },
+        )
+        .unwrap();
+    bench.run(&mut fake, bench.now + Duration::from_millis(300));
+    fake.silent = true;
+    bench.run(&mut fake, bench.now + Duration::from_millis(1000));
+    assert!(!bench.link.status().link_up);
+    // Back, but the limits cannot be read: the re-apply waits, and `Bench` checks that
+    // `poll_at` is never left in the past meanwhile.
+    fake.silent = false;
+    fake.undocumented.push(0x3001);
+    fake.writes.clear();
+    bench.run(&mut fake, bench.now + Duration::from_millis(3000));
+    assert!(bench.link.status().link_up);
+    assert!(bench.link.status().limits.is_none());
+    assert!(fake.writes.is_empty());
+}
+
+/// An HPR130 in state 3 that took REMOTE_MODE and 058 at 100 A.
+fn hpr_at_100_a() -> Bench {
+    let mut bench = hpr_bench("HYPERFORMANCE130AUTO");
+    // Past the first poll and the slow data (error log, timers).
+    while bench.link.status().hpr.timers.is_none() {
+        let frame = bench.next_tx(bench.now + Duration::from_secs(1)).unwrap();
+        let reply = match &frame[1..4] {
+            b"079" => ps_info_at(3, 130),
+            b"134" => hf(134, "000 000 000 000"),
+            b"125" => hf(125, &"0000000 ".repeat(7)),
+            other => panic!("unexpected {other:?}"),
+        };
+        bench.rx(2, &reply);
+    }
+    bench
+        .link
+        .submit(bench.now, LinkCommand::HprSetNominalAmps { amps: 100 })
+        .unwrap();
+    assert_eq!(bench.next_tx(bench.now).unwrap(), b">00494<");
+    bench.rx(2, b">0041C5<");
+    assert_eq!(bench.next_tx(bench.now).unwrap(), hf(58, "100"));
+    bench.rx(2, &hf(58, "0100"));
+    assert_eq!(
+        bench.link.hpr_kept_settings(),
+        [plasma_protocol::hpr::Request::SetNominalAmps { amps: 100 }]
+    );
+    bench.events();
+    bench
+}
+
+fn ps_info_at(state: u16, amps: u16) -> Vec<u8> {
+    hf(
+        79,
+        &std::format!(
+            "PC0044 PP0042 SC0034 SP0035 CS{amps:04} ST{state:04} ER0000 CG0000 CG0000 MV0000 MV0000"
+        ),
+    )
+}
+
+#[test]
+fn an_hpr_back_in_its_power_up_state_gets_remote_mode_and_its_settings_again() {
+    let mut bench = hpr_at_100_a();
+    // A blip: the next poll finds the unit powering up, at its rated current.
+    assert_eq!(
+        bench.next_tx(bench.now + Duration::from_secs(1)).unwrap(),
+        b">079A0<"
+    );
+    bench.rx(2, &ps_info_at(0, 130));
+    assert!(!bench.link.status().hpr.remote_accepted);
+    assert!(
+        bench
+            .events()
+            .contains(&LinkEvent::RemoteModeChanged { remote: false })
+    );
+    // Nothing is re-applied before the unit is in state 2 or 3.
+    assert_eq!(
+        bench.next_tx(bench.now + Duration::from_secs(1)).unwrap(),
+        b">079A0<"
+    );
+    bench.rx(2, &ps_info_at(2, 130));
+    assert_eq!(
+        bench.next_tx(bench.now + Duration::from_secs(1)).unwrap(),
+        b">00494<"
+    );
+    bench.rx(2, b">0041C5<");
+    assert_eq!(bench.next_tx(bench.now).unwrap(), hf(58, "100"));
+    bench.rx(2, &hf(58, "0100"));
+    assert!(bench.link.status().hpr.remote_accepted);
+}
+
+#[test]
+fn an_hpr_set_point_other_than_the_kept_one_is_set_again() {
+    let mut bench = hpr_at_100_a();
+    // The state never showed the restart, but the set point did.
+    bench.next_tx(bench.now + Duration::from_secs(1)).unwrap();
+    bench.rx(2, &ps_info_at(3, 130));
+    assert_eq!(
+        bench.next_tx(bench.now + Duration::from_secs(1)).unwrap(),
+        b">00494<"
+    );
+}
+
+#[test]
+fn an_hpr_setting_answered_with_another_value_is_never_a_success() {
+    let mut bench = hpr_at_100_a();
+    let ticket = bench
+        .link
+        .submit(bench.now, LinkCommand::HprSetNominalAmps { amps: 80 })
+        .unwrap();
+    assert_eq!(
+        bench.next_tx(bench.now + Duration::from_secs(1)).unwrap(),
+        hf(58, "80")
+    );
+    // The unit answers its old value (it left remote mode): 004 again, then 058 once more.
+    bench.rx(2, &hf(58, "0100"));
+    assert_eq!(bench.next_tx(bench.now).unwrap(), b">00494<");
+    bench.rx(2, b">0041C5<");
+    assert_eq!(bench.next_tx(bench.now).unwrap(), hf(58, "80"));
+    bench.rx(2, &hf(58, "0100"));
+    let events = bench.events();
+    assert!(events.contains(&LinkEvent::CommandDone {
+        ticket,
+        result: Err(CommandFailure::NotAccepted)
+    }));
+    // What is kept is what the unit confirmed.
+    assert_eq!(
+        bench.link.hpr_kept_settings(),
+        [plasma_protocol::hpr::Request::SetNominalAmps { amps: 100 }]
+    );
+}
+
+#[test]
+fn kept_hpr_settings_are_not_given_to_another_model() {
+    let mut bench = hpr_at_100_a();
+    // The HPR130 goes silent: link down.
+    while bench.link.status().link_up {
+        bench.next_tx(bench.now + Duration::from_secs(10)).unwrap();
+    }
+    assert!(
+        !bench.link.hpr_kept_settings().is_empty(),
+        "kept across the link-down"
+    );
+    // An HPR260 answers HELLO instead.
+    loop {
+        let frame = bench.next_tx(bench.now + Duration::from_secs(10)).unwrap();
+        if frame == b">00090<" {
+            break;
+        }
+    }
+    bench.events();
+    bench.rx(3, &hf(0, "HYPERFORMANCE260AUTO"));
+    assert!(bench.link.status().link_up);
+    assert!(bench.link.hpr_kept_settings().is_empty());
+    assert!(bench.events().contains(&LinkEvent::SettingsFailed {
+        reason: SettingsFailure::OutsideLimits
+    }));
 }

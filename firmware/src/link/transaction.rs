@@ -145,6 +145,8 @@ pub struct Transaction<T> {
     expects_reply: bool,
     attempts_sent: u8,
     first_sent: Option<Instant>,
+    last_sent: Option<Instant>,
+    heard_reply: bool,
     phase: Phase,
 }
 
@@ -168,6 +170,8 @@ impl<T> Transaction<T> {
             expects_reply: true,
             attempts_sent: 0,
             first_sent: None,
+            last_sent: None,
+            heard_reply: false,
             phase: Phase::Ready { at: ready_at },
         })
     }
@@ -200,6 +204,17 @@ impl<T> Transaction<T> {
         self.attempts_sent
     }
 
+    /// When the latest attempt was handed out for transmission.
+    pub fn last_sent(&self) -> Option<Instant> {
+        self.last_sent
+    }
+
+    /// True when some attempt got a reply, even a damaged or unusable one: the unit is
+    /// there (only silence, [`TransactionError::Timeout`], says otherwise).
+    pub fn heard_reply(&self) -> bool {
+        self.heard_reply
+    }
+
     /// True while an attempt is on the wire and its reply is awaited.
     pub fn is_awaiting_reply(&self) -> bool {
         self.expects_reply && matches!(self.phase, Phase::AwaitingReply { .. })
@@ -221,6 +236,7 @@ impl<T> Transaction<T> {
                     self.first_sent = Some(now);
                 }
                 self.attempts_sent = self.attempts_sent.saturating_add(1);
+                self.last_sent = Some(now);
                 self.phase = Phase::AwaitingReply {
                     deadline: now + self.timeout,
                 };
@@ -247,6 +263,9 @@ impl<T> Transaction<T> {
     /// The current attempt ended with a bad or unusable reply (or an error reply).
     /// Schedules a retry when the error allows it and attempts remain.
     pub fn attempt_failed(&mut self, now: Instant, error: TransactionError) -> Outcome {
+        if error != TransactionError::Timeout {
+            self.heard_reply = true;
+        }
         let attempts_allowed = u16::from(self.retries) + 1;
         if !error.is_retryable() || u16::from(self.attempts_sent) >= attempts_allowed {
             return Outcome::Failed(error);

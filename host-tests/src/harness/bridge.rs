@@ -44,6 +44,10 @@ impl PsEndpoint for Bridge {
         Bridge::handle_ps_rx(self, now, bytes);
     }
 
+    fn handle_ps_rx_error(&mut self, now: Instant) {
+        Bridge::handle_ps_rx_error(self, now);
+    }
+
     fn poll_ps_transmit(&mut self, now: Instant) -> Option<&[u8]> {
         Bridge::poll_ps_transmit(self, now)
     }
@@ -287,6 +291,10 @@ impl BridgeEndpoint {
 impl PsEndpoint for BridgeEndpoint {
     fn handle_ps_rx(&mut self, now: Instant, bytes: &[u8]) {
         self.bridge.handle_ps_rx(now, bytes);
+    }
+
+    fn handle_ps_rx_error(&mut self, now: Instant) {
+        self.bridge.handle_ps_rx_error(now);
     }
 
     fn poll_ps_transmit(&mut self, now: Instant) -> Option<&[u8]> {

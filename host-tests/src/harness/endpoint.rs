@@ -14,6 +14,8 @@ use plasma_firmware::time::Instant;
 pub trait PsEndpoint {
     /// Bytes received on the PS UART.
     fn handle_ps_rx(&mut self, now: Instant, bytes: &[u8]);
+    /// A character received with a UART parity or framing error, in its place in the stream.
+    fn handle_ps_rx_error(&mut self, now: Instant);
     /// One whole frame to transmit now, if any.
     fn poll_ps_transmit(&mut self, now: Instant) -> Option<&[u8]>;
     /// The settings the PS UART must use now.
@@ -59,6 +61,10 @@ pub fn supply_state_of(status: &UnitStatus) -> SupplyState {
 impl PsEndpoint for PsLink {
     fn handle_ps_rx(&mut self, now: Instant, bytes: &[u8]) {
         self.handle_rx(now, bytes);
+    }
+
+    fn handle_ps_rx_error(&mut self, now: Instant) {
+        self.handle_rx_error(now);
     }
 
     fn poll_ps_transmit(&mut self, now: Instant) -> Option<&[u8]> {

@@ -10,15 +10,18 @@ use crate::sim::SimOptions;
 /// error flag.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum RxErrors {
-    /// Hand it to the endpoint like any other character (the harder case: only the frame
-    /// checksum can catch the damage).
+    /// Tell the endpoint ([`PsLink::handle_rx_error`](plasma_firmware::link::PsLink::handle_rx_error)),
+    /// in its place among the characters: what the board glue does with its UART's error
+    /// flags. The default.
     #[default]
+    Report,
+    /// Hand it to the endpoint like any other character (a UART driver that ignores its
+    /// error flags: only the frame checksum can catch the damage).
     Deliver,
     /// Drop it (a UART driver that discards flagged characters).
     Drop,
     /// Hand over a NUL instead: a character no frame may contain, so the frame it falls in
-    /// is rejected whatever its checksum says (a board glue that turns UART errors into a
-    /// broken frame; the link has no call to report a UART error).
+    /// is rejected whatever its checksum says (a board glue that breaks the frame itself).
     Substitute,
 }
 
@@ -56,7 +59,7 @@ impl Default for WorldOptions {
             corrupt_probability: 0.0,
             drop_probability: 0.0,
             noise_density: None,
-            rx_errors: RxErrors::Deliver,
+            rx_errors: RxErrors::Report,
         }
     }
 }

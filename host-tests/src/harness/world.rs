@@ -56,7 +56,7 @@ pub struct WorldStats {
     pub steps: u64,
     /// Steps taken because a wake-up time at or before the current instant was still asked
     /// for after the instant had been processed: on a board, a busy loop. Each counts one
-    /// millisecond of spinning.
+    /// millisecond of spinning. A world whose count is not 0 panics when dropped.
     pub stale_wakeups: u64,
 }
 
@@ -533,20 +533,22 @@ impl<E: PsEndpoint> World<E> {
         }
 
         // The bridge side.
-        let heard: Vec<u8> = self
-            .line
-            .receive(End::Master, now)
-            .into_iter()
-            .filter_map(|b| match (b.error, self.rx_errors) {
+        // In order: runs of characters, and (when reported) the flagged ones in their place.
+        let mut chunk: Vec<u8> = Vec::new();
+        for b in self.line.receive(End::Master, now) {
+            let byte = match (b.error, self.rx_errors) {
                 (None, _) | (Some(_), RxErrors::Deliver) => Some(b.byte),
                 (Some(_), RxErrors::Drop) => None,
                 (Some(_), RxErrors::Substitute) => Some(0),
-            })
-            .collect();
-        if !heard.is_empty() {
-            self.heard.extend(heard.iter().map(|&b| (now, b)));
-            self.endpoint.handle_ps_rx(now, &heard);
+                (Some(_), RxErrors::Report) => {
+                    self.hand_over(now, &mut chunk);
+                    self.endpoint.handle_ps_rx_error(now);
+                    None
+                }
+            };
+            chunk.extend(byte);
         }
+        self.hand_over(now, &mut chunk);
         self.drain_endpoint();
         for _ in 0..4 {
             self.apply_master_port();
@@ -605,6 +607,16 @@ impl<E: PsEndpoint> World<E> {
             );
         }
         self.assert_safe();
+    }
+
+    /// Hand the characters in `chunk` to the endpoint (and log them as heard).
+    fn hand_over(&mut self, now: Instant, chunk: &mut Vec<u8>) {
+        if chunk.is_empty() {
+            return;
+        }
+        self.heard.extend(chunk.iter().map(|&b| (now, b)));
+        self.endpoint.handle_ps_rx(now, chunk);
+        chunk.clear();
     }
 
     fn apply_master_port(&mut self) {
@@ -670,6 +682,13 @@ impl<E: PsEndpoint> Drop for World<E> {
     fn drop(&mut self) {
         if !std::thread::panicking() {
             self.assert_safe();
+            // On a board, a wake-up time that stays in the past is a busy loop.
+            assert_eq!(
+                self.stats.stale_wakeups,
+                0,
+                "the endpoint kept asking for a time already processed (busy loop)\n{}",
+                self.trace.tail(10)
+            );
         }
     }
 }
