@@ -165,7 +165,7 @@ fn factory_only_dangerous_and_line_control_commands_never_reach_the_unit() {
         }
         let data = if id == 85 { "0" } else { "" };
         assert_eq!(
-            world.submit(LinkCommand::Raw(hpr_frame(id, data))),
+            world.submit(LinkCommand::Raw(&hpr_frame(id, data))),
             Err(Refusal::RawCommandNotAllowed { id }),
             "id {id:03}"
         );
@@ -178,7 +178,7 @@ fn factory_only_dangerous_and_line_control_commands_never_reach_the_unit() {
         Err(Refusal::StateForbids { .. })
     ));
     // The allowed ones work, RAW included.
-    let state = world.command(LinkCommand::Raw(hpr_frame(2, "")), secs(3));
+    let state = world.command(LinkCommand::Raw(&hpr_frame(2, "")), secs(3));
     assert!(matches!(state, Ok(CommandOutput::Raw { .. })), "{state:?}");
     assert_eq!(world.link().raw_reply(), &hpr_frame(2, "0003")[..]);
     for command in [

@@ -2,7 +2,6 @@
 
 use core::fmt;
 
-use heapless::Vec;
 use plasma_protocol::hpr::{ErrorCode, GasPair, HprParameters, MaxProParameters, StateCode};
 use plasma_protocol::powermax::sync::PermittedModes;
 use plasma_protocol::powermax::{Amps, FaultCode, OperatingMode, Pressure, Psi};
@@ -10,7 +9,8 @@ use plasma_protocol::powermax::{Amps, FaultCode, OperatingMode, Pressure, Psi};
 use super::status::Family;
 use crate::time::Instant;
 
-/// Longest RAW frame accepted (a Modbus ASCII frame is at most 513 characters).
+/// Longest RAW frame accepted (a Modbus ASCII frame is at most 513 characters); the session
+/// refuses a longer one before it reaches the link.
 pub const RAW_CAPACITY: usize = 520;
 
 /// Which HPR gas test.
@@ -24,10 +24,12 @@ pub enum HprGasFlow {
 }
 
 /// An operation asked of the link; it completes with `LinkEvent::CommandDone`.
-// No allocator: a RAW frame travels inline, so this enum is as large as one frame.
-#[allow(clippy::large_enum_variant)]
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub enum LinkCommand {
+///
+/// A RAW frame is borrowed: `submit` parses it into the link's own request before it
+/// returns, so the command stays a few bytes instead of carrying a frame buffer through
+/// every caller.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum LinkCommand<'a> {
     /// Powermax: enter remote control with these settings. Checked against the permitted
     /// limits first; written in one request (SYNC) or as the legacy guide requires, read back,
     /// then kept and re-applied after a power cycle or a link return.
@@ -92,7 +94,7 @@ pub enum LinkCommand {
     HprReadTimers,
     /// A whole frame to forward as is (Modbus `:...\r\n` or HPR `>...<`), subject to the
     /// allow-lists; the reply frame is returned.
-    Raw(Vec<u8, RAW_CAPACITY>),
+    Raw(&'a [u8]),
 }
 
 /// Which HPR value was out of range.

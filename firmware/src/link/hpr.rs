@@ -774,7 +774,7 @@ impl HprDriver {
         &mut self,
         now: Instant,
         ticket: Ticket,
-        command: &LinkCommand,
+        command: &LinkCommand<'_>,
         core: &mut Core,
     ) -> Result<(), Refusal> {
         self.now = now;

@@ -453,7 +453,7 @@ impl PsLink {
 
     /// Ask for an operation. Validates against the unit's limits BEFORE anything is sent;
     /// Err = refused with a precise reason, nothing sent.
-    pub fn submit(&mut self, now: Instant, command: LinkCommand) -> Result<Ticket, Refusal> {
+    pub fn submit(&mut self, now: Instant, command: LinkCommand<'_>) -> Result<Ticket, Refusal> {
         self.now = now;
         let ticket = Ticket(self.next_ticket);
         match &mut self.phase {

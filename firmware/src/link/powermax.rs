@@ -875,7 +875,7 @@ impl PowermaxDriver {
         &mut self,
         now: Instant,
         ticket: Ticket,
-        command: &LinkCommand,
+        command: &LinkCommand<'_>,
         core: &mut Core,
     ) -> Result<(), Refusal> {
         self.now = now;

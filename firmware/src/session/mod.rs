@@ -48,6 +48,7 @@ use plasma_protocol::cnc::{
 use plasma_protocol::hpr::{GasCode, GasPair};
 
 use crate::io::{Inputs, Interlock, IoEvent, Outputs};
+use crate::link::command::RAW_CAPACITY;
 use crate::link::{Family, HprGasFlow, LinkCommand, LinkDownReason, LinkEvent, PsLink, Ticket};
 use crate::settings::{Process, SaveError, Settings};
 use crate::time::{Duration, Instant};
@@ -643,10 +644,10 @@ impl Session {
             }
             Command::Config(config) => return self.config(ctx, config),
             Command::Raw(frame) => {
-                let Ok(bytes) = Vec::from_slice(frame.as_bytes()) else {
+                if frame.len() > RAW_CAPACITY {
                     return Some(err_line(ErrorCode::TooLong, "frame too long"));
-                };
-                return self.submit(ctx, LinkCommand::Raw(bytes), Op::Raw);
+                }
+                return self.submit(ctx, LinkCommand::Raw(frame.as_bytes()), Op::Raw);
             }
             Command::Torch(on) => {
                 if !self.sim_enabled {
@@ -661,7 +662,12 @@ impl Session {
     }
 
     /// Submit `command`; `None` (the reply waits) when the link took it.
-    fn submit(&mut self, ctx: &mut Context<'_>, command: LinkCommand, op: Op) -> Option<ReplyLine> {
+    fn submit(
+        &mut self,
+        ctx: &mut Context<'_>,
+        command: LinkCommand<'_>,
+        op: Op,
+    ) -> Option<ReplyLine> {
         match ctx.link.submit(ctx.now, command) {
             Ok(ticket) => {
                 self.pending = Some(Pending::Link { ticket, op });

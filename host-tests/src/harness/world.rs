@@ -106,7 +106,7 @@ impl World<PsLink> {
     }
 
     /// Submit a command to the link now.
-    pub fn submit(&mut self, command: LinkCommand) -> Result<Ticket, Refusal> {
+    pub fn submit(&mut self, command: LinkCommand<'_>) -> Result<Ticket, Refusal> {
         let now = self.now;
         let ticket = self.endpoint.submit(now, command)?;
         // Events of the submit (e.g. an immediate answer) belong to this instant.
@@ -133,7 +133,7 @@ impl World<PsLink> {
     /// Submit and wait for the result; panics on a refusal or a time-out.
     pub fn command(
         &mut self,
-        command: LinkCommand,
+        command: LinkCommand<'_>,
         timeout: Duration,
     ) -> Result<CommandOutput, CommandFailure> {
         let ticket = self
