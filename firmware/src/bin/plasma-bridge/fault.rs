@@ -53,9 +53,21 @@ fn fail(reason: impl FnOnce()) -> ! {
     cortex_m::peripheral::SCB::sys_reset()
 }
 
+/// The outcome is the same in every build: safe state, marker (`!BOOT reason=panic`), reset.
+/// Only the log line differs: the message and location of a panic cost ~5 KB of flash (the
+/// file path and line of every panic site and the formatting behind the messages), so the
+/// standard image logs the bare fact and a debugging build (`cargo fw --features
+/// panic-message`) says where and why.
 #[panic_handler]
 fn panic(info: &core::panic::PanicInfo) -> ! {
-    fail(|| error!("panic: {}", defmt::Display2Format(info)))
+    #[cfg(feature = "panic-message")]
+    fail(|| error!("panic: {}", defmt::Display2Format(info)));
+    #[cfg(not(feature = "panic-message"))]
+    {
+        // Unread, the PanicInfo and everything that builds it are left out of the image.
+        let _ = info;
+        fail(|| error!("panic (cargo fw --features panic-message logs where and why)"))
+    }
 }
 
 #[exception]
