@@ -15,14 +15,22 @@ use crate::flash::BoardSaver;
 use crate::ps_uart::{PsUart, describe};
 use crate::watchdog::report;
 
+/// The bridge arrives by reference: a task's arguments live in its future next to the state
+/// the body keeps across awaits, so a `Bridge` by value would take its ~8 KB of RAM twice.
 #[embassy_executor::task]
-pub async fn bridge(mut bridge: Bridge, ps: PsUart, cnc: CncUart, io: BoardIo, progress: TaskId) {
+pub async fn bridge(
+    bridge: &'static mut Bridge,
+    ps: PsUart,
+    cnc: CncUart,
+    io: BoardIo,
+    progress: TaskId,
+) {
     let clock = EmbassyClock;
     let mut supervisor = Supervisor::new(ps, cnc, cnc_uart::TX_BUFFER, io, BoardSaver);
     let mut applied: Option<PortConfig> = None;
     let mut status = Seen::default();
     loop {
-        if let Err(e) = supervisor.turn(&mut bridge, &clock).await {
+        if let Err(e) = supervisor.turn(bridge, &clock).await {
             warn!("serial: {}", e);
         }
         let now_applied = supervisor.ps().applied_config();

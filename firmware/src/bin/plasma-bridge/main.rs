@@ -108,6 +108,7 @@ mod image {
     static CNC_TX: StaticCell<[u8; cnc_uart::TX_BUFFER]> = StaticCell::new();
     static CNC_RX: StaticCell<[u8; cnc_uart::RX_BUFFER]> = StaticCell::new();
     static BOOT_TEXT: StaticCell<String<64>> = StaticCell::new();
+    static BRIDGE: StaticCell<Bridge> = StaticCell::new();
 
     /// `<reset cause>,settings:<outcome>` for the CNC port (`ID ... reset=...`,
     /// `!BOOT reason=...`).
@@ -208,7 +209,7 @@ mod image {
             (Err(e), _) | (_, Err(e)) => defmt::panic!("UART set-up: {}", e),
         };
 
-        let mut bridge = Bridge::new(settings, now());
+        let bridge = BRIDGE.init_with(|| Bridge::new(settings, now()));
         bridge.set_boot_report(now(), boot_text(&boot, loaded.outcome));
         spawner.spawn(
             bridge_task::bridge(
