@@ -138,21 +138,38 @@ pub(crate) fn parse_fixed(
     if significant > MAX_FRACTION_DIGITS {
         return Err(ParseError::TooManyDigits);
     }
-    let mut numerator: u128 = 0;
-    let mut denominator: u128 = 1;
-    for &d in fraction_digits.iter().take(significant) {
-        numerator = numerator * 10 + u128::from(d - b'0');
-        denominator *= 10;
+    // The fraction times 2^bits, in decimal: each doubling of the digits carries the next bit
+    // of the steps out of the first digit, and what stays behind is the remainder. Exact for
+    // every digit count, and no wide division (u128 arithmetic costs the board ~1 KB).
+    let mut digits = [0u8; MAX_FRACTION_DIGITS];
+    for (slot, &d) in digits
+        .iter_mut()
+        .zip(fraction_digits.iter().take(significant))
+    {
+        *slot = d - b'0';
     }
-    let scaled = numerator << bits;
-    let mut steps = u128::from(whole) << bits;
-    steps += scaled / denominator;
-    let remainder = scaled % denominator;
-    if remainder != 0 {
+    let mut fraction_steps: u64 = 0;
+    for _ in 0..bits {
+        let mut carry = 0;
+        for d in digits.iter_mut().take(significant).rev() {
+            let doubled = *d * 2 + carry;
+            *d = doubled % 10;
+            carry = doubled / 10;
+        }
+        fraction_steps = (fraction_steps << 1) | u64::from(carry);
+    }
+    let mut steps = u64::from(whole)
+        .checked_shl(bits)
+        .filter(|s| s >> bits == u64::from(whole))
+        .and_then(|s| s.checked_add(fraction_steps))
+        .ok_or(ParseError::OutOfRange)?;
+    // The remainder as a decimal fraction: zero, below one half, or at least one half.
+    let remainder = digits.first().copied().unwrap_or(0);
+    if digits.iter().any(|&d| d != 0) {
         if rounding == Rounding::Exact {
             return Err(ParseError::Inexact);
         }
-        if remainder * 2 >= denominator {
+        if remainder >= 5 {
             steps += 1;
         }
     }
@@ -388,9 +405,12 @@ impl FromStr for Pressure {
 
 #[cfg(test)]
 mod tests {
+    extern crate std;
+
     use super::*;
     use core::fmt::Write;
     use heapless::String;
+    use std::vec;
 
     fn text(value: impl fmt::Display) -> String<32> {
         let mut s = String::new();
@@ -603,5 +623,76 @@ mod tests {
         assert_eq!("0".parse::<Pressure>(), Ok(Pressure::Auto));
         assert_eq!("45".parse::<Pressure>(), Ok(Pressure::from_raw(0x1680)));
         assert_eq!("x".parse::<Pressure>(), Err(Error::Malformed));
+    }
+
+    /// The arithmetic the parser had before it doubled decimal digits: numerator and
+    /// denominator of the fraction in u128.
+    fn parse_fixed_u128(
+        text: &str,
+        bits: u32,
+        rounding: Rounding,
+    ) -> core::result::Result<i16, ParseError> {
+        let (negative, body) = match text.strip_prefix('-') {
+            Some(rest) => (true, rest),
+            None => (false, text),
+        };
+        let (whole, fraction) = body.split_once('.').unwrap_or((body, ""));
+        let whole: u128 = whole.parse().unwrap();
+        if whole > 0xFFFF {
+            return Err(ParseError::OutOfRange);
+        }
+        let fraction = fraction.trim_end_matches('0');
+        if fraction.len() > MAX_FRACTION_DIGITS {
+            return Err(ParseError::TooManyDigits);
+        }
+        let numerator: u128 = if fraction.is_empty() {
+            0
+        } else {
+            fraction.parse().unwrap()
+        };
+        let denominator = 10u128.pow(fraction.len() as u32);
+        let scaled = numerator << bits;
+        let mut steps = (whole << bits) + scaled / denominator;
+        let remainder = scaled % denominator;
+        if remainder != 0 {
+            if rounding == Rounding::Exact {
+                return Err(ParseError::Inexact);
+            }
+            if remainder * 2 >= denominator {
+                steps += 1;
+            }
+        }
+        if steps > if negative { 0x8000 } else { 0x7FFF } {
+            return Err(ParseError::OutOfRange);
+        }
+        Ok(if negative {
+            (steps as i32).wrapping_neg()
+        } else {
+            steps as i32
+        } as i16)
+    }
+
+    proptest::proptest! {
+        #[test]
+        fn parse_matches_wide_arithmetic(
+            negative in proptest::bool::ANY,
+            whole in 0u32..70_000,
+            fraction in "[0-9]{0,34}",
+            dot in proptest::bool::ANY,
+            bits in proptest::sample::select(vec![0u32, 1, 6, 7, 12, 15]),
+            exact in proptest::bool::ANY,
+        ) {
+            let rounding = if exact { Rounding::Exact } else { Rounding::Nearest };
+            let mut text = std::format!("{}{whole}", if negative { "-" } else { "" });
+            if dot && !fraction.is_empty() {
+                text.push('.');
+                text.push_str(&fraction);
+            }
+            proptest::prop_assert_eq!(
+                parse_fixed(&text, bits, rounding),
+                parse_fixed_u128(&text, bits, rounding),
+                "{}", text
+            );
+        }
     }
 }
