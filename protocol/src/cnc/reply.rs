@@ -16,13 +16,16 @@ use super::error::{ErrorCode, ParseError};
 /// What ends every reply and event line.
 pub const LINE_END: &str = "\r\n";
 
+// The writing itself goes through `dyn Write` / `dyn Display`: one copy of each routine serves
+// every value type and output, where generics would stamp out one per use (flash on the board).
+
 /// Passes text through, replacing what could split or corrupt a line.
-struct Sanitize<'w, W: Write> {
-    out: &'w mut W,
+struct Sanitize<'w> {
+    out: &'w mut dyn Write,
     keep_spaces: bool,
 }
 
-impl<W: Write> Write for Sanitize<'_, W> {
+impl Write for Sanitize<'_> {
     fn write_str(&mut self, s: &str) -> fmt::Result {
         for c in s.chars() {
             let c = match c {
@@ -37,8 +40,21 @@ impl<W: Write> Write for Sanitize<'_, W> {
     }
 }
 
-fn sanitized<W: Write>(out: &mut W, keep_spaces: bool, value: impl Display) -> fmt::Result {
+fn sanitized(out: &mut dyn Write, keep_spaces: bool, value: &dyn Display) -> fmt::Result {
     write!(Sanitize { out, keep_spaces }, "{value}")
+}
+
+fn write_field(out: &mut dyn Write, key: &str, value: &dyn Display) -> fmt::Result {
+    out.write_char(' ')?;
+    sanitized(out, false, &key)?;
+    out.write_char('=')?;
+    sanitized(out, false, value)
+}
+
+fn write_error_line(out: &mut dyn Write, code: ErrorCode, text: &dyn Display) -> fmt::Result {
+    write!(out, "ERR {code} ")?;
+    sanitized(out, true, text)?;
+    out.write_str(LINE_END)
 }
 
 /// Builds one `OK ...` or `!event ...` line.
@@ -69,22 +85,19 @@ impl<W: Write> ReplyWriter<W> {
     /// Start an event line: `!` followed by the event name.
     pub fn event(mut out: W, name: &str) -> Result<Self, fmt::Error> {
         out.write_char('!')?;
-        sanitized(&mut out, false, name)?;
+        sanitized(&mut out, false, &name)?;
         Ok(ReplyWriter { out })
     }
 
     /// Append ` key=value`.
     pub fn field(&mut self, key: &str, value: impl Display) -> fmt::Result {
-        self.out.write_char(' ')?;
-        sanitized(&mut self.out, false, key)?;
-        self.out.write_char('=')?;
-        sanitized(&mut self.out, false, value)
+        write_field(&mut self.out, key, &value)
     }
 
     /// Append ` word` (a value without a key, e.g. a command name in the `HELP` list).
     pub fn word(&mut self, word: impl Display) -> fmt::Result {
         self.out.write_char(' ')?;
-        sanitized(&mut self.out, false, word)
+        sanitized(&mut self.out, false, &word)
     }
 
     /// End the line with CR LF and give the writer back.
@@ -96,9 +109,7 @@ impl<W: Write> ReplyWriter<W> {
 
 /// Write `ERR <CODE> <text>` and CR LF.
 pub fn write_error<W: Write>(out: &mut W, code: ErrorCode, text: impl Display) -> fmt::Result {
-    write!(out, "ERR {code} ")?;
-    sanitized(out, true, text)?;
-    out.write_str(LINE_END)
+    write_error_line(out, code, &text)
 }
 
 /// Write the `ERR` line for a line that did not parse.
