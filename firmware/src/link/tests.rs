@@ -932,7 +932,9 @@ fn legacy_settings_use_the_three_force_registers() {
 #[test]
 fn raw_modbus_reads_are_forwarded_and_unlisted_writes_refused() {
     let (mut bench, mut fake) = sync_bench();
-    let raw = LinkCommand::Raw;
+    fn raw(bytes: &[u8]) -> LinkCommand<'_> {
+        LinkCommand::Raw(bytes)
+    }
     let now = bench.now;
     assert_eq!(
         bench
@@ -1154,7 +1156,9 @@ fn maxpro_set_process_needs_state_2_or_3() {
 #[test]
 fn hpr_raw_commands_outside_the_allow_list_are_refused() {
     let mut bench = hpr_bench("HYPERFORMANCE400XD");
-    let raw = LinkCommand::Raw;
+    fn raw(bytes: &[u8]) -> LinkCommand<'_> {
+        LinkCommand::Raw(bytes)
+    }
     for id in [120u16, 119, 102, 101, 71, 103, 85, 86, 87, 999] {
         let frame = hf(id, "");
         assert_eq!(
