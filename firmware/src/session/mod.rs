@@ -181,8 +181,18 @@ impl Output {
     fn poll(&mut self) -> Option<&[u8]> {
         let taken = core::mem::take(&mut self.taken);
         let len = self.buf.len();
-        self.buf.copy_within(taken.min(len).., 0);
-        self.buf.truncate(len - taken.min(len));
+        let taken = taken.min(len);
+        // What arrived since the last poll moves to the front. A forward byte copy (the
+        // destination is below the source), not `copy_within`: that is a memmove, and keeping
+        // memmove out of the image saves 1.5 KB of flash. Rarely more than one reply moves.
+        for from in taken..len {
+            if let Some(&byte) = self.buf.get(from)
+                && let Some(slot) = self.buf.get_mut(from - taken)
+            {
+                *slot = byte;
+            }
+        }
+        self.buf.truncate(len - taken);
         if self.buf.is_empty() {
             return None;
         }
