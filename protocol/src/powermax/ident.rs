@@ -50,37 +50,48 @@ pub struct TorchType {
     pub lead: LeadLength,
 }
 
-/// Table 3, all 6 rows: (id, torch, description).
+/// The manual's description for a host tool; empty without the `descriptions` feature (the
+/// board never prints these, so its image leaves them out).
+const fn host_text(text: &'static str) -> &'static str {
+    if cfg!(feature = "descriptions") {
+        text
+    } else {
+        ""
+    }
+}
+
+/// Table 3, all 6 rows: (id, torch, description; the description is empty without the
+/// `descriptions` feature).
 pub static TORCH_TYPES: [(u8, TorchType, &str); 6] = [
     (
         0x00,
         torch(TorchKind::Hand, LeadLength::Upto7m6),
-        "Hand torch with 7.6 m (25-foot) lead",
+        host_text("Hand torch with 7.6 m (25-foot) lead"),
     ),
     (
         0x01,
         torch(TorchKind::Hand, LeadLength::Upto15m),
-        "Hand torch with 15 m (50-foot) lead",
+        host_text("Hand torch with 15 m (50-foot) lead"),
     ),
     (
         0x02,
         torch(TorchKind::Hand, LeadLength::Upto23m),
-        "Hand torch with 23 m (75-foot) lead",
+        host_text("Hand torch with 23 m (75-foot) lead"),
     ),
     (
         0x04,
         torch(TorchKind::Machine, LeadLength::Upto7m6),
-        "Machine torch with 4.6 m - 7.6 m (15-foot - 25-foot) lead",
+        host_text("Machine torch with 4.6 m - 7.6 m (15-foot - 25-foot) lead"),
     ),
     (
         0x05,
         torch(TorchKind::Machine, LeadLength::Upto15m),
-        "Machine torch with 10.7 m - 15 m (35-foot - 50-foot) lead",
+        host_text("Machine torch with 10.7 m - 15 m (35-foot - 50-foot) lead"),
     ),
     (
         0x06,
         torch(TorchKind::Machine, LeadLength::Upto23m),
-        "Machine torch with 23 m (75-foot) lead",
+        host_text("Machine torch with 23 m (75-foot) lead"),
     ),
 ];
 
@@ -106,6 +117,7 @@ impl TorchType {
     }
 
     /// Table 3's description.
+    #[cfg(feature = "descriptions")]
     pub fn description(self) -> &'static str {
         TORCH_TYPES
             .iter()
@@ -141,57 +153,58 @@ pub enum SyncModel {
     Powermax45_Csa480,
 }
 
-/// Table 4, all 10 rows: (id, model, description).
+/// Table 4, all 10 rows: (id, model, description; the description is empty without the
+/// `descriptions` feature).
 pub static SYNC_MODELS: [(u8, SyncModel, &str); 10] = [
     (
         0x00,
         SyncModel::Powermax65_Csa200_600,
-        "Powermax65 SYNC 200 V - 600 V CSA",
+        host_text("Powermax65 SYNC 200 V - 600 V CSA"),
     ),
     (
         0x01,
         SyncModel::Powermax65_Ccc380_Ce400,
-        "Powermax65 SYNC 380 V CCC / 400 V CE",
+        host_text("Powermax65 SYNC 380 V CCC / 400 V CE"),
     ),
     (
         0x02,
         SyncModel::Powermax85_Csa200_600,
-        "Powermax85 SYNC 200 V - 600 V CSA",
+        host_text("Powermax85 SYNC 200 V - 600 V CSA"),
     ),
     (
         0x03,
         SyncModel::Powermax85_Ccc380_Ce400,
-        "Powermax85 SYNC 380 V CCC / 400 V CE",
+        host_text("Powermax85 SYNC 380 V CCC / 400 V CE"),
     ),
     (
         0x08,
         SyncModel::Powermax105_Csa200_600,
-        "Powermax105 SYNC 200 V - 600 V CSA",
+        host_text("Powermax105 SYNC 200 V - 600 V CSA"),
     ),
     (
         0x09,
         SyncModel::Powermax105_Ce230_400,
-        "Powermax105 SYNC 230 V - 400 V CE",
+        host_text("Powermax105 SYNC 230 V - 400 V CE"),
     ),
     (
         0x0A,
         SyncModel::Powermax105_Ccc380_Ce400,
-        "Powermax105 SYNC 380 V CCC / 400 V CE",
+        host_text("Powermax105 SYNC 380 V CCC / 400 V CE"),
     ),
     (
         0x11,
         SyncModel::Powermax45_Csa_Ce230,
-        "Powermax45 SYNC 230 V CSA and CE",
+        host_text("Powermax45 SYNC 230 V CSA and CE"),
     ),
     (
         0x12,
         SyncModel::Powermax45_Ce400,
-        "Powermax45 SYNC 400 V CE",
+        host_text("Powermax45 SYNC 400 V CE"),
     ),
     (
         0x13,
         SyncModel::Powermax45_Csa480,
-        "Powermax45 SYNC 480 V CSA",
+        host_text("Powermax45 SYNC 480 V CSA"),
     ),
 ];
 
@@ -213,6 +226,7 @@ impl SyncModel {
     }
 
     /// Table 4's description.
+    #[cfg(feature = "descriptions")]
     pub fn description(self) -> &'static str {
         SYNC_MODELS
             .iter()
@@ -268,6 +282,10 @@ mod tests {
         for (id, m, d) in SYNC_MODELS.iter() {
             assert_eq!(SyncModel::from_id(*id), Some(*m));
             assert_eq!(m.id(), *id);
+            if !cfg!(feature = "descriptions") {
+                assert_eq!(*d, "");
+                continue;
+            }
             assert!(d.starts_with("Powermax"));
             let size = m.size();
             let name_size = match size {
