@@ -65,7 +65,7 @@ fn writes_since(world: &World, mark: usize) -> Vec<Vec<u8>> {
         .collect()
 }
 
-fn apply(mode: OperatingMode, current: u16, pressure: Pressure) -> LinkCommand {
+fn apply(mode: OperatingMode, current: u16, pressure: Pressure) -> LinkCommand<'static> {
     LinkCommand::ApplySettings {
         mode,
         current: amps(current),
