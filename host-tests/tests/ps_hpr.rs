@@ -201,7 +201,7 @@ fn factory_only_dangerous_and_line_control_commands_never_reach_the_unit() {
         }),
         LinkCommand::RefreshSlowData,
     ] {
-        let result = world.command(command.clone(), secs(5));
+        let result = world.command(command, secs(5));
         assert!(result.is_ok(), "{command:?}: {result:?}");
     }
     world.run_for(secs(3));

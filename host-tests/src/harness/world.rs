@@ -137,7 +137,7 @@ impl World<PsLink> {
         timeout: Duration,
     ) -> Result<CommandOutput, CommandFailure> {
         let ticket = self
-            .submit(command.clone())
+            .submit(command)
             .unwrap_or_else(|r| panic!("{command:?} refused: {r}"));
         self.wait_command(ticket, timeout).unwrap_or_else(|t| {
             panic!("{command:?} did not complete: {t}\n{}", self.trace.tail(20))
