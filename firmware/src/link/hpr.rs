@@ -17,7 +17,7 @@ use plasma_protocol::hpr::{
 use super::Core;
 use super::command::{HprGasFlow, HprValue, LinkCommand, Refusal};
 use super::event::{CommandFailure, CommandOutput, LinkEvent, SettingsFailure, Ticket};
-use super::powermax::SLOW_RETRY_FIRST;
+use super::slow::SlowData;
 use super::status::{ActiveFault, Family};
 use super::transaction::TransactionError;
 use crate::time::{Duration, Instant};
@@ -82,6 +82,7 @@ impl HprJob {
 
 const SLOW_ERROR_LOG: u8 = 1;
 const SLOW_TIMERS: u8 = 2;
+const SLOW_ALL: u8 = SLOW_ERROR_LOG | SLOW_TIMERS;
 
 /// Wait before re-applying kept settings again after a re-apply failed.
 pub const REAPPLY_BACKOFF: Duration = Duration::from_secs(5);
@@ -192,10 +193,7 @@ pub struct HprDriver {
     system: SystemId,
     next_poll_at: Instant,
     pause_until: Option<Instant>,
-    slow_pending: u8,
-    slow_error: Option<TransactionError>,
-    slow_tickets: Vec<Ticket, QUEUE_CAPACITY>,
-    next_slow_at: Instant,
+    slow: SlowData,
     queue: Deque<(Ticket, HprJob), QUEUE_CAPACITY>,
     active: Option<ActiveJob>,
     /// Kept settings still to re-apply in this re-apply run.
@@ -205,10 +203,6 @@ pub struct HprDriver {
     reapply_not_before: Instant,
     /// The last transaction started was a poll (the next turn goes to due slow data).
     polled_last: bool,
-    /// Slow items whose read failed on the line, read again from `slow_retry_at`.
-    slow_retry: u8,
-    slow_retry_at: Instant,
-    slow_backoff: Duration,
     now: Instant,
 }
 
@@ -253,23 +247,17 @@ impl HprDriver {
             system,
             next_poll_at: now,
             pause_until: None,
-            slow_pending: if maxpro {
-                0
-            } else {
-                SLOW_ERROR_LOG | SLOW_TIMERS
-            },
-            slow_error: None,
-            slow_tickets: Vec::new(),
-            next_slow_at: now + core.config.slow_data_interval,
+            slow: SlowData::new(
+                if maxpro { 0 } else { SLOW_ALL },
+                now,
+                core.config.slow_data_interval,
+            ),
             queue: Deque::new(),
             active: None,
             reapply: Deque::new(),
             reapply_pending: !core.hpr_kept.is_empty(),
             reapply_not_before: now,
             polled_last: false,
-            slow_retry: 0,
-            slow_retry_at: now,
-            slow_backoff: SLOW_RETRY_FIRST,
             now,
         }
     }
@@ -323,16 +311,13 @@ impl HprDriver {
         if self.active.is_some()
             || !self.queue.is_empty()
             || !self.reapply.is_empty()
-            || self.slow_pending != 0
+            || self.slow.pending() != 0
         {
             return Some(self.now);
         }
-        let mut at = self.next_poll_at.min(self.next_slow_at);
+        let mut at = self.next_poll_at.min(self.slow.wake_at());
         if self.reapply_pending && self.reapply_allowed(core) {
             at = at.min(self.reapply_not_before.max(self.now));
-        }
-        if self.slow_retry != 0 {
-            at = at.min(self.slow_retry_at);
         }
         Some(at)
     }
@@ -472,20 +457,15 @@ impl HprDriver {
         now: Instant,
         core: &Core,
     ) -> Option<(HprPurpose, HprExpect, Vec<u8, RAW_HPR_CAPACITY>)> {
-        if now >= self.next_slow_at {
-            self.next_slow_at = now + core.config.slow_data_interval;
-            if !self.maxpro() {
-                self.slow_pending = SLOW_ERROR_LOG | SLOW_TIMERS;
-            }
+        if self.slow.refresh_due(now, core.config.slow_data_interval) && !self.maxpro() {
+            self.slow.request(SLOW_ALL);
         }
-        if self.slow_retry != 0 && now >= self.slow_retry_at {
-            self.slow_pending |= self.slow_retry;
-            self.slow_retry = 0;
-        }
-        if self.slow_pending & SLOW_ERROR_LOG != 0 {
+        self.slow.take_due_retries(now);
+        let pending = self.slow.pending();
+        if pending & SLOW_ERROR_LOG != 0 {
             return typed(HprPurpose::SlowErrorLog, Request::ReadErrorLog);
         }
-        if self.slow_pending & SLOW_TIMERS != 0 {
+        if pending & SLOW_TIMERS != 0 {
             return typed(HprPurpose::SlowTimers, Request::GetTimerCounter);
         }
         None
@@ -723,23 +703,10 @@ impl HprDriver {
     fn update_error(&mut self, error: ErrorCode, core: &mut Core) {
         let new = error.is_error().then_some(ActiveFault::Hpr(error));
         core.status.hpr.error = Some(error);
-        if core.status.active_fault == new {
-            return;
-        }
-        if let Some(old) = core.status.active_fault {
-            core.emit(LinkEvent::FaultCleared { code: old });
-        }
-        if let Some(fault) = new {
-            core.emit(LinkEvent::FaultRaised {
-                code: fault,
-                action_required: fault.action_required(),
-            });
-        }
-        core.status.active_fault = new;
+        core.set_active_fault(new);
     }
 
-    /// Like the Powermax driver: a read that failed on the line is tried again soon, with a
-    /// doubling wait; a final answer (501) waits for the next refresh.
+    /// A slow-data item is read (`error` = None) or failed for good (see [`SlowData::finish`]).
     fn slow_done(
         &mut self,
         now: Instant,
@@ -747,35 +714,8 @@ impl HprDriver {
         error: Option<TransactionError>,
         core: &mut Core,
     ) {
-        self.slow_pending &= !bit;
-        match error {
-            Some(e) if e.is_retryable() => {
-                if self.slow_retry == 0 {
-                    self.slow_retry_at = now + self.slow_backoff;
-                    self.slow_backoff =
-                        (self.slow_backoff + self.slow_backoff).min(core.config.slow_data_interval);
-                }
-                self.slow_retry |= bit;
-            }
-            Some(_) => {}
-            None => self.slow_backoff = SLOW_RETRY_FIRST,
-        }
-        if error.is_some() {
-            self.slow_error = error;
-        }
-        if self.slow_pending == 0 {
-            let result = match self.slow_error.take() {
-                None => Ok(CommandOutput::Done),
-                Some(e) => Err(CommandFailure::Transaction(e)),
-            };
-            for ticket in self.slow_tickets.iter() {
-                core.emit(LinkEvent::CommandDone {
-                    ticket: *ticket,
-                    result,
-                });
-            }
-            self.slow_tickets.clear();
-        }
+        let interval = core.config.slow_data_interval;
+        self.slow.finish(now, bit, error, interval, core);
     }
 
     /// Validate and queue a command.
@@ -914,11 +854,7 @@ impl HprDriver {
                     });
                     return Ok(());
                 }
-                self.slow_tickets
-                    .push(ticket)
-                    .map_err(|_| Refusal::QueueFull)?;
-                self.slow_pending |= SLOW_ERROR_LOG | SLOW_TIMERS;
-                return Ok(());
+                return self.slow.request_for(ticket, SLOW_ALL);
             }
             LinkCommand::Raw(bytes) => {
                 let job = parse_raw(bytes)?;
@@ -942,32 +878,11 @@ impl HprDriver {
 
     /// The link went down: every pending command fails.
     pub fn abort(&mut self, core: &mut Core) {
-        let failed = Err(CommandFailure::LinkDown);
-        if let Some(ActiveJob {
-            ticket: Some(ticket),
-            ..
-        }) = self.active.take()
-        {
-            core.emit(LinkEvent::CommandDone {
-                ticket,
-                result: failed,
-            });
-        }
+        let active = self.active.take().and_then(|active| active.ticket);
+        core.fail_commands(active, &mut self.queue);
         // Kept settings stay (in the core) and are re-applied when the unit is back.
         self.reapply.clear();
-        while let Some((ticket, _)) = self.queue.pop_front() {
-            core.emit(LinkEvent::CommandDone {
-                ticket,
-                result: failed,
-            });
-        }
-        for ticket in self.slow_tickets.iter() {
-            core.emit(LinkEvent::CommandDone {
-                ticket: *ticket,
-                result: failed,
-            });
-        }
-        self.slow_tickets.clear();
+        self.slow.fail_all(core);
     }
 }
 

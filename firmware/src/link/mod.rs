@@ -65,7 +65,7 @@
 //!
 //! Slow data (limits first) is read at start, on a cartridge change, on request and at each
 //! refresh. A read that fails on the line is tried again soon, at the first turn after
-//! [`powermax::SLOW_RETRY_FIRST`], the wait doubling with each further failure up to the
+//! [`slow::SLOW_RETRY_FIRST`], the wait doubling with each further failure up to the
 //! slow-data interval; an exception waits for the next refresh.
 //!
 //! ```
@@ -89,6 +89,7 @@ pub mod hpr;
 pub mod legacy;
 pub mod modbus;
 pub mod powermax;
+pub mod slow;
 pub mod status;
 pub mod sync;
 pub mod transaction;
@@ -163,6 +164,41 @@ impl Core {
     /// Queue an event.
     pub fn emit(&mut self, event: LinkEvent) {
         self.events.push(event, &mut self.diagnostics);
+    }
+
+    /// The link went down: the active command (`active`, when there is one) and every queued
+    /// one fail.
+    pub fn fail_commands<J, const N: usize>(
+        &mut self,
+        active: Option<Ticket>,
+        queue: &mut heapless::Deque<(Ticket, J), N>,
+    ) {
+        let queued = core::iter::from_fn(|| queue.pop_front().map(|(ticket, _)| ticket));
+        for ticket in active.into_iter().chain(queued) {
+            self.emit(LinkEvent::CommandDone {
+                ticket,
+                result: Err(CommandFailure::LinkDown),
+            });
+        }
+    }
+
+    /// The unit's active fault is now `new`: a change is reported (the old fault cleared,
+    /// the new one raised). False when nothing changed.
+    pub fn set_active_fault(&mut self, new: Option<ActiveFault>) -> bool {
+        if self.status.active_fault == new {
+            return false;
+        }
+        if let Some(old) = self.status.active_fault {
+            self.emit(LinkEvent::FaultCleared { code: old });
+        }
+        if let Some(fault) = new {
+            self.emit(LinkEvent::FaultRaised {
+                code: fault,
+                action_required: fault.action_required(),
+            });
+        }
+        self.status.active_fault = new;
+        true
     }
 }
 

@@ -1,7 +1,7 @@
 //! The Powermax driver (SYNC and legacy): polling, slow data, settings and commands over
 //! Modbus ASCII. Family specifics live in [`super::sync`] and [`super::legacy`].
 
-use heapless::{Deque, Vec};
+use heapless::Deque;
 use plasma_protocol::modbus_ascii::{self, Request, Response};
 use plasma_protocol::powermax::sync::{Cartridge, FaultLog, Identification, PsCounters};
 use plasma_protocol::powermax::{
@@ -14,6 +14,7 @@ use super::config::ProtocolChoice;
 use super::event::{CommandFailure, CommandOutput, LinkEvent, SettingsFailure, Ticket};
 use super::legacy;
 use super::modbus::{self, BlockPart, BlockPoller, MbRequest, read_values};
+use super::slow::SlowData;
 use super::status::{ActiveFault, Family, Limits, Model, PowermaxSettings};
 use super::sync::{self, SlowItem};
 use super::transaction::TransactionError;
@@ -26,9 +27,6 @@ pub const QUICK_RESTART_BLACKOUT: Duration = Duration::from_secs(2);
 pub const UID_CHECK_INTERVAL: Duration = Duration::from_secs(1);
 /// Wait before re-applying kept settings again after a re-apply failed.
 pub const REAPPLY_BACKOFF: Duration = Duration::from_secs(5);
-/// First wait before a slow-data read that failed on the line is tried again (doubling with
-/// each further failure, up to the slow-data interval).
-pub const SLOW_RETRY_FIRST: Duration = Duration::from_millis(200);
 /// Commands waiting behind the active one.
 const QUEUE_CAPACITY: usize = 4;
 
@@ -155,10 +153,7 @@ pub struct PowermaxDriver {
     poll_started: Instant,
     next_poll_at: Instant,
     cartridge: BlockPoller,
-    slow_pending: u8,
-    slow_error: Option<TransactionError>,
-    slow_tickets: Vec<Ticket, QUEUE_CAPACITY>,
-    next_slow_at: Instant,
+    slow: SlowData,
     next_uid_check_at: Instant,
     queue: Deque<(Ticket, Job), QUEUE_CAPACITY>,
     active: Option<Active>,
@@ -169,11 +164,6 @@ pub struct PowermaxDriver {
     identify_refused: bool,
     /// The last transaction started was a poll (the next turn goes to other due work).
     polled_last: bool,
-    /// Slow items whose read failed on the line, read again from `slow_retry_at`.
-    slow_retry: u8,
-    slow_retry_at: Instant,
-    /// Wait before the next retry of failed slow items.
-    slow_backoff: Duration,
     now: Instant,
 }
 
@@ -191,13 +181,14 @@ impl PowermaxDriver {
             poll_started: now,
             next_poll_at: now,
             cartridge: BlockPoller::new(plasma_protocol::powermax::sync::CARTRIDGE_BLOCK),
-            slow_pending: match variant {
-                Variant::Sync => SlowItem::ALL_ITEMS,
-                Variant::Legacy => 0,
-            },
-            slow_error: None,
-            slow_tickets: Vec::new(),
-            next_slow_at: now + core.config.slow_data_interval,
+            slow: SlowData::new(
+                match variant {
+                    Variant::Sync => SlowItem::ALL_ITEMS,
+                    Variant::Legacy => 0,
+                },
+                now,
+                core.config.slow_data_interval,
+            ),
             next_uid_check_at: now + UID_CHECK_INTERVAL,
             queue: Deque::new(),
             active: None,
@@ -206,9 +197,6 @@ impl PowermaxDriver {
             blackout_until: None,
             identify_refused: false,
             polled_last: false,
-            slow_retry: 0,
-            slow_retry_at: now,
-            slow_backoff: SLOW_RETRY_FIRST,
             now,
         }
     }
@@ -247,14 +235,11 @@ impl PowermaxDriver {
         let busy = self.poll.in_cycle()
             || self.active.is_some()
             || !self.queue.is_empty()
-            || self.slow_pending != 0;
+            || self.slow.pending() != 0;
         if busy {
             return Some(self.now);
         }
-        let mut at = self.next_poll_at.min(self.next_slow_at);
-        if self.slow_retry != 0 {
-            at = at.min(self.slow_retry_at);
-        }
+        let mut at = self.next_poll_at.min(self.slow.wake_at());
         // The UID check needs a cartridge read first (slow data, retried on its own).
         if self.variant == Variant::Sync && core.status.cartridge.is_some() {
             at = at.min(self.next_uid_check_at);
@@ -319,10 +304,7 @@ impl PowermaxDriver {
         now: Instant,
         core: &mut Core,
     ) -> Option<(MbPurpose, MbRequest, Option<u8>)> {
-        if self.slow_retry != 0 && now >= self.slow_retry_at {
-            self.slow_pending |= self.slow_retry;
-            self.slow_retry = 0;
-        }
+        self.slow.take_due_retries(now);
         if let Some(request) = self.slow_request() {
             return Some(request);
         }
@@ -333,11 +315,10 @@ impl PowermaxDriver {
             self.next_uid_check_at = now + UID_CHECK_INTERVAL;
             return Some((MbPurpose::UidCheck, sync::read_uid(), None));
         }
-        if now >= self.next_slow_at {
-            self.next_slow_at = now + core.config.slow_data_interval;
+        if self.slow.refresh_due(now, core.config.slow_data_interval) {
             match self.variant {
                 Variant::Sync => {
-                    self.slow_pending |= SlowItem::ALL_ITEMS;
+                    self.slow.request(SlowItem::ALL_ITEMS);
                     return self.slow_request();
                 }
                 Variant::Legacy if self.wants_identify(core) => {
@@ -454,7 +435,7 @@ impl PowermaxDriver {
     fn slow_request(&mut self) -> Option<(MbPurpose, MbRequest, Option<u8>)> {
         let item = SlowItem::ALL
             .into_iter()
-            .find(|item| self.slow_pending & item.bit() != 0)?;
+            .find(|item| self.slow.pending() & item.bit() != 0)?;
         match item.span() {
             Some(span) => Some((MbPurpose::Slow(item), sync::read(span), None)),
             None => {
@@ -526,7 +507,7 @@ impl PowermaxDriver {
                     && uid != known.uid
                 {
                     // The cartridge block read emits CartridgeChanged with the new data.
-                    self.slow_pending |= SlowItem::CARTRIDGE_ITEMS;
+                    self.slow.request(SlowItem::CARTRIDGE_ITEMS);
                 }
             }
             MbPurpose::Active => self.advance_active(now, response, raw_len, core),
@@ -635,21 +616,10 @@ impl PowermaxDriver {
 
     fn update_fault(&mut self, now: Instant, code: FaultCode, core: &mut Core) {
         let new = (!code.is_none()).then_some(ActiveFault::Powermax(code));
-        if core.status.active_fault == new {
-            return;
+        if core.set_active_fault(new) {
+            // Cartridge faults come and go with cartridge changes: look at the UID soon.
+            self.next_uid_check_at = now;
         }
-        if let Some(old) = core.status.active_fault {
-            core.emit(LinkEvent::FaultCleared { code: old });
-        }
-        if let Some(fault) = new {
-            core.emit(LinkEvent::FaultRaised {
-                code: fault,
-                action_required: fault.action_required(),
-            });
-        }
-        core.status.active_fault = new;
-        // Cartridge faults come and go with cartridge changes: look at the UID soon.
-        self.next_uid_check_at = now;
     }
 
     /// Settings differ from the kept ones while the bridge holds remote control: the unit
@@ -693,10 +663,7 @@ impl PowermaxDriver {
         self.slow_done(now, SlowItem::Cartridge, None, core);
     }
 
-    /// A slow-data item is read (`error` = None) or failed for good. A failure on the line
-    /// is read again soon: at the first turn after [`SLOW_RETRY_FIRST`], the wait doubling
-    /// with each failure up to the slow-data interval. A final answer (an exception) waits
-    /// for the next refresh.
+    /// A slow-data item is read (`error` = None) or failed for good (see [`SlowData::finish`]).
     fn slow_done(
         &mut self,
         now: Instant,
@@ -704,35 +671,8 @@ impl PowermaxDriver {
         error: Option<TransactionError>,
         core: &mut Core,
     ) {
-        self.slow_pending &= !item.bit();
-        match error {
-            Some(e) if e.is_retryable() => {
-                if self.slow_retry == 0 {
-                    self.slow_retry_at = now + self.slow_backoff;
-                    self.slow_backoff =
-                        (self.slow_backoff + self.slow_backoff).min(core.config.slow_data_interval);
-                }
-                self.slow_retry |= item.bit();
-            }
-            Some(_) => {}
-            None => self.slow_backoff = SLOW_RETRY_FIRST,
-        }
-        if error.is_some() {
-            self.slow_error = error;
-        }
-        if self.slow_pending == 0 {
-            let result = match self.slow_error.take() {
-                None => Ok(CommandOutput::Done),
-                Some(e) => Err(CommandFailure::Transaction(e)),
-            };
-            for ticket in self.slow_tickets.iter() {
-                core.emit(LinkEvent::CommandDone {
-                    ticket: *ticket,
-                    result,
-                });
-            }
-            self.slow_tickets.clear();
-        }
+        let interval = core.config.slow_data_interval;
+        self.slow.finish(now, item.bit(), error, interval, core);
     }
 
     fn start_blackout(&mut self, now: Instant, core: &mut Core) {
@@ -743,7 +683,7 @@ impl PowermaxDriver {
         self.next_poll_at = until;
         // The restart may come with another cartridge: read its data again afterwards.
         if self.variant == Variant::Sync {
-            self.slow_pending |= SlowItem::ALL_ITEMS;
+            self.slow.request(SlowItem::ALL_ITEMS);
         }
     }
 
@@ -924,11 +864,7 @@ impl PowermaxDriver {
                     });
                     return Ok(());
                 }
-                self.slow_tickets
-                    .push(ticket)
-                    .map_err(|_| Refusal::QueueFull)?;
-                self.slow_pending |= SlowItem::ALL_ITEMS;
-                return Ok(());
+                return self.slow.request_for(ticket, SlowItem::ALL_ITEMS);
             }
             LinkCommand::Raw(bytes) => {
                 Job::Raw(parse_raw(bytes, core.config.node_address, family)?)
@@ -942,30 +878,9 @@ impl PowermaxDriver {
 
     /// The link went down: every pending command fails.
     pub fn abort(&mut self, core: &mut Core) {
-        let failed = Err(CommandFailure::LinkDown);
-        if let Some(Active {
-            ticket: Some(ticket),
-            ..
-        }) = self.active.take()
-        {
-            core.emit(LinkEvent::CommandDone {
-                ticket,
-                result: failed,
-            });
-        }
-        while let Some((ticket, _)) = self.queue.pop_front() {
-            core.emit(LinkEvent::CommandDone {
-                ticket,
-                result: failed,
-            });
-        }
-        for ticket in self.slow_tickets.iter() {
-            core.emit(LinkEvent::CommandDone {
-                ticket: *ticket,
-                result: failed,
-            });
-        }
-        self.slow_tickets.clear();
+        let active = self.active.take().and_then(|active| active.ticket);
+        core.fail_commands(active, &mut self.queue);
+        self.slow.fail_all(core);
     }
 }
 
