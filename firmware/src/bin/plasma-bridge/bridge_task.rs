@@ -1,7 +1,7 @@
 //! The bridge task (thread mode): `plasma_firmware::supervisor::Supervisor` around the
 //! `Bridge`, over the PS UART, the CNC UART, the I/O task and the settings task.
 
-use defmt::{info, warn};
+use defmt::{debug, info, warn};
 use plasma_firmware::bridge::Bridge;
 use plasma_firmware::link::UnitStatus;
 use plasma_firmware::port::PortConfig;
@@ -37,7 +37,7 @@ pub async fn bridge(
         if now_applied != applied {
             applied = now_applied;
             if let Some(config) = now_applied {
-                info!("PS UART: {} baud {=str}", config.baud, describe(config));
+                debug!("PS UART: {} baud {=str}", config.baud, describe(config));
             }
         }
         status.log_changes(bridge.status());

@@ -82,7 +82,7 @@ async fn io_task(
     let (io_config, input_config) = config;
     let mut io = DiscreteIo::new(io_config, input_config, now(), pins.levels());
     outputs.drive(io.outputs());
-    info!(
+    debug!(
         "I/O: start gap {} ms, transfer time-out {} ms, ARC_OK debounce {} us, link required: {}",
         io_config.effective_start_gap().as_millis(),
         io_config.transfer_timeout.as_millis(),
@@ -106,7 +106,7 @@ async fn io_task(
             Either4::Third(supply) => io.on_supply(now, supply),
             Either4::Fourth((io_config, input_config)) => {
                 if io.reconfigure(now, io_config, input_config, pins.levels()) {
-                    warn!(
+                    info!(
                         "I/O: new settings: start gap {} ms, transfer time-out {} ms, link required {=bool}",
                         io_config.effective_start_gap().as_millis(),
                         io_config.transfer_timeout.as_millis(),
@@ -202,7 +202,7 @@ impl IoExchange for BoardIo {
     }
 
     fn send_supply(&mut self, supply: SupplyState) {
-        info!(
+        debug!(
             "supply: link {=bool}, ready {=bool}, fault {=bool} (requires action {=bool})",
             supply.link_up, supply.unit_ready, supply.fault_active, supply.fault_requires_action
         );

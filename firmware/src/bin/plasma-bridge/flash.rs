@@ -4,7 +4,7 @@ use core::future::Future;
 use core::ops::Range;
 use core::sync::atomic::Ordering;
 
-use defmt::{error, info, warn};
+use defmt::{debug, error, info, warn};
 use embassy_futures::select::{Either, select};
 use embassy_stm32::flash::{Async, Flash};
 use embassy_sync::blocking_mutex::raw::CriticalSectionRawMutex;
@@ -77,7 +77,7 @@ pub async fn load(store: Option<&mut Store>) -> LoadedSettings<Settings> {
     if loaded.outcome.is_problem() {
         warn!("settings: {=str}", loaded.outcome.as_str());
     } else {
-        info!("settings: {=str}", loaded.outcome.as_str());
+        debug!("settings: {=str}", loaded.outcome.as_str());
     }
     loaded
 }
