@@ -7,7 +7,7 @@ use plasma_protocol::powermax::sync::PermittedModes;
 use plasma_protocol::powermax::{Amps, FaultCode, OperatingMode, Pressure, Psi};
 
 use super::status::Family;
-use crate::time::Instant;
+use crate::time::{Decimal, Instant};
 
 /// Longest RAW frame accepted (a Modbus ASCII frame is at most 513 characters); the session
 /// refuses a longer one before it reaches the link.
@@ -237,11 +237,9 @@ impl fmt::Display for Refusal {
                 None => f.write_str("quick restart needs fault 0-50-0, no fault active"),
             },
             Refusal::Blackout { until } => {
-                write!(
-                    f,
-                    "quiet after quick restart until {} ms",
-                    until.as_millis()
-                )
+                // (Decimal: no 64-bit division in the board image.)
+                let until = Decimal(until.as_millis());
+                write!(f, "quiet after quick restart until {until} ms")
             }
             Refusal::QueueFull => f.write_str("too many commands waiting"),
             Refusal::HprValueOutOfRange {

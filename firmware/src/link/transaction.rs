@@ -28,7 +28,7 @@
 use heapless::Vec;
 use plasma_protocol::modbus_ascii::ExceptionCode;
 
-use crate::time::{Duration, Instant};
+use crate::time::{Duration, Instant, div_rem_u16};
 
 /// Longest frame a transaction can hold: a Modbus ASCII frame is at most
 /// 1 + 2 + 2 + 2x252 + 2 + 2 = 513 characters; HPR frames are far shorter.
@@ -93,12 +93,12 @@ impl RetrySpacing {
                 let waits_us = timeout_us.saturating_mul(u64::from(retries));
                 let budget_us = BLACKOUT_SPAN.as_micros().saturating_sub(waits_us);
                 // Weights 1, 2, 4, ... sum to 2^r - 1; attempt k has used the first k of them.
-                let total_weight = (1u64 << retries).saturating_sub(1).max(1);
-                let used_weight = (1u64 << attempt).saturating_sub(1);
-                let gaps_us = budget_us
-                    .saturating_mul(used_weight)
-                    .div_ceil(total_weight)
-                    .min(budget_us);
+                // (At most 16 retries: the total weight fits 16 bits, a cheap division.)
+                let total_weight = ((1u32 << retries) - 1).max(1) as u16;
+                let used_weight = (1u64 << attempt) - 1;
+                let (whole, rest) =
+                    div_rem_u16(budget_us.saturating_mul(used_weight), total_weight);
+                let gaps_us = whole.saturating_add(u64::from(rest != 0)).min(budget_us);
                 Duration::from_micros(
                     timeout_us
                         .saturating_mul(u64::from(attempt))

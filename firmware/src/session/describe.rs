@@ -308,7 +308,7 @@ pub fn write_refusal<W: Write>(
             ErrorCode::Busy,
             format_args!(
                 "the unit restarts: quiet for another {} ms",
-                until.saturating_since(now).as_millis()
+                until.saturating_since(now).as_millis_u32()
             ),
         ),
         Refusal::QueueFull => write_error(out, ErrorCode::Busy, "the link's command queue is full"),

@@ -912,7 +912,7 @@ impl Session {
             IoEvent::StartDelayed { until } => write!(
                 l,
                 "!START DELAYED ms={}\r\n",
-                until.saturating_since(now).as_millis()
+                until.saturating_since(now).as_millis_u32()
             ),
             IoEvent::StuckTorchOnAtPowerUp => write!(
                 l,

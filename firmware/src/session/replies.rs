@@ -273,7 +273,7 @@ pub(super) fn complete(
                 .link
                 .status()
                 .restart_blackout_until
-                .map(|until| until.saturating_since(ctx.now).as_millis());
+                .map(|until| until.saturating_since(ctx.now).as_millis_u32());
             ok_line(|w| {
                 w.field("restart", "done")?;
                 w.field("quiet_ms", OrDash(quiet))

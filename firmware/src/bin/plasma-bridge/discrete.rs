@@ -24,7 +24,7 @@ use plasma_firmware::discrete::DiscreteIo;
 use plasma_firmware::inputs::InputConfig;
 use plasma_firmware::io::{Inputs, IoConfig, IoEvent, Outputs, SupplyState, Transition};
 use plasma_firmware::supervisor::IoExchange;
-use plasma_firmware::time::{Duration, Instant};
+use plasma_firmware::time::{Duration, Instant, div_rem_u16};
 use plasma_firmware::watchdog::TaskId;
 
 use crate::clock::{embassy_instant, now};
@@ -149,10 +149,11 @@ static LOST_EVENTS: AtomicU32 = AtomicU32::new(0);
 /// Thread mode: logs every output change the I/O task made, with its reason.
 pub fn log_transitions() {
     while let Ok(t) = TRANSITIONS.try_receive() {
+        let (ms, us) = div_rem_u16(t.at.as_micros(), 1000);
         info!(
-            "I/O {=u64}.{=u64:03} ms: {=str} {=str}: {=str}",
-            t.at.as_micros() / 1000,
-            t.at.as_micros() % 1000,
+            "I/O {=u64}.{=u16:03} ms: {=str} {=str}: {=str}",
+            ms,
+            us,
             output_name(t.output),
             if t.level { "on" } else { "off" },
             t.reason.as_str()
