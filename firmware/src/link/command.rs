@@ -109,6 +109,17 @@ pub enum HprValue {
     GasParameter,
 }
 
+impl HprValue {
+    /// The word for error texts.
+    pub const fn word(self) -> &'static str {
+        match self {
+            HprValue::Amps => "amps",
+            HprValue::CornerPercent => "percent",
+            HprValue::GasParameter => "gas parameter",
+        }
+    }
+}
+
 /// Why a command was refused; nothing was sent.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -205,18 +216,21 @@ pub enum Refusal {
     },
 }
 
+/// The board image shows some refusals with this text (RAW checks, quick restart): it uses no
+/// `Debug` formatting, which would bring core's `Debug` machinery (~1 KB) into the image.
 impl fmt::Display for Refusal {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let mode_name = |mode: Option<OperatingMode>| mode.map_or("-", OperatingMode::sync_name);
         match self {
             Refusal::LinkNotUp => f.write_str("no power supply connected"),
-            Refusal::NotSupported { family } => write!(f, "not supported by {family:?}"),
+            Refusal::NotSupported { family } => write!(f, "not supported by {}", family.name()),
             Refusal::LimitsUnknown => f.write_str("permitted limits not read yet"),
             Refusal::ModeNotPermitted { mode, permitted } => write!(
                 f,
-                "mode {} not permitted (permitted: {:?}, {:?})",
+                "mode {} not permitted (permitted: {}, {})",
                 mode.sync_name(),
-                permitted.low_mode(),
-                permitted.high_mode()
+                mode_name(permitted.low_mode()),
+                mode_name(permitted.high_mode())
             ),
             Refusal::CurrentOutOfRange {
                 requested,
@@ -248,10 +262,18 @@ impl fmt::Display for Refusal {
                 min,
                 max,
             } => {
-                write!(f, "{value:?} {requested} outside {min}-{max}")
+                write!(f, "{} {requested} outside {min}-{max}", value.word())
             }
             Refusal::StateForbids { state, error } => {
-                write!(f, "not allowed in state {state:?} with error {error:?}")
+                f.write_str("not allowed in state ")?;
+                match state {
+                    Some(state) => write!(f, "{}", state.0)?,
+                    None => f.write_str("unknown")?,
+                }
+                match error {
+                    Some(error) => write!(f, " with error {:03}", error.0),
+                    None => f.write_str(" with error unknown"),
+                }
             }
             Refusal::RawMalformed(e) => write!(f, "raw frame rejected: {e}"),
             Refusal::RawWrongAddress { expected, found } => {
@@ -267,6 +289,63 @@ impl fmt::Display for Refusal {
                 write!(f, "raw write to {address:04X} not allowed")
             }
             Refusal::RawCommandNotAllowed { id } => write!(f, "raw command {id:03} not allowed"),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::string::ToString;
+
+    #[test]
+    fn refusal_texts_name_things_without_debug_output() {
+        let texts = [
+            (
+                Refusal::NotSupported {
+                    family: Family::MaxPro200,
+                },
+                "not supported by a MaxPro200",
+            ),
+            (
+                Refusal::ModeNotPermitted {
+                    mode: OperatingMode::Gouge,
+                    permitted: PermittedModes { high: 2, low: 9 },
+                },
+                "mode gouge not permitted (permitted: -, expanded metal)",
+            ),
+            (
+                Refusal::HprValueOutOfRange {
+                    value: HprValue::CornerPercent,
+                    requested: 40,
+                    min: 50,
+                    max: 100,
+                },
+                "percent 40 outside 50-100",
+            ),
+            (
+                Refusal::StateForbids {
+                    state: Some(StateCode(14)),
+                    error: Some(ErrorCode(7)),
+                },
+                "not allowed in state 14 with error 007",
+            ),
+            (
+                Refusal::StateForbids {
+                    state: None,
+                    error: None,
+                },
+                "not allowed in state unknown with error unknown",
+            ),
+            (
+                Refusal::Blackout {
+                    until: Instant::from_millis(12_345_678_901),
+                },
+                "quiet after quick restart until 12345678901 ms",
+            ),
+        ];
+        for (refusal, text) in texts {
+            assert_eq!(refusal.to_string(), text);
         }
     }
 }

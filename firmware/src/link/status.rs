@@ -29,6 +29,16 @@ impl Family {
     pub const fn is_modbus(self) -> bool {
         matches!(self, Family::PowermaxSync | Family::PowermaxLegacy)
     }
+
+    /// A readable name for error texts ("not supported by a MaxPro200").
+    pub const fn name(self) -> &'static str {
+        match self {
+            Family::PowermaxSync => "a Powermax SYNC",
+            Family::PowermaxLegacy => "a Powermax (legacy registers)",
+            Family::Hpr => "an HPR",
+            Family::MaxPro200 => "a MaxPro200",
+        }
+    }
 }
 
 /// Which unit answered.

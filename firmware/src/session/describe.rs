@@ -11,8 +11,8 @@ use plasma_protocol::powermax::sync::Identification;
 use plasma_protocol::powermax::{FaultCode, OperatingMode, PowerSupplyModel};
 
 use crate::link::{
-    ActiveFault, CommandFailure, Family, HprValue, Model, PowermaxSettings, Refusal,
-    SettingsFailure, TransactionError, UnitStatus,
+    ActiveFault, CommandFailure, Family, Model, PowermaxSettings, Refusal, SettingsFailure,
+    TransactionError, UnitStatus,
 };
 use crate::time::Instant;
 
@@ -28,12 +28,7 @@ pub const fn family_word(family: Family) -> &'static str {
 
 /// A readable family name for error texts.
 pub const fn family_name(family: Family) -> &'static str {
-    match family {
-        Family::PowermaxSync => "a Powermax SYNC",
-        Family::PowermaxLegacy => "a Powermax (legacy registers)",
-        Family::Hpr => "an HPR",
-        Family::MaxPro200 => "a MaxPro200",
-    }
+    family.name()
 }
 
 /// The unit's model without spaces (`Powermax65`, `Powermax65/85/105`, `HPR260XD`,
@@ -317,18 +312,11 @@ pub fn write_refusal<W: Write>(
             requested,
             min,
             max,
-        } => {
-            let what = match value {
-                HprValue::Amps => "amps",
-                HprValue::CornerPercent => "percent",
-                HprValue::GasParameter => "gas parameter",
-            };
-            write_error(
-                out,
-                ErrorCode::Range,
-                format_args!("{what} {requested} outside {min}..{max} {scope}"),
-            )
-        }
+        } => write_error(
+            out,
+            ErrorCode::Range,
+            format_args!("{} {requested} outside {min}..{max} {scope}", value.word()),
+        ),
         Refusal::StateForbids { state, error } => write_error(
             out,
             ErrorCode::State,
