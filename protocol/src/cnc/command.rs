@@ -315,7 +315,10 @@ impl<'a> Args<'a> {
             self.rest = s;
             return None;
         }
-        let (word, rest) = s.split_at(s.find(is_blank).unwrap_or(s.len()));
+        // (`find` gives a char boundary: the checked split never fails, and has no panic path.)
+        let (word, rest) = s
+            .split_at_checked(s.find(is_blank).unwrap_or(s.len()))
+            .unwrap_or((s, ""));
         self.rest = rest;
         Some(word)
     }
