@@ -365,7 +365,8 @@ impl Settings {
                     .find(|p| {
                         let name = parity_name(*p);
                         name.eq_ignore_ascii_case(text)
-                            || (text.len() == 1 && name.get(..1).is_some_and(|c| c.eq_ignore_ascii_case(text)))
+                            || (text.len() == 1
+                                && name.get(..1).is_some_and(|c| c.eq_ignore_ascii_case(text)))
                     })
                     .ok_or(SetError::BadWord {
                         key,

@@ -159,8 +159,13 @@ impl HprKept {
         self.requests.retain(|old| sets(old) & !new != 0);
         if self.requests.is_full() {
             // Drop the oldest. Rebuilt rather than `Vec::remove`, whose overlapping move is
-            // the image's only other use of memmove (1.5 KB of flash).
-            self.requests = self.requests.iter().skip(1).copied().collect();
+            // the image's only other use of memmove (1.5 KB of flash), and pushed rather than
+            // collected (`collect` carries a capacity panic that cannot happen here).
+            let mut newer = Vec::new();
+            for request in self.requests.iter().skip(1) {
+                let _ = newer.push(*request);
+            }
+            self.requests = newer;
         }
         let _ = self.requests.push(request);
     }

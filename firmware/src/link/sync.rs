@@ -130,7 +130,7 @@ pub fn limits(registers: Registers<'_>) -> Option<Limits> {
 pub fn write_settings(words: [u16; 3]) -> MbRequest {
     MbRequest::WriteRegisters {
         start: sync::REMOTE_MODE,
-        values: Vec::from_iter(words),
+        values: Vec::from_array(words),
     }
 }
 

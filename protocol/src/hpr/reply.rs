@@ -275,16 +275,20 @@ fn parse_io(f: &mut Fields<'_>) -> Result<IoStatus> {
 
 fn parse_version(data: &[u8]) -> Result<Version<'_>> {
     let text = core::str::from_utf8(data).map_err(|_| Error::Malformed)?;
-    let mut parts = text.split(' ');
-    let power_supply = parts
-        .next()
-        .filter(|s| !s.is_empty())
-        .ok_or(Error::Malformed)?;
-    let gas_console = match parts.next() {
-        Some("") => return Err(Error::Malformed),
-        other => other,
+    // One space between the two revisions; none, a leading, trailing or doubled one is not
+    // this reply. (Bytes, not `str::split`: one loop instead of core's generic splitter.)
+    let (power_supply, gas_console) = match data.iter().position(|&b| b == b' ') {
+        None => (text, None),
+        Some(space) => {
+            let power_supply = text.get(..space).ok_or(Error::Malformed)?;
+            let gas_console = text.get(space + 1..).ok_or(Error::Malformed)?;
+            if gas_console.is_empty() || gas_console.bytes().any(|b| b == b' ') {
+                return Err(Error::Malformed);
+            }
+            (power_supply, Some(gas_console))
+        }
     };
-    if parts.next().is_some() {
+    if power_supply.is_empty() {
         return Err(Error::Malformed);
     }
     Ok(Version {
@@ -693,6 +697,25 @@ mod tests {
             gas_console: None,
         });
         assert_eq!(bad.emit(&mut out), Err(Error::Malformed));
+    }
+
+    #[test]
+    fn version_text_has_one_or_two_revisions_and_one_space() {
+        let both = parse_version(b"A.0 A.2").unwrap();
+        assert_eq!((both.power_supply, both.gas_console), ("A.0", Some("A.2")));
+        let single = parse_version(b"1.05").unwrap();
+        assert_eq!((single.power_supply, single.gas_console), ("1.05", None));
+        for bad in [
+            &b""[..],
+            b" A.2",
+            b"A.0 ",
+            b"A.0  A.2",
+            b"A.0 A.2 B",
+            b" ",
+            b"A.0 \xFF",
+        ] {
+            assert_eq!(parse_version(bad), Err(Error::Malformed), "{bad:?}");
+        }
     }
 
     #[test]
