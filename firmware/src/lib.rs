@@ -33,6 +33,38 @@
     )
 )]
 
+/// Texts for logs, written once: `as_str` (host displays and traces) and, with `defmt`, a
+/// `defmt::Format` that logs the same text as an interned string. The board image then keeps
+/// only an index: the text lives in the ELF's `.defmt` section for the host decoder, not in
+/// flash. A `delegate` arm hands a variant that wraps another such type to that type.
+macro_rules! log_texts {
+    (
+        $ty:ident $(, delegate $delegate:pat => $inner:ident)? {
+            $($variant:pat => $text:literal,)*
+        }
+    ) => {
+        impl $ty {
+            /// Text for logs.
+            pub const fn as_str(self) -> &'static str {
+                match self {
+                    $($delegate => $inner.as_str(),)?
+                    $($variant => $text,)*
+                }
+            }
+        }
+
+        #[cfg(feature = "defmt")]
+        impl defmt::Format for $ty {
+            fn format(&self, f: defmt::Formatter<'_>) {
+                match *self {
+                    $($delegate => defmt::Format::format(&$inner, f),)?
+                    $($variant => defmt::write!(f, $text),)*
+                }
+            }
+        }
+    };
+}
+
 pub mod bridge;
 pub mod discrete;
 pub mod inputs;

@@ -10,7 +10,6 @@ use crate::time::Instant;
 /// Each of these latches: START stays off until TORCH_ON has been released and asserted
 /// again, so clearing a condition never fires the torch by itself.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum Interlock {
     /// TORCH_ON was already active at power-up and has not been seen inactive since.
     TorchOnAtPowerUp,
@@ -24,18 +23,13 @@ pub enum Interlock {
     TransferTimeout,
 }
 
-impl Interlock {
-    /// Text for logs.
-    pub const fn as_str(self) -> &'static str {
-        match self {
-            Interlock::TorchOnAtPowerUp => "torch-on active at power-up",
-            Interlock::LinkDown => "link to power supply down",
-            Interlock::RestartBlackout => "quick-restart blackout",
-            Interlock::FaultRequiresAction => "power supply fault requires action",
-            Interlock::TransferTimeout => "arc did not transfer in time",
-        }
-    }
-}
+log_texts!(Interlock {
+    Interlock::TorchOnAtPowerUp => "torch-on active at power-up",
+    Interlock::LinkDown => "link to power supply down",
+    Interlock::RestartBlackout => "quick-restart blackout",
+    Interlock::FaultRequiresAction => "power supply fault requires action",
+    Interlock::TransferTimeout => "arc did not transfer in time",
+});
 
 impl fmt::Display for Interlock {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
@@ -45,7 +39,6 @@ impl fmt::Display for Interlock {
 
 /// Why an output took its new level.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum Reason {
     /// START on: the CNC asserted TORCH_ON and every interlock allows it.
     TorchOn,
@@ -83,30 +76,24 @@ pub enum Reason {
     FaultCleared,
 }
 
-impl Reason {
-    /// Text for logs.
-    pub const fn as_str(self) -> &'static str {
-        match self {
-            Reason::TorchOn => "torch-on from CNC",
-            Reason::StartGapElapsed => "torch-on held through the gap between starts",
-            Reason::TorchOff => "torch-on released by CNC",
-            Reason::Interlock(interlock) => interlock.as_str(),
-            Reason::ArcTransferred => "arc transferred (MOTION stable)",
-            Reason::ArcLost => "arc lost (MOTION off, stable)",
-            Reason::StartOn => "START on with arc already transferred",
-            Reason::StartOff => "START off",
-            Reason::CncInput => "follows CNC input",
-            Reason::SupplyReady => "link up, no fault, supply ready",
-            Reason::LinkDown => "link to power supply down",
-            Reason::FaultRequiresAction => "power supply fault requires action",
-            Reason::RestartBlackout => "quick-restart blackout",
-            Reason::UnitNotReady => "power supply reports not ready",
-            Reason::NotReadySignal => "NOT_READY signal active",
-            Reason::FaultActive => "power supply fault active",
-            Reason::FaultCleared => "no fault, link up",
-        }
-    }
-}
+log_texts!(Reason, delegate Reason::Interlock(interlock) => interlock {
+    Reason::TorchOn => "torch-on from CNC",
+    Reason::StartGapElapsed => "torch-on held through the gap between starts",
+    Reason::TorchOff => "torch-on released by CNC",
+    Reason::ArcTransferred => "arc transferred (MOTION stable)",
+    Reason::ArcLost => "arc lost (MOTION off, stable)",
+    Reason::StartOn => "START on with arc already transferred",
+    Reason::StartOff => "START off",
+    Reason::CncInput => "follows CNC input",
+    Reason::SupplyReady => "link up, no fault, supply ready",
+    Reason::LinkDown => "link to power supply down",
+    Reason::FaultRequiresAction => "power supply fault requires action",
+    Reason::RestartBlackout => "quick-restart blackout",
+    Reason::UnitNotReady => "power supply reports not ready",
+    Reason::NotReadySignal => "NOT_READY signal active",
+    Reason::FaultActive => "power supply fault active",
+    Reason::FaultCleared => "no fault, link up",
+});
 
 impl From<Interlock> for Reason {
     fn from(interlock: Interlock) -> Self {

@@ -95,7 +95,6 @@ pub trait Settings: Default + Sized {
 
 /// Where the settings a load returned came from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum LoadOutcome {
     /// Read from flash, current version.
     Loaded,
@@ -130,19 +129,16 @@ impl LoadOutcome {
             LoadOutcome::UnknownVersion { .. } | LoadOutcome::Corrupted | LoadOutcome::FlashError
         )
     }
-
-    /// A short text for the log and the CNC port.
-    pub const fn as_str(self) -> &'static str {
-        match self {
-            LoadOutcome::Loaded => "settings loaded",
-            LoadOutcome::Migrated { .. } => "settings migrated from an older version",
-            LoadOutcome::Empty => "no settings stored, using defaults",
-            LoadOutcome::UnknownVersion { .. } => "settings of an unknown version, using defaults",
-            LoadOutcome::Corrupted => "settings corrupted, using defaults",
-            LoadOutcome::FlashError => "settings unreadable (flash error), using defaults",
-        }
-    }
 }
+
+log_texts!(LoadOutcome {
+    LoadOutcome::Loaded => "settings loaded",
+    LoadOutcome::Migrated { .. } => "settings migrated from an older version",
+    LoadOutcome::Empty => "no settings stored, using defaults",
+    LoadOutcome::UnknownVersion { .. } => "settings of an unknown version, using defaults",
+    LoadOutcome::Corrupted => "settings corrupted, using defaults",
+    LoadOutcome::FlashError => "settings unreadable (flash error), using defaults",
+});
 
 /// The settings to run with and where they came from.
 #[derive(Debug, Clone, PartialEq, Eq)]

@@ -151,12 +151,12 @@ pub fn log_transitions() {
     while let Ok(t) = TRANSITIONS.try_receive() {
         let (ms, us) = div_rem_u16(t.at.as_micros(), 1000);
         info!(
-            "I/O {=u64}.{=u16:03} ms: {=str} {=str}: {=str}",
+            "I/O {=u64}.{=u16:03} ms: {=str} {=str}: {}",
             ms,
             us,
             output_name(t.output),
             if t.level { "on" } else { "off" },
-            t.reason.as_str()
+            t.reason
         );
     }
     let lost = LOST_TRANSITIONS.swap(0, Ordering::Relaxed);

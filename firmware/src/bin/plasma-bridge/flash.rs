@@ -75,9 +75,9 @@ pub async fn load(store: Option<&mut Store>) -> LoadedSettings<Settings> {
     };
     report_ecc_errors();
     if loaded.outcome.is_problem() {
-        warn!("settings: {=str}", loaded.outcome.as_str());
+        warn!("settings: {}", loaded.outcome);
     } else {
-        debug!("settings: {=str}", loaded.outcome.as_str());
+        debug!("settings: {}", loaded.outcome);
     }
     loaded
 }
