@@ -205,14 +205,16 @@ impl Output {
 fn line(build: impl FnOnce(&mut ReplyLine) -> fmt::Result) -> ReplyLine {
     let mut line = ReplyLine::new();
     if build(&mut line).is_err() {
-        line.clear();
-        let _ = write_error(
-            &mut line,
-            ErrorCode::State,
-            "reply longer than the line buffer",
-        );
+        too_long(&mut line);
     }
     line
+}
+
+/// A reply that did not fit becomes an `ERR` that says so (one copy, not one per reply).
+#[inline(never)]
+fn too_long(line: &mut ReplyLine) {
+    line.clear();
+    let _ = write_error(line, ErrorCode::State, "reply longer than the line buffer");
 }
 
 /// An `OK` line with the fields `fields` writes.
@@ -395,11 +397,17 @@ impl Session {
             return;
         }
         let mut l = ReplyLine::new();
-        if build(&mut l).is_err() {
-            return;
+        if build(&mut l).is_ok() {
+            self.push_event(&l);
         }
+    }
+
+    /// The part of [`Session::event`] every event shares: one copy in the image instead of
+    /// one inlined into each kind of event.
+    #[inline(never)]
+    fn push_event(&mut self, line: &ReplyLine) {
         self.stats.events = self.stats.events.saturating_add(1);
-        self.push(l.as_bytes());
+        self.push(line.as_bytes());
     }
 
     // --- input --------------------------------------------------------------------------
