@@ -43,6 +43,9 @@ pub enum SyncModels {
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct FaultInfo {
+    /// The fault code (X-YY-Z as a number). Kept in the row rather than beside it: a
+    /// `(code, row)` pair would take 16 bytes of flash per row instead of 12.
+    pub code: u16,
     /// The table's description.
     pub text: &'static str,
     /// The table's "Steps Required to Remove?" column.
@@ -79,10 +82,7 @@ impl FaultCode {
 
     /// The row of the SYNC fault table (Table 6), including 0 = no fault.
     pub fn info(self) -> Option<&'static FaultInfo> {
-        SYNC_FAULTS
-            .iter()
-            .find(|(code, _)| *code == self.0)
-            .map(|(_, info)| info)
+        SYNC_FAULTS.iter().find(|info| info.code == self.0)
     }
 
     /// The description in the legacy Powermax65/85 fault list; 0 reads as "No fault" (the
@@ -184,11 +184,12 @@ mod tests {
     fn sync_table_complete_and_consistent() {
         assert_eq!(SYNC_FAULTS.len(), 66);
         let mut previous = None;
-        for (code, info) in SYNC_FAULTS.iter() {
+        for info in SYNC_FAULTS.iter() {
+            let code = info.code;
             // Sorted, unique, every row reachable through `info`.
-            assert!(previous < Some(*code), "{code}");
-            previous = Some(*code);
-            assert_eq!(FaultCode(*code).info(), Some(info));
+            assert!(previous < Some(code), "{code}");
+            previous = Some(code);
+            assert_eq!(FaultCode(code).info(), Some(info));
             assert!(info.text.is_ascii() && !info.text.is_empty());
         }
         // Hex column spot checks from Table 6.

@@ -6,27 +6,20 @@
 
 use super::fault::{FaultInfo, StepsRequired, SyncModels};
 
-const fn row(
-    code: u16,
-    models: SyncModels,
-    steps: StepsRequired,
-    text: &'static str,
-) -> (u16, FaultInfo) {
-    (
+const fn row(code: u16, models: SyncModels, steps: StepsRequired, text: &'static str) -> FaultInfo {
+    FaultInfo {
         code,
-        FaultInfo {
-            text,
-            steps,
-            models,
-        },
-    )
+        text,
+        steps,
+        models,
+    }
 }
 
 use StepsRequired::{No, Recommended, Yes};
 use SyncModels::{All, Powermax45, Powermax65_85_105};
 
 /// SYNC guide, Table 6 "Fault codes and descriptions": all 66 rows, in table order.
-pub(super) static SYNC_FAULTS: [(u16, FaultInfo); 66] = [
+pub(super) static SYNC_FAULTS: [FaultInfo; 66] = [
     // Operational faults
     row(0, All, No, "There is no active fault."),
     row(
