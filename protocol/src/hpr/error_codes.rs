@@ -19,7 +19,7 @@ impl ErrorCode {
 
     /// Name from section IV, if the manual lists this code.
     pub fn name(self) -> Option<&'static str> {
-        error_info(self.0).map(|e| e.name)
+        error_name(self.0)
     }
 
     /// Description from section IV, if the manual lists this code.
@@ -70,400 +70,433 @@ const fn row(code: u16, name: &'static str, description: &'static str) -> ErrorI
     }
 }
 
-/// Section IV, in the manual's order (ascending code).
-pub const ERROR_CODES: &[ErrorInfo] = &[
-    row(0, "NO ERROR", "System is ready to run"),
-    row(
+/// The table, written once: the full rows ([`ERROR_CODES`], host tools) and a compact name
+/// index for [`error_name`]. The board image keeps only the index: 4 bytes a row and the names
+/// one after the other, instead of a 12-byte row with a string reference each.
+macro_rules! error_table {
+    ($(($code:literal, $name:literal, $description:literal $(,)?)),* $(,)?) => {
+        /// Section IV, in the manual's order (ascending code).
+        pub const ERROR_CODES: &[ErrorInfo] = &[$(row($code, $name, $description)),*];
+
+        /// Every name, in table order.
+        const NAMES: &str = concat!($($name),*);
+
+        /// Each code with the end of its name in [`NAMES`] (the start is the row before's end).
+        static NAME_ENDS: [(u16, u16); ERROR_CODES.len()] = name_ends([$(($code, $name.len())),*]);
+    };
+}
+
+/// Running ends of the names (`(code, length)` in, `(code, end)` out).
+const fn name_ends<const N: usize>(rows: [(u16, usize); N]) -> [(u16, u16); N] {
+    let mut ends = [(0, 0); N];
+    let mut end = 0;
+    let mut i = 0;
+    while i < N {
+        // Const evaluation only (the table), never input: an index out of range would fail
+        // the build, not the bridge.
+        #[allow(clippy::indexing_slicing)]
+        {
+            end += rows[i].1;
+            ends[i] = (rows[i].0, end as u16);
+        }
+        i += 1;
+    }
+    ends
+}
+
+error_table![
+    (0, "NO ERROR", "System is ready to run"),
+    (
         9,
         "FLOW SWITCH TEST",
         "When the pump is restarted after a pump timeout (30 minutes without a start signal) the system will test the flow switch to make sure there is sufficient flow before firing the torch.",
     ),
-    row(
+    (
         12,
         "TEST IN PROGRESS",
         "One in the gas test modes is running",
     ),
-    row(13, "TEST PASSED", "The test completed successfully"),
-    row(
+    (13, "TEST PASSED", "The test completed successfully"),
+    (
         14,
         "CUT GAS CHANNEL #1 FAIL",
         "The gas pressure is dropping on channel #1, indicating a leak",
     ),
-    row(
+    (
         15,
         "CUT GAS CHANNEL #2 FAIL",
         "The gas pressure is dropping on channel #2, indicating a leak",
     ),
-    row(
+    (
         16,
         "PLASMA RAMPDOWN FAIL",
         "Plasma pressure did not decrease in the allotted time",
     ),
-    row(
+    (
         17,
         "SHIELD RAMPDOWN FAIL",
         "Shield pressure did not decrease in the allotted time",
     ),
-    row(18, "PUMP OVER PRESSURE", "Pump output has exceeded 200 psi"),
-    row(
+    (18, "PUMP OVER PRESSURE", "Pump output has exceeded 200 psi"),
+    (
         20,
         "NO PILOT ARC",
         "No current detected from choppers before 1-second timeout",
     ),
-    row(
+    (
         21,
         "NO ARC TRANSFER",
         "No transfer signal detected before 300-msec timeout",
     ),
-    row(
+    (
         24,
         "LOST CURRENT CH1",
         "After transfer lost chopper current signal",
     ),
-    row(
+    (
         25,
         "LOST CURRENT CH2",
         "After transfer lost chopper current signal",
     ),
-    row(
+    (
         26,
         "LOST TRANSFER",
         "After transfer lost the transfer signal",
     ),
-    row(
+    (
         27,
         "LOST PHASE",
         "When main contactor is engaged no phase ok input",
     ),
-    row(
+    (
         28,
         "LOST CURRENT CH3",
         "After transfer lost chopper current signal",
     ),
-    row(
+    (
         30,
         "GAS SYSTEM ERROR",
         "A failure had a occurred in the gas system",
     ),
-    row(
+    (
         31,
         "START LOST",
         "Start signal was removed before steady state operation",
     ),
-    row(
+    (
         32,
         "HOLD TIMEOUT",
         "Hold signal was applied for longer than 60 seconds",
     ),
-    row(
+    (
         33,
         "PRE CHARGE TIMEOUT",
         "Gas console was not able to charge the gas lines to the correct value",
     ),
-    row(
+    (
         34,
         "LOST CURRENT CH4",
         "After transfer lost chopper current signal",
     ),
-    row(
+    (
         42,
         "N2 PURGE LOW PRESSURE ERROR",
         "Low N2 gas pressure while purging because of switching from a fuel gas process to an oxidizing process or vice versa",
     ),
-    row(
+    (
         44,
         "LOW PLASMA GAS PRESSURE",
         "Gas pressure under lower limit (15 psi preflow, 50 psi outflow)",
     ),
-    row(
+    (
         45,
         "HIGH PLASMA GAS PRESSURE",
         "Gas pressure over upper limit (110 psi)",
     ),
-    row(
+    (
         46,
         "LOW LINE VOLTAGE",
         "Line voltage is under lower limit (-15%)",
     ),
-    row(
+    (
         47,
         "HIGH LINE VOLTAGE",
         "Line voltage is over upper limit (+15%)",
     ),
-    row(
+    (
         48,
         "CAN ERROR",
         "An error occurred with the CAN communication system",
     ),
-    row(
+    (
         50,
         "START ON AT INIT",
         "Start signal input is active during power up",
     ),
-    row(
+    (
         53,
         "LOW SHIELD GAS PRESSURE",
         "Gas pressure is under lower limit (2 psi)",
     ),
-    row(
+    (
         54,
         "HIGH SHIELD GAS PRESSURE",
         "Gas pressure is over upper limit (110 psi)",
     ),
-    row(
+    (
         55,
         "MV 1 INLET PRESSURE",
         "Motor valve 1 inlet pressure is less than 90 psi or greater than 130 psi.",
     ),
-    row(
+    (
         56,
         "MV 2 INLET PRESSURE",
         "Motor valve 2 inlet pressure is less than 90 psi or greater than 130 psi.",
     ),
-    row(
+    (
         57,
         "CUT GAS 1 PRESSURE",
         "In the selection console, cut gas 1 outlet pressure is less than 90 psi or greater than 130 psi.",
     ),
-    row(
+    (
         58,
         "CUT GAS 2 PRESSURE",
         "In the selection console, if cut gas 2 outlet pressure is less than 90 psi for non mixing or less than 20 psi when mixing or greater than 130 psi.",
     ),
-    row(
+    (
         60,
         "LOW COOLANT FLOW",
         "Coolant flow is present but is less than the required 0.6 gpm",
     ),
-    row(61, "NO PLASMA GAS TYPE", "Plasma gas has not been selected"),
-    row(
+    (61, "NO PLASMA GAS TYPE", "Plasma gas has not been selected"),
+    (
         62,
         "NO SHIELD GAS TYPE",
         "Shield gas has not been selected or system is in test mode",
     ),
-    row(65, "CHOPPER1 OVERTEMP", "Chopper #1 overheated"),
-    row(66, "CHOPPER2 OVERTEMP", "Chopper #2 overheated"),
-    row(67, "MAGNETICS OVERTEMP", "Transformer has overheated"),
-    row(71, "COOLANT OVERTEMP", "Torch coolant has overheated"),
-    row(
+    (65, "CHOPPER1 OVERTEMP", "Chopper #1 overheated"),
+    (66, "CHOPPER2 OVERTEMP", "Chopper #2 overheated"),
+    (67, "MAGNETICS OVERTEMP", "Transformer has overheated"),
+    (71, "COOLANT OVERTEMP", "Torch coolant has overheated"),
+    (
         72,
         "AUTOMATIC GAS CONTROL BOARD OVERTEMP",
         "Control board has exceeded 90 degrees C",
     ),
-    row(73, "CHOPPER3 OVERTEMP", "Chopper #3 overheated"),
-    row(74, "CHOPPER4 OVERTEMP", "Chopper #4 overheated"),
-    row(
+    (73, "CHOPPER3 OVERTEMP", "Chopper #3 overheated"),
+    (74, "CHOPPER4 OVERTEMP", "Chopper #4 overheated"),
+    (
         75,
         "LEM 3 CURRENT LOW",
         "Current is less than 10 amps during the chopper test",
     ),
-    row(
+    (
         76,
         "LEM 4 CURRENT LOW",
         "Current is less than 10 amps during the chopper test",
     ),
-    row(
+    (
         93,
         "NO COOLANT FLOW",
         "Coolant flow is less than 0.6 gpm or greater than 3.0 gpm",
     ),
-    row(
+    (
         95,
         "LEM 4 CURRENT HIGH",
         "Current has exceeded 35 amps during chopper test",
     ),
-    row(
+    (
         99,
         "CHOPPER1 OVERTEMP AT INIT",
         "Chopper #1 is indicating overtemp during powerup",
     ),
-    row(
+    (
         100,
         "CHOPPER2 OVERTEMP AT INIT",
         "Chopper #2 is indicating overtemp during power up",
     ),
-    row(
+    (
         101,
         "MAGNETICS OVERTEMP AT INIT",
         "Transformer is indicating overtemp during powerup",
     ),
-    row(
+    (
         102,
         "LEM SENSOR A FAULT",
         "Chopper A current signal is invalid",
     ),
-    row(
+    (
         103,
         "LEM 1 CURRENT HIGH",
         "Current has exceeded 35 amps during chopper test",
     ),
-    row(
+    (
         104,
         "LEM 2 CURRENT HIGH",
         "Current has exceeded 35 amps during chopper test",
     ),
-    row(
+    (
         105,
         "LEM 1 CURRENT LOW",
         "Current is less than 10 amps during the chopper test",
     ),
-    row(
+    (
         106,
         "LEM 2 CURRENT LOW",
         "Current is less than 10 amps during the chopper test",
     ),
-    row(
+    (
         107,
         "LEM 3 CURRENT HIGH",
         "Current has exceeded 35 amps during chopper test",
     ),
-    row(
+    (
         108,
         "TRANSFER AT INIT",
         "The system has detected current on the work lead during power up",
     ),
-    row(
+    (
         109,
         "COOLANT FLOW AT INIT",
         "Coolant flow is greater than 0.3 gpm when pump is off.",
     ),
-    row(
+    (
         111,
         "COOLANT OVERTEMP AT INIT",
         "Coolant is indicating overtemp during powerup",
     ),
-    row(116, "WATCHDOG INTERLOCK", "CAN communication error"),
-    row(
+    (116, "WATCHDOG INTERLOCK", "CAN communication error"),
+    (
         123,
         "MV 1 ERROR",
         "Motor valve 1 did not move into position within 60 seconds",
     ),
-    row(
+    (
         124,
         "MV 2 ERROR",
         "Motor valve 2 did not move into position within 60 seconds",
     ),
-    row(
+    (
         133,
         "UNKNOWN GAS CONSOLE TYPE",
         "The power supply control board does not recognize the gas console installed or has not received a CAN message identifying the type of console installed",
     ),
-    row(
+    (
         134,
         "CHOPPER 1 OVERCURRENT",
         "Chopper 1 current feedback has exceeded 160 amps",
     ),
-    row(
+    (
         138,
         "CHOPPER 2 OVERCURRENT",
         "Chopper 2 current feedback has exceeded 160 amps",
     ),
-    row(
+    (
         139,
         "PURGE TIMEOUT ERROR",
         "The purge cycle did not complete within 3 minutes",
     ),
-    row(
+    (
         140,
         "PRESSURE TRANSDUCER #1 ERROR",
         "Selection Console - Motor Valve #1 inlet Metering Console - Plasma gas outlet",
     ),
-    row(
+    (
         141,
         "PRESSURE TRANSDUCER #2 ERROR",
         "Selection Console - Motor Valve #2 inlet Metering Console - Shield gas outlet",
     ),
-    row(
+    (
         142,
         "PRESSURE TRANSDUCER #3 ERROR",
         "Selection Console - Cut Gas 1 outlet Metering Console - Cut Gas 1 inlet",
     ),
-    row(
+    (
         143,
         "PRESSURE TRANSDUCER #4 ERROR",
         "Selection Console - Cut Gas 2 outlet Metering Console - Cut Gas 2 inlet",
     ),
-    row(
+    (
         144,
         "MANUAL GAS CONSOLE INTERNAL FLASH ERROR",
         "DSP memory is not working properly",
     ),
-    row(
+    (
         145,
         "AUTO GAS CONSOLE INTERNAL FLASH ERROR",
         "DSP memory is not working properly",
     ),
-    row(
+    (
         146,
         "CHOPPER #3 OVERTEMP AT INIT",
         "Chopper #3 is indicating over temp during power up",
     ),
-    row(
+    (
         147,
         "CHOPPER #4 OVERTEMP AT INIT",
         "Chopper #4 is indicating over temp during power up",
     ),
-    row(
+    (
         151,
         "SOFTWARE FAIL",
         "Software has detected an incorrect state or condition",
     ),
-    row(
+    (
         152,
         "INTERNAL FLASH ERROR",
         "DSP memory is not working properly",
     ),
-    row(
+    (
         153,
         "PS EEPROM ERROR",
         "EEPROM memory on power supply board not working",
     ),
-    row(
+    (
         154,
         "CHOPPER 3 OVER CURRENT",
         "Chopper 3 current feedback has exceeded 160 amps",
     ),
-    row(
+    (
         155,
         "CHOPPER 4 OVER CURRENT",
         "Chopper 4 current feedback has exceeded 160 amps",
     ),
-    row(
+    (
         156,
         "CHOPPER 2 CURRENT AT INIT",
         "Chopper 2 current signal is active on powerup",
     ),
-    row(
+    (
         157,
         "CHOPPER 3 CURRENT AT INIT",
         "Chopper 3 current signal is active on powerup",
     ),
-    row(
+    (
         158,
         "CHOPPER 4 CURRENT AT INIT",
         "Chopper 4 current signal is active on powerup",
     ),
-    row(
+    (
         159,
         "MOTOR DRIVE FAULT",
         "Motor drive board power module is indicating an alarm - This can be comparable to \"blowing a fuse\" - does not necessarily indicate a problem with the board.",
     ),
-    row(
+    (
         160,
         "HPR COOLER CAN FAULT",
         "Communications between the control board and the pump/motor drive board was interrupted for greater than 1 second.",
     ),
-    row(
+    (
         180,
         "SELECTION CONSOLE CAN TIMEOUT",
         "Power supply has not received a CAN message from the selection console within 1 second",
     ),
-    row(
+    (
         181,
         "METERING CONSOLE CAN TIMEOUT",
         "Power supply has not received a CAN message from the metering console within 1 second",
     ),
-    row(
+    (
         190,
         "LEM SENSOR B FAULT",
         "Chopper B current signal is invalid",
@@ -478,9 +511,15 @@ pub fn error_info(code: u16) -> Option<&'static ErrorInfo> {
         .and_then(|i| ERROR_CODES.get(i))
 }
 
-/// Name of error `code`, if the manual lists it.
+/// Name of error `code`, if the manual lists it (from the compact index, see [`error_table`]).
 pub fn error_name(code: u16) -> Option<&'static str> {
-    error_info(code).map(|e| e.name)
+    let row = NAME_ENDS.binary_search_by_key(&code, |&(c, _)| c).ok()?;
+    let end = NAME_ENDS.get(row)?.1;
+    let start = match row.checked_sub(1) {
+        Some(before) => NAME_ENDS.get(before)?.1,
+        None => 0,
+    };
+    NAMES.get(usize::from(start)..usize::from(end))
 }
 
 /// Description of error `code`, if the manual lists it.
@@ -503,6 +542,15 @@ mod tests {
         ] {
             assert!(error_name(code).is_some(), "{code}");
         }
+    }
+
+    #[test]
+    fn name_index_matches_the_rows() {
+        assert_eq!(NAME_ENDS.len(), ERROR_CODES.len());
+        for info in ERROR_CODES {
+            assert_eq!(error_name(info.code), Some(info.name), "{}", info.code);
+        }
+        assert_eq!(usize::from(NAME_ENDS[NAME_ENDS.len() - 1].1), NAMES.len());
     }
 
     #[test]
