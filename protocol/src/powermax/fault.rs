@@ -6,7 +6,7 @@
 use core::fmt;
 use core::str::FromStr;
 
-use super::fault_table::{LEGACY_FAULTS, SYNC_FAULTS};
+use super::fault_table::{LEGACY_FAULTS, SYNC_FAULT_TEXTS, SYNC_FAULTS};
 use crate::{Error, Result};
 
 /// A fault code as read from 0x301A, 0x3044-0x3047 (SYNC) or 0x2098 (legacy).
@@ -81,8 +81,19 @@ impl FaultCode {
     }
 
     /// The row of the SYNC fault table (Table 6), including 0 = no fault.
-    pub fn info(self) -> Option<&'static FaultInfo> {
-        SYNC_FAULTS.iter().find(|info| info.code == self.0)
+    pub fn info(self) -> Option<FaultInfo> {
+        let row = SYNC_FAULTS.iter().position(|row| row.code == self.0)?;
+        let found = SYNC_FAULTS.get(row)?;
+        let start = match row.checked_sub(1) {
+            Some(before) => SYNC_FAULTS.get(before)?.end,
+            None => 0,
+        };
+        Some(FaultInfo {
+            code: found.code,
+            text: SYNC_FAULT_TEXTS.get(usize::from(start)..usize::from(found.end))?,
+            steps: found.steps,
+            models: found.models,
+        })
     }
 
     /// The description in the legacy Powermax65/85 fault list; 0 reads as "No fault" (the
@@ -184,14 +195,32 @@ mod tests {
     fn sync_table_complete_and_consistent() {
         assert_eq!(SYNC_FAULTS.len(), 66);
         let mut previous = None;
-        for info in SYNC_FAULTS.iter() {
-            let code = info.code;
+        for row in SYNC_FAULTS.iter() {
+            let code = row.code;
             // Sorted, unique, every row reachable through `info`.
             assert!(previous < Some(code), "{code}");
             previous = Some(code);
-            assert_eq!(FaultCode(code).info(), Some(info));
+            let info = FaultCode(code).info().unwrap();
+            assert_eq!(
+                (info.code, info.steps, info.models),
+                (code, row.steps, row.models)
+            );
             assert!(info.text.is_ascii() && !info.text.is_empty());
         }
+        assert_eq!(usize::from(SYNC_FAULTS[65].end), SYNC_FAULT_TEXTS.len());
+        // First, a middle and the last text, whole.
+        assert_eq!(
+            FaultCode(0).info().unwrap().text,
+            "There is no active fault."
+        );
+        assert_eq!(
+            FaultCode(121).info().unwrap().text,
+            "The gas pressure output is low."
+        );
+        assert_eq!(
+            FaultCode(3700).info().unwrap().text,
+            "There is an internal serial communications fault between the DSP PCB and power PCB."
+        );
         // Hex column spot checks from Table 6.
         for (hex, field) in [
             (0x006E, "0-11-0"),
