@@ -297,43 +297,56 @@ fn parse_version(data: &[u8]) -> Result<Version<'_>> {
     })
 }
 
+/// The 4-digit fields with `tags`, in order: one loop rather than one inlined parse per field.
+fn tagged_fields<const N: usize>(f: &mut Fields<'_>, tags: [&[u8; 2]; N]) -> Result<[u16; N]> {
+    let mut values = [0u16; N];
+    for (value, tag) in values.iter_mut().zip(tags) {
+        *value = tagged_field(f, tag)?;
+    }
+    Ok(values)
+}
+
 fn parse_hpr_ps_info(f: &mut Fields<'_>) -> Result<PsInfo> {
-    let plasma_cutflow = tagged_field(f, b"PC")?;
-    let plasma_preflow = tagged_field(f, b"PP")?;
-    let shield_cutflow = tagged_field(f, b"SC")?;
-    let shield_preflow = tagged_field(f, b"SP")?;
-    let current_setpoint = tagged_field(f, b"CS")?;
-    let state = StateCode(tagged_field(f, b"ST")?);
-    let error = ErrorCode(tagged_field(f, b"ER")?);
-    let pressures = GasPressures {
-        plasma_cutflow,
-        plasma_preflow,
-        shield_cutflow,
-        shield_preflow,
-        cut_gas_1: tagged_field(f, b"CG")?,
-        cut_gas_2: tagged_field(f, b"CG")?,
-        n2_mix_inlet: tagged_field(f, b"MV")?,
-        gas2_mix_inlet: tagged_field(f, b"MV")?,
-    };
+    let [pc, pp, sc, sp, cs, st, er, cg1, cg2, mv1, mv2] = tagged_fields(
+        f,
+        [
+            b"PC", b"PP", b"SC", b"SP", b"CS", b"ST", b"ER", b"CG", b"CG", b"MV", b"MV",
+        ],
+    )?;
     Ok(PsInfo {
-        pressures,
-        current_setpoint,
-        state,
-        error,
+        pressures: GasPressures {
+            plasma_cutflow: pc,
+            plasma_preflow: pp,
+            shield_cutflow: sc,
+            shield_preflow: sp,
+            cut_gas_1: cg1,
+            cut_gas_2: cg2,
+            n2_mix_inlet: mv1,
+            gas2_mix_inlet: mv2,
+        },
+        current_setpoint: cs,
+        state: StateCode(st),
+        error: ErrorCode(er),
     })
 }
 
 fn parse_maxpro_ps_info(f: &mut Fields<'_>) -> Result<MaxProPsInfo> {
+    let [st, er, pg, ps, sg, ss, cs, dm, lm] = tagged_fields(
+        f,
+        [
+            b"st", b"er", b"pg", b"ps", b"sg", b"ss", b"cs", b"dm", b"lm",
+        ],
+    )?;
     Ok(MaxProPsInfo {
-        state: StateCode(tagged_field(f, b"st")?),
-        error: ErrorCode(tagged_field(f, b"er")?),
-        plasma_gas: GasCode(tagged_field(f, b"pg")?),
-        plasma_setpoint: tagged_field(f, b"ps")?,
-        shield_gas: GasCode(tagged_field(f, b"sg")?),
-        shield_setpoint: tagged_field(f, b"ss")?,
-        current_setpoint: tagged_field(f, b"cs")?,
-        display_mode: tagged_field(f, b"dm")?,
-        locked: match tagged_field(f, b"lm")? {
+        state: StateCode(st),
+        error: ErrorCode(er),
+        plasma_gas: GasCode(pg),
+        plasma_setpoint: ps,
+        shield_gas: GasCode(sg),
+        shield_setpoint: ss,
+        current_setpoint: cs,
+        display_mode: dm,
+        locked: match lm {
             0 => false,
             1 => true,
             _ => return Err(Error::Malformed),
@@ -342,15 +355,17 @@ fn parse_maxpro_ps_info(f: &mut Fields<'_>) -> Result<MaxProPsInfo> {
 }
 
 fn parse_pressures(f: &mut Fields<'_>) -> Result<GasPressures> {
+    let [pc, pp, sc, sp, cg1, cg2, mv1, mv2] =
+        tagged_fields(f, [b"PC", b"PP", b"SC", b"SP", b"CG", b"CG", b"MV", b"MV"])?;
     Ok(GasPressures {
-        plasma_cutflow: tagged_field(f, b"PC")?,
-        plasma_preflow: tagged_field(f, b"PP")?,
-        shield_cutflow: tagged_field(f, b"SC")?,
-        shield_preflow: tagged_field(f, b"SP")?,
-        cut_gas_1: tagged_field(f, b"CG")?,
-        cut_gas_2: tagged_field(f, b"CG")?,
-        n2_mix_inlet: tagged_field(f, b"MV")?,
-        gas2_mix_inlet: tagged_field(f, b"MV")?,
+        plasma_cutflow: pc,
+        plasma_preflow: pp,
+        shield_cutflow: sc,
+        shield_preflow: sp,
+        cut_gas_1: cg1,
+        cut_gas_2: cg2,
+        n2_mix_inlet: mv1,
+        gas2_mix_inlet: mv2,
     })
 }
 
