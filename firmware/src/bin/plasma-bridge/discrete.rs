@@ -151,7 +151,7 @@ pub fn log_transitions() {
     while let Ok(t) = TRANSITIONS.try_receive() {
         let (ms, us) = div_rem_u16(t.at.as_micros(), 1000);
         info!(
-            "I/O {=u64}.{=u16:03} ms: {=str} {=str}: {}",
+            "I/O {=u64}.{=u16:03} ms: {=istr} {=str}: {}",
             ms,
             us,
             output_name(t.output),

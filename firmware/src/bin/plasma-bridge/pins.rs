@@ -111,15 +111,16 @@ pub fn pull(config: &InputConfig, input: Input) -> Pull {
     }
 }
 
-/// The names of the io outputs as docs/board.md writes them, for logs.
-pub fn output_name(output: io::Output) -> &'static str {
+/// The names of the io outputs as docs/board.md writes them, for logs (interned: the texts stay
+/// in the ELF for the host decoder, not in flash).
+pub fn output_name(output: io::Output) -> defmt::Str {
     match output {
-        io::Output::Start => "START",
-        io::Output::Hold => "PS_HOLD",
-        io::Output::PierceComplete => "PS_PIERCE_COMPLETE",
-        io::Output::CornerCurrent => "PS_CORNER_CURRENT",
-        io::Output::ArcOk => "ARC_OK",
-        io::Output::Ready => "READY",
-        io::Output::Fault => "FAULT",
+        io::Output::Start => defmt::intern!("START"),
+        io::Output::Hold => defmt::intern!("PS_HOLD"),
+        io::Output::PierceComplete => defmt::intern!("PS_PIERCE_COMPLETE"),
+        io::Output::CornerCurrent => defmt::intern!("PS_CORNER_CURRENT"),
+        io::Output::ArcOk => defmt::intern!("ARC_OK"),
+        io::Output::Ready => defmt::intern!("READY"),
+        io::Output::Fault => defmt::intern!("FAULT"),
     }
 }
