@@ -6,7 +6,7 @@
 use core::fmt;
 use core::str::FromStr;
 
-use super::fault_table::{LEGACY_FAULTS, SYNC_FAULT_TEXTS, SYNC_FAULTS};
+use super::fault_table::{LEGACY_FAULT_TEXTS, LEGACY_FAULTS, SYNC_FAULT_TEXTS, SYNC_FAULTS};
 use crate::{Error, Result};
 
 /// A fault code as read from 0x301A, 0x3044-0x3047 (SYNC) or 0x2098 (legacy).
@@ -102,10 +102,13 @@ impl FaultCode {
         if self.is_none() {
             return Some("No fault");
         }
-        LEGACY_FAULTS
-            .iter()
-            .find(|(code, _)| *code == self.0)
-            .map(|(_, text)| *text)
+        let row = LEGACY_FAULTS.iter().position(|&(code, _)| code == self.0)?;
+        let end = LEGACY_FAULTS.get(row)?.1;
+        let start = match row.checked_sub(1) {
+            Some(before) => LEGACY_FAULTS.get(before)?.1,
+            None => 0,
+        };
+        LEGACY_FAULT_TEXTS.get(usize::from(start)..usize::from(end))
     }
 }
 
@@ -252,9 +255,18 @@ mod tests {
     #[test]
     fn legacy_table_complete() {
         assert_eq!(LEGACY_FAULTS.len(), 18);
-        for (code, desc) in LEGACY_FAULTS.iter() {
-            assert_eq!(FaultCode(*code).legacy_info(), Some(*desc));
+        let mut previous = None;
+        for &(code, _) in LEGACY_FAULTS.iter() {
+            assert!(previous < Some(code), "{code}");
+            previous = Some(code);
+            let text = FaultCode(code).legacy_info().unwrap();
+            assert!(text.is_ascii() && !text.is_empty(), "{code}");
         }
+        assert_eq!(usize::from(LEGACY_FAULTS[17].1), LEGACY_FAULT_TEXTS.len());
+        assert_eq!(
+            FaultCode(110).legacy_info(),
+            Some("Invalid cut mode setting")
+        );
         assert_eq!(
             FaultCode(990).legacy_info(),
             Some("System hardware fault - service required")

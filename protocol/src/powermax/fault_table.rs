@@ -372,9 +372,38 @@ sync_faults![
     ),
 ];
 
-/// Legacy Powermax65/85 guide (807220), "Fault Codes": all 18 rows, in table order. The guide
-/// calls the list partial ("summarizes some fault codes") and has no action column.
-pub(super) static LEGACY_FAULTS: [(u16, &str); 18] = [
+/// The legacy list, written once: the texts back to back and a (code, end) index, 4 bytes a
+/// row instead of a 12-byte (code, text) pair.
+macro_rules! legacy_faults {
+    ($(($code:literal, $text:literal)),* $(,)?) => {
+        /// Every text, in list order.
+        pub(super) const LEGACY_FAULT_TEXTS: &str = concat!($($text),*);
+
+        /// Legacy Powermax65/85 guide (807220), "Fault Codes": all 18 rows, in table order,
+        /// each code with the end of its text in [`LEGACY_FAULT_TEXTS`]. The guide calls the
+        /// list partial ("summarizes some fault codes") and has no action column.
+        pub(super) static LEGACY_FAULTS: [(u16, u16); 18] = text_ends([$(($code, $text.len())),*]);
+    };
+}
+
+/// Running ends of the texts (`(code, length)` in, `(code, end)` out).
+const fn text_ends<const N: usize>(rows: [(u16, usize); N]) -> [(u16, u16); N] {
+    let mut ends = [(0, 0); N];
+    let mut end = 0;
+    let mut i = 0;
+    while i < N {
+        // Const evaluation only (the table), never input.
+        #[allow(clippy::indexing_slicing)]
+        {
+            end += rows[i].1;
+            ends[i] = (rows[i].0, end as u16);
+        }
+        i += 1;
+    }
+    ends
+}
+
+legacy_faults![
     (110, "Invalid cut mode setting"),
     (111, "Current setting value is out of range"),
     (112, "Gas pressure setting value is out of range"),
