@@ -28,6 +28,7 @@
 
 mod decimal;
 mod error;
+mod text_table;
 pub use error::{Error, Result};
 
 pub mod cnc;

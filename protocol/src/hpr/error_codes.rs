@@ -82,26 +82,8 @@ macro_rules! error_table {
         const NAMES: &str = concat!($($name),*);
 
         /// Each code with the end of its name in [`NAMES`] (the start is the row before's end).
-        static NAME_ENDS: [(u16, u16); ERROR_CODES.len()] = name_ends([$(($code, $name.len())),*]);
+        static NAME_ENDS: [(u16, u16); ERROR_CODES.len()] = crate::text_table::text_ends([$(($code, $name.len())),*]);
     };
-}
-
-/// Running ends of the names (`(code, length)` in, `(code, end)` out).
-const fn name_ends<const N: usize>(rows: [(u16, usize); N]) -> [(u16, u16); N] {
-    let mut ends = [(0, 0); N];
-    let mut end = 0;
-    let mut i = 0;
-    while i < N {
-        // Const evaluation only (the table), never input: an index out of range would fail
-        // the build, not the bridge.
-        #[allow(clippy::indexing_slicing)]
-        {
-            end += rows[i].1;
-            ends[i] = (rows[i].0, end as u16);
-        }
-        i += 1;
-    }
-    ends
 }
 
 error_table![
@@ -513,13 +495,7 @@ pub fn error_info(code: u16) -> Option<&'static ErrorInfo> {
 
 /// Name of error `code`, if the manual lists it (from the compact index, see [`error_table`]).
 pub fn error_name(code: u16) -> Option<&'static str> {
-    let row = NAME_ENDS.binary_search_by_key(&code, |&(c, _)| c).ok()?;
-    let end = NAME_ENDS.get(row)?.1;
-    let start = match row.checked_sub(1) {
-        Some(before) => NAME_ENDS.get(before)?.1,
-        None => 0,
-    };
-    NAMES.get(usize::from(start)..usize::from(end))
+    crate::text_table::text_of(NAMES, &NAME_ENDS, code)
 }
 
 /// Description of error `code`, if the manual lists it.

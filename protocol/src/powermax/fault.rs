@@ -102,13 +102,7 @@ impl FaultCode {
         if self.is_none() {
             return Some("No fault");
         }
-        let row = LEGACY_FAULTS.iter().position(|&(code, _)| code == self.0)?;
-        let end = LEGACY_FAULTS.get(row)?.1;
-        let start = match row.checked_sub(1) {
-            Some(before) => LEGACY_FAULTS.get(before)?.1,
-            None => 0,
-        };
-        LEGACY_FAULT_TEXTS.get(usize::from(start)..usize::from(end))
+        crate::text_table::text_of(LEGACY_FAULT_TEXTS, &LEGACY_FAULTS, self.0)
     }
 }
 

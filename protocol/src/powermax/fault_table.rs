@@ -382,25 +382,9 @@ macro_rules! legacy_faults {
         /// Legacy Powermax65/85 guide (807220), "Fault Codes": all 18 rows, in table order,
         /// each code with the end of its text in [`LEGACY_FAULT_TEXTS`]. The guide calls the
         /// list partial ("summarizes some fault codes") and has no action column.
-        pub(super) static LEGACY_FAULTS: [(u16, u16); 18] = text_ends([$(($code, $text.len())),*]);
+        pub(super) static LEGACY_FAULTS: [(u16, u16); 18] =
+            crate::text_table::text_ends([$(($code, $text.len())),*]);
     };
-}
-
-/// Running ends of the texts (`(code, length)` in, `(code, end)` out).
-const fn text_ends<const N: usize>(rows: [(u16, usize); N]) -> [(u16, u16); N] {
-    let mut ends = [(0, 0); N];
-    let mut end = 0;
-    let mut i = 0;
-    while i < N {
-        // Const evaluation only (the table), never input.
-        #[allow(clippy::indexing_slicing)]
-        {
-            end += rows[i].1;
-            ends[i] = (rows[i].0, end as u16);
-        }
-        i += 1;
-    }
-    ends
 }
 
 legacy_faults![
