@@ -124,6 +124,16 @@ mod image {
         text.as_str()
     }
 
+    /// The UART, or a panic: the settings are fixed ones the USARTs support at 80 MHz, so an
+    /// error is a build mistake (panic = safe state). One UART at a time: a pair of results
+    /// would bring the drop code of a `BufferedUart` into the image for the other one.
+    fn uart<U>(built: Result<U, usart::ConfigError>) -> U {
+        match built {
+            Ok(uart) => uart,
+            Err(e) => defmt::panic!("UART set-up: {}", e),
+        }
+    }
+
     #[embassy_executor::main]
     async fn main(spawner: Spawner) {
         // Before clocks, before anything that could fail: START and every other output off.
@@ -184,7 +194,7 @@ mod image {
             register("io", Duration::from_millis(200)),
         );
 
-        let ps_uart = BufferedUart::new_with_de(
+        let ps_uart = uart(BufferedUart::new_with_de(
             p.USART1,
             p.PA10,
             p.PA9,
@@ -193,8 +203,8 @@ mod image {
             PS_TX.init([0; TX_CAPACITY]),
             PS_RX.init([0; 256]),
             uart_config(settings.link.modbus_port()),
-        );
-        let cnc_uart = BufferedUart::new(
+        ));
+        let cnc_uart = uart(BufferedUart::new(
             p.USART2,
             p.PA3,
             p.PA2,
@@ -202,12 +212,7 @@ mod image {
             CNC_RX.init([0; cnc_uart::RX_BUFFER]),
             Irqs,
             cnc_uart::uart_config(),
-        );
-        let (ps_uart, cnc_uart) = match (ps_uart, cnc_uart) {
-            (Ok(ps), Ok(cnc)) => (ps, cnc),
-            // Fixed settings the USARTs support at 80 MHz: a build mistake; panic = safe state.
-            (Err(e), _) | (_, Err(e)) => defmt::panic!("UART set-up: {}", e),
-        };
+        ));
 
         let bridge = BRIDGE.init_with(|| Bridge::new(settings, now()));
         bridge.set_boot_report(now(), boot_text(&boot, loaded.outcome));
