@@ -314,16 +314,7 @@ fn parse_hpr_ps_info(f: &mut Fields<'_>) -> Result<PsInfo> {
         ],
     )?;
     Ok(PsInfo {
-        pressures: GasPressures {
-            plasma_cutflow: pc,
-            plasma_preflow: pp,
-            shield_cutflow: sc,
-            shield_preflow: sp,
-            cut_gas_1: cg1,
-            cut_gas_2: cg2,
-            n2_mix_inlet: mv1,
-            gas2_mix_inlet: mv2,
-        },
+        pressures: gas_pressures([pc, pp, sc, sp, cg1, cg2, mv1, mv2]),
         current_setpoint: cs,
         state: StateCode(st),
         error: ErrorCode(er),
@@ -355,9 +346,12 @@ fn parse_maxpro_ps_info(f: &mut Fields<'_>) -> Result<MaxProPsInfo> {
 }
 
 fn parse_pressures(f: &mut Fields<'_>) -> Result<GasPressures> {
-    let [pc, pp, sc, sp, cg1, cg2, mv1, mv2] =
-        tagged_fields(f, [b"PC", b"PP", b"SC", b"SP", b"CG", b"CG", b"MV", b"MV"])?;
-    Ok(GasPressures {
+    tagged_fields(f, [b"PC", b"PP", b"SC", b"SP", b"CG", b"CG", b"MV", b"MV"]).map(gas_pressures)
+}
+
+/// The pressures in wire order (`PC PP SC SP CG CG MV MV`).
+fn gas_pressures([pc, pp, sc, sp, cg1, cg2, mv1, mv2]: [u16; 8]) -> GasPressures {
+    GasPressures {
         plasma_cutflow: pc,
         plasma_preflow: pp,
         shield_cutflow: sc,
@@ -366,7 +360,7 @@ fn parse_pressures(f: &mut Fields<'_>) -> Result<GasPressures> {
         cut_gas_2: cg2,
         n2_mix_inlet: mv1,
         gas2_mix_inlet: mv2,
-    })
+    }
 }
 
 fn write_pressures(w: &mut DataWriter, p: &GasPressures) -> Result<()> {
