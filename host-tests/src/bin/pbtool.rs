@@ -130,6 +130,16 @@ fn attached_probe() -> Option<String> {
 fn flash_board() -> ExitCode {
     let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    // A fresh machine lacks the MCU target; adding it is a no-op when it is there.
+    let target = std::process::Command::new("rustup")
+        .args(["target", "add", "thumbv7em-none-eabihf"])
+        .status();
+    if !matches!(target, Ok(status) if status.success()) {
+        eprintln!(
+            "pbtool run: could not add the thumbv7em-none-eabihf target with rustup; \
+             trying the build anyway"
+        );
+    }
     match std::process::Command::new(cargo)
         .current_dir(root)
         .arg("flash")
