@@ -377,3 +377,82 @@ pub fn check_raw_request(family: Family, request: &Request<'_>) -> Result<(), Re
 pub fn is_illegal_address(error: TransactionError) -> bool {
     error == TransactionError::Exception(ExceptionCode::IllegalDataAddress)
 }
+
+#[cfg(test)]
+mod raw_allow_list_tests {
+    //! The RAW allow-list spells its addresses out (the register catalogue's names would cost
+    //! flash); these tests keep it in step with `powermax::registers`, the one catalogue.
+
+    use plasma_protocol::modbus_ascii::{Registers, Request};
+    use plasma_protocol::powermax::registers::{
+        self, Access, LEGACY_COILS, LEGACY_REGISTERS, RegisterInfo, SYNC_COILS, SYNC_REGISTERS,
+    };
+    use plasma_protocol::powermax::sync::{QUICK_RESTART_APPROVAL, QUICK_RESTART_COMMAND};
+
+    use super::{Family, check_raw_request};
+
+    fn writable_in(tables: &[&[RegisterInfo]], address: u16) -> bool {
+        tables.iter().any(|table| {
+            table
+                .iter()
+                .any(|r| (r.first..=r.last).contains(&address) && r.access == Access::Write)
+        })
+    }
+
+    /// The family's own addresses; SYNC units also answer the legacy ones (SYNC Table 1).
+    fn tables(
+        family: Family,
+    ) -> (
+        &'static [&'static [RegisterInfo]],
+        &'static [&'static [RegisterInfo]],
+    ) {
+        match family {
+            Family::PowermaxSync => (
+                &[SYNC_REGISTERS, LEGACY_REGISTERS],
+                &[SYNC_COILS, LEGACY_COILS],
+            ),
+            _ => (&[LEGACY_REGISTERS], &[LEGACY_COILS]),
+        }
+    }
+
+    #[test]
+    fn single_writes_reach_exactly_the_catalogues_writable_addresses() {
+        for family in [Family::PowermaxSync, Family::PowermaxLegacy] {
+            let (regs, coils) = tables(family);
+            for address in 0..=u16::MAX {
+                let quick_restart =
+                    address == QUICK_RESTART_COMMAND || address == QUICK_RESTART_APPROVAL;
+                let register = Request::WriteSingleRegister { address, value: 1 };
+                assert_eq!(
+                    check_raw_request(family, &register).is_ok(),
+                    writable_in(regs, address) && !quick_restart,
+                    "{family:?} register {address:#06X}"
+                );
+                let coil = Request::WriteSingleCoil { address, on: true };
+                assert_eq!(
+                    check_raw_request(family, &coil).is_ok(),
+                    writable_in(coils, address),
+                    "{family:?} coil {address:#06X}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn block_writes_stay_inside_documented_writable_runs() {
+        let words = [0u16; 4];
+        for start in 0x3070..=0x3090u16 {
+            for quantity in 1..=4usize {
+                let values = Registers::Words(&words[..quantity]);
+                let request = Request::WriteMultipleRegisters { start, values };
+                let allowed = check_raw_request(Family::PowermaxSync, &request).is_ok();
+                if allowed {
+                    assert!(
+                        registers::registers_writable(start, quantity as u16),
+                        "{start:#06X}+{quantity} allowed but not documented writable"
+                    );
+                }
+            }
+        }
+    }
+}
