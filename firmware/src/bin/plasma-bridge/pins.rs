@@ -7,7 +7,7 @@ use embassy_stm32::mode::Async;
 use embassy_stm32::pac;
 use embassy_stm32::pac::gpio::{Gpio, vals::Moder};
 use plasma_firmware::inputs::{self, InputConfig, PinLevels};
-use plasma_firmware::io::{self, Input, Outputs};
+use plasma_firmware::io::{Input, Outputs};
 use plasma_firmware::safe_state::{Output as Signal, SAFE_OUTPUTS};
 
 /// Where each output is. All are active high at the MCU pin, with an external pull-down so
@@ -108,19 +108,5 @@ pub fn pull(config: &InputConfig, input: Input) -> Pull {
     match config.get(input).polarity.pull() {
         inputs::Pull::Up => Pull::Up,
         inputs::Pull::Down => Pull::Down,
-    }
-}
-
-/// The names of the io outputs as docs/board.md writes them, for logs (interned: the texts stay
-/// in the ELF for the host decoder, not in flash).
-pub fn output_name(output: io::Output) -> defmt::Str {
-    match output {
-        io::Output::Start => defmt::intern!("START"),
-        io::Output::Hold => defmt::intern!("PS_HOLD"),
-        io::Output::PierceComplete => defmt::intern!("PS_PIERCE_COMPLETE"),
-        io::Output::CornerCurrent => defmt::intern!("PS_CORNER_CURRENT"),
-        io::Output::ArcOk => defmt::intern!("ARC_OK"),
-        io::Output::Ready => defmt::intern!("READY"),
-        io::Output::Fault => defmt::intern!("FAULT"),
     }
 }
