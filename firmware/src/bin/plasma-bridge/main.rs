@@ -48,8 +48,9 @@ mod watchdog;
 mod board {
     pub use crate::cnc_uart::{CncUart, TX_BUFFER as CNC_TX_BUFFER};
     pub use crate::flash::{SettingsFlash, flash_errors_seen};
-    pub use crate::pins::{InputPins, OutputPins, drive_safe_state};
+    pub use crate::pins::{InputPins, OutputPins};
     pub use crate::ps_uart::PsUart;
+    pub use embassy_stm32::pac;
 
     /// The heartbeat LED (LD2, PA5).
     pub type Led = embassy_stm32::gpio::Output<'static>;
@@ -79,11 +80,12 @@ mod image {
 
     use crate::cnc_uart::CncUart;
     use crate::io_executor::{SERIAL_PRIORITY, start_io_executor};
-    use crate::pins::{InputPins, OutputPins, drive_safe_state, pull};
+    use crate::pins::{InputPins, OutputPins, pull};
     use crate::ps_uart::{PsUart, uart_config};
     use crate::tasks::bridge::bridge as bridge_task;
     use crate::tasks::clock::now;
     use crate::tasks::io::{BoardIo, io_task};
+    use crate::tasks::pin_map::drive_safe_state;
     use crate::tasks::progress::{heartbeat, register};
     use crate::tasks::settings::{self as settings_task, outcome_word};
     use crate::{cnc_uart, fault, flash, watchdog};

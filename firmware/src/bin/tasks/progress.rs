@@ -11,7 +11,8 @@ use plasma_firmware::time::Duration;
 use plasma_firmware::watchdog::{ProgressMonitor, TaskId};
 
 use super::clock::now;
-use crate::board::{Led, drive_safe_state};
+use super::pin_map::drive_safe_state;
+use crate::board::Led;
 
 /// One slot per task that matters: I/O, bridge (PS and CNC), settings, heartbeat.
 const TASKS: usize = 6;
