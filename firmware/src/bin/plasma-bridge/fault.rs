@@ -10,7 +10,7 @@ use embassy_stm32::pac;
 use plasma_firmware::safe_state::{BootReport, PANIC_MARKER};
 
 use crate::flash::{FLASH_BANK2, FLASH_BASE, settings_region};
-use crate::pins::drive_safe_state;
+use crate::tasks::pin_map::drive_safe_state;
 
 /// A word the reset does not clear (cortex-m-rt's `.uninit`), for the panic marker.
 #[unsafe(link_section = ".uninit.PANIC_MARKER")]

@@ -3,17 +3,19 @@
 //! Built for the MCU with `cargo fw`, flashed with `cargo flash`. On the host this file only
 //! prints how to build it, so that `cargo build` / `cargo test` of the workspace work.
 //!
-//! The image only builds peripherals and spawns tasks; what they do is the library's:
+//! The image only builds peripherals and spawns tasks. The tasks are shared with the emulated
+//! board (`../tasks`, included as [`tasks`]); what they do is the library's. This file and
+//! its modules are the board layer ([`board`] lists what the tasks take from it):
 //!
 //! - boot: outputs to safe state before anything else, reset cause, clocks (80 MHz),
 //!   settings from flash ([`flash`]), the reset cause and the settings outcome handed to the
 //!   bridge for the CNC port (`!BOOT`, `ID`);
-//! - [`discrete`]: the I/O task on an interrupt executor above all serial work (input edges
-//!   to outputs);
-//! - [`bridge_task`]: the `Bridge` in thread mode: the power-supply link on USART1 with
-//!   hardware driver-enable ([`ps_uart`]), the CNC session on USART2 ([`cnc_uart`]);
-//! - [`flash`]: the settings task that stores `CONFIG SAVE`;
-//! - [`watchdog`]: the IWDG fed only while every task reports progress, the heartbeat LED;
+//! - the I/O task on an interrupt executor above all serial work ([`io_executor`]): input
+//!   edges (EXTI, [`pins`]) to outputs;
+//! - the bridge task in thread mode: the power-supply link on USART1 with hardware
+//!   driver-enable ([`ps_uart`]), the CNC session on USART2 ([`cnc_uart`]);
+//! - the settings task that stores `CONFIG SAVE` in flash ([`flash`]);
+//! - [`watchdog`]: the IWDG fed only while every task reports progress; the heartbeat LED;
 //! - [`fault`]: panic, HardFault and NMI leave every output off and reset.
 #![cfg_attr(target_os = "none", no_std)]
 #![cfg_attr(target_os = "none", no_main)]
@@ -24,23 +26,35 @@ fn main() {
 }
 
 #[cfg(target_os = "none")]
-mod bridge_task;
-#[cfg(target_os = "none")]
-mod clock;
-#[cfg(target_os = "none")]
 mod cnc_uart;
-#[cfg(target_os = "none")]
-mod discrete;
 #[cfg(target_os = "none")]
 mod fault;
 #[cfg(target_os = "none")]
 mod flash;
 #[cfg(target_os = "none")]
+mod io_executor;
+#[cfg(target_os = "none")]
 mod pins;
 #[cfg(target_os = "none")]
 mod ps_uart;
 #[cfg(target_os = "none")]
+#[path = "../tasks/mod.rs"]
+mod tasks;
+#[cfg(target_os = "none")]
 mod watchdog;
+
+/// What the shared tasks take from this board (see `../tasks/mod.rs`).
+#[cfg(target_os = "none")]
+mod board {
+    pub use crate::cnc_uart::{CncUart, TX_BUFFER as CNC_TX_BUFFER};
+    pub use crate::flash::{SettingsFlash, flash_errors_seen};
+    pub use crate::pins::{InputPins, OutputPins};
+    pub use crate::ps_uart::PsUart;
+    pub use embassy_stm32::pac;
+
+    /// The heartbeat LED (LD2, PA5).
+    pub type Led = embassy_stm32::gpio::Output<'static>;
+}
 
 #[cfg(target_os = "none")]
 mod image {
@@ -64,13 +78,17 @@ mod image {
     use plasma_firmware::time::Duration;
     use static_cell::StaticCell;
 
-    use crate::clock::now;
     use crate::cnc_uart::CncUart;
-    use crate::discrete::{BoardIo, SERIAL_PRIORITY};
-    use crate::pins::{InputPins, OutputPins, drive_safe_state, pull};
+    use crate::io_executor::{SERIAL_PRIORITY, start_io_executor};
+    use crate::pins::{InputPins, OutputPins, pull};
     use crate::ps_uart::{PsUart, uart_config};
-    use crate::watchdog::register;
-    use crate::{bridge_task, cnc_uart, discrete, fault, flash, watchdog};
+    use crate::tasks::bridge::bridge as bridge_task;
+    use crate::tasks::clock::now;
+    use crate::tasks::io::{BoardIo, io_task};
+    use crate::tasks::pin_map::drive_safe_state;
+    use crate::tasks::progress::{heartbeat, register};
+    use crate::tasks::settings::{self as settings_task, outcome_word};
+    use crate::{cnc_uart, fault, flash, watchdog};
 
     bind_interrupts!(struct Irqs {
         FLASH => embassy_stm32::flash::InterruptHandler;
@@ -119,7 +137,7 @@ mod image {
             text,
             "{},settings:{}",
             boot.cause.as_str(),
-            flash::outcome_word(outcome)
+            outcome_word(outcome)
         );
         text.as_str()
     }
@@ -171,7 +189,7 @@ mod image {
         }
 
         let mut store = flash::open(embassy_stm32::flash::Flash::new(p.FLASH, Irqs));
-        let loaded = flash::load(store.as_mut()).await;
+        let loaded = settings_task::load(store.as_mut()).await;
         let settings = loaded.settings;
         // Polarity and debounce of the inputs are not (yet) part of the stored settings.
         let input_config = InputConfig::default();
@@ -187,12 +205,9 @@ mod image {
             ExtiInput::new(p.PA8, p.EXTI8, pull(c, Input::NotReady), Irqs),
             ExtiInput::new(p.PB10, p.EXTI10, pull(c, Input::RampdownError), Irqs),
         ]);
-        discrete::start(
-            inputs,
-            outputs,
-            (settings.io, input_config),
-            register("io", Duration::from_millis(200)),
-        );
+        let io_progress = register("io", Duration::from_millis(200));
+        start_io_executor()
+            .spawn(io_task(inputs, outputs, (settings.io, input_config), io_progress).unwrap());
 
         let ps_uart = uart(BufferedUart::new_with_de(
             p.USART1,
@@ -217,7 +232,7 @@ mod image {
         let bridge = BRIDGE.init_with(|| Bridge::new(settings, now()));
         bridge.set_boot_report(now(), boot_text(&boot, loaded.outcome));
         spawner.spawn(
-            bridge_task::bridge(
+            bridge_task(
                 bridge,
                 PsUart(ps_uart),
                 CncUart(cnc_uart),
@@ -228,13 +243,12 @@ mod image {
             )
             .unwrap(),
         );
-        spawner
-            .spawn(flash::settings(store, register("settings", Duration::from_secs(1))).unwrap());
+        spawner.spawn(
+            settings_task::settings(store, register("settings", Duration::from_secs(1))).unwrap(),
+        );
 
         let led = Output::new(p.PA5, Level::Low, Speed::Low);
-        spawner.spawn(
-            watchdog::heartbeat(led, register("heartbeat", Duration::from_secs(1))).unwrap(),
-        );
+        spawner.spawn(heartbeat(led, register("heartbeat", Duration::from_secs(1))).unwrap());
         spawner.spawn(watchdog::watchdog(p.IWDG).unwrap());
     }
 }

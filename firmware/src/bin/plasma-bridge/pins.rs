@@ -1,49 +1,12 @@
-//! The pin map (docs/board.md): where every discrete signal is, and the register-level safe
-//! state used before the HAL exists and from the fault handlers.
+//! The pins through the HAL: the outputs and the EXTI inputs the I/O task owns. Where each
+//! output is, and the register-level safe state, are shared with the emulated board
+//! (`../tasks/pin_map.rs`).
 
 use embassy_stm32::exti::ExtiInput;
 use embassy_stm32::gpio::{Level, Output, Pull};
 use embassy_stm32::mode::Async;
-use embassy_stm32::pac;
-use embassy_stm32::pac::gpio::{Gpio, vals::Moder};
 use plasma_firmware::inputs::{self, InputConfig, PinLevels};
-use plasma_firmware::io::{self, Input, Outputs};
-use plasma_firmware::safe_state::{Output as Signal, SAFE_OUTPUTS};
-
-/// Where each output is. All are active high at the MCU pin, with an external pull-down so
-/// they are off while the pin is still high-impedance after reset.
-const fn output_pin(signal: Signal) -> (Gpio, usize) {
-    match signal {
-        Signal::Start => (pac::GPIOB, 0),
-        Signal::PsHold => (pac::GPIOC, 1),
-        Signal::PsPierceComplete => (pac::GPIOC, 0),
-        Signal::PsCornerCurrent => (pac::GPIOB, 8),
-        Signal::CncArcOk => (pac::GPIOB, 9),
-        Signal::CncReady => (pac::GPIOB, 6),
-        Signal::CncFault => (pac::GPIOC, 7),
-    }
-}
-
-/// Drives every output to its safe level with plain register writes: usable before the HAL
-/// exists, and from the panic and fault handlers while tasks own the pins.
-pub fn drive_safe_state() {
-    pac::RCC.ahb2enr().modify(|w| {
-        w.set_gpioben(true);
-        w.set_gpiocen(true);
-    });
-    for (signal, on) in SAFE_OUTPUTS.levels() {
-        let (port, pin) = output_pin(signal);
-        // Level first, then output mode: the pin never drives the wrong level.
-        port.bsrr().write(|w| {
-            if on {
-                w.set_bs(pin, true)
-            } else {
-                w.set_br(pin, true)
-            }
-        });
-        port.moder().modify(|w| w.set_moder(pin, Moder::OUTPUT));
-    }
-}
+use plasma_firmware::io::{Input, Outputs};
 
 /// The seven outputs, owned by the I/O task.
 pub struct OutputPins {
@@ -108,19 +71,5 @@ pub fn pull(config: &InputConfig, input: Input) -> Pull {
     match config.get(input).polarity.pull() {
         inputs::Pull::Up => Pull::Up,
         inputs::Pull::Down => Pull::Down,
-    }
-}
-
-/// The names of the io outputs as docs/board.md writes them, for logs (interned: the texts stay
-/// in the ELF for the host decoder, not in flash).
-pub fn output_name(output: io::Output) -> defmt::Str {
-    match output {
-        io::Output::Start => defmt::intern!("START"),
-        io::Output::Hold => defmt::intern!("PS_HOLD"),
-        io::Output::PierceComplete => defmt::intern!("PS_PIERCE_COMPLETE"),
-        io::Output::CornerCurrent => defmt::intern!("PS_CORNER_CURRENT"),
-        io::Output::ArcOk => defmt::intern!("ARC_OK"),
-        io::Output::Ready => defmt::intern!("READY"),
-        io::Output::Fault => defmt::intern!("FAULT"),
     }
 }

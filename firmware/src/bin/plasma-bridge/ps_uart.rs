@@ -71,16 +71,3 @@ impl ConfigurablePort for PsUart {
             .map_err(|_| UnsupportedConfig)
     }
 }
-
-/// Short text for a line setting, for logs.
-pub fn describe(config: PortConfig) -> &'static str {
-    use port::{Parity, StopBits};
-    match (config.parity, config.stop_bits) {
-        (Parity::None, StopBits::One) => "8N1",
-        (Parity::Even, StopBits::One) => "8E1",
-        (Parity::Odd, StopBits::One) => "8O1",
-        (Parity::None, StopBits::Two) => "8N2",
-        (Parity::Even, StopBits::Two) => "8E2",
-        (Parity::Odd, StopBits::Two) => "8O2",
-    }
-}

@@ -12,24 +12,21 @@ use core::future::Future;
 use core::sync::atomic::{AtomicU32, Ordering};
 
 use defmt::{debug, info, warn};
-use embassy_executor::InterruptExecutor;
 use embassy_futures::select::{Either4, select4};
-use embassy_stm32::interrupt;
-use embassy_stm32::interrupt::{InterruptExt, Priority};
 use embassy_sync::blocking_mutex::raw::CriticalSectionRawMutex;
 use embassy_sync::channel::Channel;
 use embassy_sync::signal::Signal;
 use embassy_time::Timer;
 use plasma_firmware::discrete::DiscreteIo;
 use plasma_firmware::inputs::InputConfig;
-use plasma_firmware::io::{Inputs, IoConfig, IoEvent, Outputs, SupplyState, Transition};
+use plasma_firmware::io::{self, Inputs, IoConfig, IoEvent, Outputs, SupplyState, Transition};
 use plasma_firmware::supervisor::IoExchange;
 use plasma_firmware::time::{Duration, Instant, div_rem_u16};
 use plasma_firmware::watchdog::TaskId;
 
-use crate::clock::{embassy_instant, now};
-use crate::pins::{InputPins, OutputPins, output_name};
-use crate::watchdog::report;
+use super::clock::{embassy_instant, now};
+use super::progress::report;
+use crate::board::{InputPins, OutputPins};
 
 /// The link's view of the supply, latest wins (bridge → I/O).
 pub static SUPPLY: Signal<CriticalSectionRawMutex, SupplyState> = Signal::new();
@@ -40,40 +37,14 @@ pub static SNAPSHOT: Signal<CriticalSectionRawMutex, (Inputs, Outputs)> = Signal
 /// I/O events for the CNC session, in order (I/O → bridge).
 pub static EVENTS: Channel<CriticalSectionRawMutex, (Instant, IoEvent), 16> = Channel::new();
 
-/// The I/O task's executor, run from the UART4 interrupt (a vector this board leaves unused).
-static EXECUTOR: InterruptExecutor = InterruptExecutor::new();
-
-#[interrupt]
-unsafe fn UART4() {
-    // SAFETY: called from its own interrupt only, after `start` below.
-    unsafe { EXECUTOR.on_interrupt() }
-}
-
-/// Priorities, highest first (Cortex-M: lower number = more urgent). EXTI stays at P0 (the
-/// HAL's default): its handler only wakes the I/O task. The I/O executor comes next; every
-/// serial and flash interrupt goes below it, so the START path never waits behind them.
-pub const IO_EXECUTOR_PRIORITY: Priority = Priority::P1;
-/// USART1, USART2 and FLASH.
-pub const SERIAL_PRIORITY: Priority = Priority::P4;
-
-/// Starts the I/O executor and spawns the I/O task on it.
-pub fn start(
-    pins: InputPins,
-    outputs: OutputPins,
-    config: (IoConfig, InputConfig),
-    progress: TaskId,
-) {
-    interrupt::UART4.set_priority(IO_EXECUTOR_PRIORITY);
-    let spawner = EXECUTOR.start(interrupt::UART4);
-    spawner.spawn(io_task(pins, outputs, config, progress).unwrap());
-}
-
 /// Longest sleep of the I/O task: it reports progress and re-reads the pins at least this
 /// often, whatever happens.
 const MAX_WAIT: Duration = Duration::from_millis(50);
 
+/// The I/O task. Each board runs it on an interrupt executor above every serial interrupt
+/// (the board's `start_io_executor`), so the START path never waits behind serial work.
 #[embassy_executor::task]
-async fn io_task(
+pub async fn io_task(
     mut pins: InputPins,
     mut outputs: OutputPins,
     config: (IoConfig, InputConfig),
@@ -212,5 +183,19 @@ impl IoExchange for BoardIo {
 
     fn send_io_config(&mut self, config: IoConfig) {
         CONFIG.signal((config, self.inputs));
+    }
+}
+
+/// The names of the io outputs as docs/board.md writes them, for logs (interned: the texts stay
+/// in the ELF for the host decoder, not in flash).
+pub fn output_name(output: io::Output) -> defmt::Str {
+    match output {
+        io::Output::Start => defmt::intern!("START"),
+        io::Output::Hold => defmt::intern!("PS_HOLD"),
+        io::Output::PierceComplete => defmt::intern!("PS_PIERCE_COMPLETE"),
+        io::Output::CornerCurrent => defmt::intern!("PS_CORNER_CURRENT"),
+        io::Output::ArcOk => defmt::intern!("ARC_OK"),
+        io::Output::Ready => defmt::intern!("READY"),
+        io::Output::Fault => defmt::intern!("FAULT"),
     }
 }

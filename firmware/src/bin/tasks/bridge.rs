@@ -8,12 +8,11 @@ use plasma_firmware::port::PortConfig;
 use plasma_firmware::supervisor::Supervisor;
 use plasma_firmware::watchdog::TaskId;
 
-use crate::clock::EmbassyClock;
-use crate::cnc_uart::{self, CncUart};
-use crate::discrete::BoardIo;
-use crate::flash::BoardSaver;
-use crate::ps_uart::{PsUart, describe};
-use crate::watchdog::report;
+use super::clock::EmbassyClock;
+use super::io::BoardIo;
+use super::progress::report;
+use super::settings::BoardSaver;
+use crate::board::{CNC_TX_BUFFER, CncUart, PsUart};
 
 /// The bridge arrives by reference: a task's arguments live in its future next to the state
 /// the body keeps across awaits, so a `Bridge` by value would take its ~8 KB of RAM twice.
@@ -26,7 +25,7 @@ pub async fn bridge(
     progress: TaskId,
 ) {
     let clock = EmbassyClock;
-    let mut supervisor = Supervisor::new(ps, cnc, cnc_uart::TX_BUFFER, io, BoardSaver);
+    let mut supervisor = Supervisor::new(ps, cnc, CNC_TX_BUFFER, io, BoardSaver);
     let mut applied: Option<PortConfig> = None;
     let mut status = Seen::default();
     loop {
@@ -84,5 +83,18 @@ impl Seen {
             info!("power supply ready: {=bool}", now.ready);
         }
         *self = now;
+    }
+}
+
+/// Short text for a line setting, for logs.
+fn describe(config: PortConfig) -> &'static str {
+    use plasma_firmware::port::{Parity, StopBits};
+    match (config.parity, config.stop_bits) {
+        (Parity::None, StopBits::One) => "8N1",
+        (Parity::Even, StopBits::One) => "8E1",
+        (Parity::Odd, StopBits::One) => "8O1",
+        (Parity::None, StopBits::Two) => "8N2",
+        (Parity::Even, StopBits::Two) => "8E2",
+        (Parity::Odd, StopBits::Two) => "8O2",
     }
 }
