@@ -20,7 +20,7 @@ use super::image::firmware_elf;
 use super::log::FirmwareLog;
 use super::pins::{WATCHED_PORT, input_level, input_pin, output_active, output_pin};
 use super::qemu::{Qemu, QemuOptions};
-use super::qtest::{Edge, Qtest};
+use super::qtest::Qtest;
 use super::safety::{self, Observed};
 use super::sim_port::{Framing, SimPort, SimPortOptions};
 use crate::sim::{Model, SimOptions};
@@ -164,11 +164,11 @@ impl Board {
 
         let (on_motion, output_edges) = match options.wiring {
             Wiring::Unit => {
-                let qtest = Arc::clone(&qtest);
+                let for_motion = Arc::clone(&qtest);
                 let motion = input_pin(Input::Motion);
                 let on_motion: Box<dyn FnMut(bool) + Send> = Box::new(move |on| {
-                    // QEMU gone: the board is being dropped.
-                    let _ = qtest.set_pin(motion, input_level(on));
+                    // An error means QEMU is gone: the board is being dropped.
+                    let _ = for_motion.set_pin(motion, input_level(on));
                 });
                 (Some(on_motion), Some(qtest.subscribe()))
             }

@@ -226,6 +226,13 @@ impl CncPort {
     }
 }
 
+impl Drop for CncPort {
+    fn drop(&mut self) {
+        // Ends the reader thread (it holds a clone of the socket).
+        let _ = self.writer.shutdown(std::net::Shutdown::Both);
+    }
+}
+
 fn lock<T>(mutex: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
     mutex.lock().unwrap_or_else(|e| e.into_inner())
 }
@@ -249,11 +256,11 @@ mod tests {
         let board = std::thread::spawn(move || {
             let mut writer = theirs.try_clone().unwrap();
             let mut lines = BufReader::new(theirs).lines();
-            assert_eq!(lines.next().unwrap().unwrap(), "STATUS\r");
+            assert_eq!(lines.next().unwrap().unwrap(), "STATUS");
             writer
                 .write_all(b"!FAULT 0-50-0 cartridge\r\nOK link=UP\r\n!LINK DOWN reason=no_answer\r\n")
                 .unwrap();
-            assert_eq!(lines.next().unwrap().unwrap(), "ID\r");
+            assert_eq!(lines.next().unwrap().unwrap(), "ID");
             // No reply: the client times out.
             let _ = lines.next();
         });

@@ -222,7 +222,7 @@ impl Qemu {
             .map_err(|e| Error::Qemu(format!("cannot start qemu-system-arm: {e}; {INSTALL_HINT}")))?;
         let mut starting = Starting {
             child: Some(child),
-            stderr_path: &stderr_path,
+            stderr_path: stderr_path.clone(),
             deadline: Instant::now() + CONNECT_TIMEOUT,
         };
         let ps = starting.accept(&ps, "PS serial")?;
@@ -277,13 +277,13 @@ impl Drop for Qemu {
 }
 
 /// QEMU while its sockets connect: killed if they don't.
-struct Starting<'a> {
+struct Starting {
     child: Option<Child>,
-    stderr_path: &'a Path,
+    stderr_path: PathBuf,
     deadline: Instant,
 }
 
-impl Starting<'_> {
+impl Starting {
     fn accept(&mut self, listener: &UnixListener, what: &str) -> Result<UnixStream> {
         loop {
             match listener.accept() {
@@ -298,7 +298,7 @@ impl Starting<'_> {
             }
             let child = self.child.as_mut().expect("still starting");
             if let Ok(Some(status)) = child.try_wait() {
-                let stderr = fs::read_to_string(self.stderr_path).unwrap_or_default();
+                let stderr = fs::read_to_string(&self.stderr_path).unwrap_or_default();
                 return Err(Error::Exited(format!(
                     "qemu-system-arm exited ({status}) before connecting its {what} socket:\n{}",
                     stderr.trim()
@@ -315,7 +315,7 @@ impl Starting<'_> {
     }
 }
 
-impl Drop for Starting<'_> {
+impl Drop for Starting {
     fn drop(&mut self) {
         if let Some(child) = &mut self.child {
             let _ = child.kill();

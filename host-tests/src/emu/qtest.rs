@@ -200,6 +200,14 @@ impl Qtest {
     }
 }
 
+impl Drop for Qtest {
+    fn drop(&mut self) {
+        // Ends the reader thread (it holds a clone of the socket).
+        let session = self.session.lock().unwrap_or_else(|e| e.into_inner());
+        let _ = session.0.shutdown(std::net::Shutdown::Both);
+    }
+}
+
 fn lock<T>(mutex: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
     mutex.lock().unwrap_or_else(|e| e.into_inner())
 }
@@ -327,6 +335,8 @@ mod tests {
         let qtest = fake_qemu(vec![
             ("irq_intercept_out /machine/soc/gpiob", vec!["OK"]),
             ("readl 0x48000414", vec!["IRQ raise 0", "OK 0x00000041"]),
+            ("readl 0x48000414", vec!["OK 0x00000041"]),
+            ("readl 0x48000414", vec!["OK 0x00000041"]),
             (
                 "set_irq_in /machine/soc/gpioa unnamed-gpio-in 0 0",
                 vec!["OK", "IRQ lower 0"],
