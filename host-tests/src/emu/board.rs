@@ -28,6 +28,8 @@ use crate::sim::{Model, SimOptions};
 /// Boards that may run at once in one process (QEMU needs a core while the guest is busy;
 /// the machine has two). `PLASMA_EMU_JOBS` overrides it.
 const DEFAULT_PARALLEL_BOARDS: usize = 2;
+/// How long the firmware may take to enable its CNC port after power-up.
+const CNC_READY_TIMEOUT: Duration = Duration::from_secs(20);
 /// How often waits look at an output.
 const POLL: Duration = Duration::from_millis(2);
 
@@ -198,6 +200,7 @@ impl Board {
         let cnc = CncPort::new(sockets.cnc)?;
         let log = FirmwareLog::start(&elf, qemu.log_path())?;
         qemu.resume()?;
+        wait_cnc_port_ready(&qtest)?;
         Ok(Board {
             qemu,
             qtest,
@@ -473,6 +476,24 @@ impl Drop for Board {
             );
         }
     }
+}
+
+/// Waits until the firmware has enabled USART2's receiver and its interrupt: bytes sent to
+/// the CNC port before that are lost, as on a board.
+fn wait_cnc_port_ready(qtest: &Qtest) -> Result<()> {
+    const USART2_CR1: u64 = 0x4000_4400;
+    const READY: u32 = 1 << 0 | 1 << 2 | 1 << 5; // UE, RE, RXNEIE
+    let began = Instant::now();
+    while qtest.readl(USART2_CR1)? & READY != READY {
+        if began.elapsed() > CNC_READY_TIMEOUT {
+            return Err(Error::Timeout(format!(
+                "the firmware did not enable its CNC port (USART2) in {} s",
+                CNC_READY_TIMEOUT.as_secs()
+            )));
+        }
+        std::thread::sleep(POLL);
+    }
+    Ok(())
 }
 
 fn lock<T>(mutex: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {

@@ -65,6 +65,43 @@ pub fn parse_timestamp_us(text: &str) -> Option<u64> {
     }
 }
 
+/// An output change the I/O task logged (`I/O 69.342 ms: READY on: link up, ...`).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct LoggedTransition {
+    /// The interlocks' own time of the change, in microseconds since boot.
+    pub at_us: u64,
+    /// The output's name (`START`, `ARC_OK`, `READY`, `FAULT`...).
+    pub output: String,
+    /// The new state.
+    pub on: bool,
+    /// Why.
+    pub reason: String,
+}
+
+/// Parses an I/O task transition line; `None` for any other line.
+pub fn parse_transition(text: &str) -> Option<LoggedTransition> {
+    let rest = text.strip_prefix("I/O ")?;
+    let (time, rest) = rest.split_once(" ms: ")?;
+    let (whole, fraction) = time.split_once('.')?;
+    if fraction.len() != 3 {
+        return None;
+    }
+    let at_us = whole.parse::<u64>().ok()? * 1000 + fraction.parse::<u64>().ok()?;
+    let (change, reason) = rest.split_once(": ").unwrap_or((rest, ""));
+    let (output, state) = change.split_once(' ')?;
+    let on = match state {
+        "on" => true,
+        "off" => false,
+        _ => return None,
+    };
+    Some(LoggedTransition {
+        at_us,
+        output: output.to_string(),
+        on,
+        reason: reason.to_string(),
+    })
+}
+
 #[derive(Default)]
 struct Shared {
     lines: Vec<LogLine>,
@@ -275,6 +312,24 @@ mod tests {
         assert_eq!(parse_timestamp_us("7710"), Some(7_710));
         assert_eq!(parse_timestamp_us(""), None);
         assert_eq!(parse_timestamp_us("00:00:01.000250"), None);
+    }
+
+    #[test]
+    fn transitions_are_read_from_the_io_log() {
+        assert_eq!(
+            parse_transition("I/O 69.342 ms: READY on: link up, no fault, supply ready"),
+            Some(LoggedTransition {
+                at_us: 69_342,
+                output: "READY".to_string(),
+                on: true,
+                reason: "link up, no fault, supply ready".to_string()
+            })
+        );
+        let off = parse_transition("I/O 1203.007 ms: START off: torch-on released").unwrap();
+        assert_eq!((off.at_us, off.output.as_str(), off.on), (1_203_007, "START", false));
+        assert_eq!(parse_transition("link up: Some(Powermax)"), None);
+        assert_eq!(parse_transition("I/O 1.5 ms: START on: x"), None);
+        assert_eq!(parse_transition("I/O 1.500 ms: START maybe: x"), None);
     }
 
     #[test]

@@ -4,7 +4,8 @@
 //! The harness listens on every socket first and then starts QEMU, whose socket chardevs are
 //! clients: they connect while QEMU starts, before the guest runs, so nothing the firmware
 //! writes is lost. QEMU starts paused (`-S`); [`Qemu::resume`] starts the CPU once the caller
-//! has set the input pins through qtest.
+//! has set the input pins through qtest. The firmware's defmt frames (semihosting) arrive on
+//! QEMU's standard output, which goes to the run's log file.
 
 use std::fs;
 use std::os::unix::net::{UnixListener, UnixStream};
@@ -146,10 +147,10 @@ pub fn command_line(options: &QemuOptions, dir: &Path) -> Vec<String> {
         args.push("-serial".to_string());
         args.push(format!("chardev:{id}"));
     }
-    args.push("-chardev".to_string());
-    args.push(format!("file,id=log,path={}", path("log.defmt")));
+    // Semihosting writes to `:tt` (defmt-semihosting's frames) go to QEMU's standard output
+    // whatever `chardev=` says: the harness sends that to the log file.
     args.push("-semihosting-config".to_string());
-    args.push("enable=on,target=native,chardev=log".to_string());
+    args.push("enable=on,target=native".to_string());
     args.push("-chardev".to_string());
     args.push(format!("socket,id=qmp,path={}", path("qmp.sock")));
     args.push("-mon".to_string());
@@ -158,6 +159,9 @@ pub fn command_line(options: &QemuOptions, dir: &Path) -> Vec<String> {
     args.push("tcg".to_string());
     args.push("-qtest".to_string());
     args.push(format!("unix:{}", path("qtest.sock")));
+    // Without it QEMU echoes every qtest exchange on stderr.
+    args.push("-qtest-log".to_string());
+    args.push("/dev/null".to_string());
     if options.icount {
         args.push("-icount".to_string());
         args.push("shift=0".to_string());
@@ -213,10 +217,12 @@ impl Qemu {
         let stderr_path = dir.path().join("qemu.stderr");
         let stderr = fs::File::create(&stderr_path)
             .map_err(|e| Error::io(format!("creating {}", stderr_path.display()), e))?;
+        let log = fs::File::create(&log_path)
+            .map_err(|e| Error::io(format!("creating {}", log_path.display()), e))?;
         let child = Command::new(qemu_binary())
             .args(command_line(options, dir.path()))
             .stdin(Stdio::null())
-            .stdout(Stdio::null())
+            .stdout(log)
             .stderr(stderr)
             .spawn()
             .map_err(|e| Error::Qemu(format!("cannot start qemu-system-arm: {e}; {INSTALL_HINT}")))?;
@@ -354,8 +360,7 @@ mod tests {
             "-kernel /fw.elf",
             "-chardev socket,id=ps,path=/tmp/x/ps.sock -serial chardev:ps",
             "-chardev socket,id=cnc,path=/tmp/x/cnc.sock -serial chardev:cnc",
-            "-chardev file,id=log,path=/tmp/x/log.defmt",
-            "-semihosting-config enable=on,target=native,chardev=log",
+            "-semihosting-config enable=on,target=native",
             "-accel tcg -qtest unix:/tmp/x/qtest.sock",
             "-S",
         ] {

@@ -69,13 +69,15 @@ pub enum Framing {
 }
 
 /// The port settings USART1's registers describe: `None` while the USART is disabled or set
-/// to anything but 8 data bits.
+/// to anything but 8 data bits. A baud rate within 2 % of `nominal_baud` (the unit's; BRR
+/// rounds, and a UART tolerates that much) is taken as `nominal_baud`; without the clock the
+/// baud rate is taken as `nominal_baud`.
 pub fn port_from_registers(
     cr1: u32,
     cr2: u32,
     brr: u32,
     clock_hz: Option<u32>,
-    default_baud: u32,
+    nominal_baud: u32,
 ) -> Option<PortConfig> {
     const UE: u32 = 1 << 0;
     const PS: u32 = 1 << 9;
@@ -117,9 +119,14 @@ pub fn port_from_registers(
                 brr
             };
             let over = if cr1 & OVER8 != 0 { 2 } else { 1 };
-            over * clock / div
+            let baud = over * clock / div;
+            if baud.abs_diff(nominal_baud).saturating_mul(50) <= nominal_baud {
+                nominal_baud
+            } else {
+                baud
+            }
         }
-        _ => default_baud,
+        _ => nominal_baud,
     };
     Some(PortConfig {
         baud,
@@ -509,7 +516,7 @@ impl Station {
         let mut published = lock(&self.published);
         if let Some(last) = published.trace.last_mut()
             && last.direction == direction
-            && last.end >= start
+            && start.saturating_since(last.end) <= FRAME_GAP
             && !last.bytes.ends_with(b"\n")
             && !last.bytes.ends_with(b"<")
         {
@@ -563,10 +570,12 @@ mod tests {
                 stop_bits: StopBits::Two
             })
         );
-        // 8N1 at 80 MHz: BRR = 80e6 / 19200 = 4166.
-        let hpr = port_from_registers(UE, 0, 4166, Some(80_000_000), 9600).unwrap();
-        assert_eq!(hpr.parity, Parity::None);
-        assert_eq!(hpr.baud, 19_203);
+        // 8N1 at 80 MHz: BRR = 80e6 / 19200 = 4166, 19203 baud: the unit's 19200 within 2 %.
+        let hpr = port_from_registers(UE, 0, 4166, Some(80_000_000), 19_200).unwrap();
+        assert_eq!(hpr, PortConfig::HPR);
+        // Against a 9600-baud unit it is a mismatch.
+        let fast = port_from_registers(UE, 0, 4166, Some(80_000_000), 9600).unwrap();
+        assert_eq!(fast.baud, 19_203);
         // Disabled, or 7 data bits with parity: no 8-bit framing to model.
         assert_eq!(port_from_registers(PCE | M0, 0, 0, None, 19_200), None);
         assert_eq!(port_from_registers(UE | PCE, 0, 0, None, 19_200), None);
