@@ -60,23 +60,35 @@ pub fn run(init: impl FnOnce(Spawner), mut idle_work: impl FnMut()) -> ! {
         cortex_m::peripheral::NVIC::unmask(WAKE_IRQ);
     }
     init(executor.spawner());
+    WORK.store(true, Ordering::Release);
     loop {
-        WORK.store(false, Ordering::Release);
-        // SAFETY: the executor lives for ever and is polled from thread mode only.
-        unsafe { executor.poll() };
-        idle_work();
+        // Poll only when a task was woken: a SysTick wrap with no timer due wakes the core
+        // but not the executor.
+        if WORK.swap(false, Ordering::AcqRel) {
+            // SAFETY: the executor lives for ever and is polled from thread mode only.
+            unsafe { executor.poll() };
+            critical_section::with(|cs| {
+                let stats = STATS.borrow(cs);
+                let mut counted = stats.get();
+                counted.polls = counted.polls.wrapping_add(1);
+                stats.set(counted);
+            });
+            idle_work();
+        }
         critical_section::with(|cs| {
-            let mut stats = STATS.borrow(cs).get();
-            stats.polls = stats.polls.wrapping_add(1);
             // A wake-up during the poll already ran its handler: poll again at once. One after
             // this check pends the interrupt, which ends WFI even though it is masked.
-            if !WORK.load(Ordering::Acquire) {
-                let fell_asleep = now_cycles();
-                cortex_m::asm::wfi();
-                stats.asleep += now_cycles() - fell_asleep;
-                stats.wake_ups = stats.wake_ups.wrapping_add(1);
+            if WORK.load(Ordering::Acquire) {
+                return;
             }
-            STATS.borrow(cs).set(stats);
+            let fell_asleep = now_cycles();
+            cortex_m::asm::wfi();
+            let slept = now_cycles() - fell_asleep;
+            let stats = STATS.borrow(cs);
+            let mut counted = stats.get();
+            counted.asleep += slept;
+            counted.wake_ups = counted.wake_ups.wrapping_add(1);
+            stats.set(counted);
         });
         // Interrupts on again: whatever ended WFI is handled here.
     }

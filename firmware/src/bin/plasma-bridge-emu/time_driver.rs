@@ -1,14 +1,18 @@
 //! embassy-time on SysTick, the only timer QEMU's STM32L4 models.
 //!
-//! SysTick counts SYSCLK down through a fixed 1 ms period and interrupts at every wrap. The
-//! time is the wrap count *plus the counter*, never a count of interrupts: a tick count loses
-//! time whenever the guest runs late, and an emulated guest runs late whenever the host is
-//! busy (../shared/EMULATION.md). The wrap interrupt also fires due alarms, so a timer is at
-//! most one period late; the executor is woken only when a timer is due.
+//! SysTick counts SYSCLK cycles down from a period the driver chooses: until the next timer
+//! is due, or the counter's longest period (2^24 cycles, 210 ms) when none is sooner. So the
+//! core wakes when a timer is due, on time, and otherwise sleeps.
 //!
-//! Internally time is kept in SYSCLK cycles ([`now_cycles`], 12.5 ns, used by the
-//! measurement probes); embassy-time sees microseconds (`tick-hz-1_000_000`, as on the
-//! Nucleo).
+//! The time is the sum of the finished periods *plus the counter*, never a count of
+//! interrupts: a count loses time whenever the guest runs late, and an emulated guest runs
+//! late whenever the host is busy (../shared/EMULATION.md). A period is shortened by
+//! restarting the counter (a write to SYST_CVR, which reloads it one cycle later without an
+//! interrupt, on the Cortex-M as in QEMU's model); only the cycles between reading the
+//! counter and that write are lost, a few per restart.
+//!
+//! Time is kept in SYSCLK cycles ([`now_cycles`], 12.5 ns, used by the measurement probes);
+//! embassy-time sees microseconds (`tick-hz-1_000_000`, as on the Nucleo).
 
 use core::cell::{Cell, RefCell};
 use core::task::Waker;
@@ -23,30 +27,35 @@ use embassy_time_queue_utils::Queue;
 
 use crate::rcc::SYSCLK_HZ;
 
-/// SYSCLK cycles per wrap: 1 ms.
-const PERIOD: u32 = SYSCLK_HZ / 1000;
+/// The longest period: SYST_RVR is 24 bits.
+const MAX_PERIOD: u32 = 1 << 24;
+/// The shortest period, so that a restart always sees the reload (1 µs).
+const MIN_PERIOD: u32 = CYCLES_PER_TICK;
 /// SYSCLK cycles per embassy-time tick (1 µs).
 const CYCLES_PER_TICK: u32 = SYSCLK_HZ / 1_000_000;
 
 struct SysTickDriver {
-    /// Wraps handled by the interrupt.
-    wraps: Mutex<Cell<u64>>,
-    /// The earliest alarm, in embassy-time ticks (`u64::MAX`: none).
+    /// Cycles at the start of the current period.
+    base: Mutex<Cell<u64>>,
+    /// Length of the current period (SYST_RVR + 1).
+    period: Mutex<Cell<u32>>,
+    /// The earliest timer, in cycles (`u64::MAX`: none).
     alarm: Mutex<Cell<u64>>,
     queue: Mutex<RefCell<Queue>>,
 }
 
 embassy_time_driver::time_driver_impl!(static DRIVER: SysTickDriver = SysTickDriver {
-    wraps: Mutex::new(Cell::new(0)),
+    base: Mutex::new(Cell::new(0)),
+    period: Mutex::new(Cell::new(MAX_PERIOD)),
     alarm: Mutex::new(Cell::new(u64::MAX)),
     queue: Mutex::new(RefCell::new(Queue::new())),
 });
 
-/// Starts SysTick: SYSCLK, 1 ms period, the highest exception priority (like EXTI), so that
-/// timers of the I/O task are served above everything else.
+/// Starts SysTick on SYSCLK with the longest period, at the highest exception priority (like
+/// EXTI), so that timers of the I/O task are served above everything else.
 pub fn init(mut syst: SYST, scb: &mut SCB) {
     syst.set_clock_source(SystClkSource::Core);
-    syst.set_reload(PERIOD - 1);
+    syst.set_reload(MAX_PERIOD - 1);
     syst.clear_current();
     // SAFETY: priority 0 on SysTick breaks no priority-based critical section: this image
     // uses only `critical_section` (interrupts off).
@@ -61,18 +70,23 @@ pub fn now_cycles() -> u64 {
 }
 
 fn now_cycles_cs(cs: CriticalSection) -> u64 {
-    let wraps = DRIVER.wraps.borrow(cs).get();
+    let base = DRIVER.base.borrow(cs).get();
+    let period = DRIVER.period.borrow(cs).get();
     let mut remaining = SYST::get_current();
     // A wrap the interrupt has not handled yet (interrupts are off here): the pending bit
-    // says so, and a counter read after seeing it belongs to the new period.
-    let pending = SCB::is_pendst_pending();
-    let wraps = if pending {
+    // says so, and a counter read after seeing it belongs to the next period, which has the
+    // same length (the counter reloads SYST_RVR).
+    if SCB::is_pendst_pending() {
         remaining = SYST::get_current();
-        wraps + 1
+        base + u64::from(period) + elapsed_in(period, remaining)
     } else {
-        wraps
-    };
-    wraps * u64::from(PERIOD) + u64::from(PERIOD - 1 - remaining.min(PERIOD - 1))
+        base + elapsed_in(period, remaining)
+    }
+}
+
+/// Cycles since the start of a period of `period` cycles whose counter reads `remaining`.
+fn elapsed_in(period: u32, remaining: u32) -> u64 {
+    u64::from(period - 1 - remaining.min(period - 1))
 }
 
 /// SYSCLK cycles as nanoseconds (80 MHz: 12.5 ns each).
@@ -81,10 +95,39 @@ pub const fn cycles_to_ns(cycles: u64) -> u64 {
 }
 
 impl SysTickDriver {
-    /// Wakes every timer that is due and keeps the next expiry (always later than `now`).
-    fn arm(&self, cs: CriticalSection, now: u64) {
-        let next = self.queue.borrow(cs).borrow_mut().next_expiration(now);
-        self.alarm.borrow(cs).set(next);
+    /// Ends the current period now and starts one that ends at the alarm (or after the
+    /// longest period).
+    fn restart(&self, cs: CriticalSection) {
+        let now = now_cycles_cs(cs);
+        let until_alarm = self.alarm.borrow(cs).get().saturating_sub(now);
+        let period = u32::try_from(until_alarm)
+            .unwrap_or(MAX_PERIOD)
+            .clamp(MIN_PERIOD, MAX_PERIOD);
+        // SAFETY: SysTick belongs to this driver; interrupts are off.
+        let syst = unsafe { &*SYST::PTR };
+        unsafe {
+            syst.rvr.write(period - 1);
+            syst.cvr.write(0);
+        }
+        // A wrap pending from the old period is already in `now`.
+        SCB::clear_pendst();
+        // The counter reloads on the next cycle; until then it reads 0, which would look like
+        // the end of the new period.
+        while SYST::get_current() == 0 {}
+        self.base.borrow(cs).set(now + 1);
+        self.period.borrow(cs).set(period);
+    }
+
+    /// Wakes every timer that is due and keeps the next expiry (always later than now).
+    fn fire_due(&self, cs: CriticalSection) {
+        let now_ticks = now_cycles_cs(cs) / u64::from(CYCLES_PER_TICK);
+        let next = self
+            .queue
+            .borrow(cs)
+            .borrow_mut()
+            .next_expiration(now_ticks);
+        let next_cycles = next.saturating_mul(u64::from(CYCLES_PER_TICK));
+        self.alarm.borrow(cs).set(next_cycles);
     }
 }
 
@@ -95,10 +138,14 @@ impl Driver for SysTickDriver {
 
     fn schedule_wake(&self, at: u64, waker: &Waker) {
         critical_section::with(|cs| {
-            let changed = self.queue.borrow(cs).borrow_mut().schedule_wake(at, waker);
-            if changed {
-                let now = now_cycles_cs(cs) / u64::from(CYCLES_PER_TICK);
-                self.arm(cs, now);
+            if self.queue.borrow(cs).borrow_mut().schedule_wake(at, waker) {
+                let before = self.alarm.borrow(cs).get();
+                self.fire_due(cs);
+                // Only an earlier alarm needs a shorter period; a later one is taken up at
+                // the next wrap.
+                if self.alarm.borrow(cs).get() < before {
+                    self.restart(cs);
+                }
             }
         })
     }
@@ -107,11 +154,9 @@ impl Driver for SysTickDriver {
 #[exception]
 fn SysTick() {
     critical_section::with(|cs| {
-        let wraps = DRIVER.wraps.borrow(cs);
-        wraps.set(wraps.get() + 1);
-        let now = now_cycles_cs(cs) / u64::from(CYCLES_PER_TICK);
-        if now >= DRIVER.alarm.borrow(cs).get() {
-            DRIVER.arm(cs, now);
-        }
+        let base = DRIVER.base.borrow(cs);
+        base.set(base.get() + u64::from(DRIVER.period.borrow(cs).get()));
+        DRIVER.fire_due(cs);
+        DRIVER.restart(cs);
     });
 }
