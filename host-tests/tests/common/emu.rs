@@ -38,6 +38,12 @@ pub fn ready(mut board: Board) -> Board {
     board
         .wait_output(Output::Ready, true, EDGE)
         .unwrap_or_else(|e| panic!("{e}"));
+    // The unit's limits (or an HPR's state) are read just after the link comes up.
+    let began = std::time::Instant::now();
+    while !command(&mut board, "LIMITS").starts_with("OK ") {
+        assert!(began.elapsed() < LINK, "the unit's limits were never read");
+        std::thread::sleep(Duration::from_millis(50));
+    }
     board
 }
 
@@ -67,6 +73,17 @@ pub fn set(board: &Board, input: Input, active: bool) {
     board
         .set_input(input, active)
         .unwrap_or_else(|e| panic!("{} {active}: {e}", input.as_str()));
+}
+
+/// How long the harness holds an input level it wants the firmware to see: well above the
+/// inputs' debounce (about 1 ms on TORCH_ON, 2 ms on MOTION). A stimulus, not an assertion.
+pub const HOLD: Duration = Duration::from_millis(20);
+
+/// Releases TORCH_ON and presses it again, each level held for [`HOLD`].
+pub fn press_again(board: &Board) {
+    set(board, Input::TorchOn, false);
+    std::thread::sleep(HOLD);
+    set(board, Input::TorchOn, true);
 }
 
 /// Waits for an output to reach `on`.
