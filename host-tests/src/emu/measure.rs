@@ -95,7 +95,8 @@ pub struct MeasureOptions {
     pub model: Model,
     /// TORCH_ON cycles (each gives a START-on and a START-off figure).
     pub toggles: usize,
-    /// Idle windows (10 s of guest time each) to wait for after the toggles.
+    /// Idle windows (10 s of guest time each) to report after the toggles (the window in which
+    /// the toggles end is skipped).
     pub idle_windows: usize,
 }
 
@@ -183,7 +184,8 @@ pub fn measure(options: &MeasureOptions, mut progress: impl FnMut(&str)) -> Resu
         options.toggles, options.idle_windows
     ));
     let mut mark = board.log().len();
-    for _ in 0..options.idle_windows {
+    // The first window ending after the toggles holds some of them: not idle, skipped.
+    for window in 0..=options.idle_windows {
         let line = board
             .log()
             .wait_for(mark, Duration::from_secs(60), |l| {
@@ -195,12 +197,13 @@ pub fn measure(options: &MeasureOptions, mut progress: impl FnMut(&str)) -> Resu
             .iter()
             .position(|l| l == &line)
             .map_or(board.log().len(), |i| i + 1);
-        if let Some(Probe::Idle {
-            asleep_ns,
-            elapsed_ns,
-            wake_ups,
-            polls,
-        }) = parse_probe(&line.text)
+        if window > 0
+            && let Some(Probe::Idle {
+                asleep_ns,
+                elapsed_ns,
+                wake_ups,
+                polls,
+            }) = parse_probe(&line.text)
         {
             result.idle.push((asleep_ns, elapsed_ns, wake_ups, polls));
         }

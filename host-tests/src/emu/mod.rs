@@ -14,6 +14,7 @@
 //! - [`image`]: builds the image (`cargo emu-fw`) once per process.
 //! - [`board`]: all of it as one [`Board`], with the safety rules of [`safety`] checked on
 //!   what it observed.
+//! - [`console`]: `pbtool emu`, the CNC port on stdin/stdout.
 //! - [`measure`]: the `emu-probe` figures (instructions from a TORCH_ON edge to START, idle
 //!   time) under QEMU's instruction counting.
 //!
@@ -33,6 +34,7 @@
 
 pub mod board;
 pub mod cnc;
+pub mod console;
 pub mod error;
 pub mod image;
 pub mod log;
