@@ -29,7 +29,12 @@ fn a_cnc_session_sets_a_process_and_reads_status() {
     );
     event(&mut board, mark, "!REMOTE ON", EDGE);
     // The event reports the pressure the unit chose for AUTO.
-    event(&mut board, mark, "!SETTINGS applied mode=CUT amps=45 psi=", EDGE);
+    event(
+        &mut board,
+        mark,
+        "!SETTINGS applied mode=CUT amps=45 psi=",
+        EDGE,
+    );
 
     let status = command(&mut board, "STATUS");
     for (key, expected) in [
@@ -46,24 +51,39 @@ fn a_cnc_session_sets_a_process_and_reads_status() {
     }
     // The pressure as the unit reports it: the one it chose automatically.
     let psi = value(&status, "psi").unwrap_or("-");
-    assert!(psi == "AUTO" || psi.parse::<f64>().is_ok(), "psi in {status}");
+    assert!(
+        psi == "AUTO" || psi.parse::<f64>().is_ok(),
+        "psi in {status}"
+    );
     // The unit got all three in one write and is under remote control.
     let (settings, remote) = board
         .sim()
         .with_unit(|unit, _| {
-            let powermax = unit.as_any().downcast_ref::<Powermax>().map(Powermax::settings);
+            let powermax = unit
+                .as_any()
+                .downcast_ref::<Powermax>()
+                .map(Powermax::settings);
             (powermax, unit.in_remote_mode())
         })
         .unwrap();
     let settings = settings.expect("a Powermax simulator");
-    assert_eq!((settings.mode, settings.current, settings.pressure), (1, 45 * 64, 0));
+    assert_eq!(
+        (settings.mode, settings.current, settings.pressure),
+        (1, 45 * 64, 0)
+    );
     assert!(remote);
 
     // A refusal is one ERR line; the session goes on.
     let refused = command(&mut board, "SET PROCESS CUT 400 AUTO");
-    assert!(refused.starts_with("ERR RANGE amps 400 outside"), "{refused}");
+    assert!(
+        refused.starts_with("ERR RANGE amps 400 outside"),
+        "{refused}"
+    );
     assert_eq!(command(&mut board, "REMOTE OFF"), "OK remote=OFF");
-    let remote = board.sim().with_unit(|unit, _| unit.in_remote_mode()).unwrap();
+    let remote = board
+        .sim()
+        .with_unit(|unit, _| unit.in_remote_mode())
+        .unwrap();
     assert!(!remote);
     let status = command(&mut board, "STATUS");
     assert_eq!(value(&status, "remote"), Some("OFF"), "{status}");
@@ -116,7 +136,10 @@ fn a_unit_that_stops_answering_takes_the_link_down_and_back() {
     let mark = events_mark(&mut board);
     board.sim().set_connected(false).unwrap();
     let down = event(&mut board, mark, "!LINK DOWN", LINK_EVENT);
-    assert!(down.starts_with("!LINK DOWN reason=no_answer failures="), "{down}");
+    assert!(
+        down.starts_with("!LINK DOWN reason=no_answer failures="),
+        "{down}"
+    );
     assert!(down.ends_with("last=timeout"), "{down}");
     expect_output(&board, Output::Start, false, EDGE);
     expect_output(&board, Output::Fault, true, EDGE);
@@ -132,7 +155,10 @@ fn a_unit_that_stops_answering_takes_the_link_down_and_back() {
     let mark = events_mark(&mut board);
     board.sim().set_connected(true).unwrap();
     let up = event(&mut board, mark, "!LINK UP", LINK_EVENT);
-    assert!(up.starts_with("!LINK UP model=Powermax") && up.ends_with(" LEGACY"), "{up}");
+    assert!(
+        up.starts_with("!LINK UP model=Powermax") && up.ends_with(" LEGACY"),
+        "{up}"
+    );
     expect_output(&board, Output::Ready, true, LINK_EVENT);
     expect_output(&board, Output::Fault, false, EDGE);
     expect_held(&board, Output::Start, false, STAYS_OFF);

@@ -42,7 +42,10 @@ fn a_powermax_sync_unit_is_detected() {
         id.starts_with("OK bridge=plasma-bridge version=0.1.0 reset=power-on"),
         "{id}"
     );
-    assert!(id.ends_with("model=Powermax65 family=SYNC product=081335"), "{id}");
+    assert!(
+        id.ends_with("model=Powermax65 family=SYNC product=081335"),
+        "{id}"
+    );
 }
 
 #[test]

@@ -9,8 +9,7 @@ mod common;
 use std::time::Duration;
 
 use common::emu::{
-    EDGE, HOLD, boot, expect_held, expect_output, press_again, ready, ready_board, set,
-    wait_logged,
+    EDGE, HOLD, boot, expect_held, expect_output, press_again, ready, ready_board, set, wait_logged,
 };
 use host_tests::emu::{BoardOptions, Wiring};
 use host_tests::sim::Model;
@@ -34,12 +33,18 @@ fn start_follows_torch_on_and_keeps_50_ms_between_starts() {
     let (fall, rise) = (&changes[1], &changes[2]);
     assert!(!fall.on && rise.on, "{changes:?}");
     let gap_us = rise.at_us - fall.at_us;
-    assert!(gap_us >= 50_000, "START rose {gap_us} us after it fell: {changes:?}");
+    assert!(
+        gap_us >= 50_000,
+        "START rose {gap_us} us after it fell: {changes:?}"
+    );
     // ...and not much later than the gap: it was delayed, not refused.
     assert!(gap_us < 50_000 + 100_000, "{changes:?}");
     // The harness saw the same, within its reading jitter.
     let edges = board.edges(Output::Start);
-    assert_eq!(edges.iter().map(|e| e.1).collect::<Vec<_>>(), [true, false, true]);
+    assert_eq!(
+        edges.iter().map(|e| e.1).collect::<Vec<_>>(),
+        [true, false, true]
+    );
     let seen = edges[2].0.duration_since(edges[1].0);
     assert!(seen >= Duration::from_millis(40), "{seen:?}");
 
@@ -70,7 +75,10 @@ fn a_torch_on_held_at_power_up_is_ignored_until_released() {
     expect_output(&board, Output::Start, false, EDGE);
     // The firmware's log: one START on, one off, nothing before the release.
     let changes = wait_logged(&board, Output::Start, 2);
-    assert_eq!(changes.iter().map(|c| c.on).collect::<Vec<_>>(), [true, false]);
+    assert_eq!(
+        changes.iter().map(|c| c.on).collect::<Vec<_>>(),
+        [true, false]
+    );
     board.assert_safe();
 }
 

@@ -306,7 +306,11 @@ impl Board {
         std::thread::sleep(duration);
         let level = self.output(output)?;
         let edges = self.qtest.edges();
-        let changed = edges.get(mark..).unwrap_or(&[]).iter().find(|e| e.pin == pin);
+        let changed = edges
+            .get(mark..)
+            .unwrap_or(&[])
+            .iter()
+            .find(|e| e.pin == pin);
         if level != on || changed.is_some() {
             return Err(Error::Protocol(format!(
                 "{} did not stay {} for {} ms (changed {} ms into it)",
@@ -457,7 +461,6 @@ impl Board {
         }
         text
     }
-
 }
 
 impl Drop for Board {

@@ -247,7 +247,10 @@ mod tests {
         let mut s = LineSplitter::default();
         assert_eq!(s.push(b"OK ev"), Vec::<String>::new());
         assert_eq!(s.push(b"ents=ON\r\n!LINK UP"), ["OK events=ON"]);
-        assert_eq!(s.push(b"\r\n\x06\x15ERR X\n"), ["!LINK UP", "<ACK>", "<NAK>", "ERR X"]);
+        assert_eq!(
+            s.push(b"\r\n\x06\x15ERR X\n"),
+            ["!LINK UP", "<ACK>", "<NAK>", "ERR X"]
+        );
     }
 
     #[test]
@@ -258,7 +261,9 @@ mod tests {
             let mut lines = BufReader::new(theirs).lines();
             assert_eq!(lines.next().unwrap().unwrap(), "STATUS");
             writer
-                .write_all(b"!FAULT 0-50-0 cartridge\r\nOK link=UP\r\n!LINK DOWN reason=no_answer\r\n")
+                .write_all(
+                    b"!FAULT 0-50-0 cartridge\r\nOK link=UP\r\n!LINK DOWN reason=no_answer\r\n",
+                )
                 .unwrap();
             assert_eq!(lines.next().unwrap().unwrap(), "ID");
             // No reply: the client times out.
@@ -272,7 +277,10 @@ mod tests {
             cnc.wait_event(0, "!LINK DOWN", timeout).unwrap(),
             "!LINK DOWN reason=no_answer"
         );
-        assert_eq!(cnc.wait_event(0, "!FAULT", timeout).unwrap(), "!FAULT 0-50-0 cartridge");
+        assert_eq!(
+            cnc.wait_event(0, "!FAULT", timeout).unwrap(),
+            "!FAULT 0-50-0 cartridge"
+        );
         assert!(matches!(
             cnc.command("ID", Duration::from_millis(50)),
             Err(Error::Timeout(text)) if text.contains("\"ID\"")

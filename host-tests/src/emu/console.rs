@@ -59,7 +59,12 @@ pub fn classify(line: &[u8]) -> ConsoleLine {
         .split_ascii_whitespace()
         .map(str::to_ascii_uppercase)
         .collect();
-    match words.iter().map(String::as_str).collect::<Vec<_>>().as_slice() {
+    match words
+        .iter()
+        .map(String::as_str)
+        .collect::<Vec<_>>()
+        .as_slice()
+    {
         [] => ConsoleLine::Blank,
         ["TORCH", "ON"] => ConsoleLine::Torch(true),
         ["TORCH", "OFF"] => ConsoleLine::Torch(false),
@@ -181,7 +186,8 @@ fn settle(board: &mut Board) -> Result<bool> {
     let began = Instant::now();
     while began.elapsed() < SETTLE_TIMEOUT {
         let status = board.command("STATUS", REPLY_TIMEOUT)?;
-        if status.contains(" link=UP ") && board.command("LIMITS", REPLY_TIMEOUT)?.starts_with("OK ")
+        if status.contains(" link=UP ")
+            && board.command("LIMITS", REPLY_TIMEOUT)?.starts_with("OK ")
         {
             return Ok(true);
         }

@@ -72,7 +72,9 @@ fn build() -> Result<PathBuf> {
         .map_err(|e| Error::Image(format!("waiting for cargo: {e}")))?;
     let errors = errors.join().unwrap_or_default();
     if !status.success() {
-        let hint = if errors.contains("target may not be installed") || errors.contains("can't find crate for `core`") {
+        let hint = if errors.contains("target may not be installed")
+            || errors.contains("can't find crate for `core`")
+        {
             format!("\nhint: rustup target add {TARGET}")
         } else if errors.contains("no such command: `emu-fw`") {
             "\nhint: the workspace's .cargo/config.toml lacks the emu-fw alias".to_string()
@@ -101,10 +103,7 @@ pub fn executable_of(line: &str, binary: &str) -> Option<PathBuf> {
     if message.get("target")?.get("name")?.as_str()? != binary {
         return None;
     }
-    message
-        .get("executable")?
-        .as_str()
-        .map(PathBuf::from)
+    message.get("executable")?.as_str().map(PathBuf::from)
 }
 
 fn tail(text: &str, lines: usize) -> String {
@@ -121,13 +120,18 @@ mod tests {
         let artifact = r#"{"reason":"compiler-artifact","package_id":"x","target":{"kind":["bin"],"name":"plasma-bridge-emu"},"executable":"/t/thumbv7em-none-eabihf/release/plasma-bridge-emu","fresh":true}"#;
         assert_eq!(
             executable_of(artifact, BINARY),
-            Some(PathBuf::from("/t/thumbv7em-none-eabihf/release/plasma-bridge-emu"))
+            Some(PathBuf::from(
+                "/t/thumbv7em-none-eabihf/release/plasma-bridge-emu"
+            ))
         );
         let lib = r#"{"reason":"compiler-artifact","target":{"kind":["lib"],"name":"plasma_firmware"},"executable":null}"#;
         assert_eq!(executable_of(lib, BINARY), None);
         let other = r#"{"reason":"compiler-artifact","target":{"name":"plasma-bridge"},"executable":"/t/plasma-bridge"}"#;
         assert_eq!(executable_of(other, BINARY), None);
-        assert_eq!(executable_of(r#"{"reason":"build-finished","success":true}"#, BINARY), None);
+        assert_eq!(
+            executable_of(r#"{"reason":"build-finished","success":true}"#, BINARY),
+            None
+        );
         assert_eq!(executable_of("Compiling x", BINARY), None);
     }
 

@@ -131,7 +131,8 @@ impl FirmwareLog {
             })?;
         let shared = Arc::new(Mutex::new(Shared::default()));
         let stop = Arc::new(AtomicBool::new(false));
-        let (for_thread, stop_flag, path) = (Arc::clone(&shared), Arc::clone(&stop), log.to_owned());
+        let (for_thread, stop_flag, path) =
+            (Arc::clone(&shared), Arc::clone(&stop), log.to_owned());
         let thread = std::thread::Builder::new()
             .name("defmt-log".to_string())
             .spawn(move || follow(&table, &path, &stop_flag, &for_thread))
@@ -208,7 +209,10 @@ impl FirmwareLog {
             .map(|l| format!("{l}\n"))
             .collect();
         if shared.malformed > 0 {
-            text.push_str(&format!("({} undecodable frames skipped)\n", shared.malformed));
+            text.push_str(&format!(
+                "({} undecodable frames skipped)\n",
+                shared.malformed
+            ));
         }
         if let Some(error) = &shared.error {
             text.push_str(&format!("(log decoding stopped: {error})\n"));
@@ -326,7 +330,10 @@ mod tests {
             })
         );
         let off = parse_transition("I/O 1203.007 ms: START off: torch-on released").unwrap();
-        assert_eq!((off.at_us, off.output.as_str(), off.on), (1_203_007, "START", false));
+        assert_eq!(
+            (off.at_us, off.output.as_str(), off.on),
+            (1_203_007, "START", false)
+        );
         assert_eq!(parse_transition("link up: Some(Powermax)"), None);
         assert_eq!(parse_transition("I/O 1.5 ms: START on: x"), None);
         assert_eq!(parse_transition("I/O 1.500 ms: START maybe: x"), None);
@@ -340,6 +347,9 @@ mod tests {
             .err()
             .expect("refused")
             .to_string();
-        assert!(err.contains("no .defmt section") || err.contains("bad defmt table"), "{err}");
+        assert!(
+            err.contains("no .defmt section") || err.contains("bad defmt table"),
+            "{err}"
+        );
     }
 }

@@ -186,11 +186,9 @@ pub fn measure(options: &MeasureOptions, mut progress: impl FnMut(&str)) -> Resu
     let mut mark = board.log().len();
     // The first window ending after the toggles holds some of them: not idle, skipped.
     for window in 0..=options.idle_windows {
-        let line = board
-            .log()
-            .wait_for(mark, Duration::from_secs(60), |l| {
-                matches!(parse_probe(&l.text), Some(Probe::Idle { .. }))
-            })?;
+        let line = board.log().wait_for(mark, Duration::from_secs(60), |l| {
+            matches!(parse_probe(&l.text), Some(Probe::Idle { .. }))
+        })?;
         mark = board
             .log()
             .lines()
@@ -248,7 +246,10 @@ mod tests {
             })
         );
         assert_eq!(parse_probe("link up: Powermax65"), None);
-        assert_eq!(parse_probe("emu-probe: TORCH_ON edge to START maybe: 1 ns busy"), None);
+        assert_eq!(
+            parse_probe("emu-probe: TORCH_ON edge to START maybe: 1 ns busy"),
+            None
+        );
         assert_eq!(parse_probe("emu-probe: idle 1 ns asleep"), None);
     }
 
@@ -266,6 +267,8 @@ mod tests {
         .report();
         assert!(report.contains("3 samples, instructions min 800 / median 900 / max 1000"));
         assert!(report.contains("START off: no samples"));
-        assert!(report.contains("99.00 % asleep, 100000000 instructions executed, 100.0 wake-ups/s"));
+        assert!(
+            report.contains("99.00 % asleep, 100000000 instructions executed, 100.0 wake-ups/s")
+        );
     }
 }

@@ -26,13 +26,11 @@ pub const QEMU_ENV: &str = "PLASMA_QEMU";
 /// How long QEMU may take to connect its sockets.
 const CONNECT_TIMEOUT: Duration = Duration::from_secs(20);
 
-/// How to install QEMU 10 on Debian bookworm (what `.ci/run` does).
+/// How to install QEMU 10 on Debian bookworm (what `.ci/install-qemu` does).
 pub const INSTALL_HINT: &str = "install QEMU 10 from Debian bookworm-backports: \
-    add /etc/apt/sources.list.d/backports.sources containing \
-    'Types: deb / URIs: http://deb.debian.org/debian / Suites: bookworm-backports / \
-    Components: main / Signed-By: /usr/share/keyrings/debian-archive-keyring.gpg', then \
-    `apt-get update && apt-get install -y -t bookworm-backports qemu-system-arm` \
-    (bash .ci/run does this); or point PLASMA_QEMU at a qemu-system-arm 10 binary";
+    `bash .ci/install-qemu` (adds the bookworm-backports suite to the apt sources, then \
+    `apt-get update && apt-get install -y -t bookworm-backports qemu-system-arm`), \
+    or point PLASMA_QEMU at a qemu-system-arm 10 binary";
 
 /// The QEMU binary: `$PLASMA_QEMU` or `qemu-system-arm` on `PATH`.
 pub fn qemu_binary() -> PathBuf {
@@ -107,7 +105,8 @@ impl RunDir {
         let path = std::env::temp_dir().join(format!("pb-emu-{}-{n}", std::process::id()));
         // A directory left by a crashed process with a reused pid.
         let _ = fs::remove_dir_all(&path);
-        fs::create_dir_all(&path).map_err(|e| Error::io(format!("creating {}", path.display()), e))?;
+        fs::create_dir_all(&path)
+            .map_err(|e| Error::io(format!("creating {}", path.display()), e))?;
         Ok(RunDir { path })
     }
 
@@ -225,7 +224,9 @@ impl Qemu {
             .stdout(log)
             .stderr(stderr)
             .spawn()
-            .map_err(|e| Error::Qemu(format!("cannot start qemu-system-arm: {e}; {INSTALL_HINT}")))?;
+            .map_err(|e| {
+                Error::Qemu(format!("cannot start qemu-system-arm: {e}; {INSTALL_HINT}"))
+            })?;
         let mut starting = Starting {
             child: Some(child),
             stderr_path: stderr_path.clone(),
@@ -384,7 +385,10 @@ mod tests {
         let err = check_qemu_binary(Path::new("/nonexistent/qemu-system-arm"))
             .unwrap_err()
             .to_string();
-        assert!(err.contains("cannot run /nonexistent/qemu-system-arm"), "{err}");
+        assert!(
+            err.contains("cannot run /nonexistent/qemu-system-arm"),
+            "{err}"
+        );
         assert!(
             err.contains("apt-get install -y -t bookworm-backports qemu-system-arm"),
             "{err}"
@@ -401,7 +405,10 @@ mod tests {
         };
         let old = fake("old", "QEMU emulator version 7.2.15 (Debian 1:7.2+dfsg-7)");
         let err = check_qemu_binary(&old).unwrap_err().to_string();
-        assert!(err.contains("is too old (QEMU emulator version 7.2.15"), "{err}");
+        assert!(
+            err.contains("is too old (QEMU emulator version 7.2.15"),
+            "{err}"
+        );
         assert!(err.contains("bookworm-backports"), "{err}");
         let new = fake("new", "QEMU emulator version 10.0.2 (Debian)");
         assert_eq!(

@@ -29,7 +29,9 @@ impl Qmp {
         };
         let greeting = qmp.read_message()?;
         if greeting.get("QMP").is_none() {
-            return Err(Error::Protocol(format!("QMP greeting expected, got {greeting}")));
+            return Err(Error::Protocol(format!(
+                "QMP greeting expected, got {greeting}"
+            )));
         }
         qmp.execute("qmp_capabilities")?;
         Ok(qmp)
@@ -67,8 +69,7 @@ impl Qmp {
         if n == 0 {
             return Err(Error::Exited("the QMP socket closed".to_string()));
         }
-        serde_json::from_str(&line)
-            .map_err(|e| Error::Protocol(format!("QMP sent {line:?}: {e}")))
+        serde_json::from_str(&line).map_err(|e| Error::Protocol(format!("QMP sent {line:?}: {e}")))
     }
 }
 

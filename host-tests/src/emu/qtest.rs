@@ -139,9 +139,7 @@ impl Qtest {
             .map_err(|e| Error::Exited(format!("qtest {command:?}: {e}")))?;
         match replies.recv_timeout(REPLY_TIMEOUT) {
             Ok((Line::Ok(words), mark)) => Ok((words, mark)),
-            Ok((Line::Fail(text), _)) => {
-                Err(Error::Protocol(format!("qtest {command:?}: {text}")))
-            }
+            Ok((Line::Fail(text), _)) => Err(Error::Protocol(format!("qtest {command:?}: {text}"))),
             Ok((Line::Irq { .. }, _)) => unreachable!("the reader keeps IRQ lines apart"),
             Err(RecvTimeoutError::Timeout) => Err(Error::Timeout(format!(
                 "qtest {command:?}: no reply in {} s",
@@ -353,16 +351,16 @@ mod tests {
         let first = edges.recv_timeout(Duration::from_secs(5)).unwrap();
         let second = edges.recv_timeout(Duration::from_secs(5)).unwrap();
         assert_eq!((first.pin, first.high), (output_pin(Output::Start), true));
-        assert_eq!((second.pin, second.high), (output_pin(Output::Start), false));
+        assert_eq!(
+            (second.pin, second.high),
+            (output_pin(Output::Start), false)
+        );
         assert_eq!(qtest.edges().len(), 2);
         assert!(matches!(
             qtest.readl(0x4800_0814),
             Err(Error::Protocol(text)) if text.contains("no such register")
         ));
         // The fake has hung up: the next command fails at once, it does not hang.
-        assert!(matches!(
-            qtest.readl(0x4800_0814),
-            Err(Error::Exited(_))
-        ));
+        assert!(matches!(qtest.readl(0x4800_0814), Err(Error::Exited(_))));
     }
 }

@@ -66,7 +66,10 @@ pub fn check(
             Observed::Start { at, on } => {
                 if on && !start {
                     if !torch {
-                        broken.push(format!("{:.1} ms: START rose while TORCH_ON was off", ms(at)));
+                        broken.push(format!(
+                            "{:.1} ms: START rose while TORCH_ON was off",
+                            ms(at)
+                        ));
                     }
                     if stuck {
                         broken.push(format!(
@@ -107,12 +110,30 @@ mod tests {
     fn a_clean_run_breaks_nothing() {
         let t0 = Instant::now();
         let run = [
-            Observed::TorchOn { at: at(t0, 100), active: true },
-            Observed::Start { at: at(t0, 101), on: true },
-            Observed::TorchOn { at: at(t0, 200), active: false },
-            Observed::Start { at: at(t0, 201), on: false },
-            Observed::TorchOn { at: at(t0, 210), active: true },
-            Observed::Start { at: at(t0, 252), on: true },
+            Observed::TorchOn {
+                at: at(t0, 100),
+                active: true,
+            },
+            Observed::Start {
+                at: at(t0, 101),
+                on: true,
+            },
+            Observed::TorchOn {
+                at: at(t0, 200),
+                active: false,
+            },
+            Observed::Start {
+                at: at(t0, 201),
+                on: false,
+            },
+            Observed::TorchOn {
+                at: at(t0, 210),
+                active: true,
+            },
+            Observed::Start {
+                at: at(t0, 252),
+                on: true,
+            },
         ];
         assert_eq!(check(t0, false, false, &run), Vec::<String>::new());
     }
@@ -121,30 +142,63 @@ mod tests {
     fn each_rule_is_caught() {
         let t0 = Instant::now();
         assert_eq!(check(t0, false, true, &[]), ["START on at power-up"]);
-        let without_torch = [Observed::Start { at: at(t0, 5), on: true }];
+        let without_torch = [Observed::Start {
+            at: at(t0, 5),
+            on: true,
+        }];
         assert_eq!(
             check(t0, false, false, &without_torch),
             ["5.0 ms: START rose while TORCH_ON was off"]
         );
         // Held since power-up: released and pressed again is fine, held is not.
-        let stuck = [Observed::Start { at: at(t0, 5), on: true }];
+        let stuck = [Observed::Start {
+            at: at(t0, 5),
+            on: true,
+        }];
         assert_eq!(
             check(t0, true, false, &stuck),
             ["5.0 ms: START rose from a TORCH_ON held since power-up"]
         );
         let released = [
-            Observed::TorchOn { at: at(t0, 10), active: false },
-            Observed::TorchOn { at: at(t0, 20), active: true },
-            Observed::Start { at: at(t0, 21), on: true },
+            Observed::TorchOn {
+                at: at(t0, 10),
+                active: false,
+            },
+            Observed::TorchOn {
+                at: at(t0, 20),
+                active: true,
+            },
+            Observed::Start {
+                at: at(t0, 21),
+                on: true,
+            },
         ];
         assert!(check(t0, true, false, &released).is_empty());
         let quick = [
-            Observed::TorchOn { at: at(t0, 10), active: true },
-            Observed::Start { at: at(t0, 10), on: true },
-            Observed::TorchOn { at: at(t0, 20), active: false },
-            Observed::Start { at: at(t0, 20), on: false },
-            Observed::TorchOn { at: at(t0, 30), active: true },
-            Observed::Start { at: at(t0, 50), on: true },
+            Observed::TorchOn {
+                at: at(t0, 10),
+                active: true,
+            },
+            Observed::Start {
+                at: at(t0, 10),
+                on: true,
+            },
+            Observed::TorchOn {
+                at: at(t0, 20),
+                active: false,
+            },
+            Observed::Start {
+                at: at(t0, 20),
+                on: false,
+            },
+            Observed::TorchOn {
+                at: at(t0, 30),
+                active: true,
+            },
+            Observed::Start {
+                at: at(t0, 50),
+                on: true,
+            },
         ];
         assert_eq!(
             check(t0, false, false, &quick),
@@ -156,12 +210,30 @@ mod tests {
     fn a_gap_read_a_little_short_is_tolerated() {
         let t0 = Instant::now();
         let run = [
-            Observed::TorchOn { at: at(t0, 10), active: true },
-            Observed::Start { at: at(t0, 10), on: true },
-            Observed::TorchOn { at: at(t0, 20), active: false },
-            Observed::Start { at: at(t0, 25), on: false },
-            Observed::TorchOn { at: at(t0, 30), active: true },
-            Observed::Start { at: at(t0, 70), on: true },
+            Observed::TorchOn {
+                at: at(t0, 10),
+                active: true,
+            },
+            Observed::Start {
+                at: at(t0, 10),
+                on: true,
+            },
+            Observed::TorchOn {
+                at: at(t0, 20),
+                active: false,
+            },
+            Observed::Start {
+                at: at(t0, 25),
+                on: false,
+            },
+            Observed::TorchOn {
+                at: at(t0, 30),
+                active: true,
+            },
+            Observed::Start {
+                at: at(t0, 70),
+                on: true,
+            },
         ];
         assert!(check(t0, false, false, &run).is_empty());
     }

@@ -401,7 +401,7 @@ impl Station {
                 Ok(0) => return Ok(()),
                 Ok(n) => {
                     let now = self.now();
-                    self.from_firmware(now, &buf[..n]);
+                    self.heard_from_firmware(now, &buf[..n]);
                 }
                 Err(e) if matches!(e.kind(), ErrorKind::WouldBlock | ErrorKind::TimedOut) => {}
                 Err(e) if e.kind() == ErrorKind::Interrupted => {}
@@ -428,7 +428,7 @@ impl Station {
     }
 
     /// Characters the firmware wrote: onto the line from the master end.
-    fn from_firmware(&mut self, now: Instant, bytes: &[u8]) {
+    fn heard_from_firmware(&mut self, now: Instant, bytes: &[u8]) {
         let new_frame = self
             .last_rx
             .is_none_or(|t| now.saturating_since(t) > FRAME_GAP);
@@ -680,7 +680,10 @@ mod tests {
         edges.send(edge(output_pin(Output::Start), true)).unwrap();
         let began = std::time::Instant::now();
         while !port.motion().unwrap() {
-            assert!(began.elapsed() < std::time::Duration::from_secs(5), "no arc");
+            assert!(
+                began.elapsed() < std::time::Duration::from_secs(5),
+                "no arc"
+            );
             std::thread::sleep(std::time::Duration::from_millis(5));
         }
     }

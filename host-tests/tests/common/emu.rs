@@ -64,7 +64,10 @@ pub fn event(board: &mut Board, mark: usize, prefix: &str, timeout: Duration) ->
 
 /// The number of events received so far (a mark for [`event`]).
 pub fn events_mark(board: &mut Board) -> usize {
-    board.cnc().collect_events().unwrap_or_else(|e| panic!("{e}"));
+    board
+        .cnc()
+        .collect_events()
+        .unwrap_or_else(|e| panic!("{e}"));
     board.cnc().events().len()
 }
 
