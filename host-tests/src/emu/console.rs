@@ -121,6 +121,11 @@ pub fn run(
         loop {
             match board.cnc().next(Duration::ZERO) {
                 Ok(item) => {
+                    // As `pbtool sim`: ACK/NAK in front of the reply line that follows.
+                    if matches!(item.text.as_str(), "<ACK>" | "<NAK>") {
+                        write!(out, "{}", item.text).map_err(io)?;
+                        continue;
+                    }
                     writeln!(out, "{}", item.text).map_err(io)?;
                     if !item.is_event() {
                         waiting = None;

@@ -4,8 +4,10 @@
 //! [`Qtest::command_marked`](super::qtest::Qtest::command_marked)).
 //!
 //! Order is exact; time is the host's clock when the harness read each edge, so the gap rule
-//! is checked with [`GAP_TOLERANCE`] off the manuals' 50 ms (a late read of the falling edge
-//! shortens the gap seen). Rules:
+//! is checked with [`GAP_TOLERANCE`] off the manuals' 50 ms (the reader thread may be
+//! scheduled late for the falling edge on a loaded host, which shortens the gap seen; a rule
+//! not kept at all shows gaps of a few ms). The exact check uses the firmware's own log of
+//! its output changes (tests/emu_io.rs). Rules:
 //! - START is off when the board starts;
 //! - START never rises while TORCH_ON is inactive;
 //! - a TORCH_ON active at power-up never raises START until it has been seen inactive;
@@ -16,7 +18,7 @@ use std::time::{Duration, Instant};
 /// The manuals' least delay between Start signals.
 pub const START_GAP: Duration = Duration::from_millis(50);
 /// How much shorter than [`START_GAP`] an observed gap may be (reading jitter on the host).
-pub const GAP_TOLERANCE: Duration = Duration::from_millis(8);
+pub const GAP_TOLERANCE: Duration = Duration::from_millis(25);
 
 /// One observation, in QEMU's order.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -196,13 +198,13 @@ mod tests {
                 active: true,
             },
             Observed::Start {
-                at: at(t0, 50),
+                at: at(t0, 40),
                 on: true,
             },
         ];
         assert_eq!(
             check(t0, false, false, &quick),
-            ["50.0 ms: START rose 30.0 ms after it fell (at least 50 ms)"]
+            ["40.0 ms: START rose 20.0 ms after it fell (at least 50 ms)"]
         );
     }
 
@@ -222,8 +224,9 @@ mod tests {
                 at: at(t0, 20),
                 active: false,
             },
+            // The reader was scheduled 15 ms late for the falling edge.
             Observed::Start {
-                at: at(t0, 25),
+                at: at(t0, 35),
                 on: false,
             },
             Observed::TorchOn {
