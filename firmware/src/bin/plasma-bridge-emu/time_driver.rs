@@ -11,6 +11,13 @@
 //! interrupt, on the Cortex-M as in QEMU's model); only the cycles between reading the
 //! counter and that write are lost, a few per restart.
 //!
+//! One concession to QEMU: its USART model does not tell its character back-end when RDR has
+//! been read, so the next received byte is only fetched when QEMU's main loop runs again for
+//! another reason, such as a timer. A tickless guest would then receive one byte per timer
+//! (a 5-byte command took 60-115 ms). While bytes arrive ([`keep_receiving`], from the USART
+//! interrupt), periods are therefore at most [`PUMP_PERIOD`]: the core (not the executor)
+//! wakes every 100 µs, and QEMU fetches up to 10 bytes a millisecond, faster than 115200 baud.
+//!
 //! Time is kept in SYSCLK cycles ([`now_cycles`], 12.5 ns, used by the measurement probes);
 //! embassy-time sees microseconds (`tick-hz-1_000_000`, as on the Nucleo).
 
@@ -31,6 +38,11 @@ use crate::rcc::SYSCLK_HZ;
 const MAX_PERIOD: u32 = 1 << 24;
 /// The shortest period, so that a restart always sees the reload (1 µs).
 const MIN_PERIOD: u32 = CYCLES_PER_TICK;
+/// The longest period while bytes arrive: 100 µs.
+const PUMP_PERIOD: u32 = SYSCLK_HZ / 10_000;
+/// How long after a received byte periods stay short: 2 ms, several byte times at the
+/// slowest baud rate the link uses (9600).
+const PUMP_WINDOW: u64 = SYSCLK_HZ as u64 / 500;
 /// SYSCLK cycles per embassy-time tick (1 µs).
 const CYCLES_PER_TICK: u32 = SYSCLK_HZ / 1_000_000;
 
@@ -41,6 +53,8 @@ struct SysTickDriver {
     period: Mutex<Cell<u32>>,
     /// The earliest timer, in cycles (`u64::MAX`: none).
     alarm: Mutex<Cell<u64>>,
+    /// Until when periods stay short for a receiving USART, in cycles.
+    pump_until: Mutex<Cell<u64>>,
     queue: Mutex<RefCell<Queue>>,
 }
 
@@ -48,6 +62,7 @@ embassy_time_driver::time_driver_impl!(static DRIVER: SysTickDriver = SysTickDri
     base: Mutex::new(Cell::new(0)),
     period: Mutex::new(Cell::new(MAX_PERIOD)),
     alarm: Mutex::new(Cell::new(u64::MAX)),
+    pump_until: Mutex::new(Cell::new(0)),
     queue: Mutex::new(RefCell::new(Queue::new())),
 });
 
@@ -89,6 +104,18 @@ fn elapsed_in(period: u32, remaining: u32) -> u64 {
     u64::from(period - 1 - remaining.min(period - 1))
 }
 
+/// A USART received a byte: keep QEMU fetching the next ones (see the module docs).
+pub fn keep_receiving() {
+    critical_section::with(|cs| {
+        let now = now_cycles_cs(cs);
+        DRIVER.pump_until.borrow(cs).set(now + PUMP_WINDOW);
+        let period_end = DRIVER.base.borrow(cs).get() + u64::from(DRIVER.period.borrow(cs).get());
+        if period_end > now + u64::from(PUMP_PERIOD) {
+            DRIVER.restart(cs);
+        }
+    })
+}
+
 /// SYSCLK cycles as nanoseconds (80 MHz: 12.5 ns each).
 pub const fn cycles_to_ns(cycles: u64) -> u64 {
     cycles * 1_000_000_000 / SYSCLK_HZ as u64
@@ -96,13 +123,18 @@ pub const fn cycles_to_ns(cycles: u64) -> u64 {
 
 impl SysTickDriver {
     /// Ends the current period now and starts one that ends at the alarm (or after the
-    /// longest period).
+    /// longest period, or the pump's while a USART receives).
     fn restart(&self, cs: CriticalSection) {
         let now = now_cycles_cs(cs);
+        let longest = if now < self.pump_until.borrow(cs).get() {
+            PUMP_PERIOD
+        } else {
+            MAX_PERIOD
+        };
         let until_alarm = self.alarm.borrow(cs).get().saturating_sub(now);
         let period = u32::try_from(until_alarm)
             .unwrap_or(MAX_PERIOD)
-            .clamp(MIN_PERIOD, MAX_PERIOD);
+            .clamp(MIN_PERIOD, longest);
         // SAFETY: SysTick belongs to this driver; interrupts are off.
         let syst = unsafe { &*SYST::PTR };
         unsafe {

@@ -153,6 +153,7 @@ pub fn on_interrupt(regs: Usart, state: &UartState) {
             state.overrun.store(true, Ordering::Release);
         }
         state.rx_waker.wake();
+        crate::time_driver::keep_receiving();
     }
     let cr1 = regs.cr1().read();
     if (cr1.txeie() && isr.txe()) || (cr1.tcie() && isr.tc()) {
