@@ -45,15 +45,23 @@ fn emu_gives_the_cnc_console_of_the_emulated_board() {
     );
     assert!(replies[0].contains(" link=UP "), "{lines:#?}");
     assert_eq!(replies[1], "OK torch=ON");
-    assert!(replies[2].contains(" start=ON "), "{lines:#?}");
+    assert!(replies[2].starts_with("OK link=UP "), "{lines:#?}");
     assert_eq!(replies[3], "OK torch=OFF");
-    assert!(replies[4].contains(" start=OFF "), "{lines:#?}");
+    assert!(replies[4].starts_with("OK link=UP "), "{lines:#?}");
+    // (STATUS shows the bridge's last view of the outputs, which a loaded host may deliver
+    // a little after the pin changed: the firmware's log says what START did.)
     // --log: the firmware's own log on stderr, decoded.
     assert!(
         stderr.contains("INFO  plasma-bridge 0.1.0 on the emulated STM32L475VG"),
         "{stderr}"
     );
-    assert!(stderr.contains("START on: torch-on from CNC"), "{stderr}");
+    let on = stderr
+        .find("START on: torch-on from CNC")
+        .expect("START on logged");
+    let off = stderr
+        .find("START off: torch-on released")
+        .expect("START off logged");
+    assert!(on < off, "{stderr}");
 }
 
 #[test]

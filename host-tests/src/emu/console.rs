@@ -10,7 +10,7 @@ use std::io::{self, Write};
 use std::sync::mpsc::{Receiver, RecvTimeoutError};
 use std::time::{Duration, Instant};
 
-use plasma_firmware::io::Input;
+use plasma_firmware::io::{Input, Output};
 
 use super::board::{Board, BoardOptions};
 use super::error::{Error, Result};
@@ -20,6 +20,8 @@ use crate::sim::{Model, SimOptions};
 const SETTLE_TIMEOUT: Duration = Duration::from_secs(10);
 /// The longest wait for one reply.
 const REPLY_TIMEOUT: Duration = Duration::from_secs(10);
+/// How long `TORCH ON|OFF` waits for START to follow before it answers anyway.
+const TORCH_SETTLE: Duration = Duration::from_millis(200);
 /// How long the console keeps printing after the last reply at the end of input.
 const LINGER: Duration = Duration::from_millis(200);
 /// The longest pause between two looks at the CNC port, stdin and the log.
@@ -153,6 +155,10 @@ pub fn run(
                 ConsoleLine::Blank => {}
                 ConsoleLine::Torch(on) => {
                     board.set_input(Input::TorchOn, on)?;
+                    // Like the simulator's TORCH command, answer once the interlocks have
+                    // acted: START follows at once unless a rule holds it (the 50 ms gap at
+                    // most delays it).
+                    let _ = board.wait_output(Output::Start, on, TORCH_SETTLE);
                     writeln!(out, "OK torch={}", if on { "ON" } else { "OFF" }).map_err(io)?;
                 }
                 ConsoleLine::Cnc(_) => {
