@@ -103,9 +103,11 @@ fn a_fault_raised_by_the_unit_reaches_the_cnc_and_holds_start_off() {
     assert_eq!(value(&status, "fault"), Some("0-50-0"), "{status}");
     assert!(command(&mut board, "FAULT").starts_with("OK fault=0-50-0 action=required text="));
 
-    // 0-50-0 requires action: TORCH_ON does not start the torch.
+    // 0-50-0 requires action: TORCH_ON does not start the torch, and the CNC hears why.
+    let mark = events_mark(&mut board);
     set(&board, Input::TorchOn, true);
     expect_held(&board, Output::Start, false, STAYS_OFF);
+    event(&mut board, mark, "!START REFUSED reason=fault", EDGE);
 
     // Cleared: the fault is gone, but the refused TORCH_ON stays refused until released.
     let mark = events_mark(&mut board);
@@ -122,6 +124,7 @@ fn a_fault_raised_by_the_unit_reaches_the_cnc_and_holds_start_off() {
     board.sim().inject_fault(500).unwrap();
     event(&mut board, mark, "!FAULT 0-50-0", LINK_EVENT);
     expect_output(&board, Output::Start, false, EDGE);
+    event(&mut board, mark, "!START DROPPED reason=fault", EDGE);
     set(&board, Input::TorchOn, false);
 }
 
@@ -142,14 +145,17 @@ fn a_unit_that_stops_answering_takes_the_link_down_and_back() {
     );
     assert!(down.ends_with("last=timeout"), "{down}");
     expect_output(&board, Output::Start, false, EDGE);
+    event(&mut board, mark, "!START DROPPED reason=link_down", EDGE);
     expect_output(&board, Output::Fault, true, EDGE);
     expect_output(&board, Output::Ready, false, EDGE);
     let status = command(&mut board, "STATUS");
     assert_eq!(value(&status, "link"), Some("DOWN"), "{status}");
 
     // No start while the link is down, even from a fresh TORCH_ON.
+    let mark = events_mark(&mut board);
     press_again(&board);
     expect_held(&board, Output::Start, false, STAYS_OFF);
+    event(&mut board, mark, "!START REFUSED reason=link_down", EDGE);
 
     // Connected again: found again; the held TORCH_ON does not fire the torch by itself.
     let mark = events_mark(&mut board);

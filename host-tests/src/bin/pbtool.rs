@@ -15,7 +15,7 @@ use host_tests::console::{Console, ConsoleOptions, parse_fault, read_line};
 use host_tests::decode::{all_valid, decode_frames, to_json, to_text};
 use host_tests::emu::console::EmuConsoleOptions;
 use host_tests::emu::measure::{MeasureOptions, measure};
-use host_tests::emu::qemu::check_qemu;
+use host_tests::emu::qemu::ensure_qemu;
 use host_tests::sim::Model;
 
 #[derive(Parser)]
@@ -150,7 +150,7 @@ fn run(args: &RunArgs) -> ExitCode {
         let unit =
             Model::from_name(&args.sim_args.model).map_or("unit".to_string(), |m| m.to_string());
         if !args.sim_args.fast {
-            match check_qemu() {
+            match ensure_qemu() {
                 Ok(_) => {
                     eprintln!(
                         "pbtool run: no debug probe found; running the firmware on the emulated \

@@ -59,14 +59,16 @@ pub struct BoardOptions {
     /// Model the PS framing from USART1's registers (a mismatch garbles the traffic); with
     /// the USART kernel clock, the baud rate too.
     pub framing_from_registers: Option<Option<u32>>,
-    /// `-icount shift=0` (measurements).
+    /// QEMU's instruction counting (`-icount shift=0,sleep=on`, see
+    /// [`QemuOptions::icount`]); on by default, as the firmware side recommends.
     pub icount: bool,
     /// The image; `None` builds it ([`firmware_elf`]).
     pub elf: Option<PathBuf>,
 }
 
 impl BoardOptions {
-    /// `model`, no fault, inputs inactive, the unit wired, matched framing.
+    /// `model`, no fault, inputs inactive, the unit wired, matched framing, instruction
+    /// counting on.
     pub fn new(model: Model) -> BoardOptions {
         BoardOptions {
             model,
@@ -75,7 +77,7 @@ impl BoardOptions {
             active_at_power_up: Vec::new(),
             wiring: Wiring::Unit,
             framing_from_registers: None,
-            icount: false,
+            icount: true,
             elf: None,
         }
     }

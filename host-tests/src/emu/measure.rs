@@ -156,7 +156,7 @@ pub fn measure(options: &MeasureOptions, mut progress: impl FnMut(&str)) -> Resu
         icount: true,
         ..BoardOptions::new(options.model)
     })?;
-    progress("booted under -icount shift=0; waiting for the link and a ready unit");
+    progress("booted under -icount shift=0,sleep=on; waiting for the link and a ready unit");
     board.wait_status(LINK_TIMEOUT, |s| {
         s.contains("link=UP") && s.contains("ready=ON")
     })?;

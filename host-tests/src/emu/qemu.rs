@@ -11,10 +11,12 @@ use std::fs;
 use std::os::unix::net::{UnixListener, UnixStream};
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
+use std::sync::OnceLock;
 use std::sync::atomic::{AtomicU32, Ordering};
 use std::time::{Duration, Instant};
 
 use super::error::{Error, Result};
+use super::image::workspace_root;
 use super::qmp::Qmp;
 
 /// The QEMU machine: STM32L475VG, the same family, flash and RAM as the board's STM32L476RG.
@@ -40,6 +42,55 @@ pub fn qemu_binary() -> PathBuf {
 /// Checks that the QEMU binary runs and is recent enough; returns its version line.
 pub fn check_qemu() -> Result<String> {
     check_qemu_binary(&qemu_binary())
+}
+
+/// As [`check_qemu`], but when `qemu-system-arm` 10 is missing (and `PLASMA_QEMU` does not
+/// name another binary) runs the workspace's `.ci/install-qemu` first, once per process, so
+/// that `cargo test` and `cargo emu` work on a fresh machine. A failed install is an error
+/// with the script's output.
+pub fn ensure_qemu() -> Result<String> {
+    let missing = match check_qemu() {
+        Ok(version) => return Ok(version),
+        Err(e) => e,
+    };
+    if std::env::var_os(QEMU_ENV).is_some() {
+        return Err(missing);
+    }
+    static INSTALLED: OnceLock<std::result::Result<(), String>> = OnceLock::new();
+    INSTALLED
+        .get_or_init(install_qemu)
+        .clone()
+        .map_err(|why| Error::Qemu(format!("{missing}\n{why}")))?;
+    check_qemu()
+}
+
+/// Runs `.ci/install-qemu` (needs root or sudo, and the Debian archive).
+fn install_qemu() -> std::result::Result<(), String> {
+    let script = workspace_root().join(".ci").join("install-qemu");
+    if !script.is_file() {
+        return Err(format!("{} not found", script.display()));
+    }
+    eprintln!(
+        "emu: qemu-system-arm {MIN_QEMU_MAJOR} is missing; installing it from Debian \
+         bookworm-backports with {} (a minute or two)",
+        script.display()
+    );
+    let output = Command::new("bash")
+        .arg(&script)
+        .stdin(Stdio::null())
+        .output()
+        .map_err(|e| format!("cannot run {}: {e}", script.display()))?;
+    if output.status.success() {
+        eprintln!("emu: qemu-system-arm installed");
+        return Ok(());
+    }
+    Err(format!(
+        "{} failed ({}):\n{}{}",
+        script.display(),
+        output.status,
+        String::from_utf8_lossy(&output.stdout),
+        String::from_utf8_lossy(&output.stderr)
+    ))
 }
 
 /// As [`check_qemu`], for the binary `binary`.
@@ -86,7 +137,10 @@ pub fn parse_version(line: &str) -> Option<(u32, u32)> {
 pub struct QemuOptions {
     /// The firmware ELF.
     pub elf: PathBuf,
-    /// `-icount shift=0`: one guest nanosecond per instruction (measurements).
+    /// `-icount shift=0,sleep=on`: one guest nanosecond per instruction while the core runs,
+    /// the host's time while it sleeps. The guest's clock then never runs ahead of what it
+    /// executed and never loses a tick to a busy host, and instruction counts can be measured.
+    /// Without it QEMU's clock follows the host's.
     pub icount: bool,
 }
 
@@ -163,7 +217,7 @@ pub fn command_line(options: &QemuOptions, dir: &Path) -> Vec<String> {
     args.push("/dev/null".to_string());
     if options.icount {
         args.push("-icount".to_string());
-        args.push("shift=0".to_string());
+        args.push("shift=0,sleep=on".to_string());
     }
     args
 }
@@ -191,7 +245,7 @@ pub struct Qemu {
 impl Qemu {
     /// Starts QEMU with `options`; returns it (paused) with its connected sockets.
     pub fn start(options: &QemuOptions) -> Result<(Qemu, Sockets)> {
-        check_qemu()?;
+        ensure_qemu()?;
         if !options.elf.is_file() {
             return Err(Error::Image(format!(
                 "the firmware image {} does not exist (build it with `cargo emu-fw`)",
@@ -377,7 +431,7 @@ mod tests {
             },
             dir,
         );
-        assert!(measured.join(" ").ends_with("-icount shift=0"));
+        assert!(measured.join(" ").ends_with("-icount shift=0,sleep=on"));
     }
 
     #[test]
