@@ -116,15 +116,16 @@ impl Measurements {
     pub fn report(&self) -> String {
         let mut text = String::new();
         for (what, values) in [
-            ("TORCH_ON edge -> START on ", &self.to_start_on),
+            ("TORCH_ON edge -> START on", &self.to_start_on),
             ("TORCH_ON release -> START off", &self.to_start_off),
         ] {
             match min_median_max(values) {
                 Some((min, median, max)) => text.push_str(&format!(
-                    "{what}: {} samples, instructions min {min} / median {median} / max {max}\n",
+                    "{what:<29}: {} samples, instructions min {min} / median {median} / max \
+                     {max}\n",
                     values.len()
                 )),
-                None => text.push_str(&format!("{what}: no samples\n")),
+                None => text.push_str(&format!("{what:<29}: no samples\n")),
             }
         }
         for &(asleep, elapsed, wake_ups, polls) in &self.idle {
