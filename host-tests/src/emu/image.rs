@@ -39,8 +39,30 @@ pub fn firmware_elf() -> Result<PathBuf> {
         .map_err(Error::Image)
 }
 
+/// Adds the MCU target with rustup when it is missing (a fresh machine), as `pbtool run`
+/// does; without rustup the build below says what is wrong.
+fn ensure_target() {
+    let installed = Command::new("rustup")
+        .args(["target", "list", "--installed"])
+        .stdin(Stdio::null())
+        .output();
+    let Ok(installed) = installed else { return };
+    if String::from_utf8_lossy(&installed.stdout)
+        .lines()
+        .any(|l| l.trim() == TARGET)
+    {
+        return;
+    }
+    eprintln!("emu: adding the {TARGET} target with rustup (the emulated board's image)");
+    let _ = Command::new("rustup")
+        .args(["target", "add", TARGET])
+        .stdin(Stdio::null())
+        .status();
+}
+
 /// Runs `cargo emu-fw` and returns the ELF cargo reports.
 fn build() -> Result<PathBuf> {
+    ensure_target();
     let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
     let mut child = Command::new(&cargo)
         .current_dir(workspace_root())
