@@ -7,12 +7,15 @@
 //! - [`harness`]: the scenario harness: the bridge's power-supply side, the line and a
 //!   simulator in one deterministic discrete-event [`harness::World`], with the discrete I/O
 //!   and the safety monitor checked after every step.
+//! - [`emu`]: the firmware image itself on an emulated board (QEMU), with a simulated unit on
+//!   its PS port in real time, for end-to-end tests and `pbtool emu`.
 //! - [`console`]: `pbtool sim`, the bridge against a simulated unit with the CNC protocol on
 //!   stdin/stdout.
 #![warn(missing_docs)]
 
 pub mod console;
 pub mod decode;
+pub mod emu;
 pub mod harness;
 pub mod line;
 pub mod sim;

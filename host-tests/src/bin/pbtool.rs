@@ -3,6 +3,9 @@
 //! `pbtool decode FRAME...` explains Modbus ASCII (`:`) and HPR (`>`) frames.
 //! `pbtool sim --ps MODEL` runs the bridge against a simulated unit with the CNC text protocol
 //! on stdin/stdout (see `host_tests::console`).
+//! `pbtool emu --ps MODEL` runs the firmware image itself on an emulated board (QEMU) against a
+//! simulated unit, with the CNC port on stdin/stdout (see `host_tests::emu::console`);
+//! `pbtool emu --measure` reports the image's latency and idle figures.
 
 use std::io::{self, BufRead, IsTerminal, Write};
 use std::process::ExitCode;
@@ -10,6 +13,9 @@ use std::process::ExitCode;
 use clap::{Args, Parser, Subcommand};
 use host_tests::console::{Console, ConsoleOptions, parse_fault, read_line};
 use host_tests::decode::{all_valid, decode_frames, to_json, to_text};
+use host_tests::emu::console::EmuConsoleOptions;
+use host_tests::emu::measure::{MeasureOptions, measure};
+use host_tests::emu::qemu::ensure_qemu;
 use host_tests::sim::Model;
 
 #[derive(Parser)]
@@ -38,8 +44,46 @@ enum Command {
     /// per command and exits at the end of input. Runs in real time unless `--fast`.
     Sim(SimArgs),
     /// Run the bridge: on the board when a debug probe is attached (build, flash and run with
-    /// probe-rs, showing the log), otherwise against a simulated power supply (as `sim`).
+    /// probe-rs, showing the log), otherwise the firmware on the emulated board when QEMU is
+    /// installed (as `emu`), otherwise against a simulated power supply (as `sim`).
     Run(RunArgs),
+    /// Run the firmware image on an emulated board (QEMU) against a simulated power supply;
+    /// the board's CNC port on stdin/stdout.
+    ///
+    /// Builds the image (`cargo emu-fw`), starts qemu-system-arm 10 with it, puts the simulated
+    /// unit on its power-supply port in real time and wires START and MOTION between them.
+    /// Type CNC commands as for `sim`; `TORCH ON` / `TORCH OFF` drive the board's TORCH_ON
+    /// input pin. `--measure` instead toggles TORCH_ON under QEMU's instruction counting and
+    /// reports the instructions from the edge to START and the idle figures.
+    Emu(EmuArgs),
+}
+
+#[derive(Args)]
+struct EmuArgs {
+    /// The simulated unit (as for `sim`).
+    #[arg(long = "ps", value_name = "MODEL", default_value = "sync65")]
+    model: String,
+    /// Start the unit with a fault: Powermax `0-50-0` (or decimal `500`), HPR error number.
+    #[arg(long, value_name = "CODE")]
+    fault: Option<String>,
+    /// Event lines (`!LINK UP ...`) on from the start.
+    #[arg(long)]
+    events: bool,
+    /// The firmware's own log (defmt, decoded) on stderr.
+    #[arg(long)]
+    log: bool,
+    /// Seed of the simulator's response-time jitter.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Measure instead: TORCH_ON edge to START in guest instructions, and idle behaviour.
+    #[arg(long)]
+    measure: bool,
+    /// With --measure: TORCH_ON cycles.
+    #[arg(long, default_value_t = 20, requires = "measure")]
+    toggles: usize,
+    /// With --measure: idle windows of 10 s of guest time to report.
+    #[arg(long, default_value_t = 1, requires = "measure")]
+    idle_windows: usize,
 }
 
 #[derive(Args)]
@@ -92,6 +136,7 @@ fn main() -> ExitCode {
         Command::Decode(args) => decode(&args),
         Command::Sim(args) => sim(&args),
         Command::Run(args) => run(&args),
+        Command::Emu(args) => emu(&args),
     }
 }
 
@@ -102,14 +147,114 @@ fn run(args: &RunArgs) -> ExitCode {
             eprintln!("pbtool run: debug probe found ({probe}); flashing the board image");
             return flash_board();
         }
+        let unit =
+            Model::from_name(&args.sim_args.model).map_or("unit".to_string(), |m| m.to_string());
+        if !args.sim_args.fast {
+            match ensure_qemu() {
+                Ok(_) => {
+                    eprintln!(
+                        "pbtool run: no debug probe found; running the firmware on the emulated \
+                         board against a simulated {unit} (pbtool emu --ps {})",
+                        args.sim_args.model
+                    );
+                    return emu(&EmuArgs {
+                        model: args.sim_args.model.clone(),
+                        fault: args.sim_args.fault.clone(),
+                        events: args.sim_args.events,
+                        log: args.sim_args.verbose,
+                        seed: args.sim_args.seed,
+                        measure: false,
+                        toggles: 0,
+                        idle_windows: 0,
+                    });
+                }
+                Err(e) => eprintln!("pbtool run: no emulated board ({e})"),
+            }
+        }
         eprintln!(
-            "pbtool run: no debug probe found; running the bridge against a simulated {} \
+            "pbtool run: no debug probe found; running the bridge against a simulated {unit} \
              (pbtool sim --ps {})",
-            Model::from_name(&args.sim_args.model).map_or("unit".to_string(), |m| m.to_string()),
             args.sim_args.model,
         );
     }
     sim(&args.sim_args)
+}
+
+/// The firmware on the emulated board: the CNC console, or the measurements.
+fn emu(args: &EmuArgs) -> ExitCode {
+    let Some(model) = Model::from_name(&args.model) else {
+        eprintln!(
+            "pbtool emu: unknown model {:?}; models: {}",
+            args.model,
+            model_list()
+        );
+        return ExitCode::from(USAGE);
+    };
+    let fault = match args
+        .fault
+        .as_deref()
+        .map(|f| parse_fault(model, f))
+        .transpose()
+    {
+        Ok(fault) => fault,
+        Err(e) => {
+            eprintln!("pbtool emu: {e}");
+            return ExitCode::from(USAGE);
+        }
+    };
+    if args.measure {
+        let options = MeasureOptions {
+            model,
+            toggles: args.toggles,
+            idle_windows: args.idle_windows,
+        };
+        return match measure(&options, |note| eprintln!("pbtool emu: {note}")) {
+            Ok(figures) => {
+                print!("{}", figures.report());
+                ExitCode::SUCCESS
+            }
+            Err(e) => {
+                eprintln!("pbtool emu --measure: {e}");
+                ExitCode::FAILURE
+            }
+        };
+    }
+    if io::stdin().is_terminal() {
+        eprintln!(
+            "pbtool emu: the firmware on an emulated board (QEMU) against a simulated {model}; \
+             CNC port on stdin/stdout. HELP lists the commands, TORCH ON|OFF drives the \
+             TORCH_ON pin, end of input (Ctrl-D) quits."
+        );
+    }
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        let mut stdin = io::stdin().lock();
+        while let Ok(Some(line)) = read_line(&mut stdin as &mut dyn BufRead) {
+            if tx.send(line).is_err() {
+                break;
+            }
+        }
+    });
+    let options = EmuConsoleOptions {
+        model,
+        fault,
+        events: args.events,
+        log: args.log,
+        seed: args.seed,
+    };
+    let mut out = io::stdout().lock();
+    match host_tests::emu::console::run(&options, rx, &mut out, &mut io::stderr()) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(host_tests::emu::Error::Io { source, .. })
+            if source.kind() == io::ErrorKind::BrokenPipe =>
+        {
+            ExitCode::SUCCESS
+        }
+        Err(e) => {
+            eprintln!("pbtool emu: {e}");
+            ExitCode::FAILURE
+        }
+    }
 }
 
 /// The first probe `probe-rs list` reports, if probe-rs is installed and one is attached.

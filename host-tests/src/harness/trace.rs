@@ -114,6 +114,11 @@ impl WireTrace {
         self.frames.push(frame);
     }
 
+    /// The last frame, to extend a frame that arrives in pieces (real-time traffic).
+    pub(crate) fn last_mut(&mut self) -> Option<&mut TraceFrame> {
+        self.frames.last_mut()
+    }
+
     /// Every frame.
     pub fn frames(&self) -> &[TraceFrame] {
         &self.frames

@@ -1,6 +1,8 @@
 //! Helpers shared by the CNC-side scenario and property tests.
 #![allow(dead_code, reason = "each test crate uses a different subset")]
 
+pub mod emu;
+
 use host_tests::harness::{BridgeEndpoint, World, WorldOptions};
 use host_tests::sim::Model;
 use plasma_firmware::settings::Settings;

@@ -1,0 +1,506 @@
+//! The emulated board in one piece: QEMU running the firmware image, the simulated unit on its
+//! PS port, the CNC port, the discrete I/O through qtest, and the firmware's log.
+//!
+//! A [`Board`] boots paused, sets the input pins (so a TORCH_ON held at power-up is there
+//! before the first instruction), starts watching START / ARC_OK / READY, then lets the CPU
+//! run. When it is dropped QEMU is killed; if the test is failing at that point, everything
+//! needed to understand the failure is printed: the firmware's log, the CNC transcript, the
+//! PS wire trace, QEMU's stderr. Otherwise the safety rules ([`super::safety`]) are checked on
+//! what was observed, and a broken one fails the test.
+
+use std::path::PathBuf;
+use std::sync::{Arc, Condvar, Mutex};
+use std::time::{Duration, Instant};
+
+use plasma_firmware::io::{Input, Output};
+
+use super::cnc::CncPort;
+use super::error::{Error, Result};
+use super::image::firmware_elf;
+use super::log::FirmwareLog;
+use super::pins::{WATCHED_PORT, input_level, input_pin, output_active, output_pin};
+use super::qemu::{Qemu, QemuOptions};
+use super::qtest::Qtest;
+use super::safety::{self, Observed};
+use super::sim_port::{Framing, SimPort, SimPortOptions};
+use crate::sim::{Model, SimOptions};
+
+/// Boards that may run at once in one process (QEMU needs a core while the guest is busy;
+/// the machine has two). `PLASMA_EMU_JOBS` overrides it.
+const DEFAULT_PARALLEL_BOARDS: usize = 2;
+/// How long the firmware may take to enable its CNC port after power-up.
+const CNC_READY_TIMEOUT: Duration = Duration::from_secs(20);
+/// How often waits look at an output.
+const POLL: Duration = Duration::from_millis(2);
+
+/// How the unit's discrete signals are wired to the board.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Wiring {
+    /// As in a machine: the board's START drives the unit's Start input and the unit's
+    /// Motion output drives the board's MOTION input.
+    Unit,
+    /// The test drives MOTION itself; START reaches the unit nowhere.
+    Manual,
+}
+
+/// How to boot the board.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BoardOptions {
+    /// The simulated unit.
+    pub model: Model,
+    /// Its options.
+    pub sim: SimOptions,
+    /// A fault the unit has from power-up (Powermax decimal code, HPR error number).
+    pub fault_at_power_up: Option<u16>,
+    /// Inputs already active when the board powers up.
+    pub active_at_power_up: Vec<Input>,
+    /// The discrete wiring between board and unit.
+    pub wiring: Wiring,
+    /// Model the PS framing from USART1's registers (a mismatch garbles the traffic); with
+    /// the USART kernel clock, the baud rate too.
+    pub framing_from_registers: Option<Option<u32>>,
+    /// QEMU's instruction counting (`-icount shift=0,sleep=on`, see
+    /// [`QemuOptions::icount`]); on by default, as the firmware side recommends.
+    pub icount: bool,
+    /// The image; `None` builds it ([`firmware_elf`]).
+    pub elf: Option<PathBuf>,
+}
+
+impl BoardOptions {
+    /// `model`, no fault, inputs inactive, the unit wired, matched framing, instruction
+    /// counting on.
+    pub fn new(model: Model) -> BoardOptions {
+        BoardOptions {
+            model,
+            sim: SimOptions::default(),
+            fault_at_power_up: None,
+            active_at_power_up: Vec::new(),
+            wiring: Wiring::Unit,
+            framing_from_registers: None,
+            icount: true,
+            elf: None,
+        }
+    }
+}
+
+/// Boards running now in this process (a counting semaphore).
+static RUNNING: (Mutex<usize>, Condvar) = (Mutex::new(0), Condvar::new());
+
+/// A place among the boards running at once; given back when dropped.
+struct Slot;
+
+impl Slot {
+    fn take() -> Slot {
+        let limit = std::env::var("PLASMA_EMU_JOBS")
+            .ok()
+            .and_then(|v| v.parse().ok())
+            .filter(|&n: &usize| n > 0)
+            .unwrap_or(DEFAULT_PARALLEL_BOARDS);
+        let mut running = lock(&RUNNING.0);
+        while *running >= limit {
+            running = RUNNING.1.wait(running).unwrap_or_else(|e| e.into_inner());
+        }
+        *running += 1;
+        Slot
+    }
+}
+
+impl Drop for Slot {
+    fn drop(&mut self) {
+        *lock(&RUNNING.0) -= 1;
+        RUNNING.1.notify_one();
+    }
+}
+
+/// An input the harness drove, with the number of output edges QEMU had sent before.
+#[derive(Debug, Clone, Copy)]
+struct Driven {
+    mark: usize,
+    at: Instant,
+    input: Input,
+    active: bool,
+}
+
+/// The emulated board with its simulated unit. See the [module docs](self).
+pub struct Board {
+    // Dropped first: killing QEMU closes every socket, which ends the threads below.
+    qemu: Qemu,
+    qtest: Arc<Qtest>,
+    sim: SimPort,
+    cnc: CncPort,
+    log: FirmwareLog,
+    driven: Mutex<Vec<Driven>>,
+    options: BoardOptions,
+    elf: PathBuf,
+    start_at_power_up: bool,
+    epoch: Instant,
+    _slot: Slot,
+}
+
+impl Board {
+    /// Boots the board: builds the image if needed, starts QEMU paused, sets the inputs,
+    /// connects the unit, and starts the CPU.
+    pub fn boot(options: BoardOptions) -> Result<Board> {
+        let elf = match &options.elf {
+            Some(elf) => elf.clone(),
+            None => firmware_elf()?,
+        };
+        let slot = Slot::take();
+        let (mut qemu, sockets) = Qemu::start(&QemuOptions {
+            elf: elf.clone(),
+            icount: options.icount,
+        })?;
+        let qtest = Arc::new(Qtest::new(sockets.qtest)?);
+        let mut driven = Vec::new();
+        let epoch = Instant::now();
+        for input in Input::ALL {
+            let active = options.active_at_power_up.contains(&input);
+            let mark = qtest.set_pin(input_pin(input), input_level(active))?;
+            driven.push(Driven {
+                mark,
+                at: epoch,
+                input,
+                active,
+            });
+        }
+        qtest.intercept_outputs(WATCHED_PORT)?;
+        let start_at_power_up = output_active(qtest.output_level(output_pin(Output::Start))?);
+
+        let (on_motion, output_edges) = match options.wiring {
+            Wiring::Unit => {
+                let for_motion = Arc::clone(&qtest);
+                let motion = input_pin(Input::Motion);
+                let on_motion: Box<dyn FnMut(bool) + Send> = Box::new(move |on| {
+                    // An error means QEMU is gone: the board is being dropped.
+                    let _ = for_motion.set_pin(motion, input_level(on));
+                });
+                (Some(on_motion), Some(qtest.subscribe()))
+            }
+            Wiring::Manual => (None, None),
+        };
+        let framing = match options.framing_from_registers {
+            Some(clock_hz) => Framing::Registers {
+                qtest: Arc::clone(&qtest),
+                clock_hz,
+            },
+            None => Framing::Matched,
+        };
+        let sim = SimPort::start(
+            sockets.ps,
+            SimPortOptions {
+                model: options.model,
+                sim: options.sim,
+                framing,
+                on_motion,
+                output_edges,
+                seed: options.sim.seed,
+            },
+        )?;
+        if let Some(code) = options.fault_at_power_up {
+            sim.inject_fault(code)?;
+        }
+        let cnc = CncPort::new(sockets.cnc)?;
+        let log = FirmwareLog::start(&elf, qemu.log_path())?;
+        qemu.resume()?;
+        wait_cnc_port_ready(&qtest)?;
+        Ok(Board {
+            qemu,
+            qtest,
+            sim,
+            cnc,
+            log,
+            driven: Mutex::new(driven),
+            options,
+            elf,
+            start_at_power_up,
+            epoch,
+            _slot: slot,
+        })
+    }
+
+    /// The options it was booted with.
+    pub fn options(&self) -> &BoardOptions {
+        &self.options
+    }
+
+    /// The image it runs.
+    pub fn elf(&self) -> &std::path::Path {
+        &self.elf
+    }
+
+    /// When it was powered up (host clock).
+    pub fn epoch(&self) -> Instant {
+        self.epoch
+    }
+
+    /// The qtest session.
+    pub fn qtest(&self) -> &Qtest {
+        &self.qtest
+    }
+
+    /// The simulated unit.
+    pub fn sim(&self) -> &SimPort {
+        &self.sim
+    }
+
+    /// The CNC port.
+    pub fn cnc(&mut self) -> &mut CncPort {
+        &mut self.cnc
+    }
+
+    /// The firmware's log.
+    pub fn log(&self) -> &FirmwareLog {
+        &self.log
+    }
+
+    /// Drives an input signal (`active` = the opto-coupler conducts: the pin is low).
+    pub fn set_input(&self, input: Input, active: bool) -> Result<()> {
+        let mark = self.qtest.set_pin(input_pin(input), input_level(active))?;
+        lock(&self.driven).push(Driven {
+            mark,
+            at: Instant::now(),
+            input,
+            active,
+        });
+        Ok(())
+    }
+
+    /// An output signal now.
+    pub fn output(&self, output: Output) -> Result<bool> {
+        Ok(output_active(self.qtest.output_level(output_pin(output))?))
+    }
+
+    /// Waits until `output` is `on`; returns how long that took.
+    pub fn wait_output(&self, output: Output, on: bool, timeout: Duration) -> Result<Duration> {
+        let began = Instant::now();
+        loop {
+            if self.output(output)? == on {
+                return Ok(began.elapsed());
+            }
+            if began.elapsed() > timeout {
+                return Err(Error::Timeout(format!(
+                    "{} still {} after {} ms",
+                    output.as_str(),
+                    if on { "off" } else { "on" },
+                    timeout.as_millis()
+                )));
+            }
+            std::thread::sleep(POLL);
+        }
+    }
+
+    /// Waits `duration` and checks that `output` was `on` all along: its level at both ends
+    /// and, for an output on the watched port, no edge in between.
+    pub fn expect_held(&self, output: Output, on: bool, duration: Duration) -> Result<()> {
+        let pin = output_pin(output);
+        let mark = self.qtest.edges().len();
+        let state = |now: bool| if now { "on" } else { "off" };
+        if self.output(output)? != on {
+            return Err(Error::Protocol(format!(
+                "{} is {} (expected {} for {} ms)",
+                output.as_str(),
+                state(!on),
+                state(on),
+                duration.as_millis()
+            )));
+        }
+        let began = Instant::now();
+        std::thread::sleep(duration);
+        let level = self.output(output)?;
+        let edges = self.qtest.edges();
+        let changed = edges
+            .get(mark..)
+            .unwrap_or(&[])
+            .iter()
+            .find(|e| e.pin == pin);
+        if level != on || changed.is_some() {
+            return Err(Error::Protocol(format!(
+                "{} did not stay {} for {} ms (changed {} ms into it)",
+                output.as_str(),
+                state(on),
+                duration.as_millis(),
+                changed.map_or(duration.as_millis(), |e| {
+                    e.at.saturating_duration_since(began).as_millis()
+                })
+            )));
+        }
+        Ok(())
+    }
+
+    /// Edges of `output` (on the watched port) so far, with the host time they were read.
+    pub fn edges(&self, output: Output) -> Vec<(Instant, bool)> {
+        let pin = output_pin(output);
+        self.qtest
+            .edges()
+            .into_iter()
+            .filter(|e| e.pin == pin)
+            .map(|e| (e.at, output_active(e.high)))
+            .collect()
+    }
+
+    /// Sends a CNC command and returns its reply (events on the way are kept).
+    pub fn command(&mut self, line: &str, timeout: Duration) -> Result<String> {
+        self.cnc.command(line, timeout)
+    }
+
+    /// Asks `STATUS` every 100 ms until `pred` holds for its reply; returns that reply.
+    pub fn wait_status(
+        &mut self,
+        timeout: Duration,
+        mut pred: impl FnMut(&str) -> bool,
+    ) -> Result<String> {
+        let began = Instant::now();
+        loop {
+            let reply = self.cnc.command("STATUS", timeout)?;
+            if pred(&reply) {
+                return Ok(reply);
+            }
+            if began.elapsed() > timeout {
+                return Err(Error::Timeout(format!(
+                    "STATUS never matched in {} ms; last: {reply}",
+                    timeout.as_millis()
+                )));
+            }
+            std::thread::sleep(Duration::from_millis(100));
+        }
+    }
+
+    /// The safety rules broken so far (see [`super::safety`]).
+    pub fn safety_violations(&self) -> Vec<String> {
+        let driven = lock(&self.driven).clone();
+        let start = output_pin(Output::Start);
+        let edges = self.qtest.edges();
+        let torch_at_power_up = driven
+            .iter()
+            .find(|d| d.input == Input::TorchOn)
+            .is_some_and(|d| d.active);
+        let mut observed = Vec::new();
+        let mut inputs = driven
+            .iter()
+            .filter(|d| d.input == Input::TorchOn)
+            .skip(1)
+            .peekable();
+        for (index, edge) in edges.iter().enumerate() {
+            while let Some(d) = inputs.next_if(|d| d.mark <= index) {
+                observed.push(Observed::TorchOn {
+                    at: d.at,
+                    active: d.active,
+                });
+            }
+            if edge.pin == start {
+                observed.push(Observed::Start {
+                    at: edge.at,
+                    on: output_active(edge.high),
+                });
+            }
+        }
+        observed.extend(inputs.map(|d| Observed::TorchOn {
+            at: d.at,
+            active: d.active,
+        }));
+        safety::check(
+            self.epoch,
+            torch_at_power_up,
+            self.start_at_power_up,
+            &observed,
+        )
+    }
+
+    /// Fails (with the diagnostics) when a safety rule was broken.
+    pub fn assert_safe(&self) {
+        let broken = self.safety_violations();
+        assert!(
+            broken.is_empty(),
+            "safety rules broken:\n{}\n{}",
+            broken.join("\n"),
+            self.diagnostics()
+        );
+    }
+
+    /// Everything that explains a failure: the firmware log, the CNC transcript, the PS
+    /// traffic, the discrete I/O, QEMU's stderr.
+    pub fn diagnostics(&self) -> String {
+        let mut text = String::new();
+        text.push_str(&format!(
+            "==== emulated board against a simulated {} (image {})\n",
+            self.options.model,
+            self.elf.display()
+        ));
+        text.push_str("---- firmware log (last 80 lines)\n");
+        text.push_str(&self.log.tail(80));
+        text.push_str("---- CNC port\n");
+        text.push_str(&self.cnc.transcript(self.epoch));
+        text.push_str("---- PS port (last 30 frames, times from the unit's start)\n");
+        text.push_str(&self.sim.trace().tail(30));
+        if let Some(why) = self.sim.stopped() {
+            text.push_str(&format!("(the simulated unit stopped: {why})\n"));
+        }
+        text.push_str("---- discrete I/O (host ms)\n");
+        let ms = |at: Instant| at.saturating_duration_since(self.epoch).as_secs_f64() * 1000.0;
+        for d in lock(&self.driven).iter().filter(|d| d.at > self.epoch) {
+            text.push_str(&format!(
+                "{:>10.3} ms {} {}\n",
+                ms(d.at),
+                d.input.as_str(),
+                if d.active { "active" } else { "inactive" }
+            ));
+        }
+        for e in self.qtest.edges() {
+            let name = Output::ALL
+                .into_iter()
+                .find(|&o| output_pin(o) == e.pin)
+                .map_or_else(|| e.pin.to_string(), |o| o.as_str().to_string());
+            text.push_str(&format!(
+                "{:>10.3} ms {name} -> {}\n",
+                ms(e.at),
+                if e.high { "high" } else { "low" }
+            ));
+        }
+        let stderr = self.qemu.stderr();
+        if !stderr.trim().is_empty() {
+            text.push_str("---- QEMU stderr\n");
+            text.push_str(&stderr);
+        }
+        text
+    }
+}
+
+impl Drop for Board {
+    fn drop(&mut self) {
+        if std::thread::panicking() {
+            // libtest shows a failing test's captured output: the whole story.
+            eprintln!("{}", self.diagnostics());
+            return;
+        }
+        let broken = self.safety_violations();
+        if !broken.is_empty() {
+            panic!(
+                "safety rules broken:\n{}\n{}",
+                broken.join("\n"),
+                self.diagnostics()
+            );
+        }
+    }
+}
+
+/// Waits until the firmware has enabled USART2's receiver and its interrupt: bytes sent to
+/// the CNC port before that are lost, as on a board.
+fn wait_cnc_port_ready(qtest: &Qtest) -> Result<()> {
+    const USART2_CR1: u64 = 0x4000_4400;
+    const READY: u32 = 1 << 0 | 1 << 2 | 1 << 5; // UE, RE, RXNEIE
+    let began = Instant::now();
+    while qtest.readl(USART2_CR1)? & READY != READY {
+        if began.elapsed() > CNC_READY_TIMEOUT {
+            return Err(Error::Timeout(format!(
+                "the firmware did not enable its CNC port (USART2) in {} s",
+                CNC_READY_TIMEOUT.as_secs()
+            )));
+        }
+        std::thread::sleep(POLL);
+    }
+    Ok(())
+}
+
+fn lock<T>(mutex: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
+    mutex.lock().unwrap_or_else(|e| e.into_inner())
+}

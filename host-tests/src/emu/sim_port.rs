@@ -1,0 +1,709 @@
+//! The simulated power supply on the other end of the emulated board's PS serial port, in
+//! real time.
+//!
+//! QEMU passes bytes only (no baud rate, parity or stop bits on the socket) and as fast as the
+//! guest writes them. A thread here puts them on the same baud-accurate [`Line`] the scenario
+//! harness uses, hands them to one of the same simulators ([`crate::sim`]) with real
+//! timestamps, and writes the unit's replies back to the socket character by character at the
+//! moments the line delivers them (so a reply takes its real wire time at the unit's baud).
+//! The line's master end takes the framing the firmware set in USART1's registers (read
+//! through qtest before each frame) when [`Framing::Registers`] is asked for, so a framing
+//! mismatch garbles the traffic as it would on a wire; characters the line flags with a
+//! parity or framing error are dropped (QEMU cannot hand a flagged character to the guest).
+//!
+//! The test controls the unit while it runs ([`SimPort::with_unit`]): raise and clear faults,
+//! power it off and on, or cut the cable ([`SimPort::set_connected`]) so it neither hears nor
+//! answers while it keeps its state.
+
+use std::io::{ErrorKind, Read, Write};
+use std::os::unix::net::UnixStream;
+use std::sync::mpsc::{self, Receiver, Sender, TryRecvError};
+use std::sync::{Arc, Mutex};
+use std::thread::JoinHandle;
+
+use plasma_firmware::port::{Parity, PortConfig, StopBits};
+use plasma_firmware::time::{Duration, Instant};
+
+use plasma_firmware::io::Output;
+
+use super::error::{Error, Result};
+use super::pins::{output_active, output_pin};
+use super::qtest::{Edge, Qtest};
+use crate::harness::{Direction, TraceFrame, WireTrace};
+use crate::line::{End, Line, Wiring};
+use crate::sim::{Model, SimOptions, SimulatedUnit};
+
+/// The longest the thread sleeps between two looks at the socket and the test's commands.
+const MAX_SLEEP: Duration = Duration::from_millis(5);
+/// The shortest wait worth a timed read (the timeout cannot be zero).
+const MIN_SLEEP: Duration = Duration::from_micros(50);
+/// A pause in the firmware's transmission longer than this starts a new frame (whose framing
+/// is read again from the USART registers).
+const FRAME_GAP: Duration = Duration::from_millis(2);
+/// In the trace, pieces of one frame (the firmware's writes reach the socket when QEMU runs,
+/// a few ms apart on a loaded host) are joined until the frame's end (`\n` or `<`), unless
+/// this much time passes between two pieces.
+const PIECES_OF_A_FRAME: Duration = Duration::from_millis(50);
+/// How long a write to the socket may block (QEMU stops reading while the guest does not).
+const WRITE_TIMEOUT: std::time::Duration = std::time::Duration::from_secs(2);
+
+/// USART1's registers (the PS port).
+pub mod usart1 {
+    /// Control register 1.
+    pub const CR1: u64 = 0x4001_3800;
+    /// Control register 2.
+    pub const CR2: u64 = 0x4001_3804;
+    /// Baud rate register.
+    pub const BRR: u64 = 0x4001_380C;
+}
+
+/// Where the line's master end (the firmware's UART) takes its framing from.
+#[derive(Clone)]
+pub enum Framing {
+    /// Always the unit's: no mismatch is modelled.
+    Matched,
+    /// From USART1's CR1/CR2 (parity, stop bits) and BRR (baud), read through qtest at the
+    /// start of every frame the firmware sends.
+    Registers {
+        /// The board's qtest session.
+        qtest: Arc<Qtest>,
+        /// USART1's kernel clock, to turn BRR into a baud rate; `None` takes the unit's baud.
+        clock_hz: Option<u32>,
+    },
+}
+
+/// The port settings USART1's registers describe: `None` while the USART is disabled or set
+/// to anything but 8 data bits. A baud rate within 2 % of `nominal_baud` (the unit's; BRR
+/// rounds, and a UART tolerates that much) is taken as `nominal_baud`; without the clock the
+/// baud rate is taken as `nominal_baud`.
+pub fn port_from_registers(
+    cr1: u32,
+    cr2: u32,
+    brr: u32,
+    clock_hz: Option<u32>,
+    nominal_baud: u32,
+) -> Option<PortConfig> {
+    const UE: u32 = 1 << 0;
+    const PS: u32 = 1 << 9;
+    const PCE: u32 = 1 << 10;
+    const M0: u32 = 1 << 12;
+    const M1: u32 = 1 << 28;
+    const OVER8: u32 = 1 << 15;
+    if cr1 & UE == 0 {
+        return None;
+    }
+    // Word length counts the parity bit: 8 data bits are M=00 without parity, M=01 with.
+    let word_bits = match (cr1 & M1 != 0, cr1 & M0 != 0) {
+        (false, false) => 8,
+        (false, true) => 9,
+        (true, false) => 7,
+        (true, true) => return None,
+    };
+    let parity = match (cr1 & PCE != 0, cr1 & PS != 0) {
+        (false, _) => Parity::None,
+        (true, false) => Parity::Even,
+        (true, true) => Parity::Odd,
+    };
+    let data_bits = word_bits - u32::from(parity != Parity::None);
+    if data_bits != 8 {
+        return None;
+    }
+    let stop_bits = match (cr2 >> 12) & 0b11 {
+        0b00 => StopBits::One,
+        0b10 => StopBits::Two,
+        // 0.5 and 1.5 stop bits: nothing the bridge uses; read as one.
+        _ => StopBits::One,
+    };
+    let baud = match clock_hz {
+        Some(clock) if brr != 0 => {
+            // OVER8: BRR[3:0] holds USARTDIV[3:0] shifted right by one.
+            let div = if cr1 & OVER8 != 0 {
+                (brr & !0xF) | ((brr & 0x7) << 1)
+            } else {
+                brr
+            };
+            let over = if cr1 & OVER8 != 0 { 2 } else { 1 };
+            let baud = over * clock / div;
+            if baud.abs_diff(nominal_baud).saturating_mul(50) <= nominal_baud {
+                nominal_baud
+            } else {
+                baud
+            }
+        }
+        _ => nominal_baud,
+    };
+    Some(PortConfig {
+        baud,
+        parity,
+        stop_bits,
+    })
+}
+
+/// How to run the simulated unit.
+pub struct SimPortOptions {
+    /// The model.
+    pub model: Model,
+    /// Simulator options (seed, addresses).
+    pub sim: SimOptions,
+    /// Where the firmware's framing comes from.
+    pub framing: Framing,
+    /// Called on the port's thread whenever the unit's Motion output changes (the harness
+    /// wires it to the board's MOTION input).
+    pub on_motion: Option<Box<dyn FnMut(bool) + Send>>,
+    /// Edges of the board's outputs (qtest's stream): START drives the unit's Start input.
+    pub output_edges: Option<Receiver<Edge>>,
+    /// Seed of the line model.
+    pub seed: u64,
+}
+
+impl SimPortOptions {
+    /// `model` with default options, matched framing and no Motion wiring.
+    pub fn new(model: Model) -> SimPortOptions {
+        SimPortOptions {
+            model,
+            sim: SimOptions::default(),
+            framing: Framing::Matched,
+            on_motion: None,
+            output_edges: None,
+            seed: 1,
+        }
+    }
+}
+
+/// What the port's thread publishes.
+#[derive(Debug, Default)]
+struct Published {
+    trace: WireTrace,
+    dropped: u64,
+    /// Set when the thread stopped on an error (the socket failed).
+    stopped: Option<String>,
+}
+
+type Job = Box<dyn FnOnce(&mut Station) + Send>;
+
+/// A simulated unit answering on the board's PS socket. Stops when dropped or when QEMU closes
+/// the socket.
+pub struct SimPort {
+    jobs: Option<Sender<Job>>,
+    published: Arc<Mutex<Published>>,
+    epoch: std::time::Instant,
+    thread: Option<JoinHandle<()>>,
+    model: Model,
+}
+
+impl SimPort {
+    /// Starts the unit on `stream` (time zero is now).
+    pub fn start(stream: UnixStream, options: SimPortOptions) -> Result<SimPort> {
+        let epoch = std::time::Instant::now();
+        let published = Arc::new(Mutex::new(Published::default()));
+        let (jobs, inbox) = mpsc::channel::<Job>();
+        stream
+            .set_write_timeout(Some(WRITE_TIMEOUT))
+            .map_err(|e| Error::io("PS socket", e))?;
+        let model = options.model;
+        let for_thread = Arc::clone(&published);
+        let thread = std::thread::Builder::new()
+            .name(format!("sim-{model}"))
+            .spawn(move || {
+                // The unit is built on its own thread: simulators need not be Send.
+                let unit = options.model.build(&options.sim);
+                let port = unit.port();
+                let mut station = Station {
+                    line: Line::new(port, port, Wiring::FourWire, options.seed),
+                    unit,
+                    framing: options.framing,
+                    on_motion: options.on_motion,
+                    output_edges: options.output_edges,
+                    motion: false,
+                    last_rx: None,
+                    epoch,
+                    published: for_thread,
+                };
+                let result = station.run(stream, &inbox);
+                if let Err(e) = result {
+                    lock(&station.published).stopped = Some(e.to_string());
+                }
+            })
+            .map_err(|e| Error::io("simulator thread", e))?;
+        Ok(SimPort {
+            jobs: Some(jobs),
+            published,
+            epoch,
+            thread: Some(thread),
+            model,
+        })
+    }
+
+    /// The simulated model.
+    pub fn model(&self) -> Model {
+        self.model
+    }
+
+    /// The simulator's clock now.
+    pub fn now(&self) -> Instant {
+        instant_since(self.epoch)
+    }
+
+    /// Runs `act` on the unit (on its thread, between two steps) and returns its result.
+    pub fn with_unit<R: Send + 'static>(
+        &self,
+        act: impl FnOnce(&mut dyn SimulatedUnit, Instant) -> R + Send + 'static,
+    ) -> Result<R> {
+        self.with_station(move |station, now| act(&mut *station.unit, now))
+    }
+
+    fn with_station<R: Send + 'static>(
+        &self,
+        act: impl FnOnce(&mut Station, Instant) -> R + Send + 'static,
+    ) -> Result<R> {
+        let (reply, result) = mpsc::channel();
+        let job: Job = Box::new(move |station: &mut Station| {
+            let now = instant_since(station.epoch);
+            let _ = reply.send(act(station, now));
+        });
+        let stopped = || {
+            let why = lock(&self.published).stopped.clone();
+            Error::Exited(format!(
+                "the simulated unit has stopped ({})",
+                why.as_deref().unwrap_or("the PS socket closed")
+            ))
+        };
+        self.jobs
+            .as_ref()
+            .and_then(|jobs| jobs.send(job).ok())
+            .ok_or_else(stopped)?;
+        result
+            .recv_timeout(std::time::Duration::from_secs(10))
+            .map_err(|_| stopped())
+    }
+
+    /// Raises a fault (Powermax decimal code such as 500 for 0-50-0, HPR error number).
+    pub fn inject_fault(&self, code: u16) -> Result<()> {
+        self.with_unit(move |unit, now| unit.inject_fault(now, code))
+    }
+
+    /// Clears the unit's fault.
+    pub fn clear_fault(&self) -> Result<()> {
+        self.with_unit(|unit, now| unit.clear_fault(now))
+    }
+
+    /// Switches the unit off (it forgets its volatile settings; neither hears nor sends).
+    pub fn power_off(&self) -> Result<()> {
+        self.with_station(|station, now| {
+            station.unit.power_off(now);
+            station.line.set_unit_powered(now, false);
+        })
+    }
+
+    /// Switches the unit on.
+    pub fn power_on(&self) -> Result<()> {
+        self.with_station(|station, now| {
+            station.line.set_unit_powered(now, true);
+            station.unit.power_on(now);
+        })
+    }
+
+    /// Connects or cuts the cable: while cut the unit hears nothing and nothing it sends
+    /// arrives, but it stays on and keeps its state.
+    pub fn set_connected(&self, connected: bool) -> Result<()> {
+        self.with_station(move |station, now| station.line.set_unit_powered(now, connected))
+    }
+
+    /// Drives the unit's Start input (the board's START output).
+    pub fn set_start(&self, on: bool) -> Result<()> {
+        self.with_unit(move |unit, now| unit.set_start(now, on))
+    }
+
+    /// The unit's Motion output.
+    pub fn motion(&self) -> Result<bool> {
+        self.with_unit(|unit, _| unit.motion())
+    }
+
+    /// What went over the line so far (frames as sent, with their line timing).
+    pub fn trace(&self) -> WireTrace {
+        lock(&self.published).trace.clone()
+    }
+
+    /// Characters from the firmware that the line flagged (dropped), so far.
+    pub fn dropped(&self) -> u64 {
+        lock(&self.published).dropped
+    }
+
+    /// Why the port's thread stopped, if it did on an error.
+    pub fn stopped(&self) -> Option<String> {
+        lock(&self.published).stopped.clone()
+    }
+}
+
+impl Drop for SimPort {
+    fn drop(&mut self) {
+        // Closing the job channel ends the thread at its next look (at most MAX_SLEEP).
+        self.jobs = None;
+        if let Some(thread) = self.thread.take() {
+            let _ = thread.join();
+        }
+    }
+}
+
+fn lock<T>(mutex: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
+    mutex.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+fn instant_since(epoch: std::time::Instant) -> Instant {
+    Instant::from_micros(u64::try_from(epoch.elapsed().as_micros()).unwrap_or(u64::MAX))
+}
+
+fn std_duration(d: Duration) -> std::time::Duration {
+    std::time::Duration::from_micros(d.as_micros())
+}
+
+/// The unit, its line and the socket's bookkeeping, owned by the port's thread.
+struct Station {
+    unit: Box<dyn SimulatedUnit>,
+    line: Line,
+    framing: Framing,
+    on_motion: Option<Box<dyn FnMut(bool) + Send>>,
+    output_edges: Option<Receiver<Edge>>,
+    motion: bool,
+    /// When the firmware's last character arrived.
+    last_rx: Option<Instant>,
+    epoch: std::time::Instant,
+    published: Arc<Mutex<Published>>,
+}
+
+impl Station {
+    fn now(&self) -> Instant {
+        instant_since(self.epoch)
+    }
+
+    /// The loop: jobs, the socket, the unit and the line, until the socket or the job channel
+    /// closes.
+    fn run(&mut self, mut stream: UnixStream, jobs: &Receiver<Job>) -> Result<()> {
+        let mut buf = [0u8; 256];
+        loop {
+            loop {
+                match jobs.try_recv() {
+                    Ok(job) => job(self),
+                    Err(TryRecvError::Empty) => break,
+                    Err(TryRecvError::Disconnected) => return Ok(()),
+                }
+            }
+            self.take_output_edges();
+            self.step(&mut stream)?;
+            let now = self.now();
+            let wait = [self.line.next_delivery(), self.unit.next_wakeup()]
+                .into_iter()
+                .flatten()
+                .min()
+                .map_or(MAX_SLEEP, |t| t.saturating_since(now))
+                .min(MAX_SLEEP)
+                .max(MIN_SLEEP);
+            stream
+                .set_read_timeout(Some(std_duration(wait)))
+                .map_err(|e| Error::io("PS socket", e))?;
+            match stream.read(&mut buf) {
+                Ok(0) => return Ok(()),
+                Ok(n) => {
+                    let now = self.now();
+                    self.heard_from_firmware(now, &buf[..n]);
+                }
+                Err(e) if matches!(e.kind(), ErrorKind::WouldBlock | ErrorKind::TimedOut) => {}
+                Err(e) if e.kind() == ErrorKind::Interrupted => {}
+                Err(e) => return Err(Error::io("reading the PS socket", e)),
+            }
+        }
+    }
+
+    /// START edges from the board to the unit's Start input.
+    fn take_output_edges(&mut self) {
+        let Some(edges) = &self.output_edges else {
+            return;
+        };
+        let start = output_pin(Output::Start);
+        let changes: Vec<bool> = edges
+            .try_iter()
+            .filter(|e| e.pin == start)
+            .map(|e| e.high)
+            .collect();
+        for high in changes {
+            let now = self.now();
+            self.unit.set_start(now, output_active(high));
+        }
+    }
+
+    /// Characters the firmware wrote: onto the line from the master end.
+    fn heard_from_firmware(&mut self, now: Instant, bytes: &[u8]) {
+        let new_frame = self
+            .last_rx
+            .is_none_or(|t| now.saturating_since(t) > FRAME_GAP);
+        self.last_rx = Some(now);
+        if new_frame && let Some(port) = self.firmware_port() {
+            self.line.set_port(End::Master, port);
+        }
+        let start = now.max(self.line.busy_until(End::Master));
+        let port = self.line.port(End::Master);
+        let end = self.line.transmit(End::Master, now, bytes);
+        self.record(Direction::ToUnit, start, end, port, bytes);
+    }
+
+    /// The framing the firmware has set, if it is to be modelled and can be read.
+    fn firmware_port(&self) -> Option<PortConfig> {
+        let Framing::Registers { qtest, clock_hz } = &self.framing else {
+            return None;
+        };
+        let read = || -> Result<(u32, u32, u32)> {
+            Ok((
+                qtest.readl(usart1::CR1)?,
+                qtest.readl(usart1::CR2)?,
+                qtest.readl(usart1::BRR)?,
+            ))
+        };
+        let (cr1, cr2, brr) = read().ok()?;
+        port_from_registers(cr1, cr2, brr, *clock_hz, self.unit.port().baud)
+    }
+
+    /// Everything due now: the unit hears, runs and answers; its characters go to the socket.
+    fn step(&mut self, stream: &mut UnixStream) -> Result<()> {
+        let now = self.now();
+        self.unit.advance(now);
+        self.take_noise();
+        for b in self.line.receive(End::Unit, now) {
+            match b.error {
+                None => self.unit.receive(b.at, b.byte),
+                Some(_) => self.unit.receive_error(b.at),
+            }
+        }
+        if let Some(reply) = self.unit.poll_transmit(now) {
+            let start = now.max(self.line.busy_until(End::Unit));
+            let port = self.line.port(End::Unit);
+            let end = self.line.transmit(End::Unit, now, &reply);
+            self.record(Direction::ToBridge, start, end, port, &reply);
+        }
+        self.take_noise();
+        let mut out = Vec::new();
+        for b in self.line.receive(End::Master, now) {
+            match b.error {
+                None => out.push(b.byte),
+                Some(_) => lock(&self.published).dropped += 1,
+            }
+        }
+        if !out.is_empty() {
+            stream
+                .write_all(&out)
+                .map_err(|e| Error::io("writing the PS socket", e))?;
+        }
+        let motion = self.unit.motion();
+        if motion != self.motion {
+            self.motion = motion;
+            if let Some(on_motion) = &mut self.on_motion {
+                on_motion(motion);
+            }
+        }
+        Ok(())
+    }
+
+    fn take_noise(&mut self) {
+        for (start, length) in self.unit.take_noise_bursts() {
+            self.line.add_noise_burst(start, length);
+        }
+    }
+
+    /// Adds a transmission to the trace, extending the last frame when it continues it (see
+    /// [`PIECES_OF_A_FRAME`]).
+    fn record(
+        &self,
+        direction: Direction,
+        start: Instant,
+        end: Instant,
+        port: PortConfig,
+        bytes: &[u8],
+    ) {
+        let mut published = lock(&self.published);
+        if let Some(last) = published.trace.last_mut()
+            && last.direction == direction
+            && start.saturating_since(last.end) <= PIECES_OF_A_FRAME
+            && !last.bytes.ends_with(b"\n")
+            && !last.bytes.ends_with(b"<")
+        {
+            last.bytes.extend_from_slice(bytes);
+            last.end = end;
+            return;
+        }
+        published.trace.push(TraceFrame {
+            direction,
+            start,
+            end,
+            port,
+            bytes: bytes.to_vec(),
+        });
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::io::Read;
+
+    fn read_until(stream: &mut UnixStream, end: &[u8]) -> (Vec<u8>, std::time::Duration) {
+        let began = std::time::Instant::now();
+        stream
+            .set_read_timeout(Some(std::time::Duration::from_secs(5)))
+            .unwrap();
+        let mut got = Vec::new();
+        let mut byte = [0u8];
+        while !got.ends_with(end) {
+            stream.read_exact(&mut byte).unwrap();
+            got.push(byte[0]);
+        }
+        (got, began.elapsed())
+    }
+
+    #[test]
+    fn registers_give_the_framing() {
+        const UE: u32 = 1;
+        const PCE: u32 = 1 << 10;
+        const PS: u32 = 1 << 9;
+        const M0: u32 = 1 << 12;
+        let even = port_from_registers(UE | PCE | M0, 0, 0, None, 19_200).unwrap();
+        assert_eq!(even, PortConfig::MODBUS_DEFAULT);
+        let odd_two = port_from_registers(UE | PCE | PS | M0, 0b10 << 12, 0, None, 19_200);
+        assert_eq!(
+            odd_two,
+            Some(PortConfig {
+                baud: 19_200,
+                parity: Parity::Odd,
+                stop_bits: StopBits::Two
+            })
+        );
+        // 8N1 at 80 MHz: BRR = 80e6 / 19200 = 4166, 19203 baud: the unit's 19200 within 2 %.
+        let hpr = port_from_registers(UE, 0, 4166, Some(80_000_000), 19_200).unwrap();
+        assert_eq!(hpr, PortConfig::HPR);
+        // Against a 9600-baud unit it is a mismatch.
+        let fast = port_from_registers(UE, 0, 4166, Some(80_000_000), 9600).unwrap();
+        assert_eq!(fast.baud, 19_203);
+        // Disabled, or 7 data bits with parity: no 8-bit framing to model.
+        assert_eq!(port_from_registers(PCE | M0, 0, 0, None, 19_200), None);
+        assert_eq!(port_from_registers(UE | PCE, 0, 0, None, 19_200), None);
+    }
+
+    #[test]
+    fn a_request_on_the_socket_gets_the_units_reply_at_its_baud() {
+        let (mut firmware, theirs) = UnixStream::pair().unwrap();
+        let port = SimPort::start(theirs, SimPortOptions::new(Model::Sync65)).unwrap();
+        firmware.write_all(b":010430000001CA\r\n").unwrap();
+        let (reply, took) = read_until(&mut firmware, b"\r\n");
+        assert_eq!(reply, b":0104020400F5\r\n");
+        // 17 + 15 characters of 572.9 us on the wire and 3 ms in the unit: 21.3 ms at least.
+        assert!(took >= std::time::Duration::from_micros(21_000), "{took:?}");
+        let trace = port.trace();
+        let frames: Vec<String> = trace.frames().iter().map(|f| f.text()).collect();
+        assert_eq!(frames, [":010430000001CA\\r\\n", ":0104020400F5\\r\\n"]);
+        assert!(trace.frames()[1].start >= trace.frames()[0].end);
+    }
+
+    #[test]
+    fn a_request_in_pieces_is_one_frame() {
+        let (mut firmware, theirs) = UnixStream::pair().unwrap();
+        let port = SimPort::start(theirs, SimPortOptions::new(Model::Sync65)).unwrap();
+        // A loaded host: the pieces come 5 ms apart.
+        for piece in [&b":0104300"[..], b"00001CA", b"\r\n"] {
+            firmware.write_all(piece).unwrap();
+            std::thread::sleep(std::time::Duration::from_millis(5));
+        }
+        let (reply, _) = read_until(&mut firmware, b"\r\n");
+        assert_eq!(reply, b":0104020400F5\r\n");
+        assert_eq!(port.trace().frames()[0].bytes, b":010430000001CA\r\n");
+    }
+
+    #[test]
+    fn a_cut_cable_silences_the_unit_until_it_is_connected_again() {
+        let (mut firmware, theirs) = UnixStream::pair().unwrap();
+        let port = SimPort::start(theirs, SimPortOptions::new(Model::Sync65)).unwrap();
+        port.set_connected(false).unwrap();
+        firmware.write_all(b":010430000001CA\r\n").unwrap();
+        firmware
+            .set_read_timeout(Some(std::time::Duration::from_millis(100)))
+            .unwrap();
+        let mut byte = [0u8];
+        assert!(firmware.read(&mut byte).is_err(), "the unit answered");
+        port.set_connected(true).unwrap();
+        firmware.write_all(b":010430000001CA\r\n").unwrap();
+        let (reply, _) = read_until(&mut firmware, b"\r\n");
+        assert_eq!(reply, b":0104020400F5\r\n");
+    }
+
+    #[test]
+    fn an_injected_fault_is_reported_and_cleared() {
+        let (mut firmware, theirs) = UnixStream::pair().unwrap();
+        let port = SimPort::start(theirs, SimPortOptions::new(Model::Sync65)).unwrap();
+        port.inject_fault(500).unwrap();
+        assert_eq!(port.with_unit(|u, _| u.active_fault()).unwrap(), 500);
+        // The active fault register (0x301A): 500 = 0x01F4.
+        firmware.write_all(b":0104301A0001B0\r\n").unwrap();
+        let (reply, _) = read_until(&mut firmware, b"\r\n");
+        assert_eq!(reply, b":01040201F404\r\n");
+        port.clear_fault().unwrap();
+        firmware.write_all(b":0104301A0001B0\r\n").unwrap();
+        let (reply, _) = read_until(&mut firmware, b"\r\n");
+        assert_eq!(reply, b":0104020000F9\r\n");
+    }
+
+    #[test]
+    fn motion_follows_start_and_reaches_the_wiring() {
+        let (_firmware, theirs) = UnixStream::pair().unwrap();
+        let (tx, rx) = mpsc::channel();
+        let options = SimPortOptions {
+            on_motion: Some(Box::new(move |on| tx.send(on).unwrap())),
+            ..SimPortOptions::new(Model::Sync65)
+        };
+        let port = SimPort::start(theirs, options).unwrap();
+        port.set_start(true).unwrap();
+        let timeout = std::time::Duration::from_secs(5);
+        assert_eq!(rx.recv_timeout(timeout), Ok(true));
+        assert!(port.motion().unwrap());
+        port.set_start(false).unwrap();
+        assert_eq!(rx.recv_timeout(timeout), Ok(false));
+    }
+
+    #[test]
+    fn start_edges_reach_the_units_start_input() {
+        let (_firmware, theirs) = UnixStream::pair().unwrap();
+        let (edges, output_edges) = mpsc::channel();
+        let options = SimPortOptions {
+            output_edges: Some(output_edges),
+            ..SimPortOptions::new(Model::Sync65)
+        };
+        let port = SimPort::start(theirs, options).unwrap();
+        let edge = |pin, high| Edge {
+            at: std::time::Instant::now(),
+            pin,
+            high,
+        };
+        // Another pin of the port changes nothing.
+        edges.send(edge(output_pin(Output::Ready), true)).unwrap();
+        std::thread::sleep(std::time::Duration::from_millis(300));
+        assert!(!port.motion().unwrap());
+        edges.send(edge(output_pin(Output::Start), true)).unwrap();
+        let began = std::time::Instant::now();
+        while !port.motion().unwrap() {
+            assert!(
+                began.elapsed() < std::time::Duration::from_secs(5),
+                "no arc"
+            );
+            std::thread::sleep(std::time::Duration::from_millis(5));
+        }
+    }
+
+    #[test]
+    fn the_port_stops_when_the_socket_closes() {
+        let (firmware, theirs) = UnixStream::pair().unwrap();
+        let port = SimPort::start(theirs, SimPortOptions::new(Model::Hpr260)).unwrap();
+        drop(firmware);
+        let began = std::time::Instant::now();
+        while port.inject_fault(44).is_ok() {
+            assert!(began.elapsed() < std::time::Duration::from_secs(5));
+            std::thread::sleep(std::time::Duration::from_millis(5));
+        }
+        assert!(matches!(port.clear_fault(), Err(Error::Exited(_))));
+    }
+}

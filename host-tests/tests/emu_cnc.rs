@@ -1,0 +1,175 @@
+//! End to end on the emulated board: the CNC's view. A session that sets a process, a fault
+//! the unit raises reaching the CNC as an event (and holding START off), and a unit that stops
+//! answering taking the link down and back, with START kept off while the rules forbid it.
+
+mod common;
+
+use std::time::Duration;
+
+use common::emu::{
+    EDGE, LINK_EVENT, command, event, events_mark, expect_held, expect_output, press_again,
+    ready_board, set, value,
+};
+use host_tests::sim::Model;
+use host_tests::sim::powermax::Powermax;
+use plasma_firmware::io::{Input, Output};
+
+/// Long enough that a START the firmware wrongly allowed would have come (it follows a
+/// TORCH_ON edge within a few ms, or when a 50 ms gap ends).
+const STAYS_OFF: Duration = Duration::from_millis(300);
+
+#[test]
+fn a_cnc_session_sets_a_process_and_reads_status() {
+    let mut board = ready_board(Model::Sync65);
+    assert_eq!(command(&mut board, "EVENTS ON"), "OK events=ON");
+    let mark = events_mark(&mut board);
+    assert_eq!(
+        command(&mut board, "SET PROCESS CUT 45 AUTO"),
+        "OK mode=CUT amps=45 psi=AUTO"
+    );
+    event(&mut board, mark, "!REMOTE ON", EDGE);
+    // The event reports the pressure the unit chose for AUTO.
+    event(
+        &mut board,
+        mark,
+        "!SETTINGS applied mode=CUT amps=45 psi=",
+        EDGE,
+    );
+
+    let status = command(&mut board, "STATUS");
+    for (key, expected) in [
+        ("link", "UP"),
+        ("family", "SYNC"),
+        ("remote", "ON"),
+        ("mode", "CUT"),
+        ("amps", "45"),
+        ("fault", "none"),
+        ("start", "OFF"),
+        ("ready", "ON"),
+    ] {
+        assert_eq!(value(&status, key), Some(expected), "{key} in {status}");
+    }
+    // The pressure as the unit reports it: the one it chose automatically.
+    let psi = value(&status, "psi").unwrap_or("-");
+    assert!(
+        psi == "AUTO" || psi.parse::<f64>().is_ok(),
+        "psi in {status}"
+    );
+    // The unit got all three in one write and is under remote control.
+    let (settings, remote) = board
+        .sim()
+        .with_unit(|unit, _| {
+            let powermax = unit
+                .as_any()
+                .downcast_ref::<Powermax>()
+                .map(Powermax::settings);
+            (powermax, unit.in_remote_mode())
+        })
+        .unwrap();
+    let settings = settings.expect("a Powermax simulator");
+    assert_eq!(
+        (settings.mode, settings.current, settings.pressure),
+        (1, 45 * 64, 0)
+    );
+    assert!(remote);
+
+    // A refusal is one ERR line; the session goes on.
+    let refused = command(&mut board, "SET PROCESS CUT 400 AUTO");
+    assert!(
+        refused.starts_with("ERR RANGE amps 400 outside"),
+        "{refused}"
+    );
+    assert_eq!(command(&mut board, "REMOTE OFF"), "OK remote=OFF");
+    let remote = board
+        .sim()
+        .with_unit(|unit, _| unit.in_remote_mode())
+        .unwrap();
+    assert!(!remote);
+    let status = command(&mut board, "STATUS");
+    assert_eq!(value(&status, "remote"), Some("OFF"), "{status}");
+}
+
+#[test]
+fn a_fault_raised_by_the_unit_reaches_the_cnc_and_holds_start_off() {
+    let mut board = ready_board(Model::Sync65);
+    assert_eq!(command(&mut board, "EVENTS ON"), "OK events=ON");
+    let mark = events_mark(&mut board);
+    board.sim().inject_fault(500).unwrap();
+    let fault = event(&mut board, mark, "!FAULT 0-50-0", LINK_EVENT);
+    assert!(fault.len() > "!FAULT 0-50-0 ".len(), "no text: {fault}");
+    expect_output(&board, Output::Fault, true, EDGE);
+    expect_output(&board, Output::Ready, false, EDGE);
+    let status = command(&mut board, "STATUS");
+    assert_eq!(value(&status, "fault"), Some("0-50-0"), "{status}");
+    assert!(command(&mut board, "FAULT").starts_with("OK fault=0-50-0 action=required text="));
+
+    // 0-50-0 requires action: TORCH_ON does not start the torch, and the CNC hears why.
+    let mark = events_mark(&mut board);
+    set(&board, Input::TorchOn, true);
+    expect_held(&board, Output::Start, false, STAYS_OFF);
+    event(&mut board, mark, "!START REFUSED reason=fault", EDGE);
+
+    // Cleared: the fault is gone, but the refused TORCH_ON stays refused until released.
+    let mark = events_mark(&mut board);
+    board.sim().clear_fault().unwrap();
+    event(&mut board, mark, "!FAULT CLEARED code=0-50-0", LINK_EVENT);
+    expect_output(&board, Output::Ready, true, EDGE);
+    expect_output(&board, Output::Fault, false, EDGE);
+    expect_held(&board, Output::Start, false, STAYS_OFF);
+    press_again(&board);
+    expect_output(&board, Output::Start, true, EDGE);
+
+    // A fault during the cut drops START.
+    let mark = events_mark(&mut board);
+    board.sim().inject_fault(500).unwrap();
+    event(&mut board, mark, "!FAULT 0-50-0", LINK_EVENT);
+    expect_output(&board, Output::Start, false, EDGE);
+    event(&mut board, mark, "!START DROPPED reason=fault", EDGE);
+    set(&board, Input::TorchOn, false);
+}
+
+#[test]
+fn a_unit_that_stops_answering_takes_the_link_down_and_back() {
+    let mut board = ready_board(Model::Pm65);
+    assert_eq!(command(&mut board, "EVENTS ON"), "OK events=ON");
+    set(&board, Input::TorchOn, true);
+    expect_output(&board, Output::Start, true, EDGE);
+
+    // The cable is cut: the link goes down and takes START with it.
+    let mark = events_mark(&mut board);
+    board.sim().set_connected(false).unwrap();
+    let down = event(&mut board, mark, "!LINK DOWN", LINK_EVENT);
+    assert!(
+        down.starts_with("!LINK DOWN reason=no_answer failures="),
+        "{down}"
+    );
+    assert!(down.ends_with("last=timeout"), "{down}");
+    expect_output(&board, Output::Start, false, EDGE);
+    event(&mut board, mark, "!START DROPPED reason=link_down", EDGE);
+    expect_output(&board, Output::Fault, true, EDGE);
+    expect_output(&board, Output::Ready, false, EDGE);
+    let status = command(&mut board, "STATUS");
+    assert_eq!(value(&status, "link"), Some("DOWN"), "{status}");
+
+    // No start while the link is down, even from a fresh TORCH_ON.
+    let mark = events_mark(&mut board);
+    press_again(&board);
+    expect_held(&board, Output::Start, false, STAYS_OFF);
+    event(&mut board, mark, "!START REFUSED reason=link_down", EDGE);
+
+    // Connected again: found again; the held TORCH_ON does not fire the torch by itself.
+    let mark = events_mark(&mut board);
+    board.sim().set_connected(true).unwrap();
+    let up = event(&mut board, mark, "!LINK UP", LINK_EVENT);
+    assert!(
+        up.starts_with("!LINK UP model=Powermax") && up.ends_with(" LEGACY"),
+        "{up}"
+    );
+    expect_output(&board, Output::Ready, true, LINK_EVENT);
+    expect_output(&board, Output::Fault, false, EDGE);
+    expect_held(&board, Output::Start, false, STAYS_OFF);
+    press_again(&board);
+    expect_output(&board, Output::Start, true, EDGE);
+    set(&board, Input::TorchOn, false);
+    expect_output(&board, Output::Start, false, EDGE);
+}
