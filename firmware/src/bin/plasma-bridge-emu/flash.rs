@@ -1,7 +1,8 @@
 //! Settings "flash" in RAM. QEMU models no FLASH controller, so the store runs on the
 //! library's model of the L4 flash (`plasma_firmware::storage::ram_flash`, 2 KiB pages,
 //! double-word programming), the size of the Nucleo's settings region. `CONFIG SAVE` works
-//! and is read back; the settings last until QEMU exits.
+//! and is read back; the settings last until the board resets (RAM is cleared at boot) or
+//! QEMU exits.
 
 use plasma_firmware::storage::ram_flash::RamFlash;
 

@@ -68,7 +68,7 @@ mod image {
     use core::fmt::Write as _;
 
     use cortex_m::peripheral::NVIC;
-    use defmt::{info, warn};
+    use defmt::{error, info, warn};
     use defmt_semihosting as _;
     use embassy_executor::{InterruptExecutor, Spawner};
     use heapless::String;
@@ -197,7 +197,16 @@ mod image {
     #[embassy_executor::task]
     async fn boot_task(spawner: Spawner, boot: BootReport) {
         let mut store: Option<Store> =
-            SettingsStore::new(SettingsFlash::new(), 0..SETTINGS_SIZE as u32).ok();
+            match SettingsStore::new(SettingsFlash::new(), 0..SETTINGS_SIZE as u32) {
+                Ok(store) => Some(store),
+                Err(e) => {
+                    error!(
+                        "settings region: {=str}; settings will not be kept",
+                        e.as_str()
+                    );
+                    None
+                }
+            };
         let loaded = settings_task::load(store.as_mut()).await;
         let settings = loaded.settings;
         let input_config = InputConfig::default();
