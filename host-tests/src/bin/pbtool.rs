@@ -182,25 +182,9 @@ fn run(args: &RunArgs) -> ExitCode {
 
 /// The firmware on the emulated board: the CNC console, or the measurements.
 fn emu(args: &EmuArgs) -> ExitCode {
-    let Some(model) = Model::from_name(&args.model) else {
-        eprintln!(
-            "pbtool emu: unknown model {:?}; models: {}",
-            args.model,
-            model_list()
-        );
-        return ExitCode::from(USAGE);
-    };
-    let fault = match args
-        .fault
-        .as_deref()
-        .map(|f| parse_fault(model, f))
-        .transpose()
-    {
-        Ok(fault) => fault,
-        Err(e) => {
-            eprintln!("pbtool emu: {e}");
-            return ExitCode::from(USAGE);
-        }
+    let (model, fault) = match simulated_unit("emu", &args.model, args.fault.as_deref()) {
+        Ok(unit) => unit,
+        Err(status) => return status,
     };
     if args.measure {
         let options = MeasureOptions {
@@ -306,26 +290,32 @@ fn model_list() -> String {
     Model::ALL.map(Model::name).join(" ")
 }
 
-fn sim(args: &SimArgs) -> ExitCode {
-    let Some(model) = Model::from_name(&args.model) else {
+/// The unit `--ps` names and its `--fault`, or the usage status after saying what is wrong.
+fn simulated_unit(
+    command: &str,
+    model: &str,
+    fault: Option<&str>,
+) -> Result<(Model, Option<u16>), ExitCode> {
+    let Some(unit) = Model::from_name(model) else {
         eprintln!(
-            "pbtool sim: unknown model {:?}; models: {}",
-            args.model,
+            "pbtool {command}: unknown model {model:?}; models: {}",
             model_list()
         );
-        return ExitCode::from(USAGE);
+        return Err(ExitCode::from(USAGE));
     };
-    let fault = match args
-        .fault
-        .as_deref()
-        .map(|f| parse_fault(model, f))
-        .transpose()
-    {
-        Ok(fault) => fault,
+    match fault.map(|f| parse_fault(unit, f)).transpose() {
+        Ok(fault) => Ok((unit, fault)),
         Err(e) => {
-            eprintln!("pbtool sim: {e}");
-            return ExitCode::from(USAGE);
+            eprintln!("pbtool {command}: {e}");
+            Err(ExitCode::from(USAGE))
         }
+    }
+}
+
+fn sim(args: &SimArgs) -> ExitCode {
+    let (model, fault) = match simulated_unit("sim", &args.model, args.fault.as_deref()) {
+        Ok(unit) => unit,
+        Err(status) => return status,
     };
     let mut console = Console::new(ConsoleOptions {
         model,

@@ -68,7 +68,7 @@ mod image {
     use core::fmt::Write as _;
 
     use cortex_m::peripheral::NVIC;
-    use defmt::{error, info, warn};
+    use defmt::{info, warn};
     use defmt_semihosting as _;
     use embassy_executor::{InterruptExecutor, Spawner};
     use heapless::String;
@@ -76,7 +76,7 @@ mod image {
     use plasma_firmware::inputs::InputConfig;
     use plasma_firmware::port::PortConfig;
     use plasma_firmware::safe_state::BootReport;
-    use plasma_firmware::storage::{LoadOutcome, SettingsStore};
+    use plasma_firmware::storage::LoadOutcome;
     use plasma_firmware::time::Duration;
     use static_cell::StaticCell;
     use stm32_metapac::gpio::vals::Moder;
@@ -89,9 +89,10 @@ mod image {
     use crate::tasks::io::{BoardIo, io_task};
     use crate::tasks::pin_map::drive_safe_state;
     use crate::tasks::progress::{heartbeat, register};
-    use crate::tasks::settings::{self as settings_task, Store, outcome_word};
+    use crate::tasks::reset;
+    use crate::tasks::settings::{self as settings_task, outcome_word};
     use crate::usart::{Uart, UartState, on_interrupt};
-    use crate::{executor, fault, probe, rcc, time_driver, watchdog};
+    use crate::{executor, probe, rcc, time_driver, watchdog};
 
     /// NVIC priorities as on the Nucleo (4 bits, upper nibble): EXTI and SysTick 0, the I/O
     /// executor 1, the USARTs 4.
@@ -158,7 +159,7 @@ mod image {
     fn main() -> ! {
         // Before clocks, before anything that could fail: START and every other output off.
         drive_safe_state();
-        let boot = fault::boot_report();
+        let boot = reset::boot_report();
         rcc::init();
         let mut core = cortex_m::Peripherals::take()
             .unwrap_or_else(|| defmt::panic!("core peripherals taken"));
@@ -196,17 +197,7 @@ mod image {
 
     #[embassy_executor::task]
     async fn boot_task(spawner: Spawner, boot: BootReport) {
-        let mut store: Option<Store> =
-            match SettingsStore::new(SettingsFlash::new(), 0..SETTINGS_SIZE as u32) {
-                Ok(store) => Some(store),
-                Err(e) => {
-                    error!(
-                        "settings region: {=str}; settings will not be kept",
-                        e.as_str()
-                    );
-                    None
-                }
-            };
+        let mut store = settings_task::open(SettingsFlash::new(), 0..SETTINGS_SIZE as u32);
         let loaded = settings_task::load(store.as_mut()).await;
         let settings = loaded.settings;
         let input_config = InputConfig::default();

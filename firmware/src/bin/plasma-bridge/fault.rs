@@ -1,52 +1,21 @@
-//! Panic, HardFault and NMI: outputs to safe state first, a marker that survives the reset,
-//! a log line, reset. And the boot report that reads the marker back.
+//! Panic, HardFault and NMI: outputs to safe state first, a marker that survives the reset
+//! (`tasks::reset`, which reads it back at boot), a log line, reset.
 
-use core::mem::MaybeUninit;
 use core::sync::atomic::{AtomicU32, Ordering};
 
 use cortex_m_rt::{ExceptionFrame, exception};
 use defmt::error;
 use embassy_stm32::pac;
-use plasma_firmware::safe_state::{BootReport, PANIC_MARKER};
 
 use crate::flash::{FLASH_BANK2, FLASH_BASE, settings_region};
 use crate::tasks::pin_map::drive_safe_state;
-
-/// A word the reset does not clear (cortex-m-rt's `.uninit`), for the panic marker.
-#[unsafe(link_section = ".uninit.PANIC_MARKER")]
-static mut PANIC_MARKER_WORD: MaybeUninit<u32> = MaybeUninit::uninit();
-
-fn marker_word() -> *mut u32 {
-    (&raw mut PANIC_MARKER_WORD).cast()
-}
-
-/// Reads and clears the panic marker. The word may hold power-up garbage: BootReport only
-/// believes it together with the software-reset flag.
-fn take_panic_marker() -> u32 {
-    // SAFETY: a word-aligned static only this module touches, in a single-threaded context
-    // (before the executors start); volatile because the compiler cannot know the previous
-    // run wrote it.
-    unsafe {
-        let value = marker_word().read_volatile();
-        marker_word().write_volatile(0);
-        value
-    }
-}
-
-/// Why the MCU reset, from RCC_CSR and the panic marker; clears both for the next boot.
-pub fn boot_report() -> BootReport {
-    let csr = pac::RCC.csr().read().0;
-    let report = BootReport::read(csr, take_panic_marker());
-    pac::RCC.csr().modify(|w| w.set_rmvf(true));
-    report
-}
+use crate::tasks::reset::mark_panic;
 
 /// Safe state, marker, log, reset.
 fn fail(reason: impl FnOnce()) -> ! {
     cortex_m::interrupt::disable();
     drive_safe_state();
-    // SAFETY: as in take_panic_marker; interrupts are off.
-    unsafe { marker_word().write_volatile(PANIC_MARKER) };
+    mark_panic();
     reason();
     // Give a probe ~50 ms to drain the RTT buffer; the outputs are already safe.
     cortex_m::asm::delay(4_000_000);

@@ -4,11 +4,10 @@
 use core::ops::Range;
 use core::sync::atomic::Ordering;
 
-use defmt::error;
 use embassy_stm32::flash::{Async, Flash};
-use plasma_firmware::storage::SettingsStore;
 
 use crate::fault::SETTINGS_ECC_ERRORS;
+use crate::tasks::settings::Store;
 
 /// Start of flash in the address map.
 pub const FLASH_BASE: u32 = 0x0800_0000;
@@ -17,9 +16,6 @@ pub const FLASH_BANK2: u32 = 0x0808_0000;
 
 /// The flash the settings store writes.
 pub type SettingsFlash = Flash<'static, Async>;
-
-/// The store over the on-chip flash.
-pub type Store = SettingsStore<SettingsFlash>;
 
 /// The settings region from memory.x, as offsets from the start of flash.
 pub fn settings_region() -> Range<u32> {
@@ -33,19 +29,9 @@ pub fn settings_region() -> Range<u32> {
     start - FLASH_BASE..end - FLASH_BASE
 }
 
-/// The store, or `None` (logged) if the region does not suit it; build.rs checks the region,
-/// so that would be a mismatch between memory.x and the flash driver's page size.
-pub fn open(flash: Flash<'static, Async>) -> Option<Store> {
-    match SettingsStore::new(flash, settings_region()) {
-        Ok(store) => Some(store),
-        Err(e) => {
-            error!(
-                "settings region: {=str}; settings will not be kept",
-                e.as_str()
-            );
-            None
-        }
-    }
+/// The store over the settings region; build.rs checks the region against the page size.
+pub fn open(flash: SettingsFlash) -> Option<Store> {
+    crate::tasks::settings::open(flash, settings_region())
 }
 
 /// Double ECC errors the NMI handler skipped in the settings region since the last call.

@@ -87,8 +87,9 @@ mod image {
     use crate::tasks::io::{BoardIo, io_task};
     use crate::tasks::pin_map::drive_safe_state;
     use crate::tasks::progress::{heartbeat, register};
+    use crate::tasks::reset;
     use crate::tasks::settings::{self as settings_task, outcome_word};
-    use crate::{cnc_uart, fault, flash, watchdog};
+    use crate::{cnc_uart, flash, watchdog};
 
     bind_interrupts!(struct Irqs {
         FLASH => embassy_stm32::flash::InterruptHandler;
@@ -156,7 +157,7 @@ mod image {
     async fn main(spawner: Spawner) {
         // Before clocks, before anything that could fail: START and every other output off.
         drive_safe_state();
-        let boot = fault::boot_report();
+        let boot = reset::boot_report();
 
         let p = embassy_stm32::init(clock_config());
         // The HAL takes the pins over at the level they already have.

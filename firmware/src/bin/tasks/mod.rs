@@ -1,8 +1,8 @@
 //! The tasks of the board image, shared by both boards: the Nucleo-L476RG image
 //! (`plasma-bridge`) and the emulated STM32L475VG under QEMU (`plasma-bridge-emu`).
 //!
-//! They hold no HAL code and one piece of register code, the output pin map with its safe
-//! state ([`pin_map`]), the same on both chips. Everything board-specific comes from the
+//! They hold no HAL code, and register code only where both chips are the same: the output
+//! pin map with its safe state ([`pin_map`]) and the reset cause ([`reset`]). Everything board-specific comes from the
 //! including binary's `board` module, which must provide:
 //!
 //! - `InputPins` (`levels()`, `any_edge()`), `OutputPins` (`drive()`), `Led` (`toggle()`);
@@ -18,4 +18,5 @@ pub mod clock;
 pub mod io;
 pub mod pin_map;
 pub mod progress;
+pub mod reset;
 pub mod settings;

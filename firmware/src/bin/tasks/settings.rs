@@ -3,8 +3,9 @@
 //! the board's (`board::SettingsFlash`).
 
 use core::future::Future;
+use core::ops::Range;
 
-use defmt::{debug, info, warn};
+use defmt::{debug, error, info, warn};
 use embassy_futures::select::{Either, select};
 use embassy_sync::blocking_mutex::raw::CriticalSectionRawMutex;
 use embassy_sync::signal::Signal;
@@ -19,6 +20,21 @@ use crate::board::{SettingsFlash, flash_errors_seen};
 
 /// The store over the board's settings flash.
 pub type Store = SettingsStore<SettingsFlash>;
+
+/// The store over `region` of `flash`, or `None` (logged) if the region does not suit it: a
+/// mismatch between the board's region and the flash's page size, a build mistake.
+pub fn open(flash: SettingsFlash, region: Range<u32>) -> Option<Store> {
+    match SettingsStore::new(flash, region) {
+        Ok(store) => Some(store),
+        Err(e) => {
+            error!(
+                "settings region: {=str}; settings will not be kept",
+                e.as_str()
+            );
+            None
+        }
+    }
+}
 
 /// Logs flash read errors the board saw while the store was read (torn writes).
 fn report_flash_errors() {
