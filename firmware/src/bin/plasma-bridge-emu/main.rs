@@ -95,7 +95,9 @@ mod image {
     use crate::{executor, probe, rcc, time_driver, watchdog};
 
     /// NVIC priorities as on the Nucleo (4 bits, upper nibble): EXTI and SysTick 0, the I/O
-    /// executor 1, the USARTs 4.
+    /// executor 1, the USARTs 4. The watchdog's executor stands in for the IWDG, which no
+    /// task can block: 0, above every task.
+    const WATCHDOG_PRIORITY: u8 = 0;
     const IO_EXECUTOR_PRIORITY: u8 = 1 << 4;
     const SERIAL_PRIORITY: u8 = 4 << 4;
 
@@ -119,6 +121,15 @@ mod image {
     fn UART4() {
         // SAFETY: called from its own interrupt only, after it was started below.
         unsafe { IO_EXECUTOR.on_interrupt() }
+    }
+
+    /// The watchdog task's executor, on the unused USART3 vector (see [`watchdog`]).
+    static WATCHDOG_EXECUTOR: InterruptExecutor = InterruptExecutor::new();
+
+    #[interrupt]
+    fn USART3() {
+        // SAFETY: called from its own interrupt only, after it was started below.
+        unsafe { WATCHDOG_EXECUTOR.on_interrupt() }
     }
 
     static BOOT_TEXT: StaticCell<String<64>> = StaticCell::new();
@@ -188,6 +199,7 @@ mod image {
         // SAFETY: priorities are set before the interrupts are unmasked; no priority-based
         // critical sections exist in this image.
         unsafe {
+            nvic.set_priority(Interrupt::USART3, WATCHDOG_PRIORITY);
             nvic.set_priority(Interrupt::UART4, IO_EXECUTOR_PRIORITY);
             nvic.set_priority(Interrupt::USART1, SERIAL_PRIORITY);
             nvic.set_priority(Interrupt::USART2, SERIAL_PRIORITY);
@@ -251,6 +263,8 @@ mod image {
         );
         spawner
             .spawn(heartbeat(Led::new(), register("heartbeat", Duration::from_secs(1))).unwrap());
-        spawner.spawn(watchdog::watchdog().unwrap());
+        WATCHDOG_EXECUTOR
+            .start(Interrupt::USART3)
+            .spawn(watchdog::watchdog().unwrap());
     }
 }

@@ -3,9 +3,14 @@
 //! same check as the Nucleo's), the outputs go safe at once and, after the IWDG's time-out,
 //! the core resets.
 //!
-//! One difference: a guest's clock jumps when the host stops QEMU for a while (a loaded
-//! machine), and then every task looks late at once. So the check is only made when this
-//! task itself woke on time; after a jump the tasks get one feed period to report.
+//! Like the IWDG, it must not depend on the tasks it watches: it runs on its own interrupt
+//! executor above every task (`main.rs`), so a task that hangs in thread mode or in the I/O
+//! executor cannot keep it from judging.
+//!
+//! One difference: a guest's clock can jump (by up to one SysTick period, 210 ms) when the
+//! host stops QEMU for a while, and then every task looks late at once. So the check is only
+//! made when this task itself woke on time; after a jump the tasks get one feed period to
+//! report. Nothing but a jump or an interrupt handler at its own priority can make it late.
 
 use defmt::warn;
 use embassy_time::{Duration, Instant, Timer};
