@@ -60,21 +60,11 @@ enum Command {
 
 #[derive(Args)]
 struct EmuArgs {
-    /// The simulated unit (as for `sim`).
-    #[arg(long = "ps", value_name = "MODEL", default_value = "sync65")]
-    model: String,
-    /// Start the unit with a fault: Powermax `0-50-0` (or decimal `500`), HPR error number.
-    #[arg(long, value_name = "CODE")]
-    fault: Option<String>,
-    /// Event lines (`!LINK UP ...`) on from the start.
-    #[arg(long)]
-    events: bool,
+    #[command(flatten)]
+    unit: UnitArgs,
     /// The firmware's own log (defmt, decoded) on stderr.
     #[arg(long)]
     log: bool,
-    /// Seed of the simulator's response-time jitter.
-    #[arg(long, default_value_t = 1)]
-    seed: u64,
     /// Measure instead: TORCH_ON edge to START in guest instructions, and idle behaviour.
     #[arg(long)]
     measure: bool,
@@ -98,6 +88,20 @@ struct RunArgs {
 
 #[derive(Args)]
 struct SimArgs {
+    #[command(flatten)]
+    unit: UnitArgs,
+    /// Virtual time: no waiting, the same output on every run (scripts and tests).
+    #[arg(long, alias = "virtual")]
+    fast: bool,
+    /// Log every change of the discrete outputs (START, ARC_OK, READY, FAULT) with its
+    /// reason on stderr.
+    #[arg(short, long)]
+    verbose: bool,
+}
+
+/// The simulated unit and the session's start, common to `sim`, `emu` and `run`.
+#[derive(Args, Clone)]
+struct UnitArgs {
     /// The simulated unit: sync45 sync65 sync85 sync105 pm45xp pm65 pm85 pm105 pm125 hpr130
     /// hpr260 hpr400 hpr130xd hpr260xd hpr400xd maxpro200.
     #[arg(long = "ps", value_name = "MODEL", default_value = "sync65")]
@@ -111,13 +115,6 @@ struct SimArgs {
     /// Seed of the simulator's response-time jitter and the line model.
     #[arg(long, default_value_t = 1)]
     seed: u64,
-    /// Virtual time: no waiting, the same output on every run (scripts and tests).
-    #[arg(long, alias = "virtual")]
-    fast: bool,
-    /// Log every change of the discrete outputs (START, ARC_OK, READY, FAULT) with its
-    /// reason on stderr.
-    #[arg(short, long)]
-    verbose: bool,
 }
 
 #[derive(Args)]
@@ -147,22 +144,19 @@ fn run(args: &RunArgs) -> ExitCode {
             eprintln!("pbtool run: debug probe found ({probe}); flashing the board image");
             return flash_board();
         }
-        let unit =
-            Model::from_name(&args.sim_args.model).map_or("unit".to_string(), |m| m.to_string());
+        let unit = Model::from_name(&args.sim_args.unit.model)
+            .map_or("unit".to_string(), |m| m.to_string());
         if !args.sim_args.fast {
             match ensure_qemu() {
                 Ok(_) => {
                     eprintln!(
                         "pbtool run: no debug probe found; running the firmware on the emulated \
                          board against a simulated {unit} (pbtool emu --ps {})",
-                        args.sim_args.model
+                        args.sim_args.unit.model
                     );
                     return emu(&EmuArgs {
-                        model: args.sim_args.model.clone(),
-                        fault: args.sim_args.fault.clone(),
-                        events: args.sim_args.events,
+                        unit: args.sim_args.unit.clone(),
                         log: args.sim_args.verbose,
-                        seed: args.sim_args.seed,
                         measure: false,
                         toggles: 0,
                         idle_windows: 0,
@@ -174,7 +168,7 @@ fn run(args: &RunArgs) -> ExitCode {
         eprintln!(
             "pbtool run: no debug probe found; running the bridge against a simulated {unit} \
              (pbtool sim --ps {})",
-            args.sim_args.model,
+            args.sim_args.unit.model,
         );
     }
     sim(&args.sim_args)
@@ -182,7 +176,7 @@ fn run(args: &RunArgs) -> ExitCode {
 
 /// The firmware on the emulated board: the CNC console, or the measurements.
 fn emu(args: &EmuArgs) -> ExitCode {
-    let (model, fault) = match simulated_unit("emu", &args.model, args.fault.as_deref()) {
+    let (model, fault) = match simulated_unit("emu", &args.unit.model, args.unit.fault.as_deref()) {
         Ok(unit) => unit,
         Err(status) => return status,
     };
@@ -222,9 +216,9 @@ fn emu(args: &EmuArgs) -> ExitCode {
     let options = EmuConsoleOptions {
         model,
         fault,
-        events: args.events,
+        events: args.unit.events,
         log: args.log,
-        seed: args.seed,
+        seed: args.unit.seed,
     };
     let mut out = io::stdout().lock();
     match host_tests::emu::console::run(&options, rx, &mut out, &mut io::stderr()) {
@@ -313,15 +307,15 @@ fn simulated_unit(
 }
 
 fn sim(args: &SimArgs) -> ExitCode {
-    let (model, fault) = match simulated_unit("sim", &args.model, args.fault.as_deref()) {
+    let (model, fault) = match simulated_unit("sim", &args.unit.model, args.unit.fault.as_deref()) {
         Ok(unit) => unit,
         Err(status) => return status,
     };
     let mut console = Console::new(ConsoleOptions {
         model,
         fault,
-        events: args.events,
-        seed: args.seed,
+        events: args.unit.events,
+        seed: args.unit.seed,
         verbose: args.verbose,
     });
     let interactive = io::stdin().is_terminal();
