@@ -22,7 +22,7 @@
 //! ```
 //! use plasma_firmware::bridge::Bridge;
 //! use plasma_firmware::settings::Settings;
-//! use plasma_firmware::time::Instant;
+//! use plasma_protocol::time::Instant;
 //!
 //! let mut bridge = Bridge::new(Settings::default(), Instant::ZERO);
 //! // The link starts looking for a unit at once.
@@ -38,10 +38,10 @@
 
 use crate::io::{Inputs, IoConfig, IoEvent, Outputs, SupplyState};
 use crate::link::{Diagnostics, LinkCommand, LinkEvent, PsLink, Refusal, Ticket, UnitStatus};
-use crate::port::PortConfig;
 use crate::session::{Context, Session, SessionStats, SimCommand};
 use crate::settings::{SaveError, Settings};
-use crate::time::Instant;
+use plasma_protocol::serial::PortConfig;
+use plasma_protocol::time::Instant;
 
 /// Re-applying the process kept in the settings after power-up.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -328,7 +328,7 @@ mod tests {
 
     use super::*;
     use crate::session::tests::{FakePowermax, NAK_TOKEN, Rig, Unit};
-    use crate::time::Duration;
+    use plasma_protocol::time::Duration;
 
     fn with_process(amps: u16, events: bool) -> Settings {
         Settings {

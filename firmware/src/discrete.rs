@@ -8,7 +8,7 @@
 //! use plasma_firmware::discrete::DiscreteIo;
 //! use plasma_firmware::inputs::{InputConfig, PinLevels};
 //! use plasma_firmware::io::{Input, IoConfig, SupplyState};
-//! use plasma_firmware::time::Instant;
+//! use plasma_protocol::time::Instant;
 //!
 //! let t = Instant::from_millis;
 //! let mut io = DiscreteIo::new(IoConfig::default(), InputConfig::default(), t(0), PinLevels::ALL_HIGH);
@@ -25,7 +25,7 @@
 
 use crate::inputs::{InputConfig, InputFilter, PinLevels};
 use crate::io::{Inputs, Interlocks, IoConfig, IoEvent, Outputs, SupplyState, Transition};
-use crate::time::Instant;
+use plasma_protocol::time::Instant;
 
 /// Input filter and interlocks.
 #[derive(Debug, Clone)]
@@ -138,7 +138,7 @@ mod tests {
     use super::*;
     use crate::inputs::Polarity;
     use crate::io::{Input, Interlock, Output, Reason};
-    use crate::time::Duration;
+    use plasma_protocol::time::Duration;
 
     fn ms(v: u64) -> Instant {
         Instant::from_millis(v)

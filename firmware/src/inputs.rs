@@ -13,7 +13,7 @@
 //! ```
 //! use plasma_firmware::inputs::{InputConfig, InputFilter, PinLevels};
 //! use plasma_firmware::io::Input;
-//! use plasma_firmware::time::Instant;
+//! use plasma_protocol::time::Instant;
 //!
 //! let t = Instant::from_micros;
 //! // Active-low inputs with pull-ups: every pin high = every input inactive.
@@ -32,7 +32,7 @@
 use heapless::Deque;
 
 use crate::io::{Input, Inputs};
-use crate::time::{Duration, Instant};
+use plasma_protocol::time::{Duration, Instant};
 
 /// Which pin level means "active".
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]

@@ -10,8 +10,6 @@
 //! - [`link`]: the power-supply link (Modbus ASCII and HPR).
 //! - [`io`]: torch-safe discrete I/O (START interlocks, ARC_OK, READY, FAULT) and the
 //!   independent [`io::SafetyMonitor`] used by every scenario test.
-//! - [`port`]: UART settings the link asks for.
-//! - [`time`]: caller-supplied monotonic time.
 //! - [`safe_state`], [`watchdog`], [`storage`]: the board's reset/panic policy, task-progress
 //!   watchdog feeding and power-cut-safe settings storage, as logic.
 //! - [`inputs`], [`discrete`]: input polarity and debounce in front of [`io::Interlocks`],
@@ -70,12 +68,10 @@ pub mod discrete;
 pub mod inputs;
 pub mod io;
 pub mod link;
-pub mod port;
 pub mod runner;
 pub mod safe_state;
 pub mod session;
 pub mod settings;
 pub mod storage;
 pub mod supervisor;
-pub mod time;
 pub mod watchdog;

@@ -29,8 +29,8 @@ use heapless::Vec;
 
 use crate::link::PsLink;
 use crate::link::transaction::TX_CAPACITY;
-use crate::port::PortConfig;
-use crate::time::{Duration, Instant};
+use plasma_protocol::serial::PortConfig;
+use plasma_protocol::time::{Duration, Instant};
 
 /// The board's clock, or a simulator's.
 pub trait Clock {

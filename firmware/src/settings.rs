@@ -30,9 +30,9 @@ use plasma_protocol::cnc::{
 
 use crate::io::{IoConfig, MIN_START_GAP};
 use crate::link::{LinkConfig, ProtocolChoice};
-use crate::port::{Parity, StopBits};
 use crate::storage::{self, StoreError};
-use crate::time::Duration;
+use plasma_protocol::serial::{Parity, StopBits};
+use plasma_protocol::time::Duration;
 
 /// Accepted `arc_ok_debounce_ms` values.
 pub const ARC_OK_DEBOUNCE_MS: (u32, u32) = (0, 100);

@@ -26,10 +26,10 @@ use embedded_io_async::{Read, ReadReady, Write};
 
 use crate::bridge::Bridge;
 use crate::io::{Inputs, IoConfig, IoEvent, Outputs, SupplyState};
-use crate::port::PortConfig;
 use crate::runner::{Clock, ConfigurablePort, MAX_WAIT, PortError, PsEndpoint, PsPort};
 use crate::settings::{SaveError, Settings};
-use crate::time::Instant;
+use plasma_protocol::serial::PortConfig;
+use plasma_protocol::time::Instant;
 
 /// What the supervisor needs from the bridge ([`Bridge`] implements it; the names follow
 /// its API).

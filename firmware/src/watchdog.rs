@@ -7,7 +7,7 @@
 //! name of the task that stalled is there to log before it does.
 //!
 //! ```
-//! use plasma_firmware::time::{Duration, Instant};
+//! use plasma_protocol::time::{Duration, Instant};
 //! use plasma_firmware::watchdog::ProgressMonitor;
 //!
 //! let t0 = Instant::ZERO;
@@ -24,7 +24,7 @@
 //! assert_eq!(monitor.stalled().unwrap().name, "cnc");
 //! ```
 
-use crate::time::{Duration, Instant};
+use plasma_protocol::time::{Duration, Instant};
 
 /// Handle of a registered task.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]

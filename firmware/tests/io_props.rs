@@ -5,7 +5,7 @@
 use plasma_firmware::io::{
     Input, Inputs, Interlocks, IoConfig, Output, Outputs, SafetyMonitor, SupplyState, ViolationKind,
 };
-use plasma_firmware::time::{Duration, Instant};
+use plasma_protocol::time::{Duration, Instant};
 use proptest::prelude::*;
 
 #[derive(Debug, Clone)]

@@ -19,12 +19,12 @@ use std::str::FromStr;
 use std::sync::mpsc::{Receiver, RecvTimeoutError};
 
 use plasma_firmware::settings::Settings;
-use plasma_firmware::time::{Duration, Instant};
 use plasma_protocol::cnc::phoenix::{EOT, ETX, SOH, STX};
 use plasma_protocol::powermax::FaultCode;
+use plasma_protocol::time::{Duration, Instant};
 
 use crate::harness::{BridgeEndpoint, CncItem, World, WorldOptions};
-use crate::sim::{Family, Model, SimOptions};
+use plasma_sim::{Family, Model, SimOptions};
 
 /// The longest wait for the link (and the unit's limits) before the first command.
 pub const SETTLE_TIMEOUT: Duration = Duration::from_secs(5);

@@ -1,9 +1,5 @@
-//! Simulated power supplies and test harness for the plasma-bridge.
+//! Test harnesses for the plasma-bridge, over the simulated units of `plasma-sim`.
 //!
-//! - [`line`]: the serial line in virtual time (baud-accurate timing, port-setting mismatches,
-//!   seeded fault injection, 2-wire / 4-wire).
-//! - [`sim`]: simulated Hypertherm power supplies (Powermax SYNC, legacy Powermax, HPR and
-//!   MaxPro200) behind one byte-level interface, [`sim::SimulatedUnit`].
 //! - [`harness`]: the scenario harness: the bridge's power-supply side, the line and a
 //!   simulator in one deterministic discrete-event [`harness::World`], with the discrete I/O
 //!   and the safety monitor checked after every step.
@@ -17,5 +13,3 @@ pub mod console;
 pub mod decode;
 pub mod emu;
 pub mod harness;
-pub mod line;
-pub mod sim;

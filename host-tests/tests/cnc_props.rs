@@ -8,9 +8,9 @@ mod common;
 
 use common::{phoenix_113, well_formed};
 use host_tests::harness::{BridgeEndpoint, World, WorldOptions};
-use host_tests::sim::Model;
 use plasma_firmware::settings::Settings;
-use plasma_firmware::time::Duration;
+use plasma_protocol::time::Duration;
+use plasma_sim::Model;
 use proptest::prelude::*;
 
 /// Command lines a CNC (or a confused operator) might send.

@@ -9,12 +9,12 @@ use common::{
     well_formed,
 };
 use host_tests::harness::{CncItem, World, WorldOptions};
-use host_tests::sim::Model;
-use host_tests::sim::hpr::Hpr;
-use host_tests::sim::powermax::Powermax;
 use plasma_firmware::io::{Input, Interlock, IoEvent, Output, Reason};
 use plasma_firmware::settings::{SaveError, Settings};
-use plasma_firmware::time::Duration;
+use plasma_protocol::time::Duration;
+use plasma_sim::Model;
+use plasma_sim::hpr::Hpr;
+use plasma_sim::powermax::Powermax;
 
 fn ms(n: u64) -> Duration {
     Duration::from_millis(n)
@@ -1119,7 +1119,7 @@ fn mode_aliases_are_answered_in_the_family_s_own_word() {
 #[test]
 fn the_bare_bridge_is_an_endpoint_too() {
     use plasma_firmware::bridge::Bridge;
-    use plasma_firmware::time::Instant;
+    use plasma_protocol::time::Instant;
     for model in [
         Model::Sync105,
         Model::Pm125,
@@ -1133,6 +1133,6 @@ fn the_bare_bridge_is_an_endpoint_too() {
             .unwrap_or_else(|t| panic!("{model}: {t}"));
         // The bridge consumes the link's events itself.
         assert!(w.events().is_empty());
-        assert!(w.io().outputs().ready || model.family() == host_tests::sim::Family::Hpr);
+        assert!(w.io().outputs().ready || model.family() == plasma_sim::Family::Hpr);
     }
 }

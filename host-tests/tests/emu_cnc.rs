@@ -10,9 +10,9 @@ use common::emu::{
     EDGE, LINK_EVENT, command, event, events_mark, expect_held, expect_output, press_again,
     ready_board, set, value,
 };
-use host_tests::sim::Model;
-use host_tests::sim::powermax::Powermax;
 use plasma_firmware::io::{Input, Output};
+use plasma_sim::Model;
+use plasma_sim::powermax::Powermax;
 
 /// Long enough that a START the firmware wrongly allowed would have come (it follows a
 /// TORCH_ON edge within a few ms, or when a 50 ms gap ends).

@@ -7,9 +7,9 @@ mod common;
 
 use common::emu::{EDGE, LINK, boot, command, expect_output, value};
 use host_tests::emu::{Board, BoardOptions};
-use host_tests::sim::Model;
 use plasma_firmware::io::Output;
-use plasma_firmware::port::PortConfig;
+use plasma_protocol::serial::PortConfig;
+use plasma_sim::Model;
 
 /// USART1's kernel clock (PCLK2) on the emulated board.
 const USART_CLOCK_HZ: u32 = 80_000_000;

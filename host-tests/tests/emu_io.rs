@@ -13,8 +13,8 @@ use common::emu::{
 };
 use host_tests::emu::safety::{GAP_TOLERANCE, START_GAP};
 use host_tests::emu::{BoardOptions, Wiring};
-use host_tests::sim::Model;
 use plasma_firmware::io::{Input, Output};
+use plasma_sim::Model;
 
 #[test]
 fn start_follows_torch_on_and_keeps_50_ms_between_starts() {

@@ -3,7 +3,7 @@
 use std::io::Write;
 use std::process::{Command, Output, Stdio};
 
-use host_tests::sim::Model;
+use plasma_sim::Model;
 
 /// Run `pbtool sim ARGS` with `input` on stdin.
 fn sim(args: &[&str], input: &str) -> Output {

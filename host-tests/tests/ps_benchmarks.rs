@@ -5,7 +5,7 @@ use host_tests::harness::measure::{
     PMX485_CHARS_PER_CYCLE, PMX485_REQUESTS_PER_CYCLE, Setup, bus_efficiency, fault_latency,
 };
 use plasma_firmware::link::LinkConfig;
-use plasma_firmware::time::Duration;
+use plasma_protocol::time::Duration;
 
 const WINDOW: Duration = Duration::from_secs(10);
 

@@ -2,14 +2,14 @@
 //! answer device identification, other Modbus framings, HPR multi-drop.
 
 use host_tests::harness::{World, WorldOptions};
-use host_tests::sim::hpr::{GasConsole, Hpr};
-use host_tests::sim::powermax::{DeviceIdSupport, Powermax, PowermaxConfig};
-use host_tests::sim::{Family as SimFamily, Model, SimOptions};
 use plasma_firmware::link::{Family, LinkConfig, LinkEvent, Model as LinkModel, ProtocolChoice};
-use plasma_firmware::port::{Parity, PortConfig, StopBits};
-use plasma_firmware::time::Duration;
 use plasma_protocol::hpr::{GasConsole as IdConsole, HprRating, SystemId};
 use plasma_protocol::powermax::PowerSupplyModel;
+use plasma_protocol::serial::{Parity, PortConfig, StopBits};
+use plasma_protocol::time::Duration;
+use plasma_sim::hpr::{GasConsole, Hpr};
+use plasma_sim::powermax::{DeviceIdSupport, Powermax, PowermaxConfig};
+use plasma_sim::{Family as SimFamily, Model, SimOptions};
 
 const SECOND: Duration = Duration::from_secs(1);
 
@@ -64,7 +64,7 @@ fn link_ups(world: &World) -> Vec<(LinkModel, Family)> {
 }
 
 /// Requests that started before `up` (the first poll goes out at the instant of link-up).
-fn requests_before(world: &World, up: plasma_firmware::time::Instant) -> usize {
+fn requests_before(world: &World, up: plasma_protocol::time::Instant) -> usize {
     world.trace().requests().filter(|f| f.start < up).count()
 }
 

@@ -2,14 +2,14 @@
 //! allow-list as seen by the unit, power cycles.
 
 use host_tests::harness::{World, WorldOptions};
-use host_tests::sim::hpr::Hpr;
-use host_tests::sim::{Model, SimulatedUnit};
 use plasma_firmware::io::Interlock;
 use plasma_firmware::link::{
     CommandOutput, HprGasFlow, LinkCommand, LinkEvent, Refusal, command::RAW_CAPACITY,
 };
-use plasma_firmware::time::Duration;
 use plasma_protocol::hpr::{self, Class, GasCode, GasPair, StateCode};
+use plasma_protocol::time::Duration;
+use plasma_sim::hpr::Hpr;
+use plasma_sim::{Model, SimulatedUnit};
 
 fn ms(n: u64) -> Duration {
     Duration::from_millis(n)

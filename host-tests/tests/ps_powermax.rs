@@ -2,16 +2,16 @@
 //! before sending, fault reporting, quick restart, power cycles, block-read fallbacks.
 
 use host_tests::harness::{World, WorldOptions};
-use host_tests::sim::powermax::{Powermax, Settings, UndocumentedAddresses};
-use host_tests::sim::sync::Cartridge;
-use host_tests::sim::{Model, SimulatedUnit};
 use plasma_firmware::io::{Interlock, IoConfig};
 use plasma_firmware::link::{
     ActiveFault, CommandOutput, Family, LinkCommand, LinkEvent, PowermaxSettings, Refusal,
 };
-use plasma_firmware::time::{Duration, Instant};
 use plasma_protocol::modbus_ascii;
 use plasma_protocol::powermax::{Amps, FaultCode, OperatingMode, Pressure, Psi};
+use plasma_protocol::time::{Duration, Instant};
+use plasma_sim::powermax::{Powermax, Settings, UndocumentedAddresses};
+use plasma_sim::sync::Cartridge;
+use plasma_sim::{Model, SimulatedUnit};
 
 fn ms(n: u64) -> Duration {
     Duration::from_millis(n)

@@ -6,17 +6,17 @@ use std::any::Any;
 use std::collections::VecDeque;
 
 use host_tests::harness::{RxErrors, World, WorldOptions};
-use host_tests::sim::hpr::Hpr;
-use host_tests::sim::powermax::Powermax;
-use host_tests::sim::{Model, SimulatedUnit};
 use plasma_firmware::link::{
     ActiveFault, CommandOutput, LinkCommand, LinkConfig, ProtocolChoice, UnitStatus,
 };
-use plasma_firmware::port::PortConfig;
-use plasma_firmware::time::{Duration, Instant};
 use plasma_protocol::hpr::{self, ErrorCode, StateCode};
 use plasma_protocol::modbus_ascii;
 use plasma_protocol::powermax::{Amps, FaultCode, OperatingMode, Pressure, Psi};
+use plasma_protocol::serial::PortConfig;
+use plasma_protocol::time::{Duration, Instant};
+use plasma_sim::hpr::Hpr;
+use plasma_sim::powermax::Powermax;
+use plasma_sim::{Model, SimulatedUnit};
 use rand::rngs::Xoshiro256PlusPlus;
 use rand::{RngExt, SeedableRng};
 
@@ -62,7 +62,7 @@ fn powermax_consistent(w: &World, faults: &[Option<ActiveFault>]) -> Result<(), 
     let s = w.link().status();
     let sim = w.sim_ref::<Powermax>();
     let truth = sim.settings();
-    let sync = sim.config().model.family() == host_tests::sim::Family::Sync;
+    let sync = sim.config().model.family() == plasma_sim::Family::Sync;
     if !s.link_up {
         return fault_ok(s, &[None]);
     }
@@ -123,7 +123,7 @@ fn corrupted_powermax_session_with(
     rx_errors: RxErrors,
 ) -> World {
     let protocol = match model.family() {
-        host_tests::sim::Family::Sync => ProtocolChoice::Sync,
+        plasma_sim::Family::Sync => ProtocolChoice::Sync,
         _ => ProtocolChoice::Legacy,
     };
     let options = WorldOptions {
@@ -303,7 +303,7 @@ impl SimulatedUnit for DamagedReplies {
 #[test]
 fn damaged_device_id_replies_do_not_make_a_sync_unit_legacy() {
     let unit = DamagedReplies {
-        inner: Model::Sync65.build(&host_tests::sim::SimOptions::default()),
+        inner: Model::Sync65.build(&plasma_sim::SimOptions::default()),
         prefix: b":012B",
         damaged: 3,
     };
@@ -581,7 +581,7 @@ fn a_hostile_unit_never_crashes_the_link_or_draws_a_write_out_of_it() {
 
 fn two_wire(model: Model, master_echo: bool) -> World {
     let options = WorldOptions {
-        wiring: host_tests::line::Wiring::TwoWire { master_echo },
+        wiring: plasma_sim::line::Wiring::TwoWire { master_echo },
         ..WorldOptions::default()
     };
     let mut world = World::new(model, options);
@@ -607,7 +607,7 @@ fn two_wire(model: Model, master_echo: bool) -> World {
 fn limits_are_known_soon_even_when_their_first_read_is_damaged() {
     // The three attempts at 0x3001-0x3005 (a 10-byte reply) arrive damaged.
     let unit = DamagedReplies {
-        inner: Model::Sync65.build(&host_tests::sim::SimOptions::default()),
+        inner: Model::Sync65.build(&plasma_sim::SimOptions::default()),
         prefix: b":01040A",
         damaged: 3,
     };
@@ -623,7 +623,7 @@ fn poll_at_never_stays_in_the_past() {
     // Every cartridge block reply damaged: the read keeps failing (and is tried again with
     // a growing wait).
     let unit = DamagedReplies {
-        inner: Model::Sync65.build(&host_tests::sim::SimOptions::default()),
+        inner: Model::Sync65.build(&plasma_sim::SimOptions::default()),
         prefix: b":010428",
         damaged: usize::MAX,
     };

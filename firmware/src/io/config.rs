@@ -1,6 +1,6 @@
 //! Settings of the discrete I/O logic.
 
-use crate::time::Duration;
+use plasma_protocol::time::Duration;
 
 /// The Powermax manuals' minimum delay between Start signals ("to give sufficient time for
 /// the relay circuits to complete switching").

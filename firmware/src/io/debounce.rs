@@ -1,6 +1,6 @@
 //! A level filter: the output takes the input's level once it has held for a set time.
 
-use crate::time::{Duration, Instant};
+use plasma_protocol::time::{Duration, Instant};
 
 /// Debounced view of one input.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

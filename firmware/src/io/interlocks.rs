@@ -6,7 +6,7 @@ use super::config::IoConfig;
 use super::debounce::Debouncer;
 use super::reason::{Interlock, IoEvent, Reason, Transition};
 use super::signals::{Input, Inputs, Output, Outputs, SupplyState};
-use crate::time::Instant;
+use plasma_protocol::time::Instant;
 
 /// Room for the transitions of several steps (one step changes at most 7 outputs).
 const TRANSITION_QUEUE: usize = 32;

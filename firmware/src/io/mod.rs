@@ -49,7 +49,7 @@
 //!
 //! ```
 //! use plasma_firmware::io::{Input, Inputs, Interlocks, IoConfig, Output, Reason, SupplyState};
-//! use plasma_firmware::time::Instant;
+//! use plasma_protocol::time::Instant;
 //!
 //! let t = Instant::from_millis;
 //! let mut io = Interlocks::new(IoConfig::default(), t(0), Inputs::NONE);

@@ -8,7 +8,7 @@ use core::fmt;
 
 use heapless::Vec;
 
-use crate::time::{Duration, Instant};
+use plasma_protocol::time::{Duration, Instant};
 
 /// The manuals' least delay between Start signals. Deliberately its own constant rather than
 /// the controller's setting, so a wrong setting is caught.

@@ -3,7 +3,7 @@
 use core::fmt;
 
 use super::signals::Output;
-use crate::time::Instant;
+use plasma_protocol::time::Instant;
 
 /// A condition that keeps START off although the CNC asks for it.
 ///

@@ -4,7 +4,7 @@
 
 use core::fmt;
 
-use crate::time::Instant;
+use plasma_protocol::time::Instant;
 
 /// A discrete input of the bridge.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]

@@ -4,7 +4,7 @@
 use std::vec::Vec;
 
 use super::*;
-use crate::time::{Duration, Instant};
+use plasma_protocol::time::{Duration, Instant};
 
 fn ms(v: u64) -> Instant {
     Instant::from_millis(v)

@@ -7,7 +7,7 @@ use plasma_protocol::powermax::sync::PermittedModes;
 use plasma_protocol::powermax::{Amps, FaultCode, OperatingMode, Pressure, Psi};
 
 use super::status::Family;
-use crate::time::{Decimal, Instant};
+use plasma_protocol::time::{Decimal, Instant};
 
 /// Longest RAW frame accepted (a Modbus ASCII frame is at most 513 characters); the session
 /// refuses a longer one before it reaches the link.

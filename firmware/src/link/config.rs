@@ -2,8 +2,8 @@
 
 use core::fmt;
 
-use crate::port::{Parity, PortConfig, StopBits};
-use crate::time::Duration;
+use plasma_protocol::serial::{Parity, PortConfig, StopBits};
+use plasma_protocol::time::Duration;
 
 /// Which protocol family the link speaks.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]

@@ -20,7 +20,7 @@ use super::event::{CommandFailure, CommandOutput, LinkEvent, SettingsFailure, Ti
 use super::slow::SlowData;
 use super::status::{ActiveFault, Family};
 use super::transaction::TransactionError;
-use crate::time::{Duration, Instant};
+use plasma_protocol::time::{Duration, Instant};
 
 /// How long all traffic stops when the state is pilot arc: the manual's HF-ignition burst
 /// ("can be active for up to 1 second").

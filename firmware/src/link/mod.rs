@@ -70,7 +70,7 @@
 //!
 //! ```
 //! use plasma_firmware::link::{LinkConfig, PsLink};
-//! use plasma_firmware::time::Instant;
+//! use plasma_protocol::time::Instant;
 //!
 //! let mut link = PsLink::new(LinkConfig::default(), Instant::ZERO);
 //! // Auto-detection starts with Read Device Identification at node 1, 8E1.
@@ -120,8 +120,8 @@ use modbus::MbRequest;
 use powermax::{MbPurpose, PowermaxDriver, Variant};
 use transaction::{Outcome, RetrySpacing, TX_CAPACITY, Transaction};
 
-use crate::port::{Parity, PortConfig, StopBits};
-use crate::time::{Duration, Instant};
+use plasma_protocol::serial::{Parity, PortConfig, StopBits};
+use plasma_protocol::time::{Duration, Instant};
 
 /// Pause between two detection rounds, so a silent line is not hammered.
 pub const DETECT_ROUND_PAUSE: Duration = Duration::from_millis(250);

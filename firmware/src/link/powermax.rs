@@ -18,7 +18,7 @@ use super::slow::SlowData;
 use super::status::{ActiveFault, Family, Limits, Model, PowermaxSettings};
 use super::sync::{self, SlowItem};
 use super::transaction::TransactionError;
-use crate::time::{Duration, Instant};
+use plasma_protocol::time::{Duration, Instant};
 
 /// Silence after a quick restart (SYNC guide: "wait 2 seconds before you send a new read or
 /// write request").

@@ -11,7 +11,7 @@ use super::Core;
 use super::command::Refusal;
 use super::event::{CommandFailure, CommandOutput, LinkEvent, Ticket};
 use super::transaction::TransactionError;
-use crate::time::{Duration, Instant};
+use plasma_protocol::time::{Duration, Instant};
 
 /// First wait before a slow-data read that failed on the line is tried again (doubling with
 /// each further failure, up to the slow-data interval).

@@ -8,7 +8,7 @@ use plasma_protocol::powermax::{
     Amps, CartridgeName, FaultCode, OperatingMode, PowerSupplyModel, Pressure, Psi,
 };
 
-use crate::time::Instant;
+use plasma_protocol::time::Instant;
 
 /// Protocol family of the unit on the line.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]

@@ -14,7 +14,7 @@ use plasma_protocol::modbus_ascii::{self, Request};
 use plasma_protocol::powermax::{Amps, FaultCode, OperatingMode, PowerSupplyModel, Pressure, Psi};
 
 use super::*;
-use crate::port::{Parity, PortConfig};
+use plasma_protocol::serial::{Parity, PortConfig};
 
 // ---------------------------------------------------------------------------------------
 // helpers

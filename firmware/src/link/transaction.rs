@@ -28,7 +28,7 @@
 use heapless::Vec;
 use plasma_protocol::modbus_ascii::ExceptionCode;
 
-use crate::time::{Duration, Instant, div_rem_u16};
+use plasma_protocol::time::{Duration, Instant, div_rem_u16};
 
 /// Longest frame a transaction can hold: a Modbus ASCII frame is at most
 /// 1 + 2 + 2 + 2x252 + 2 + 2 = 513 characters; HPR frames are far shorter.

@@ -14,7 +14,7 @@ use embedded_io_async::{ErrorKind, ErrorType, Read, ReadReady, Write};
 
 use super::*;
 use crate::link::LinkConfig;
-use crate::port::{Parity, StopBits};
+use plasma_protocol::serial::{Parity, StopBits};
 
 /// What the fake port saw.
 #[derive(Debug, Clone, PartialEq, Eq)]

@@ -14,7 +14,7 @@ use crate::link::{
     ActiveFault, CommandFailure, Family, Model, PowermaxSettings, Refusal, SettingsFailure,
     TransactionError, UnitStatus,
 };
-use crate::time::Instant;
+use plasma_protocol::time::Instant;
 
 /// The family as one word: `SYNC`, `LEGACY`, `HPR`, `MAXPRO200`.
 pub const fn family_word(family: Family) -> &'static str {

@@ -51,7 +51,7 @@ use crate::io::{Inputs, Interlock, IoEvent, Outputs};
 use crate::link::command::RAW_CAPACITY;
 use crate::link::{Family, HprGasFlow, LinkCommand, LinkDownReason, LinkEvent, PsLink, Ticket};
 use crate::settings::{Process, SaveError, Settings};
-use crate::time::{Duration, Instant};
+use plasma_protocol::time::{Duration, Instant};
 
 use describe::{
     FaultId, OrDash, SettingsText, Text, fault_text, on_off, settings_failure_word, state_name,

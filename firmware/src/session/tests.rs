@@ -25,7 +25,7 @@ use crate::link::ProtocolChoice;
 use crate::session::SimCommand;
 use crate::settings::{Process, SaveError, Settings};
 use crate::storage::Settings as _;
-use crate::time::{Duration, Instant};
+use plasma_protocol::time::{Duration, Instant};
 
 // ---------------------------------------------------------------------------------------
 // scripted power supplies

@@ -13,8 +13,8 @@ use embassy_futures::block_on;
 use embedded_io_async::{ErrorKind, ErrorType};
 
 use super::*;
-use crate::port::PortConfig;
 use crate::runner::UnsupportedConfig;
+use plasma_protocol::serial::PortConfig;
 
 const PS: usize = 0;
 const CNC: usize = 1;

@@ -16,7 +16,7 @@ use host_tests::decode::{all_valid, decode_frames, to_json, to_text};
 use host_tests::emu::console::EmuConsoleOptions;
 use host_tests::emu::measure::{MeasureOptions, measure};
 use host_tests::emu::qemu::ensure_qemu;
-use host_tests::sim::Model;
+use plasma_sim::Model;
 
 #[derive(Parser)]
 #[command(

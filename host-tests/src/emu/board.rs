@@ -23,7 +23,7 @@ use super::qemu::{Qemu, QemuOptions};
 use super::qtest::Qtest;
 use super::safety::{self, Observed};
 use super::sim_port::{Framing, SimPort, SimPortOptions};
-use crate::sim::{Model, SimOptions};
+use plasma_sim::{Model, SimOptions};
 
 /// Boards that may run at once in one process (QEMU needs a core while the guest is busy;
 /// the machine has two). `PLASMA_EMU_JOBS` overrides it.

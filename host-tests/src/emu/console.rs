@@ -14,7 +14,7 @@ use plasma_firmware::io::{Input, Output};
 
 use super::board::{Board, BoardOptions};
 use super::error::{Error, Result};
-use crate::sim::{Model, SimOptions};
+use plasma_sim::{Model, SimOptions};
 
 /// The longest wait for the link (and the unit's limits) before the first command.
 const SETTLE_TIMEOUT: Duration = Duration::from_secs(10);

@@ -9,7 +9,7 @@ use plasma_firmware::io::{Input, Output};
 
 use super::board::{Board, BoardOptions};
 use super::error::{Error, Result};
-use crate::sim::Model;
+use plasma_sim::Model;
 
 /// One `emu-probe:` line.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

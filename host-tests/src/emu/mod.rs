@@ -7,8 +7,8 @@
 //!   an error that says how to install QEMU 10 (Debian bookworm-backports).
 //! - [`qtest`]: drives the input pins and reads registers; streams the output edges of one
 //!   port. [`pins`] is the board's pin map.
-//! - [`sim_port`]: a simulated unit ([`crate::sim`]) on the PS socket, with the baud-accurate
-//!   [`Line`](crate::line::Line) in between, in real time.
+//! - [`sim_port`]: a simulated unit ([`plasma_sim`]) on the PS socket, with the baud-accurate
+//!   [`Line`](plasma_sim::line::Line) in between, in real time.
 //! - [`cnc`]: the CNC's end of the CNC port: commands, replies, `!` events.
 //! - [`log`]: the firmware's defmt log, decoded against the ELF.
 //! - [`image`]: builds the image (`cargo emu-fw`) once per process.
@@ -21,7 +21,7 @@
 //! ```no_run
 //! use std::time::Duration;
 //! use host_tests::emu::{Board, BoardOptions};
-//! use host_tests::sim::Model;
+//! use plasma_sim::Model;
 //! use plasma_firmware::io::{Input, Output};
 //!
 //! let mut board = Board::boot(BoardOptions::new(Model::Sync65)).unwrap();

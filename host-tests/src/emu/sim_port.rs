@@ -3,7 +3,7 @@
 //!
 //! QEMU passes bytes only (no baud rate, parity or stop bits on the socket) and as fast as the
 //! guest writes them. A thread here puts them on the same baud-accurate [`Line`] the scenario
-//! harness uses, hands them to one of the same simulators ([`crate::sim`]) with real
+//! harness uses, hands them to one of the same simulators ([`plasma_sim`]) with real
 //! timestamps, and writes the unit's replies back to the socket character by character at the
 //! moments the line delivers them (so a reply takes its real wire time at the unit's baud).
 //! The line's master end takes the framing the firmware set in USART1's registers (read
@@ -21,8 +21,8 @@ use std::sync::mpsc::{self, Receiver, Sender, TryRecvError};
 use std::sync::{Arc, Mutex};
 use std::thread::JoinHandle;
 
-use plasma_firmware::port::{Parity, PortConfig, StopBits};
-use plasma_firmware::time::{Duration, Instant};
+use plasma_protocol::serial::{Parity, PortConfig, StopBits};
+use plasma_protocol::time::{Duration, Instant};
 
 use plasma_firmware::io::Output;
 
@@ -30,8 +30,8 @@ use super::error::{Error, Result};
 use super::pins::{output_active, output_pin};
 use super::qtest::{Edge, Qtest};
 use crate::harness::{Direction, TraceFrame, WireTrace};
-use crate::line::{End, Line, Wiring};
-use crate::sim::{Model, SimOptions, SimulatedUnit};
+use plasma_sim::line::{End, Line, Wiring};
+use plasma_sim::{Model, SimOptions, SimulatedUnit};
 
 /// The longest the thread sleeps between two looks at the socket and the test's commands.
 const MAX_SLEEP: Duration = Duration::from_millis(5);

@@ -6,9 +6,9 @@
 //!
 //! ```
 //! use host_tests::harness::{World, WorldOptions};
-//! use host_tests::sim::Model;
+//! use plasma_sim::Model;
 //! use plasma_firmware::settings::Settings;
-//! use plasma_firmware::time::Duration;
+//! use plasma_protocol::time::Duration;
 //!
 //! let mut world = World::with_bridge(Model::Sync65, WorldOptions::default(), Settings::default());
 //! world.wait_link_up(Duration::from_secs(1)).unwrap();
@@ -20,17 +20,17 @@ use std::collections::VecDeque;
 use plasma_firmware::bridge::Bridge;
 use plasma_firmware::io::{Inputs, IoConfig, IoEvent, Outputs, SupplyState};
 use plasma_firmware::link::{Diagnostics, LinkEvent, UnitStatus};
-use plasma_firmware::port::PortConfig;
 use plasma_firmware::session::SimCommand;
 use plasma_firmware::settings::{SaveError, Settings};
 use plasma_firmware::storage::{MAX_PAYLOAD, Settings as _};
-use plasma_firmware::time::{Duration, Instant};
 use plasma_protocol::cnc::phoenix::{ACK, NAK};
+use plasma_protocol::serial::PortConfig;
+use plasma_protocol::time::{Duration, Instant};
 
 use super::endpoint::PsEndpoint;
 use super::options::WorldOptions;
 use super::world::{Timeout, World};
-use crate::sim::{Model, SimulatedUnit};
+use plasma_sim::{Model, SimulatedUnit};
 
 /// How long [`World::cnc_line`] waits for its reply (virtual time): longer than any command
 /// takes (a settings write with retries, a restart's quiet time).

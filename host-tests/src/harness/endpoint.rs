@@ -7,8 +7,8 @@
 
 use plasma_firmware::io::{Inputs, IoConfig, IoEvent, Outputs, SupplyState};
 use plasma_firmware::link::{Diagnostics, LinkEvent, PsLink, UnitStatus};
-use plasma_firmware::port::PortConfig;
-use plasma_firmware::time::Instant;
+use plasma_protocol::serial::PortConfig;
+use plasma_protocol::time::Instant;
 
 /// What drives the power-supply UART, as seen by the harness.
 pub trait PsEndpoint {

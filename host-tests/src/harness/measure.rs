@@ -14,15 +14,15 @@
 //!   polling (the link's shortest poll interval).
 
 use plasma_firmware::link::{LinkConfig, LinkEvent};
-use plasma_firmware::time::Duration;
+use plasma_protocol::time::Duration;
 use rand::rngs::Xoshiro256PlusPlus;
 use rand::{RngExt, SeedableRng};
 
 use super::WorldOptions;
 use super::trace::TraceFrame;
 use super::world::World;
-use crate::sim::powermax::{Powermax, UndocumentedAddresses};
-use crate::sim::{Family, Model};
+use plasma_sim::powermax::{Powermax, UndocumentedAddresses};
+use plasma_sim::{Family, Model};
 
 /// The configurations measured, one per protocol variant.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -384,7 +384,8 @@ pub fn report() -> String {
         "{:<20} {:>12} {:>8} {:>12}",
         "", "transactions", "chars", "wire ms/cycle"
     );
-    let char_us = plasma_firmware::port::PortConfig::MODBUS_DEFAULT.char_time_ns() as f64 / 1000.0;
+    let char_us =
+        plasma_protocol::serial::PortConfig::MODBUS_DEFAULT.char_time_ns() as f64 / 1000.0;
     let _ = writeln!(
         out,
         "{:<20} {:>12} {:>8} {:>12.1}",

@@ -1,5 +1,5 @@
-//! The scenario harness: the bridge's power-supply side, a serial [`Line`](crate::line::Line)
-//! and a [`SimulatedUnit`](crate::sim::SimulatedUnit) in one deterministic discrete-event
+//! The scenario harness: the bridge's power-supply side, a serial [`Line`](plasma_sim::line::Line)
+//! and a [`SimulatedUnit`](plasma_sim::SimulatedUnit) in one deterministic discrete-event
 //! [`World`], in virtual time (no sleeps, no wall clock).
 //!
 //! Each step takes the earliest instant at which anything needs attention (the endpoint's
@@ -25,9 +25,9 @@
 //!
 //! ```
 //! use host_tests::harness::{World, WorldOptions};
-//! use host_tests::sim::Model;
+//! use plasma_sim::Model;
 //! use plasma_firmware::link::{Family, LinkEvent};
-//! use plasma_firmware::time::Duration;
+//! use plasma_protocol::time::Duration;
 //!
 //! let mut world = World::new(Model::Sync65, WorldOptions::default());
 //! world.wait_link_up(Duration::from_secs(1)).unwrap();

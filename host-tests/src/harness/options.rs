@@ -3,8 +3,8 @@
 use plasma_firmware::io::IoConfig;
 use plasma_firmware::link::LinkConfig;
 
-use crate::line::Wiring;
-use crate::sim::SimOptions;
+use plasma_sim::SimOptions;
+use plasma_sim::line::Wiring;
 
 /// What the bridge's UART does with a character the line delivers with a parity or framing
 /// error flag.

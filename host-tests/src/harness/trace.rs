@@ -5,8 +5,8 @@
 
 use std::fmt;
 
-use plasma_firmware::port::PortConfig;
-use plasma_firmware::time::Instant;
+use plasma_protocol::serial::PortConfig;
+use plasma_protocol::time::Instant;
 
 /// Which way a frame went.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]

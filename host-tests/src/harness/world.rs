@@ -9,14 +9,14 @@ use plasma_firmware::io::{
 use plasma_firmware::link::{
     CommandFailure, CommandOutput, LinkCommand, LinkEvent, PsLink, Refusal, Ticket,
 };
-use plasma_firmware::time::{Duration, Instant};
+use plasma_protocol::time::{Duration, Instant};
 
 use super::endpoint::PsEndpoint;
 use super::options::{RxErrors, WorldOptions};
 use super::trace::{Direction, TraceFrame, WireTrace};
-use crate::line::{End, Line};
-use crate::sim::hpr::Hpr;
-use crate::sim::{Model, SimulatedUnit};
+use plasma_sim::hpr::Hpr;
+use plasma_sim::line::{End, Line};
+use plasma_sim::{Model, SimulatedUnit};
 
 /// Times the loop processes one instant again because something still asks for it; beyond
 /// this the request is stale and the loop moves on (and counts it).
@@ -341,7 +341,7 @@ impl<E: PsEndpoint> World<E> {
         &*self.unit
     }
 
-    /// The concrete simulator (e.g. [`crate::sim::powermax::Powermax`]).
+    /// The concrete simulator (e.g. [`plasma_sim::powermax::Powermax`]).
     pub fn sim<T: 'static>(&mut self) -> &mut T {
         self.unit
             .as_any_mut()

@@ -7,8 +7,8 @@ use std::time::Duration;
 
 use host_tests::emu::log::{LoggedTransition, parse_transition};
 use host_tests::emu::{Board, BoardOptions};
-use host_tests::sim::Model;
 use plasma_firmware::io::{Input, Output};
+use plasma_sim::Model;
 
 /// Link detection, generous: a few hundred ms on an idle machine.
 pub const LINK: Duration = Duration::from_secs(30);

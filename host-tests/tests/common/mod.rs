@@ -4,9 +4,9 @@
 pub mod emu;
 
 use host_tests::harness::{BridgeEndpoint, World, WorldOptions};
-use host_tests::sim::Model;
 use plasma_firmware::settings::Settings;
-use plasma_firmware::time::Duration;
+use plasma_protocol::time::Duration;
+use plasma_sim::Model;
 
 /// The bridge (default settings, simulator commands on) against `model`, run until the link
 /// is up and the unit's limits (Powermax) or state (HPR) are known.

@@ -74,10 +74,10 @@ mod image {
     use heapless::String;
     use plasma_firmware::bridge::Bridge;
     use plasma_firmware::inputs::InputConfig;
-    use plasma_firmware::port::PortConfig;
     use plasma_firmware::safe_state::BootReport;
     use plasma_firmware::storage::LoadOutcome;
-    use plasma_firmware::time::Duration;
+    use plasma_protocol::serial::PortConfig;
+    use plasma_protocol::time::Duration;
     use static_cell::StaticCell;
     use stm32_metapac::gpio::vals::Moder;
     use stm32_metapac::{GPIOA, Interrupt, USART1, USART2, interrupt};
@@ -233,8 +233,8 @@ mod image {
             &CNC_STATE,
             PortConfig {
                 baud: 115_200,
-                parity: plasma_firmware::port::Parity::None,
-                stop_bits: plasma_firmware::port::StopBits::One,
+                parity: plasma_protocol::serial::Parity::None,
+                stop_bits: plasma_protocol::serial::StopBits::One,
             },
             false,
         ));

@@ -18,7 +18,7 @@ use critical_section::Mutex;
 use embassy_sync::waitqueue::AtomicWaker;
 use embedded_io_async::{ErrorKind, ErrorType, Read, ReadReady, Write};
 use heapless::Deque;
-use plasma_firmware::port::{Parity, PortConfig, StopBits};
+use plasma_protocol::serial::{Parity, PortConfig, StopBits};
 use stm32_metapac::usart::Usart;
 use stm32_metapac::usart::vals::{M0, M1, Ps, Stop};
 

@@ -75,7 +75,7 @@ mod image {
     use plasma_firmware::link::transaction::TX_CAPACITY;
     use plasma_firmware::safe_state::BootReport;
     use plasma_firmware::storage::LoadOutcome;
-    use plasma_firmware::time::Duration;
+    use plasma_protocol::time::Duration;
     use static_cell::StaticCell;
 
     use crate::cnc_uart::CncUart;

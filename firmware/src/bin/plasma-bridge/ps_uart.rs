@@ -2,8 +2,8 @@
 
 use embassy_stm32::usart::{self, BufferedUart};
 use embedded_io_async::{ErrorType, Read, ReadReady, Write};
-use plasma_firmware::port::{self, PortConfig};
 use plasma_firmware::runner::{ConfigurablePort, UnsupportedConfig};
+use plasma_protocol::serial::{self, PortConfig};
 
 /// DE raised this long before the start bit and held this long after the stop bit, in 1/16
 /// bit (8 = half a bit, 26 us at 19200: far more than a transceiver's enable time).
@@ -17,13 +17,13 @@ pub fn uart_config(config: PortConfig) -> usart::Config {
     uart.baudrate = config.baud;
     uart.data_bits = usart::DataBits::DataBits8;
     uart.parity = match config.parity {
-        port::Parity::None => usart::Parity::ParityNone,
-        port::Parity::Even => usart::Parity::ParityEven,
-        port::Parity::Odd => usart::Parity::ParityOdd,
+        serial::Parity::None => usart::Parity::ParityNone,
+        serial::Parity::Even => usart::Parity::ParityEven,
+        serial::Parity::Odd => usart::Parity::ParityOdd,
     };
     uart.stop_bits = match config.stop_bits {
-        port::StopBits::One => usart::StopBits::STOP1,
-        port::StopBits::Two => usart::StopBits::STOP2,
+        serial::StopBits::One => usart::StopBits::STOP1,
+        serial::StopBits::Two => usart::StopBits::STOP2,
     };
     uart.de_assertion_time = DE_TIME;
     uart.de_deassertion_time = DE_TIME;

@@ -4,9 +4,9 @@
 use defmt::{debug, info, warn};
 use plasma_firmware::bridge::Bridge;
 use plasma_firmware::link::UnitStatus;
-use plasma_firmware::port::PortConfig;
 use plasma_firmware::supervisor::Supervisor;
 use plasma_firmware::watchdog::TaskId;
+use plasma_protocol::serial::PortConfig;
 
 use super::clock::EmbassyClock;
 use super::io::BoardIo;
@@ -88,7 +88,7 @@ impl Seen {
 
 /// Short text for a line setting, for logs.
 fn describe(config: PortConfig) -> &'static str {
-    use plasma_firmware::port::{Parity, StopBits};
+    use plasma_protocol::serial::{Parity, StopBits};
     match (config.parity, config.stop_bits) {
         (Parity::None, StopBits::One) => "8N1",
         (Parity::Even, StopBits::One) => "8E1",

@@ -3,7 +3,7 @@
 use core::future::Future;
 
 use plasma_firmware::runner::Clock;
-use plasma_firmware::time::Instant;
+use plasma_protocol::time::Instant;
 
 /// Now, in the library's microseconds (embassy-time runs at 1 MHz: tick-hz-1_000_000).
 pub fn now() -> Instant {

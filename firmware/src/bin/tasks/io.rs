@@ -21,8 +21,8 @@ use plasma_firmware::discrete::DiscreteIo;
 use plasma_firmware::inputs::InputConfig;
 use plasma_firmware::io::{self, Inputs, IoConfig, IoEvent, Outputs, SupplyState, Transition};
 use plasma_firmware::supervisor::IoExchange;
-use plasma_firmware::time::{Duration, Instant, div_rem_u16};
 use plasma_firmware::watchdog::TaskId;
+use plasma_protocol::time::{Duration, Instant, div_rem_u16};
 
 use super::clock::{embassy_instant, now};
 use super::progress::report;

@@ -7,8 +7,8 @@ use defmt::error;
 use embassy_sync::blocking_mutex::Mutex;
 use embassy_sync::blocking_mutex::raw::CriticalSectionRawMutex;
 use embassy_time::Timer;
-use plasma_firmware::time::Duration;
 use plasma_firmware::watchdog::{ProgressMonitor, TaskId};
+use plasma_protocol::time::Duration;
 
 use super::clock::now;
 use super::pin_map::drive_safe_state;

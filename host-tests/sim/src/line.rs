@@ -39,9 +39,9 @@
 //! at the same time).
 //!
 //! ```
-//! use host_tests::line::{End, Line, Wiring};
-//! use plasma_firmware::port::PortConfig;
-//! use plasma_firmware::time::Instant;
+//! use plasma_sim::line::{End, Line, Wiring};
+//! use plasma_protocol::serial::PortConfig;
+//! use plasma_protocol::time::Instant;
 //!
 //! let mut line = Line::new(PortConfig::MODBUS_DEFAULT, PortConfig::MODBUS_DEFAULT, Wiring::FourWire, 1);
 //! line.transmit(End::Master, Instant::ZERO, b":01");
@@ -50,8 +50,8 @@
 //! assert_eq!(got[0].at, Instant::from_micros(573)); // 11 bits at 19200 baud
 //! ```
 
-use plasma_firmware::port::{Parity, PortConfig, StopBits};
-use plasma_firmware::time::{Duration, Instant};
+use plasma_protocol::serial::{Parity, PortConfig, StopBits};
+use plasma_protocol::time::{Duration, Instant};
 use rand::rngs::Xoshiro256PlusPlus;
 use rand::{RngExt, SeedableRng};
 

@@ -34,7 +34,7 @@ use plasma_protocol::modbus_ascii::ExceptionCode;
 use super::clock::Accumulator;
 use super::powermax::{Cell, Powermax};
 use super::{Model, SimulatedUnit};
-use plasma_firmware::time::Instant;
+use plasma_protocol::time::Instant;
 
 /// Low byte of 0x3000 (Table 4) for the CSA variant of each model.
 pub fn type_id(model: Model) -> u8 {
@@ -314,12 +314,10 @@ pub(crate) fn write_multiple(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::sim::SimulatedUnit;
-    use crate::sim::powermax::testing::*;
-    use crate::sim::powermax::{
-        ArcState, Counters, OutOfRange, PowermaxConfig, UndocumentedAddresses,
-    };
-    use plasma_firmware::time::Duration;
+    use crate::SimulatedUnit;
+    use crate::powermax::testing::*;
+    use crate::powermax::{ArcState, Counters, OutOfRange, PowermaxConfig, UndocumentedAddresses};
+    use plasma_protocol::time::Duration;
 
     fn unit(model: Model) -> Powermax {
         Powermax::new(PowermaxConfig::for_model(model))

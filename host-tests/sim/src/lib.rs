@@ -1,4 +1,8 @@
-//! Simulated Hypertherm power supplies behind one byte-level interface.
+//! Simulated Hypertherm power supplies behind one byte-level interface, and the serial line
+//! between them and a master in virtual time ([`line`]).
+//!
+//! This crate depends on the wire formats (`plasma-protocol`) only, never on the bridge: the
+//! firmware's own tests, the scenario harness and `pbtool` all use these same units.
 //!
 //! Every simulator is a sans-IO state machine in virtual time: the harness hands it received
 //! characters and the current [`Instant`], asks for characters to send, and wakes it at
@@ -15,8 +19,8 @@
 //! disagreement in the scenario tests.
 //!
 //! ```
-//! use host_tests::sim::{Model, SimOptions};
-//! use plasma_firmware::time::Instant;
+//! use plasma_sim::{Model, SimOptions};
+//! use plasma_protocol::time::Instant;
 //!
 //! let mut unit = Model::from_name("sync65").unwrap().build(&SimOptions::default());
 //! for &b in b":010430000001CA\r\n" {
@@ -29,13 +33,14 @@
 
 use std::any::Any;
 
-use plasma_firmware::port::PortConfig;
-use plasma_firmware::time::{Duration, Instant};
+use plasma_protocol::serial::PortConfig;
+use plasma_protocol::time::{Duration, Instant};
 
 pub mod clock;
 pub mod hpr;
 mod hpr_wire;
 pub mod legacy;
+pub mod line;
 pub mod modbus_wire;
 pub mod powermax;
 pub mod sync;
@@ -235,7 +240,7 @@ mod tests {
     use super::*;
     use crate::line::{End, Line, RxByte, Wiring};
     use clock::earliest;
-    use plasma_firmware::port::Parity;
+    use plasma_protocol::serial::Parity;
 
     /// A minimal discrete-event loop (the shape of the scenario harness): the master sends
     /// `request` at `t0`; returns what the master hears until `until`.

@@ -1,7 +1,7 @@
 //! Small helpers for virtual time: earliest deadline, and time accumulators that report whole
 //! seconds the way the power supplies' counters do.
 
-use plasma_firmware::time::{Duration, Instant};
+use plasma_protocol::time::{Duration, Instant};
 
 /// The earlier of two optional deadlines.
 pub fn earliest(a: Option<Instant>, b: Option<Instant>) -> Option<Instant> {

@@ -149,6 +149,7 @@ impl fmt::Display for Decimal {
 
 #[cfg(test)]
 mod tests {
+    extern crate std;
     use super::*;
     use proptest::prelude::*;
 

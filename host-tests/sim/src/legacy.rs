@@ -132,11 +132,11 @@ pub(crate) fn write_multiple(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::sim::SimulatedUnit;
-    use crate::sim::clock::Accumulator;
-    use crate::sim::powermax::testing::*;
-    use crate::sim::powermax::{Counters, DeviceIdSupport, PowermaxConfig};
-    use plasma_firmware::time::{Duration, Instant};
+    use crate::SimulatedUnit;
+    use crate::clock::Accumulator;
+    use crate::powermax::testing::*;
+    use crate::powermax::{Counters, DeviceIdSupport, PowermaxConfig};
+    use plasma_protocol::time::{Duration, Instant};
 
     fn unit(model: Model) -> Powermax {
         Powermax::new(PowermaxConfig::for_model(model))

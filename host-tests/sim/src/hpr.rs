@@ -47,8 +47,8 @@
 use std::any::Any;
 use std::collections::VecDeque;
 
-use plasma_firmware::port::PortConfig;
-use plasma_firmware::time::{Duration, Instant};
+use plasma_protocol::serial::PortConfig;
+use plasma_protocol::time::{Duration, Instant};
 use rand::rngs::Xoshiro256PlusPlus;
 use rand::{RngExt, SeedableRng};
 
