@@ -14,8 +14,9 @@
 //! 4. the endpoint's [`SupplyState`](plasma_firmware::io::SupplyState) goes to the
 //!    [`Interlocks`](plasma_firmware::io::Interlocks), whose START drives the unit's Start
 //!    input;
-//! 5. the independent [`SafetyMonitor`](plasma_firmware::io::SafetyMonitor) checks TORCH_ON /
-//!    START / blackout. A broken rule panics at once (with the last frames on the wire), so
+//! 5. the independent [`SafetyMonitor`](plasma_firmware::io::SafetyMonitor), fed the input
+//!    edges as the harness drives them (never the interlocks' view), checks them against
+//!    START and the blackout. A broken rule panics at once (with the last frames on the wire), so
 //!    every scenario enforces the safety rules.
 //!
 //! The endpoint is anything implementing [`PsEndpoint`]: a bare
