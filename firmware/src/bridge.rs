@@ -244,14 +244,7 @@ impl Bridge {
 
     /// What the interlocks need to know about the supply.
     pub fn supply_state(&self) -> SupplyState {
-        let status = self.link.status();
-        SupplyState {
-            link_up: status.link_up,
-            fault_requires_action: status.active_fault.is_some_and(|f| f.action_required()),
-            fault_active: status.active_fault.is_some(),
-            restart_blackout_until: status.restart_blackout_until,
-            unit_ready: status.ready,
-        }
+        SupplyState::from(self.link.status())
     }
 
     /// The interlocks' configuration (changes after `CONFIG <io key> <value>`).
@@ -316,6 +309,20 @@ impl Bridge {
     /// The link (read only), e.g. for its configuration.
     pub fn link(&self) -> &PsLink {
         &self.link
+    }
+}
+
+/// The one translation of the link's view into what the interlocks need: the board's
+/// [`Bridge::supply_state`] and a host loop driving a bare [`PsLink`] both use it.
+impl From<&UnitStatus> for SupplyState {
+    fn from(status: &UnitStatus) -> SupplyState {
+        SupplyState {
+            link_up: status.link_up,
+            fault_requires_action: status.active_fault.is_some_and(|f| f.action_required()),
+            fault_active: status.active_fault.is_some(),
+            restart_blackout_until: status.restart_blackout_until,
+            unit_ready: status.ready,
+        }
     }
 }
 

@@ -48,7 +48,7 @@ mod trace;
 mod world;
 
 pub use bridge::{BridgeEndpoint, CNC_REPLY_TIMEOUT, CncItem, CncRecord};
-pub use endpoint::{PsEndpoint, supply_state_of};
+pub use endpoint::PsEndpoint;
 pub use options::{RxErrors, WorldOptions};
 pub use trace::{Direction, TraceFrame, WireTrace};
 pub use world::{Timeout, World, WorldStats};
