@@ -409,6 +409,11 @@ impl Hpr {
         self.counters
     }
 
+    /// Sets the timers and counters (a unit with a history).
+    pub fn set_counters(&mut self, counters: HprCounters) {
+        self.counters = counters;
+    }
+
     /// The error log, most recent first.
     pub fn error_log(&self) -> [u16; 4] {
         self.error_log

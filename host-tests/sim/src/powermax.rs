@@ -112,6 +112,9 @@ pub struct PowermaxConfig {
     pub out_of_range: OutOfRange,
     /// Read Device Identification.
     pub device_id: DeviceIdSupport,
+    /// Remote settings take effect. `false` models a faulty unit that acknowledges the
+    /// writes but keeps cutting with its panel settings, so that a read-back differs.
+    pub remote_settings_apply: bool,
     /// Arc sequence timing.
     pub timings: ArcTimings,
     /// After power-on the unit ignores the line this long.
@@ -146,6 +149,7 @@ impl PowermaxConfig {
             undocumented: UndocumentedAddresses::Accept,
             out_of_range: OutOfRange::Fault,
             device_id: DeviceIdSupport::Answers,
+            remote_settings_apply: true,
             timings: ArcTimings::default(),
             boot_time: Duration::ZERO,
             quick_restart_time: Duration::from_secs(2),
@@ -338,7 +342,7 @@ impl Powermax {
 
     /// The settings the unit cuts with now (remote if in remote mode, else the front panel).
     pub fn settings(&self) -> Settings {
-        if !self.remote {
+        if !self.remote || !self.config.remote_settings_apply {
             return self.panel;
         }
         // On the way back to manual (legacy: one force register at a time), a register already
