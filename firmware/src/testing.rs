@@ -3,8 +3,8 @@
 //!
 //! The firmware's own tests use the same units as the scenario harness and `pbtool`, so a
 //! test here cannot pass against a private idea of how a unit answers. What a test needs of an
-//! unusual unit (one that refuses a block read, ignores remote settings, a cable pulled) is an
-//! option of the simulator or of the line, set through [`SimPs`].
+//! unusual unit (one that refuses a block read, does not apply remote settings, a cable
+//! pulled) is an option of the simulator or of the line, set through [`SimPs`].
 
 extern crate std;
 
@@ -22,7 +22,9 @@ use plasma_sim::{Model, SimOptions, SimulatedUnit};
 use crate::bridge::Bridge;
 use crate::link::PsLink;
 
-/// The power-supply side of whatever drives the UART: a bare link or the bridge.
+/// The power-supply side of whatever drives the UART: a bare link or the bridge. Time is
+/// the caller's: it polls the master and sleeps until the earlier of the master's `poll_at`
+/// and what [`SimPs::exchange`] returns.
 pub(crate) trait Master {
     /// One whole frame to send now, if any.
     fn transmit(&mut self, now: Instant) -> Option<&[u8]>;
@@ -32,10 +34,6 @@ pub(crate) trait Master {
     fn receive_error(&mut self, now: Instant);
     /// The UART settings in use.
     fn port(&self) -> PortConfig;
-    /// Let time pass.
-    fn poll(&mut self, now: Instant);
-    /// When the master next needs attention.
-    fn poll_at(&self) -> Option<Instant>;
 }
 
 impl Master for PsLink {
@@ -50,10 +48,6 @@ impl Master for PsLink {
     }
     fn port(&self) -> PortConfig {
         self.port_config()
-    }
-    fn poll(&mut self, _now: Instant) {}
-    fn poll_at(&self) -> Option<Instant> {
-        PsLink::poll_at(self)
     }
 }
 
@@ -70,12 +64,6 @@ impl Master for Bridge {
     fn port(&self) -> PortConfig {
         self.ps_port_config()
     }
-    fn poll(&mut self, now: Instant) {
-        Bridge::poll(self, now);
-    }
-    fn poll_at(&self) -> Option<Instant> {
-        Bridge::poll_at(self)
-    }
 }
 
 /// A simulated unit at the end of a four-wire line, and every frame the master sent it.
@@ -84,6 +72,8 @@ pub(crate) struct SimPs {
     line: Line,
     /// Every frame the master sent, with the instant it began to send it.
     pub sent: Vec<(Instant, Vec<u8>)>,
+    /// Every character the master was handed, with its instant.
+    pub heard: Vec<(Instant, u8)>,
 }
 
 impl SimPs {
@@ -94,13 +84,19 @@ impl SimPs {
         Self::with_unit(model.build(&SimOptions::default()))
     }
 
-    /// `unit` on a fresh line.
+    /// `unit` on a fresh four-wire line.
     pub(crate) fn with_unit(unit: Box<dyn SimulatedUnit>) -> Self {
+        Self::on_line(unit, Wiring::FourWire)
+    }
+
+    /// `unit` on a fresh line wired as `wiring`.
+    pub(crate) fn on_line(unit: Box<dyn SimulatedUnit>, wiring: Wiring) -> Self {
         let port = unit.port();
         SimPs {
-            line: Line::new(port, port, Wiring::FourWire, 1),
+            line: Line::new(port, port, wiring, 1),
             unit,
             sent: Vec::new(),
+            heard: Vec::new(),
         }
     }
 
@@ -122,20 +118,10 @@ impl SimPs {
         self.unit.as_any_mut().downcast_mut().expect("an HPR model")
     }
 
-    /// The line (fault injection: corrupt or drop characters, noise bursts).
-    pub(crate) fn line(&mut self) -> &mut Line {
-        &mut self.line
-    }
-
     /// Pulls the serial cable at `now` (true) or plugs it back (false): the unit keeps its
     /// state but neither hears nor answers while unplugged.
     pub(crate) fn unplug(&mut self, now: Instant, unplugged: bool) {
         self.line.set_unit_powered(now, !unplugged);
-    }
-
-    /// Frames the master sent since `mark` (an index into [`sent`](Self::sent)).
-    pub(crate) fn sent_since(&self, mark: usize) -> Vec<Vec<u8>> {
-        self.sent[mark..].iter().map(|(_, f)| f.clone()).collect()
     }
 
     /// Everything due at `now` on both sides: the master's frame onto the line, the
@@ -167,7 +153,10 @@ impl SimPs {
         let mut run = Vec::new();
         for b in self.line.receive(End::Master, now) {
             match b.error {
-                None => run.push(b.byte),
+                None => {
+                    self.heard.push((now, b.byte));
+                    run.push(b.byte);
+                }
                 Some(_) => {
                     if !run.is_empty() {
                         master.receive(now, &run);
@@ -181,33 +170,5 @@ impl SimPs {
             master.receive(now, &run);
         }
         earliest(self.line.next_delivery(), self.unit.next_wakeup())
-    }
-
-    /// Runs `master` against the unit from `now` until `until`; returns `until`.
-    pub(crate) fn run(&mut self, master: &mut dyn Master, now: Instant, until: Instant) -> Instant {
-        let mut now = now;
-        loop {
-            let line_next = self.exchange(master, now);
-            master.poll(now);
-            let next = earliest(line_next, master.poll_at());
-            match next {
-                Some(at) if at <= until => {
-                    // Something due now again (a master that asks for `now` once more) moves
-                    // on by a microsecond rather than spin.
-                    now = if at > now {
-                        at
-                    } else {
-                        now + plasma_protocol::time::Duration::from_micros(1)
-                    };
-                }
-                _ => break,
-            }
-            if now > until {
-                break;
-            }
-        }
-        self.exchange(master, until);
-        master.poll(until);
-        until
     }
 }

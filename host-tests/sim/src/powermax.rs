@@ -112,6 +112,9 @@ pub struct PowermaxConfig {
     pub out_of_range: OutOfRange,
     /// Read Device Identification.
     pub device_id: DeviceIdSupport,
+    /// Holding / input registers the unit refuses to read (a read touching one is refused
+    /// whole with exception 02), as a unit might for write-only or unsupported registers.
+    pub refused_registers: Vec<u16>,
     /// Remote settings take effect. `false` models a faulty unit that acknowledges the
     /// writes but keeps cutting with its panel settings, so that a read-back differs.
     pub remote_settings_apply: bool,
@@ -149,6 +152,7 @@ impl PowermaxConfig {
             undocumented: UndocumentedAddresses::Accept,
             out_of_range: OutOfRange::Fault,
             device_id: DeviceIdSupport::Answers,
+            refused_registers: Vec::new(),
             remote_settings_apply: true,
             timings: ArcTimings::default(),
             boot_time: Duration::ZERO,
@@ -731,6 +735,9 @@ impl Powermax {
     }
 
     fn register(&self, address: u16) -> Cell {
+        if self.config.refused_registers.contains(&address) {
+            return Cell::Unknown;
+        }
         match (self.is_sync(), address) {
             (true, 0x3000..=0x3FFF) => sync::register(self, address),
             (_, 0x2000..=0x2FFF) => legacy::register(self, address),
