@@ -52,8 +52,8 @@ use std::collections::VecDeque;
 
 use plasma_protocol::serial::PortConfig;
 use plasma_protocol::time::{Duration, Instant};
-use rand::rngs::Xoshiro256PlusPlus;
 use rand::SeedableRng;
+use rand::rngs::Xoshiro256PlusPlus;
 
 use super::clock::earliest;
 use super::hpr_wire::{self, Assembler};
