@@ -92,7 +92,8 @@ impl HprConfig {
     }
 }
 
-/// Where the sequence is (mapped to the section V state codes by [`Hpr::state_code`]).
+/// Where the sequence is (mapped to the section V state codes by
+/// [`Hpr::state_code`](super::Hpr::state_code)).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Phase {
     /// Power-up (HPR 0 idle, MaxPro 0 power up).
