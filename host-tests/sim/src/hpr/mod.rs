@@ -56,7 +56,7 @@ use rand::SeedableRng;
 use rand::rngs::Xoshiro256PlusPlus;
 
 use super::clock::earliest;
-use super::hpr_wire::{self, Assembler};
+use super::hpr_wire::Assembler;
 use super::{Model, SimulatedUnit};
 
 mod commands;

@@ -1,6 +1,7 @@
 //! Tests of the HPR / MaxPro200 simulator: identity, replies, the sequence, remote settings.
 
 use super::*;
+use crate::hpr_wire;
 
 fn ms(t: u64) -> Instant {
     Instant::from_millis(t)

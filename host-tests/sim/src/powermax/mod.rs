@@ -42,7 +42,7 @@ use rand::SeedableRng;
 use rand::rngs::Xoshiro256PlusPlus;
 
 use super::clock::earliest;
-use super::modbus_wire::{self, Assembler};
+use super::modbus_wire::Assembler;
 use super::sync::Cartridge;
 use super::{Family, Model, SimulatedUnit};
 
@@ -425,6 +425,7 @@ impl SimulatedUnit for Powermax {
 #[cfg(test)]
 pub(crate) mod testing {
     use super::*;
+    use crate::modbus_wire;
 
     /// Sends `frame` at `now` and returns the unit's reply (or None if it stays silent).
     pub fn exchange(unit: &mut Powermax, now: Instant, frame: &[u8]) -> Option<Vec<u8>> {
