@@ -66,7 +66,8 @@ impl Master for Bridge {
     }
 }
 
-/// A simulated unit at the end of a four-wire line, and every frame the master sent it.
+/// A simulated unit at the end of a serial line, every frame the master sent it and every
+/// character it heard back.
 pub(crate) struct SimPs {
     unit: Box<dyn SimulatedUnit>,
     line: Line,
