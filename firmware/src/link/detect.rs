@@ -329,11 +329,13 @@ impl PsLink {
         self.core.status.link_up = true;
         self.core.emit(LinkEvent::LinkUp { model, family });
         self.phase = match family {
-            Family::PowermaxSync => {
-                Phase::Powermax(PowermaxDriver::new(Variant::Sync, now, &self.core))
-            }
-            Family::PowermaxLegacy => {
-                Phase::Powermax(PowermaxDriver::new(Variant::Legacy, now, &self.core))
+            Family::PowermaxSync | Family::PowermaxLegacy => {
+                let variant = if family == Family::PowermaxSync {
+                    Variant::Sync
+                } else {
+                    Variant::Legacy
+                };
+                Phase::Powermax(PowermaxDriver::new(variant, now, &self.core))
             }
             Family::Hpr | Family::MaxPro200 => {
                 let system = match model {
