@@ -89,6 +89,7 @@ pub mod event;
 pub(crate) mod hpr;
 pub(crate) mod legacy;
 pub(crate) mod modbus;
+mod phase;
 pub(crate) mod powermax;
 mod receive;
 mod schedule;
@@ -117,9 +118,8 @@ pub use transaction::TransactionError;
 
 use detect::{DetectStep, Detector, KnownGood};
 use event::EventQueue;
-use hpr::HprDriver;
 pub use hpr::HprKept;
-use powermax::PowermaxDriver;
+use phase::Phase;
 use schedule::Tag;
 use transaction::{TX_CAPACITY, Transaction};
 
@@ -189,15 +189,6 @@ impl Core {
 enum Wire {
     Modbus,
     Hpr,
-}
-
-// One phase at a time, held inline (no allocator).
-#[allow(clippy::large_enum_variant)]
-#[derive(Debug)]
-enum Phase {
-    Detecting(Detector),
-    Powermax(PowermaxDriver),
-    Hpr(HprDriver),
 }
 
 /// The power-supply link.
