@@ -23,7 +23,7 @@ use plasma_protocol::cnc::phoenix::{EOT, ETX, SOH, STX};
 use plasma_protocol::powermax::FaultCode;
 use plasma_protocol::time::{Duration, Instant};
 
-use crate::harness::{BridgeEndpoint, CncItem, World, WorldOptions};
+use host_tests::harness::{BridgeEndpoint, CncItem, World, WorldOptions};
 use plasma_sim::{Family, Model, SimOptions};
 
 /// The longest wait for the link (and the unit's limits) before the first command.

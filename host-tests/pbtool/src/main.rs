@@ -1,0 +1,65 @@
+//! pbtool: the plasma-bridge technician's tool.
+//!
+//! `pbtool decode FRAME...` explains Modbus ASCII (`:`) and HPR (`>`) frames.
+//! `pbtool sim --ps MODEL` runs the bridge against a simulated unit with the CNC text protocol
+//! on stdin/stdout (see `pbtool::sim`).
+//! `pbtool emu --ps MODEL` runs the firmware image itself on an emulated board (QEMU) against a
+//! simulated unit, with the CNC port on stdin/stdout (see `pbtool::emu::console`);
+//! `pbtool emu --measure` reports the image's latency and idle figures.
+//! `pbtool run` runs the bridge where it can: the board, the emulated board or the simulator.
+
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+
+mod cli;
+
+#[derive(Parser)]
+#[command(
+    name = "pbtool",
+    version,
+    about = "Tools for the plasma-bridge and Hypertherm power supplies"
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Explain Modbus ASCII (`:...`) and HPR (`>...<`) frames.
+    ///
+    /// Each argument is one frame, with or without CR LF or the manuals' `<CR><LF>`. A frame
+    /// right after a request is read as its reply. Exit status 1 when any frame is invalid.
+    Decode(cli::decode::DecodeArgs),
+    /// Run the bridge against a simulated power supply; the CNC protocol on stdin/stdout.
+    ///
+    /// Type commands (`SET PROCESS CUT 45 AUTO`, `STATUS`, `HELP`); `TORCH ON` / `TORCH OFF`
+    /// drive the CNC's torch-on input (simulator only). Each command line is sent once the
+    /// previous reply is out; the first once the link is up. From a pipe it prints one reply
+    /// per command and exits at the end of input. Runs in real time unless `--fast`.
+    Sim(cli::sim::SimArgs),
+    /// Run the bridge: on the board when a debug probe is attached (build, flash and run with
+    /// probe-rs, showing the log), otherwise the firmware on the emulated board when QEMU is
+    /// installed (as `emu`), otherwise against a simulated power supply (as `sim`).
+    Run(cli::run::RunArgs),
+    /// Run the firmware image on an emulated board (QEMU) against a simulated power supply;
+    /// the board's CNC port on stdin/stdout.
+    ///
+    /// Builds the image (`cargo emu-fw`), starts qemu-system-arm 10 with it, puts the simulated
+    /// unit on its power-supply port in real time and wires START and MOTION between them.
+    /// Type CNC commands as for `sim`; `TORCH ON` / `TORCH OFF` drive the board's TORCH_ON
+    /// input pin. `--measure` instead toggles TORCH_ON under QEMU's instruction counting and
+    /// reports the instructions from the edge to START and the idle figures.
+    Emu(cli::emu::EmuArgs),
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    match cli.command {
+        Command::Decode(args) => cli::decode::decode(&args),
+        Command::Sim(args) => cli::sim::sim(&args),
+        Command::Run(args) => cli::run::run(&args),
+        Command::Emu(args) => cli::emu::emu(&args),
+    }
+}
