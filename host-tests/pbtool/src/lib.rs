@@ -9,4 +9,9 @@
 
 pub mod decode;
 pub mod emu;
+pub mod framer;
+pub mod realtime;
+pub mod run;
+pub mod serial;
 pub mod sim;
+pub mod unit;

@@ -52,6 +52,13 @@ enum Command {
     /// input pin. `--measure` instead toggles TORCH_ON under QEMU's instruction counting and
     /// reports the instructions from the edge to START and the idle figures.
     Emu(cli::emu::EmuArgs),
+    /// Serve a simulated power supply on a serial port in real time, answering any master.
+    ///
+    /// The port takes the unit's framing (Powermax 19200 8E1, HPR 19200 8N1). Lines on stdin
+    /// control it while it runs: `FAULT CODE`, `CLEAR`, `POWER OFF`, `POWER ON`, `SILENT`
+    /// (as if the cable were cut), `ANSWER`. Runs until stopped (Ctrl-C) or the port goes
+    /// away (exit status 2).
+    Unit(cli::unit::ServeArgs),
 }
 
 fn main() -> ExitCode {
@@ -61,5 +68,6 @@ fn main() -> ExitCode {
         Command::Sim(args) => cli::sim::sim(&args),
         Command::Run(args) => cli::run::run(&args),
         Command::Emu(args) => cli::emu::emu(&args),
+        Command::Unit(args) => cli::unit::unit(&args),
     }
 }

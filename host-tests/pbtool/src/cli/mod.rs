@@ -2,14 +2,17 @@
 
 pub mod decode;
 pub mod emu;
+mod line;
 pub mod run;
 pub mod sim;
+pub mod unit;
 
 use std::io::{self, BufRead};
 use std::process::ExitCode;
 use std::sync::mpsc::Receiver;
 
 use clap::Args;
+use pbtool::serial::SerialError;
 use pbtool::sim::{parse_fault, read_line};
 use plasma_sim::Model;
 
@@ -72,4 +75,13 @@ pub fn stdin_lines() -> Receiver<Vec<u8>> {
         }
     });
     rx
+}
+
+/// Exit status for a port that cannot be opened or fails.
+pub const PORT_ERROR: u8 = 2;
+
+/// Says what is wrong with the port; the exit status for it.
+pub fn serial_failure(command: &str, e: &SerialError) -> ExitCode {
+    eprintln!("pbtool {command}: {e}");
+    ExitCode::from(PORT_ERROR)
 }

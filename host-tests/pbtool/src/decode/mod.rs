@@ -17,9 +17,11 @@ mod hpr;
 mod json;
 mod modbus;
 mod registers;
+mod stream;
 mod text;
 
 pub use json::to_json;
+pub use stream::FrameStream;
 pub use text::{lines, to_text};
 
 /// Wire protocol of a frame, from its first character.
