@@ -71,6 +71,13 @@ impl Framer {
         }
     }
 
+    /// One character at `now`; the pieces it completes.
+    pub fn push_one(&mut self, now: Instant, rx: Rx) -> Vec<Piece> {
+        let mut out = Vec::new();
+        self.push(now, rx, &mut out);
+        out
+    }
+
     /// Whatever is held, as an incomplete piece (the line went quiet).
     pub fn flush(&mut self) -> Option<Piece> {
         self.take(false)

@@ -14,4 +14,5 @@ pub mod realtime;
 pub mod run;
 pub mod serial;
 pub mod sim;
+pub mod sniff;
 pub mod unit;

@@ -59,6 +59,13 @@ enum Command {
     /// (as if the cable were cut), `ANSWER`. Runs until stopped (Ctrl-C) or the port goes
     /// away (exit status 2).
     Unit(cli::unit::ServeArgs),
+    /// Listen to a live line and explain every frame; never transmits.
+    ///
+    /// One port hears a 2-wire bus, two ports the two pairs of a 4-wire line. Each frame comes
+    /// with its time and decoded as `decode` does; replies are paired with their requests, and
+    /// missing replies, bad checksums, parity errors, pauses inside frames and noise are
+    /// flagged. Runs until stopped (Ctrl-C) or a port goes away (exit status 2).
+    Sniff(cli::sniff::SniffArgs),
 }
 
 fn main() -> ExitCode {
@@ -69,5 +76,6 @@ fn main() -> ExitCode {
         Command::Run(args) => cli::run::run(&args),
         Command::Emu(args) => cli::emu::emu(&args),
         Command::Unit(args) => cli::unit::unit(&args),
+        Command::Sniff(args) => cli::sniff::sniff(&args),
     }
 }

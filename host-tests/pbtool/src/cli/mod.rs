@@ -5,6 +5,7 @@ pub mod emu;
 mod line;
 pub mod run;
 pub mod sim;
+pub mod sniff;
 pub mod unit;
 
 use std::io::{self, BufRead};
