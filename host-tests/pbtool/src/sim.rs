@@ -25,6 +25,9 @@ use plasma_protocol::powermax::FaultCode;
 use plasma_protocol::time::{Duration, Instant};
 
 use host_tests::harness::{BridgeEndpoint, CncItem, World, WorldOptions};
+
+use crate::realtime::{Arrival, Clock, wait};
+use crate::serial::{Port, Rx, SerialError};
 use plasma_sim::{Family, Model, SimOptions};
 
 /// The longest wait for the link (and the unit's limits) before the first command.
@@ -227,6 +230,42 @@ impl Console {
             // Take whatever else has arrived (a paste, a pipe) in one go.
             while let Ok(line) = input.try_recv() {
                 lines.push_back(line);
+            }
+        }
+    }
+
+    /// Real time, the CNC on a serial port: `inbox` brings the port's characters (from its
+    /// reader thread), `cnc` is its writing handle; the bytes pass as they are. Runs until the
+    /// port fails.
+    pub fn run_cnc_port(&mut self, inbox: &Receiver<Arrival>, cnc: &mut Port) -> SerialError {
+        let clock = Clock::start();
+        let mut sent = 0;
+        loop {
+            let arrival = wait(inbox, &clock, self.world.next_wakeup());
+            let due = clock.now().saturating_since(self.world.now());
+            self.world.run_for(due);
+            match arrival {
+                Some(Arrival::Serial { rx, .. }) => {
+                    let bytes: Vec<u8> = rx
+                        .iter()
+                        .map(|r| match r {
+                            Rx::Byte(b) => *b,
+                            // The session sees a garbled character as one it cannot read.
+                            Rx::Error => b'?',
+                        })
+                        .collect();
+                    self.world.cnc_send(&bytes);
+                }
+                Some(Arrival::Failed(e)) => return e,
+                _ => {}
+            }
+            let raw = self.world.cnc_bytes();
+            if raw.len() > sent {
+                let fresh = raw[sent..].to_vec();
+                sent = raw.len();
+                if let Err(e) = cnc.write_all(&fresh) {
+                    return e;
+                }
             }
         }
     }

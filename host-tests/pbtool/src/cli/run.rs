@@ -13,12 +13,9 @@ use super::sim::{SimArgs, sim};
 #[derive(Args)]
 pub struct RunArgs {
     /// Run the bridge here, in real time, on this serial port wired to the power supply
-    /// (/dev/ttyUSB0, COM3); the CNC protocol on stdin/stdout.
+    /// (/dev/ttyUSB0, COM3); the CNC protocol on stdin/stdout, or on --cnc-port.
     #[arg(long, value_name = "DEV", conflicts_with_all = ["sim", "fast", "model", "fault"])]
     ps_port: Option<String>,
-    /// With --ps-port: the CNC protocol on this serial port (115200 8N1) instead.
-    #[arg(long, value_name = "DEV", requires = "ps_port")]
-    cnc_port: Option<String>,
     /// Use the simulator even when a probe is attached.
     #[arg(long)]
     sim: bool,
@@ -32,11 +29,12 @@ pub fn run(args: &RunArgs) -> ExitCode {
     if let Some(ps_port) = &args.ps_port {
         return super::line::run_on_ports(
             ps_port,
-            args.cnc_port.as_deref(),
+            args.sim_args.cnc_port.as_deref(),
             args.sim_args.unit.events,
         );
     }
-    if !args.sim {
+    // A CNC port without a PS port: the simulator's CNC side on it.
+    if !args.sim && args.sim_args.cnc_port.is_none() {
         if let Some(probe) = attached_probe() {
             eprintln!("pbtool run: debug probe found ({probe}); flashing the board image");
             return flash_board();

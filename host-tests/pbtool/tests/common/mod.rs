@@ -273,3 +273,46 @@ impl Drop for Pbtool {
         let _ = self.child.wait();
     }
 }
+
+/// The CNC's end of a CNC port: commands out, reply lines back.
+pub struct CncEnd {
+    port: Box<dyn SerialPort>,
+    pending: Vec<u8>,
+}
+
+impl CncEnd {
+    /// Opens `device` at the CNC port's 115200 8N1.
+    pub fn open(device: &str) -> CncEnd {
+        let port = serialport::new(device, 115_200)
+            .timeout(Duration::from_millis(100))
+            .open()
+            .expect("the CNC end opens");
+        CncEnd {
+            port,
+            pending: Vec::new(),
+        }
+    }
+
+    /// Sends `line` with CR LF and returns the next reply line (`OK`/`ERR`; event lines are
+    /// skipped); `None` when none came within [`LONG`].
+    pub fn command(&mut self, line: &str) -> Option<String> {
+        self.port
+            .write_all(format!("{line}\r\n").as_bytes())
+            .expect("written");
+        let deadline = Instant::now() + LONG;
+        while Instant::now() < deadline {
+            while let Some(end) = self.pending.iter().position(|&b| b == b'\n') {
+                let line: Vec<u8> = self.pending.drain(..=end).collect();
+                let text = String::from_utf8_lossy(&line).trim().to_string();
+                if text.starts_with("OK") || text.starts_with("ERR") {
+                    return Some(text);
+                }
+            }
+            let mut buf = [0u8; 256];
+            if let Ok(n) = self.port.read(&mut buf) {
+                self.pending.extend_from_slice(&buf[..n]);
+            }
+        }
+        None
+    }
+}
