@@ -10,6 +10,7 @@
 pub mod decode;
 pub mod emu;
 pub mod framer;
+pub mod probe;
 pub mod realtime;
 pub mod run;
 pub mod serial;

@@ -68,6 +68,14 @@ enum Command {
     /// missing replies, bad checksums, parity errors, pauses inside frames and noise are
     /// flagged. Runs until stopped (Ctrl-C) or a port goes away (exit status 2).
     Sniff(cli::sniff::SniffArgs),
+    /// Find the unit on a serial port and report everything it tells; never writes to it.
+    ///
+    /// Tries every framing with Modbus (SYNC, legacy Powermax) and HPR, then reads the model
+    /// and identification, limits, settings, actual outputs, the active fault (text, whether
+    /// action is required), counters, cartridge data and logs (HPR: state, PS info, error
+    /// log, timers). Exit status 0 when a unit answered, 1 when none did within --seconds, 2
+    /// on a port error.
+    Probe(cli::probe::ProbeArgs),
 }
 
 fn main() -> ExitCode {
@@ -79,5 +87,6 @@ fn main() -> ExitCode {
         Command::Emu(args) => cli::emu::emu(&args),
         Command::Unit(args) => cli::unit::unit(&args),
         Command::Sniff(args) => cli::sniff::sniff(&args),
+        Command::Probe(args) => cli::probe::probe_command(&args),
     }
 }

@@ -3,6 +3,7 @@
 pub mod decode;
 pub mod emu;
 mod line;
+pub mod probe;
 pub mod run;
 pub mod sim;
 pub mod sniff;
