@@ -135,3 +135,19 @@ fn a_missing_or_busy_port_is_an_error_that_says_so() {
     assert_eq!(second.wait().code(), Some(2));
     assert!(second.stderr().contains("in use"), "{}", second.stderr());
 }
+
+#[test]
+fn with_no_unit_on_the_line_the_console_says_so_and_goes_on() {
+    let cable = Cable::new();
+    let mut run = Pbtool::spawn(&["run", "--ps-port", &cable.a]);
+    run.send("ID");
+    let id = run.expect_prefix("OK bridge=");
+    assert!(!id.contains(" link=UP "), "{id}");
+    assert!(
+        run.stderr().contains("no power supply answered on the PS port within 15 s"),
+        "{}",
+        run.transcript()
+    );
+    run.close_stdin();
+    assert!(run.wait().success(), "{}", run.transcript());
+}
