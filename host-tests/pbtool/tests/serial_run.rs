@@ -144,7 +144,8 @@ fn with_no_unit_on_the_line_the_console_says_so_and_goes_on() {
     let id = run.expect_prefix("OK bridge=");
     assert!(!id.contains(" link=UP "), "{id}");
     assert!(
-        run.stderr().contains("no power supply answered on the PS port within 15 s"),
+        run.stderr()
+            .contains("no power supply answered on the PS port within 15 s"),
         "{}",
         run.transcript()
     );
