@@ -12,7 +12,7 @@ use crate::serial::{Port, Rx, SerialError};
 /// The longest wait without a look at the clock (a piece that asks for no wake-up still
 /// gets polled this often).
 pub const MAX_WAIT: std::time::Duration = std::time::Duration::from_millis(100);
-/// How long a reader thread blocks in one read before it looks whether it is still wanted.
+/// How long a reader thread blocks in one read (it then simply reads again).
 const READ_TICK: std::time::Duration = std::time::Duration::from_millis(200);
 
 /// The wall clock, from zero at [`Clock::start`].
@@ -61,20 +61,14 @@ pub enum Arrival {
 }
 
 /// Starts a thread that reads `port` and sends what comes as [`Arrival::Serial`] tagged
-/// `index`; it stops when the inbox is dropped or the port fails (after sending
-/// [`Arrival::Failed`]).
+/// `index`; it stops when the port fails (after sending [`Arrival::Failed`]) or, once the
+/// inbox is dropped, with the next characters (or the process).
 pub fn spawn_reader(mut port: Port, index: usize, inbox: Sender<Arrival>) {
     std::thread::spawn(move || {
         let mut rx = Vec::new();
         loop {
             match port.read(READ_TICK, &mut rx) {
-                Ok(()) if rx.is_empty() => {
-                    // Still wanted? A send of nothing would be noise: probe with a cheap
-                    // check instead.
-                    if inbox_closed(&inbox) {
-                        return;
-                    }
-                }
+                Ok(()) if rx.is_empty() => {}
                 Ok(()) => {
                     let arrival = Arrival::Serial {
                         port: index,
@@ -106,16 +100,6 @@ pub fn spawn_stdin(inbox: Sender<Arrival>) {
     });
 }
 
-fn inbox_closed(inbox: &Sender<Arrival>) -> bool {
-    // An empty batch is ignored by every receiver; failing to send means nobody listens.
-    inbox
-        .send(Arrival::Serial {
-            port: usize::MAX,
-            rx: Vec::new(),
-        })
-        .is_err()
-}
-
 /// Waits for the next arrival until `wake` (at most [`MAX_WAIT`]); `None` when the time came
 /// first (or every sender has gone).
 pub fn wait(inbox: &Receiver<Arrival>, clock: &Clock, wake: Option<Instant>) -> Option<Arrival> {
@@ -125,9 +109,6 @@ pub fn wait(inbox: &Receiver<Arrival>, clock: &Clock, wake: Option<Instant>) -> 
         .unwrap_or(MAX_WAIT)
         .min(MAX_WAIT);
     match inbox.recv_timeout(timeout) {
-        Ok(Arrival::Serial {
-            port: usize::MAX, ..
-        }) => None,
         Ok(arrival) => Some(arrival),
         Err(RecvTimeoutError::Timeout) => None,
         Err(RecvTimeoutError::Disconnected) => {

@@ -58,7 +58,8 @@ impl fmt::Display for SerialError {
             SerialError::Permission(port) => write!(
                 f,
                 "no permission to open serial port {port} (Linux: sudo usermod -aG dialout \
-                 $USER, then log in again)"
+                 $USER, then log in again; Windows says this when another program has the \
+                 port open)"
             ),
             SerialError::Gone(port, e) => write!(
                 f,

@@ -8,11 +8,18 @@ use serde_json::Value;
 
 /// Probes `pbtool unit UNIT_ARGS`; the JSON report and the unit's log.
 fn probe(unit_args: &[&str]) -> (Value, String) {
+    probe_with(unit_args, &[])
+}
+
+/// Probes `pbtool unit UNIT_ARGS` with `pbtool probe PROBE_ARGS`.
+fn probe_with(unit_args: &[&str], probe_args: &[&str]) -> (Value, String) {
     let cable = Cable::new();
     let mut args = vec!["unit", "--port", &cable.b, "--log"];
     args.extend_from_slice(unit_args);
     let unit = Pbtool::spawn(&args);
-    let mut probe = Pbtool::spawn(&["probe", "--port", &cable.a, "--json"]);
+    let mut args = vec!["probe", "--port", &cable.a, "--json"];
+    args.extend_from_slice(probe_args);
+    let mut probe = Pbtool::spawn(&args);
     probe.close_stdin();
     let line = probe.expect("the JSON report", |l| l.starts_with('{'));
     assert!(probe.wait().success(), "{}", probe.transcript());
@@ -55,6 +62,14 @@ fn a_sync_unit_is_found_and_read() {
     );
     assert!(reply_text(&report, "permitted maximum current").contains("65 A"));
     assert_read_only(&log);
+}
+
+#[test]
+fn a_unit_at_another_node_address_is_found_there() {
+    let (report, log) = probe_with(&["--ps", "sync85", "--address", "7"], &["--address", "7"]);
+    assert_eq!(report["family"], "SYNC", "{report}");
+    assert_eq!(report["identity"]["address"], 7, "{report}");
+    assert!(log.contains("node 7"), "{log}");
 }
 
 #[test]

@@ -5,7 +5,7 @@ use std::time::Duration;
 
 use clap::Args;
 use pbtool::probe::report::{to_json_report, to_text};
-use pbtool::probe::{FRAMINGS, probe};
+use pbtool::probe::{DEFAULT_NODE, FRAMINGS, probe};
 use pbtool::serial::Port;
 
 use super::serial_failure;
@@ -18,6 +18,10 @@ pub struct ProbeArgs {
     /// One JSON object instead of text.
     #[arg(long)]
     json: bool,
+    /// The Powermax's Modbus node address (1-247).
+    #[arg(long, value_name = "N", default_value_t = DEFAULT_NODE,
+          value_parser = clap::value_parser!(u8).range(1..=247))]
+    address: u8,
     /// How long to look for a unit.
     #[arg(long, value_name = "SECONDS", default_value_t = 15)]
     seconds: u64,
@@ -29,7 +33,7 @@ pub fn probe_command(args: &ProbeArgs) -> ExitCode {
         Ok(port) => port,
         Err(e) => return serial_failure("probe", &e),
     };
-    let found = match probe(port, Duration::from_secs(args.seconds)) {
+    let found = match probe(port, Duration::from_secs(args.seconds), args.address) {
         Ok(found) => found,
         Err(e) => return serial_failure("probe", &e),
     };

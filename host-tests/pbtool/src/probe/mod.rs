@@ -28,7 +28,7 @@ use reads::Read;
 /// a USB adapter adds some.
 const REPLY_TIMEOUT: Duration = Duration::from_millis(500);
 /// The Powermax's default node address.
-const NODE: u8 = 1;
+pub const DEFAULT_NODE: u8 = 1;
 
 /// The framings detection tries, in order (the bridge's link tries the same).
 pub const FRAMINGS: [PortConfig; 6] = {
@@ -125,19 +125,20 @@ fn is_exception(report: &FrameReport) -> bool {
     report.function.as_ref().is_some_and(|f| f.code & 0x80 != 0)
 }
 
-/// Finds the unit on `port` (trying for up to `patience`) and reads it.
-pub fn probe(port: Port, patience: Duration) -> Result<Probe, SerialError> {
+/// Finds the unit on `port` (trying for up to `patience`; a Powermax at Modbus node `node`)
+/// and reads it.
+pub fn probe(port: Port, patience: Duration, node: u8) -> Result<Probe, SerialError> {
     let name = port.name().to_string();
     let mut master = Master { port };
     let began = Instant::now();
     let mut found = None;
     while found.is_none() && began.elapsed() < patience {
-        found = detect(&mut master)?;
+        found = detect(&mut master, node)?;
     }
     let mut readings = Vec::new();
     if let Some(found) = &found {
         master.port.set_config(found.framing)?;
-        for read in reads::for_family(found.family) {
+        for read in reads::for_family(found.family, node) {
             let Read { what, request } = read;
             let reply = master.ask(&request)?;
             readings.push(Reading {
@@ -155,10 +156,10 @@ pub fn probe(port: Port, patience: Duration) -> Result<Probe, SerialError> {
 }
 
 /// One round over every framing.
-fn detect(master: &mut Master) -> Result<Option<Found>, SerialError> {
+fn detect(master: &mut Master, node: u8) -> Result<Option<Found>, SerialError> {
     for framing in FRAMINGS {
         master.port.set_config(framing)?;
-        if let Some(found) = detect_modbus(master, framing)? {
+        if let Some(found) = detect_modbus(master, framing, node)? {
             return Ok(Some(found));
         }
     }
@@ -174,8 +175,12 @@ fn detect(master: &mut Master) -> Result<Option<Found>, SerialError> {
         }))
 }
 
-fn detect_modbus(master: &mut Master, framing: PortConfig) -> Result<Option<Found>, SerialError> {
-    let device_id = reads::device_id_request(NODE);
+fn detect_modbus(
+    master: &mut Master,
+    framing: PortConfig,
+    node: u8,
+) -> Result<Option<Found>, SerialError> {
+    let device_id = reads::device_id_request(node);
     if let Some(reply) = master.ask(&device_id)?.filter(answers)
         && !is_exception(&reply)
     {
@@ -190,7 +195,7 @@ fn detect_modbus(master: &mut Master, framing: PortConfig) -> Result<Option<Foun
         }));
     }
     // A legacy unit may not know Read Device Identification: a plain register read.
-    let legacy = reads::legacy_presence_request(NODE);
+    let legacy = reads::legacy_presence_request(node);
     Ok(master
         .ask(&legacy)?
         .filter(|r| answers(r) && !is_exception(r))

@@ -8,8 +8,6 @@ use plasma_protocol::powermax::registers::{
 };
 use plasma_sim::Family;
 
-use super::NODE;
-
 /// One read: what it is for, and its request frame.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Read {
@@ -68,11 +66,11 @@ pub fn hpr_query(name: &str, class: Class) -> bool {
             || ["GET_", "READ_", "IS_"].iter().any(|p| name.starts_with(p)))
 }
 
-fn catalogue(registers: &[RegisterInfo], coils: &[RegisterInfo]) -> Vec<Read> {
+fn catalogue(registers: &[RegisterInfo], coils: &[RegisterInfo], node: u8) -> Vec<Read> {
     let registers = registers.iter().map(|r| Read {
         what: r.name.to_string(),
         request: modbus(
-            NODE,
+            node,
             &Request::ReadInputRegisters {
                 start: r.first,
                 quantity: r.last - r.first + 1,
@@ -82,7 +80,7 @@ fn catalogue(registers: &[RegisterInfo], coils: &[RegisterInfo]) -> Vec<Read> {
     let coils = coils.iter().map(|c| Read {
         what: c.name.to_string(),
         request: modbus(
-            NODE,
+            node,
             &Request::ReadCoils {
                 start: c.first,
                 quantity: c.last - c.first + 1,
@@ -92,12 +90,12 @@ fn catalogue(registers: &[RegisterInfo], coils: &[RegisterInfo]) -> Vec<Read> {
     registers.chain(coils).collect()
 }
 
-/// Everything to read from a unit of `family`.
-pub fn for_family(family: Family) -> Vec<Read> {
+/// Everything to read from a unit of `family` (a Powermax at node `node`).
+pub fn for_family(family: Family, node: u8) -> Vec<Read> {
     match family {
         // The identification is what detection read.
-        Family::Sync => catalogue(SYNC_REGISTERS, SYNC_COILS),
-        Family::Legacy => catalogue(LEGACY_REGISTERS, LEGACY_COILS),
+        Family::Sync => catalogue(SYNC_REGISTERS, SYNC_COILS, node),
+        Family::Legacy => catalogue(LEGACY_REGISTERS, LEGACY_COILS, node),
         Family::Hpr => COMMANDS
             .iter()
             .filter(|c| hpr_query(c.name, c.class))
@@ -117,7 +115,7 @@ mod tests {
     #[test]
     fn every_read_is_a_valid_request_that_writes_nothing() {
         for family in [Family::Sync, Family::Legacy, Family::Hpr] {
-            let reads = for_family(family);
+            let reads = for_family(family, 1);
             assert!(reads.len() > 5, "{family:?}");
             for read in reads {
                 let report = &decode_frames(&[read.request.as_str()])[0];
