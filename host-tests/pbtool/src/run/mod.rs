@@ -9,26 +9,21 @@
 //! ([`run_console`]: stdin/stdout, paced like `pbtool sim`) or a second serial port
 //! ([`run_cnc_port`]: the bytes as they are).
 
-use std::io::{self, Write};
+mod console;
+
+pub use console::{SETTLE_TIMEOUT, run_console};
+
+use std::io;
 use std::sync::mpsc::Receiver;
 
-use host_tests::harness::{BridgeEndpoint, CncItem, PsEndpoint};
+use host_tests::harness::{BridgeEndpoint, PsEndpoint};
 use plasma_firmware::bridge::Bridge;
 use plasma_firmware::io::{Inputs, Interlocks, SupplyState};
 use plasma_firmware::settings::Settings;
-use plasma_protocol::time::{Duration, Instant};
+use plasma_protocol::time::Instant;
 
 use crate::realtime::{Arrival, Clock, wait};
 use crate::serial::{Port, Rx, SerialError};
-use crate::sim::{Pacer, REPLY_TIMEOUT, settled};
-
-/// The longest wait for the link (and the unit's limits) before the first console command:
-/// detection tries every framing in turn on a real line.
-pub const SETTLE_TIMEOUT: Duration = Duration::from_secs(15);
-/// After the link is up: one more status cycle, so faults and settings are known.
-const SETTLE_EXTRA: Duration = Duration::from_millis(250);
-/// After the end of input and the last reply: what may still come (a second reply line).
-const LINGER: Duration = Duration::from_millis(100);
 
 /// The bridge with its PS port, in real time.
 pub struct LineBridge {
@@ -158,111 +153,6 @@ impl From<io::Error> for Stop {
     fn from(e: io::Error) -> Self {
         Stop::Console(e)
     }
-}
-
-/// The CNC protocol on a console: `inbox` brings the PS port's characters and stdin's lines.
-/// As `pbtool sim`: the first command once the link is up (or a warning after
-/// [`SETTLE_TIMEOUT`]), one command at a time, every line the bridge writes printed as it
-/// comes (ACK/NAK as `<ACK>`/`<NAK>`); returns after the last reply once input has ended.
-pub fn run_console(
-    bridge: &mut LineBridge,
-    inbox: &Receiver<Arrival>,
-    out: &mut dyn Write,
-    err: &mut dyn Write,
-) -> Result<(), Stop> {
-    let started = bridge.now();
-    let mut printed = 0;
-    let mut ready_at: Option<Instant> = None;
-    let mut ready = false;
-    let mut waiting: Option<(usize, Instant)> = None;
-    let mut lines = std::collections::VecDeque::new();
-    let mut pacer = Pacer::default();
-    let mut ended = false;
-    let mut done_since: Option<Instant> = None;
-    loop {
-        let mut wake = bridge.wake();
-        for at in [
-            ready_at.filter(|_| !ready),
-            waiting.map(|w| w.1),
-            done_since.map(|t| t + LINGER),
-        ]
-        .into_iter()
-        .flatten()
-        {
-            wake = Some(wake.map_or(at, |w| w.min(at)));
-        }
-        let arrival = wait(inbox, &bridge.clock, wake);
-        let now = bridge.now();
-        match arrival {
-            Some(Arrival::Serial { rx, .. }) => bridge.ps_rx(now, &rx),
-            Some(Arrival::Line(line)) => lines.push_back(line),
-            Some(Arrival::EndOfInput) => ended = true,
-            Some(Arrival::Failed(e)) => return Err(e.into()),
-            None => {}
-        }
-        bridge.service(now)?;
-        printed = print_records(bridge, printed, out)?;
-
-        if !ready {
-            if ready_at.is_none() && settled(bridge.bridge()) {
-                ready_at = Some(now + SETTLE_EXTRA);
-            }
-            if ready_at.is_some_and(|t| now >= t) {
-                ready = true;
-            } else if now.saturating_since(started) >= SETTLE_TIMEOUT {
-                writeln!(
-                    err,
-                    "pbtool run: no power supply answered on the PS port within {} s; commands \
-                     go on without it",
-                    SETTLE_TIMEOUT.as_millis() / 1000
-                )?;
-                ready = true;
-            }
-        }
-        if let Some((count, deadline)) = waiting {
-            if bridge.reply_count() >= count {
-                waiting = None;
-            } else if now >= deadline {
-                writeln!(
-                    err,
-                    "pbtool run: no reply within {} s",
-                    REPLY_TIMEOUT.as_millis() / 1000
-                )?;
-                waiting = None;
-            }
-        }
-        while ready && waiting.is_none() {
-            let Some(line) = lines.pop_front() else { break };
-            let before = bridge.reply_count();
-            let awaits = pacer.awaits_reply(&line);
-            bridge.cnc_rx(now, &line);
-            bridge.service(now)?;
-            printed = print_records(bridge, printed, out)?;
-            if awaits {
-                waiting = Some((before + 1, now + REPLY_TIMEOUT));
-            }
-        }
-        let idle = ended && ready && lines.is_empty() && waiting.is_none();
-        match (idle, done_since) {
-            (false, _) => done_since = None,
-            (true, None) => done_since = Some(now),
-            (true, Some(since)) if now >= since + LINGER => return Ok(()),
-            (true, Some(_)) => {}
-        }
-    }
-}
-
-fn print_records(bridge: &LineBridge, printed: usize, out: &mut dyn Write) -> io::Result<usize> {
-    let records = bridge.cnc_records();
-    for record in &records[printed..] {
-        match &record.item {
-            CncItem::Ack => write!(out, "<ACK>")?,
-            CncItem::Nak => write!(out, "<NAK>")?,
-            CncItem::Line(line) => writeln!(out, "{line}")?,
-        }
-    }
-    out.flush()?;
-    Ok(records.len())
 }
 
 /// The CNC protocol on a serial port (`cnc`, the writing handle; its characters come through
