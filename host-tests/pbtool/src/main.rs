@@ -39,11 +39,14 @@ enum Command {
     /// previous reply is out; the first once the link is up. From a pipe it prints one reply
     /// per command and exits at the end of input. Runs in real time unless `--fast`.
     Sim(cli::sim::SimArgs),
-    /// Run the bridge: with `--ps-port DEV`, here in real time on a serial port wired to the
-    /// power supply (the CNC protocol on stdin/stdout as for `sim`, or on `--cnc-port DEV`);
-    /// otherwise on the board when a debug probe is attached (build, flash and run with
-    /// probe-rs, showing the log), otherwise the firmware on the emulated board when QEMU is
-    /// installed (as `emu`), otherwise against a simulated power supply (as `sim`).
+    /// Run the bridge: on a PC's serial port, on the board, on the emulated board or against
+    /// a simulated power supply.
+    ///
+    /// With `--ps-port DEV`: here in real time on a serial port wired to the power supply
+    /// (the CNC protocol on stdin/stdout as for `sim`, or on `--cnc-port DEV`). Otherwise on
+    /// the board when a debug probe is attached (build, flash and run with probe-rs, showing
+    /// the log), otherwise the firmware on the emulated board when QEMU is installed (as
+    /// `emu`), otherwise against a simulated power supply (as `sim`).
     Run(cli::run::RunArgs),
     /// Run the firmware image on an emulated board (QEMU) against a simulated power supply;
     /// the board's CNC port on stdin/stdout.
