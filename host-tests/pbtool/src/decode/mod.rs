@@ -6,7 +6,7 @@
 //! scaling, fault texts); one that does not is reported as a mismatch.
 //!
 //! ```
-//! use host_tests::decode::{decode_frames, Kind};
+//! use pbtool::decode::{decode_frames, Kind};
 //!
 //! let reports = decode_frames(&[":010430440004".to_owned() + "83", ":010408007900790000000001".into()]);
 //! assert_eq!(reports[1].kind, Some(Kind::Reply));
@@ -17,9 +17,11 @@ mod hpr;
 mod json;
 mod modbus;
 mod registers;
+mod stream;
 mod text;
 
 pub use json::to_json;
+pub use stream::FrameStream;
 pub use text::{lines, to_text};
 
 /// Wire protocol of a frame, from its first character.

@@ -4,7 +4,7 @@
 
 use std::process::Command;
 
-use host_tests::decode::{FrameReport, Kind, Protocol, all_valid, decode_frames, lines, to_json};
+use pbtool::decode::{FrameReport, Kind, Protocol, all_valid, decode_frames, lines, to_json};
 
 fn one(frame: &str) -> FrameReport {
     decode_frames(&[frame]).remove(0)

@@ -12,8 +12,7 @@ use std::time::{Duration, Instant};
 
 use plasma_firmware::io::{Input, Output};
 
-use super::board::{Board, BoardOptions};
-use super::error::{Error, Result};
+use host_tests::emu::{Board, BoardOptions, Error, Result};
 use plasma_sim::{Model, SimOptions};
 
 /// The longest wait for the link (and the unit's limits) before the first command.

@@ -7,8 +7,7 @@ use std::time::Duration;
 
 use plasma_firmware::io::{Input, Output};
 
-use super::board::{Board, BoardOptions};
-use super::error::{Error, Result};
+use host_tests::emu::{Board, BoardOptions, Error, Result};
 use plasma_sim::Model;
 
 /// One `emu-probe:` line.

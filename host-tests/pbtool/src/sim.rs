@@ -18,12 +18,16 @@ use std::io::{self, BufRead, Write};
 use std::str::FromStr;
 use std::sync::mpsc::{Receiver, RecvTimeoutError};
 
+use plasma_firmware::bridge::Bridge;
 use plasma_firmware::settings::Settings;
 use plasma_protocol::cnc::phoenix::{EOT, ETX, SOH, STX};
 use plasma_protocol::powermax::FaultCode;
 use plasma_protocol::time::{Duration, Instant};
 
-use crate::harness::{BridgeEndpoint, CncItem, World, WorldOptions};
+use host_tests::harness::{BridgeEndpoint, CncItem, World, WorldOptions};
+
+use crate::realtime::{Arrival, Clock, wait};
+use crate::serial::{Port, Rx, SerialError};
 use plasma_sim::{Family, Model, SimOptions};
 
 /// The longest wait for the link (and the unit's limits) before the first command.
@@ -81,8 +85,7 @@ pub struct Console {
     verbose: bool,
     printed: usize,
     transitions_printed: usize,
-    /// A Phoenix message has begun (SOH/STX) and not yet ended (ETX/EOT).
-    frame_open: bool,
+    pacer: Pacer,
 }
 
 impl Console {
@@ -109,7 +112,7 @@ impl Console {
             verbose: options.verbose,
             printed: 0,
             transitions_printed: 0,
-            frame_open: false,
+            pacer: Pacer::default(),
         }
     }
 
@@ -120,8 +123,7 @@ impl Console {
 
     /// True once the link is up and what the first commands need is known.
     fn settled(world: &World<BridgeEndpoint>) -> bool {
-        let status = world.bridge().status();
-        status.link_up && (status.limits.is_some() || status.hpr.state.is_some())
+        settled(world.bridge())
     }
 
     /// Virtual time: run the commands of `input` one by one until its end.
@@ -232,25 +234,50 @@ impl Console {
         }
     }
 
+    /// Real time, the CNC on a serial port: `inbox` brings the port's characters (from its
+    /// reader thread), `cnc` is its writing handle; the bytes pass as they are. Runs until the
+    /// port fails.
+    pub fn run_cnc_port(&mut self, inbox: &Receiver<Arrival>, cnc: &mut Port) -> SerialError {
+        let clock = Clock::start();
+        let mut sent = 0;
+        loop {
+            let arrival = wait(inbox, &clock, self.world.next_wakeup());
+            let due = clock.now().saturating_since(self.world.now());
+            self.world.run_for(due);
+            match arrival {
+                Some(Arrival::Serial { rx, .. }) => {
+                    let bytes: Vec<u8> = rx
+                        .iter()
+                        .map(|r| match r {
+                            Rx::Byte(b) => *b,
+                            // The session sees a garbled character as one it cannot read.
+                            Rx::Error => b'?',
+                        })
+                        .collect();
+                    self.world.cnc_send(&bytes);
+                }
+                Some(Arrival::Failed(e)) => return e,
+                _ => {}
+            }
+            let raw = self.world.cnc_bytes();
+            if raw.len() > sent {
+                let fresh = raw[sent..].to_vec();
+                sent = raw.len();
+                if let Err(e) = cnc.write_all(&fresh) {
+                    return e;
+                }
+            }
+        }
+    }
+
     /// Hand one input line (with its terminator) to the bridge. Returns the reply count to
     /// wait for, or `None` when no reply is due: a blank line, or a line that leaves a Phoenix
     /// message open (its CR LF is inside the frame; the reply comes once the frame ends).
     fn send(&mut self, line: &[u8]) -> Option<usize> {
-        let mut content = false;
-        for &b in line {
-            match b {
-                SOH | STX => {
-                    self.frame_open = true;
-                    content = true;
-                }
-                ETX | EOT => self.frame_open = false,
-                b' ' | b'\t' | b'\r' | b'\n' => {}
-                _ => content = true,
-            }
-        }
+        let awaits_reply = self.pacer.awaits_reply(line);
         let before = self.world.cnc_reply_count();
         self.world.cnc_send(line);
-        (content && !self.frame_open).then_some(before + 1)
+        awaits_reply.then_some(before + 1)
     }
 
     /// Print what the CNC received since the last call (stdout) and, verbose, the output
@@ -274,6 +301,42 @@ impl Console {
         self.printed = records.len();
         out.flush()?;
         err.flush()
+    }
+}
+
+/// True once the bridge's link is up and what the first commands need is known (a
+/// Powermax's limits, an HPR's state): a console sends its first command then.
+pub fn settled(bridge: &Bridge) -> bool {
+    let status = bridge.status();
+    status.link_up && (status.limits.is_some() || status.hpr.state.is_some())
+}
+
+/// Which console lines a reply is due for, so that a console sends the next line only once
+/// it has come, as a well-behaved CNC does.
+#[derive(Debug, Default, Clone, Copy)]
+pub struct Pacer {
+    /// A Phoenix message has begun (SOH/STX) and not yet ended (ETX/EOT).
+    frame_open: bool,
+}
+
+impl Pacer {
+    /// True when `line` (with its terminator), sent now, earns a reply: not a blank line,
+    /// nor a line that leaves a Phoenix message open (its CR LF is inside the frame; the
+    /// reply comes once the frame ends).
+    pub fn awaits_reply(&mut self, line: &[u8]) -> bool {
+        let mut content = false;
+        for &b in line {
+            match b {
+                SOH | STX => {
+                    self.frame_open = true;
+                    content = true;
+                }
+                ETX | EOT => self.frame_open = false,
+                b' ' | b'\t' | b'\r' | b'\n' => {}
+                _ => content = true,
+            }
+        }
+        content && !self.frame_open
     }
 }
 
