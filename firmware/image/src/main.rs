@@ -193,11 +193,11 @@ impl BuildPaths {
     }
 }
 
-/// `path` made absolute against `base` (cargo reads a relative `CARGO_TARGET_DIR` from the
-/// directory it runs in, which is the workspace root here).
+/// `path` made absolute against `base`, as cargo makes it (against the directory it runs in,
+/// the workspace root here) and hands it to rustc: symbolic links are not resolved, or the
+/// prefix would not match.
 fn absolute(base: &Path, path: &Path) -> PathBuf {
-    let joined = base.join(path);
-    joined.canonicalize().unwrap_or(joined)
+    base.join(path)
 }
 
 /// A TOML basic string.
