@@ -179,6 +179,17 @@ impl BuildPaths {
             remap.push((home.join("git/checkouts"), "/git"));
         }
         remap.extend(self.registries.iter().map(|dir| (dir.clone(), "/deps")));
+        // Source paths are the ones cargo gives, but the debug info's compilation directory
+        // is where rustc runs (a dependency's own directory), with symbolic links resolved:
+        // a CARGO_HOME reached through a link needs its real path remapped too.
+        let resolved: Vec<(PathBuf, &'static str)> = remap
+            .iter()
+            .filter_map(|(from, to)| {
+                let real = from.canonicalize().ok()?;
+                (real != *from).then_some((real, *to))
+            })
+            .collect();
+        remap.extend(resolved);
         remap
     }
 
