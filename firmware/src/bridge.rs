@@ -244,14 +244,7 @@ impl Bridge {
 
     /// What the interlocks need to know about the supply.
     pub fn supply_state(&self) -> SupplyState {
-        let status = self.link.status();
-        SupplyState {
-            link_up: status.link_up,
-            fault_requires_action: status.active_fault.is_some_and(|f| f.action_required()),
-            fault_active: status.active_fault.is_some(),
-            restart_blackout_until: status.restart_blackout_until,
-            unit_ready: status.ready,
-        }
+        SupplyState::from(self.link.status())
     }
 
     /// The interlocks' configuration (changes after `CONFIG <io key> <value>`).
@@ -319,6 +312,20 @@ impl Bridge {
     }
 }
 
+/// The one translation of the link's view into what the interlocks need: the board's
+/// [`Bridge::supply_state`] and a host loop driving a bare [`PsLink`] both use it.
+impl From<&UnitStatus> for SupplyState {
+    fn from(status: &UnitStatus) -> SupplyState {
+        SupplyState {
+            link_up: status.link_up,
+            fault_requires_action: status.active_fault.is_some_and(|f| f.action_required()),
+            fault_active: status.active_fault.is_some(),
+            restart_blackout_until: status.restart_blackout_until,
+            unit_ready: status.ready,
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     extern crate std;
@@ -327,7 +334,7 @@ mod tests {
     use plasma_protocol::cnc::{Amps, Mode, Pressure};
 
     use super::*;
-    use crate::session::tests::{FakePowermax, NAK_TOKEN, Rig, Unit};
+    use crate::session::tests::{NAK_TOKEN, Rig};
     use plasma_protocol::time::Duration;
 
     fn with_process(amps: u16, events: bool) -> Settings {
@@ -344,18 +351,12 @@ mod tests {
 
     #[test]
     fn a_kept_process_is_applied_again_after_power_up() {
-        let mut rig = Rig::new(
-            with_process(45, true),
-            Unit::Powermax(FakePowermax::sync65()),
-        );
+        let mut rig = Rig::new(with_process(45, true), Some("sync65"));
         rig.run(800);
-        assert_eq!(
-            rig.unit.powermax().writes,
-            std::vec![(0x3080, std::vec![1, 2880, 0])]
-        );
+        assert_eq!(rig.writes(), std::vec![(0x3080, std::vec![1, 2880, 0])]);
         assert!(
             rig.received
-                .contains(&"!SETTINGS applied mode=CUT amps=45 psi=AUTO".to_string()),
+                .contains(&"!SETTINGS applied mode=CUT amps=45 psi=72".to_string()),
             "{:?}",
             rig.received
         );
@@ -368,12 +369,9 @@ mod tests {
 
     #[test]
     fn a_kept_process_outside_the_limits_is_reported_and_not_sent() {
-        let mut rig = Rig::new(
-            with_process(100, true),
-            Unit::Powermax(FakePowermax::sync65()),
-        );
+        let mut rig = Rig::new(with_process(100, true), Some("sync65"));
         rig.run(800);
-        assert!(rig.unit.powermax().writes.is_empty());
+        assert!(rig.writes().is_empty());
         assert!(
             rig.received.contains(
                 &"!SETTINGS failed reason=refused why=current_100_A_outside_20-65_A".to_string()
@@ -385,11 +383,11 @@ mod tests {
 
     #[test]
     fn supply_state_follows_the_link() {
-        let mut rig = Rig::new(Settings::default(), Unit::Powermax(FakePowermax::sync65()));
+        let mut rig = Rig::new(Settings::default(), Some("sync65"));
         assert_eq!(rig.bridge.supply_state(), SupplyState::default());
         rig.run(600);
         assert_eq!(rig.bridge.supply_state(), SupplyState::HEALTHY);
-        rig.unit.powermax().set_fault(500);
+        rig.fault(500);
         rig.run(300);
         let state = rig.bridge.supply_state();
         assert!(state.fault_active && state.fault_requires_action && !state.unit_ready);
@@ -401,7 +399,7 @@ mod tests {
 
     #[test]
     fn a_phoenix_frame_that_stops_arriving_is_naked_after_the_idle_time() {
-        let mut rig = Rig::new(Settings::default(), Unit::None);
+        let mut rig = Rig::new(Settings::default(), None);
         rig.bridge.handle_cnc_rx(rig.now, b"\x01\x02FAU");
         let deadline = rig.now + crate::session::FRAME_IDLE_TIMEOUT;
         assert!(rig.bridge.poll_at().is_some_and(|at| at <= deadline));
@@ -429,7 +427,7 @@ mod tests {
                 events: true,
                 ..Settings::default()
             },
-            Unit::None,
+            None,
         );
         rig.bridge.set_boot_report(rig.now, "watchdog");
         rig.collect();

@@ -78,3 +78,6 @@ pub mod settings;
 pub mod storage;
 pub mod supervisor;
 pub mod watchdog;
+
+#[cfg(test)]
+mod testing;

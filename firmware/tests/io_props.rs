@@ -114,7 +114,7 @@ impl Run {
         let io = Interlocks::new(config, Instant::ZERO, inputs);
         let mut run = Run {
             io,
-            monitor: SafetyMonitor::new(),
+            monitor: SafetyMonitor::new(inputs.torch_on),
             now: Instant::ZERO,
             inputs,
             supply: SupplyState::default(),
@@ -134,6 +134,7 @@ impl Run {
                     self.torch_rose_at = Some(self.now);
                 }
                 self.inputs.set(input, active);
+                self.monitor.input(input, active);
                 self.io.on_input(self.now, input, active);
                 self.check(false);
             }
@@ -166,12 +167,8 @@ impl Run {
 
     fn check(&mut self, polled: bool) {
         let out = self.io.outputs();
-        self.monitor.check(
-            self.now,
-            self.inputs.torch_on,
-            out.start,
-            self.supply.restart_blackout_until,
-        );
+        self.monitor
+            .check(self.now, out.start, self.supply.restart_blackout_until);
         assert!(
             self.monitor.is_clean(),
             "violations: {:?}",
@@ -278,14 +275,15 @@ proptest! {
     fn the_monitor_catches_a_naive_bridge(
         steps in prop::collection::vec((any::<bool>(), 0u64..200_000), 0..50),
     ) {
-        let mut monitor = SafetyMonitor::new();
+        let mut monitor = SafetyMonitor::new(true);
         let mut now = Instant::ZERO;
-        monitor.check(now, true, false, None); // power-up, START still off
+        monitor.check(now, false, None); // power-up, START still off
         now = now + Duration::from_millis(1);
-        monitor.check(now, true, true, None); // naive: START = TORCH_ON
+        monitor.check(now, true, None); // naive: START = TORCH_ON
         for (torch, dt) in steps {
             now = now + Duration::from_micros(dt);
-            monitor.check(now, torch, torch, None);
+            monitor.input(Input::TorchOn, torch);
+            monitor.check(now, torch, None);
         }
         prop_assert!(!monitor.is_clean());
         prop_assert_eq!(

@@ -42,8 +42,9 @@
 //! - **RAMPDOWN_ERROR** raises [`IoEvent::RampdownError`] on its rising edge (consumable wear,
 //!   not a fault).
 //!
-//! [`SafetyMonitor`] checks a trace of (TORCH_ON, START) samples against the safety rules,
-//! independently of [`Interlocks`], for scenario and property tests.
+//! [`SafetyMonitor`] checks the TORCH_ON edges the board receives and the START pin against
+//! the safety rules, independently of [`Interlocks`] (it never reads their view of the
+//! inputs), for scenario and property tests.
 //!
 //! # Example
 //!

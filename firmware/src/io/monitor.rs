@@ -1,14 +1,19 @@
 //! An independent check of the START safety rules, for tests and simulations.
 //!
-//! Written from the rules, not from [`Interlocks`](super::Interlocks): it only sees sampled
-//! levels (TORCH_ON, START, the blackout the link reports) and flags any sample that breaks
-//! a rule. Feed it after every step of whatever drives START.
+//! Written from the rules, not from [`Interlocks`](super::Interlocks), and fed only what it
+//! observes itself: the input edges as they arrive at the board ([`SafetyMonitor::input`]),
+//! the START output pin and the blackout the link reports ([`SafetyMonitor::check`]). It
+//! never reads the interlocks' own view of the inputs: a machine that lost or misread a
+//! TORCH_ON edge would agree with itself. Feed it every edge the board is given, and a
+//! sample after every step of whatever drives START.
 
 use core::fmt;
 
 use heapless::Vec;
 
 use plasma_protocol::time::{Duration, Instant};
+
+use super::Input;
 
 /// The manuals' least delay between Start signals. Deliberately its own constant rather than
 /// the controller's setting, so a wrong setting is caught.
@@ -68,10 +73,12 @@ impl fmt::Display for Violation {
     }
 }
 
-/// Watches sampled TORCH_ON / START levels for broken safety rules.
-#[derive(Debug, Clone, Default)]
+/// Watches the TORCH_ON edges and sampled START levels for broken safety rules.
+#[derive(Debug, Clone)]
 pub struct SafetyMonitor {
     sampled: bool,
+    /// TORCH_ON at the board's pin, from the edges fed.
+    torch_on: bool,
     start: bool,
     last_start_fall: Option<Instant>,
     torch_stuck_since_power_up: bool,
@@ -80,35 +87,39 @@ pub struct SafetyMonitor {
 }
 
 impl SafetyMonitor {
-    /// A monitor that has seen nothing yet; its first sample is taken as power-up.
-    pub const fn new() -> Self {
+    /// A monitor watching from power-up, with TORCH_ON's level at the board's pin then; its
+    /// first sample is taken as the reset.
+    pub const fn new(torch_on_at_power_up: bool) -> Self {
         SafetyMonitor {
             sampled: false,
+            torch_on: torch_on_at_power_up,
             start: false,
             last_start_fall: None,
-            torch_stuck_since_power_up: false,
+            torch_stuck_since_power_up: torch_on_at_power_up,
             violations: Vec::new(),
             count: 0,
         }
     }
 
-    /// One sample: the levels after a step at `now`, and the blackout the link reports.
-    pub fn check(
-        &mut self,
-        now: Instant,
-        torch_on: bool,
-        start: bool,
-        blackout_until: Option<Instant>,
-    ) {
+    /// An input edge as it arrives at the board (only TORCH_ON bears on the rules). Feed it
+    /// before the sample of the step that delivers it.
+    pub fn input(&mut self, input: Input, active: bool) {
+        if input == Input::TorchOn {
+            self.torch_on = active;
+            if !active {
+                self.torch_stuck_since_power_up = false;
+            }
+        }
+    }
+
+    /// One sample: the START pin after a step at `now`, and the blackout the link reports.
+    pub fn check(&mut self, now: Instant, start: bool, blackout_until: Option<Instant>) {
+        let torch_on = self.torch_on;
         if !self.sampled {
             self.sampled = true;
-            self.torch_stuck_since_power_up = torch_on;
             if start {
                 self.record(now, ViolationKind::StartOnAtReset);
             }
-        }
-        if !torch_on {
-            self.torch_stuck_since_power_up = false;
         }
 
         let rose = start && !self.start;
@@ -165,25 +176,37 @@ mod tests {
         Instant::from_millis(v)
     }
 
+    /// Feeds TORCH_ON's level as an edge, then samples START (one step of a trace).
+    fn step(
+        m: &mut SafetyMonitor,
+        now: Instant,
+        torch_on: bool,
+        start: bool,
+        blackout_until: Option<Instant>,
+    ) {
+        m.input(Input::TorchOn, torch_on);
+        m.check(now, start, blackout_until);
+    }
+
     fn kinds(m: &SafetyMonitor) -> std::vec::Vec<ViolationKind> {
         m.violations().iter().map(|v| v.kind).collect()
     }
 
     #[test]
     fn a_correct_trace_is_clean() {
-        let mut m = SafetyMonitor::new();
-        m.check(ms(0), false, false, None);
-        m.check(ms(10), true, true, None);
-        m.check(ms(20), false, false, None);
-        m.check(ms(70), true, true, None); // exactly 50 ms after the fall: allowed
-        m.check(ms(100), true, true, Some(ms(100))); // blackout ended at 100 ms
+        let mut m = SafetyMonitor::new(false);
+        step(&mut m, ms(0), false, false, None);
+        step(&mut m, ms(10), true, true, None);
+        step(&mut m, ms(20), false, false, None);
+        step(&mut m, ms(70), true, true, None); // exactly 50 ms after the fall: allowed
+        step(&mut m, ms(100), true, true, Some(ms(100))); // blackout ended at 100 ms
         assert!(m.is_clean(), "{:?}", m.violations());
     }
 
     #[test]
     fn start_on_at_reset_is_caught() {
-        let mut m = SafetyMonitor::new();
-        m.check(ms(0), true, true, None);
+        let mut m = SafetyMonitor::new(true);
+        step(&mut m, ms(0), true, true, None);
         assert_eq!(
             kinds(&m),
             [
@@ -195,21 +218,21 @@ mod tests {
 
     #[test]
     fn start_without_torch_on_is_caught() {
-        let mut m = SafetyMonitor::new();
-        m.check(ms(0), false, false, None);
-        m.check(ms(5), true, true, None);
-        m.check(ms(6), false, true, None);
+        let mut m = SafetyMonitor::new(false);
+        step(&mut m, ms(0), false, false, None);
+        step(&mut m, ms(5), true, true, None);
+        step(&mut m, ms(6), false, true, None);
         assert_eq!(kinds(&m), [ViolationKind::StartWithoutTorchOn]);
         assert_eq!(m.violations()[0].at, ms(6));
     }
 
     #[test]
     fn a_short_gap_is_caught() {
-        let mut m = SafetyMonitor::new();
-        m.check(ms(0), false, false, None);
-        m.check(ms(100), true, true, None);
-        m.check(ms(200), false, false, None);
-        m.check(Instant::from_micros(249_999), true, true, None);
+        let mut m = SafetyMonitor::new(false);
+        step(&mut m, ms(0), false, false, None);
+        step(&mut m, ms(100), true, true, None);
+        step(&mut m, ms(200), false, false, None);
+        step(&mut m, Instant::from_micros(249_999), true, true, None);
         assert_eq!(
             kinds(&m),
             [ViolationKind::StartGapTooShort {
@@ -220,30 +243,30 @@ mod tests {
 
     #[test]
     fn start_during_blackout_is_caught() {
-        let mut m = SafetyMonitor::new();
-        m.check(ms(0), false, false, Some(ms(2000)));
-        m.check(ms(1999), true, true, Some(ms(2000)));
+        let mut m = SafetyMonitor::new(false);
+        step(&mut m, ms(0), false, false, Some(ms(2000)));
+        step(&mut m, ms(1999), true, true, Some(ms(2000)));
         assert_eq!(kinds(&m), [ViolationKind::StartDuringBlackout]);
     }
 
     #[test]
     fn start_from_a_stuck_torch_on_is_caught_until_it_was_released() {
-        let mut m = SafetyMonitor::new();
-        m.check(ms(0), true, false, None);
-        m.check(ms(100), true, true, None);
+        let mut m = SafetyMonitor::new(true);
+        step(&mut m, ms(0), true, false, None);
+        step(&mut m, ms(100), true, true, None);
         assert_eq!(kinds(&m), [ViolationKind::StartFromTorchOnAtPowerUp]);
         // Released, then pressed again: now it is a real request.
-        m.check(ms(200), false, false, None);
-        m.check(ms(300), true, true, None);
+        step(&mut m, ms(200), false, false, None);
+        step(&mut m, ms(300), true, true, None);
         assert_eq!(m.count(), 1);
     }
 
     #[test]
     fn counts_beyond_what_it_keeps() {
-        let mut m = SafetyMonitor::new();
-        m.check(ms(0), false, false, None);
+        let mut m = SafetyMonitor::new(false);
+        step(&mut m, ms(0), false, false, None);
         for t in 1..=20 {
-            m.check(ms(t), false, true, None);
+            step(&mut m, ms(t), false, true, None);
         }
         assert_eq!(m.count(), 20);
         assert_eq!(m.violations().len(), KEPT);

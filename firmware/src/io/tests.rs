@@ -14,7 +14,8 @@ fn us(v: u64) -> Instant {
     Instant::from_micros(v)
 }
 
-/// The machine under test, its supply state, and a monitor fed after every step.
+/// The machine under test, its supply state, and a monitor fed every input edge as the board
+/// receives it and the START pin after every step.
 struct Rig {
     io: Interlocks,
     supply: SupplyState,
@@ -29,7 +30,7 @@ impl Rig {
         let mut rig = Rig {
             io,
             supply: SupplyState::default(),
-            monitor: SafetyMonitor::new(),
+            monitor: SafetyMonitor::new(inputs.torch_on),
             transitions: Vec::new(),
             events: Vec::new(),
         };
@@ -52,7 +53,6 @@ impl Rig {
     fn after(&mut self, now: Instant) {
         self.monitor.check(
             now,
-            self.io.inputs().torch_on,
             self.io.outputs().start,
             self.supply.restart_blackout_until,
         );
@@ -70,6 +70,7 @@ impl Rig {
     }
 
     fn input(&mut self, now: Instant, input: Input, active: bool) {
+        self.monitor.input(input, active);
         self.io.on_input(now, input, active);
         self.after(now);
     }

@@ -5,16 +5,19 @@
 
 extern crate std;
 
-use std::collections::BTreeMap;
 use std::string::String;
 use std::vec::Vec;
 
 use plasma_protocol::hpr::{ErrorCode, GasCode, GasPair, StateCode, SystemId};
-use plasma_protocol::modbus_ascii::{self, Request};
 use plasma_protocol::powermax::{Amps, FaultCode, OperatingMode, PowerSupplyModel, Pressure, Psi};
 
 use super::*;
+use crate::testing::SimPs;
 use plasma_protocol::serial::{Parity, PortConfig};
+use plasma_sim::clock::earliest;
+use plasma_sim::line::Wiring;
+use plasma_sim::powermax::UndocumentedAddresses;
+use plasma_sim::{Model as SimModel, SimOptions};
 
 // ---------------------------------------------------------------------------------------
 // helpers
@@ -63,151 +66,14 @@ fn hpr_checksum_ok(frame: &[u8]) -> bool {
     u8::from_str_radix(ck, 16).unwrap() == sum
 }
 
-fn words_pdu(function: u8, words: &[u16]) -> Vec<u8> {
-    let mut pdu = std::vec![function, (words.len() * 2) as u8];
-    for w in words {
-        pdu.extend_from_slice(&w.to_be_bytes());
-    }
-    pdu
-}
-
-fn device_id_pdu(code: &str) -> Vec<u8> {
-    let mut pdu = std::vec![
-        0x2B,
-        0x0E,
-        0x04,
-        0x81,
-        0x00,
-        0x00,
-        0x01,
-        0x01,
-        code.len() as u8
-    ];
-    pdu.extend_from_slice(code.as_bytes());
-    pdu
-}
-
-/// A scripted Powermax: registers and a few switches. Answers like the manuals describe.
-struct FakePowermax {
-    regs: BTreeMap<u16, u16>,
-    product_code: Option<&'static str>,
-    /// Addresses the unit refuses to read (exception 02) when a read touches them.
-    undocumented: Vec<u16>,
-    silent: bool,
-    writes: Vec<Vec<u8>>,
-}
-
-impl FakePowermax {
-    fn sync() -> Self {
-        let mut regs = BTreeMap::new();
-        // 0x3001-0x3005: cut + expanded metal, 20-105 A, 58-78 psi.
-        for (a, v) in [
-            (0x3000, 0x0508),
-            (0x3001, 0x0201),
-            (0x3002, 20 * 64),
-            (0x3003, 105 * 64),
-            (0x3004, 0x1D00),
-            (0x3005, 0x2700),
-            (0x3010, 1),
-            (0x3011, 45 * 64),
-            (0x3012, 0x2600),
-        ] {
-            regs.insert(a, v);
-        }
-        for (i, b) in b"E00401D0036FB25D".chunks(2).enumerate() {
-            regs.insert(0x3030 + i as u16, u16::from_be_bytes([b[0], b[1]]));
-        }
-        FakePowermax {
-            regs,
-            product_code: Some("081335"),
-            undocumented: Vec::new(),
-            silent: false,
-            writes: Vec::new(),
-        }
-    }
-
-    fn legacy() -> Self {
-        let mut regs = BTreeMap::new();
-        for (a, v) in [
-            (0x2099, 20 * 64),
-            (0x209A, 65 * 64),
-            (0x209C, 63 * 128),
-            (0x209D, 78 * 128),
-        ] {
-            regs.insert(a, v);
-        }
-        FakePowermax {
-            regs,
-            product_code: Some("081223"),
-            undocumented: Vec::new(),
-            silent: false,
-            writes: Vec::new(),
-        }
-    }
-
-    fn answer(&mut self, frame: &[u8]) -> Option<Vec<u8>> {
-        if self.silent {
-            return None;
-        }
-        let mut buf = [0u8; 300];
-        let decoded = modbus_ascii::decode(frame, &mut buf).unwrap();
-        assert_eq!(decoded.address, 1);
-        let request = Request::parse(decoded.pdu).unwrap();
-        let pdu: Vec<u8> = match request {
-            Request::ReadInputRegisters { start, quantity } => {
-                let range = start..start + quantity;
-                if self.undocumented.iter().any(|a| range.contains(a)) {
-                    std::vec![0x84, 0x02]
-                } else {
-                    let words: Vec<u16> = range.map(|a| *self.regs.get(&a).unwrap_or(&0)).collect();
-                    words_pdu(0x04, &words)
-                }
-            }
-            Request::ReadDeviceIdentification { .. } => match self.product_code {
-                Some(code) => device_id_pdu(code),
-                None => std::vec![0xAB, 0x01],
-            },
-            Request::WriteMultipleRegisters { start, values } => {
-                self.writes.push(frame.to_vec());
-                for (i, v) in values.iter().enumerate() {
-                    self.regs.insert(start + i as u16, v);
-                    // Remote settings show up in the settings registers.
-                    if (0x3080..=0x3082).contains(&(start + i as u16)) {
-                        self.regs.insert(start + i as u16 - 0x70, v);
-                    }
-                }
-                let n = values.len() as u16;
-                let mut p = std::vec![0x10];
-                p.extend_from_slice(&start.to_be_bytes());
-                p.extend_from_slice(&n.to_be_bytes());
-                p
-            }
-            Request::WriteSingleRegister { address, value } => {
-                self.writes.push(frame.to_vec());
-                self.regs.insert(address, value);
-                let mut p = std::vec![0x06];
-                p.extend_from_slice(&address.to_be_bytes());
-                p.extend_from_slice(&value.to_be_bytes());
-                p
-            }
-            Request::WriteSingleCoil { address, on } => {
-                self.writes.push(frame.to_vec());
-                let mut p = std::vec![0x05];
-                p.extend_from_slice(&address.to_be_bytes());
-                p.extend_from_slice(if on { &[0xFF, 0x00] } else { &[0, 0] });
-                p
-            }
-            other => panic!("unexpected request {other:?}"),
-        };
-        Some(mb(&pdu))
-    }
-}
-
-/// Drives a link: collects transmitted frames, answers with a closure, moves time.
+/// Drives a link: collects transmitted frames, moves time, and either takes scripted reply
+/// bytes from the test or runs the link against a simulated unit of `plasma-sim`.
 struct Bench {
     link: PsLink,
     now: Instant,
     sent: Vec<(Instant, Vec<u8>)>,
+    /// The unit on the line, for [`Bench::run`].
+    unit: Option<SimPs>,
 }
 
 impl Bench {
@@ -216,6 +82,15 @@ impl Bench {
             link: PsLink::new(config, Instant::ZERO),
             now: Instant::ZERO,
             sent: Vec::new(),
+            unit: None,
+        }
+    }
+
+    /// A link with the simulated `model` (pbtool's names) on the line.
+    fn with_unit(config: LinkConfig, model: &str) -> Self {
+        Bench {
+            unit: Some(SimPs::new(model)),
+            ..Bench::new(config)
         }
     }
 
@@ -243,14 +118,80 @@ impl Bench {
         self.link.handle_rx(self.now, bytes);
     }
 
-    /// Run the link against `fake` until `until`.
-    fn run(&mut self, fake: &mut FakePowermax, until: Instant) {
-        while let Some(frame) = self.next_tx(until) {
-            if let Some(reply) = fake.answer(&frame) {
-                self.rx(10, &reply);
+    /// The simulated unit.
+    fn ps(&mut self) -> &mut SimPs {
+        self.unit.as_mut().expect("a bench with a unit")
+    }
+
+    /// Run the link against the unit until `until`, or until it sends a frame `stop` accepts
+    /// (returned; it is then on its way to the unit).
+    fn run_until_sent(
+        &mut self,
+        until: Instant,
+        mut stop: impl FnMut(&[u8]) -> bool,
+    ) -> Option<Vec<u8>> {
+        let unit = self.unit.as_mut().expect("a bench with a unit");
+        loop {
+            let mark = unit.sent.len();
+            let mut line_next = unit.exchange(&mut self.link, self.now);
+            let mut link_next = self.link.poll_at();
+            if link_next.is_some_and(|at| at <= self.now) {
+                // What just arrived may have made a frame due now: it goes out at once.
+                line_next = earliest(line_next, unit.exchange(&mut self.link, self.now));
+                link_next = self.link.poll_at();
+                // Nothing more to send: the link must not ask for this instant again (a
+                // board task sleeping until `poll_at` would spin).
+                if let Some(at) = link_next {
+                    assert!(at > self.now, "poll_at {at:?} not after {:?}", self.now);
+                }
+            }
+            self.sent.extend(unit.sent[mark..].iter().cloned());
+            if let Some((_, frame)) = unit.sent[mark..].iter().find(|(_, f)| stop(f)) {
+                return Some(frame.clone());
+            }
+            match earliest(line_next, link_next) {
+                Some(at) if at <= until => self.now = self.now.max(at),
+                _ => break,
             }
         }
         self.now = self.now.max(until);
+        None
+    }
+
+    /// Run the link against the unit until `until`.
+    fn run(&mut self, until: Instant) {
+        self.run_until_sent(until, |_| false);
+    }
+
+    /// The write requests (functions 05, 06, 0x10) sent since `mark` (an index into `sent`).
+    fn writes_since(&self, mark: usize) -> Vec<Vec<u8>> {
+        self.sent[mark..]
+            .iter()
+            .map(|(_, f)| f)
+            .filter(|f| f.len() > 5 && matches!(&f[3..5], b"05" | b"06" | b"10"))
+            .cloned()
+            .collect()
+    }
+
+    /// Everything the unit sent the link so far, as one text.
+    fn heard(&mut self) -> Vec<u8> {
+        self.ps().heard.iter().map(|&(_, b)| b).collect()
+    }
+
+    /// The unit raises fault `code` now (its own numbering); 0 clears it.
+    fn fault(&mut self, code: u16) {
+        let now = self.now;
+        let unit = self.ps().unit();
+        match code {
+            0 => unit.clear_fault(now),
+            code => unit.inject_fault(now, code),
+        }
+    }
+
+    /// Pulls the unit's serial cable now (true), or plugs it back (false).
+    fn unplug(&mut self, unplugged: bool) {
+        let now = self.now;
+        self.ps().unplug(now, unplugged);
     }
 
     fn events(&mut self) -> Vec<LinkEvent> {
@@ -258,16 +199,16 @@ impl Bench {
     }
 }
 
-fn sync_bench() -> (Bench, FakePowermax) {
-    let mut bench = Bench::new(LinkConfig::default());
-    let mut fake = FakePowermax::sync();
-    bench.run(&mut fake, ms(500));
+/// A Powermax65 SYNC found and its slow data read.
+fn sync_bench() -> Bench {
+    let mut bench = Bench::with_unit(LinkConfig::default(), "sync65");
+    bench.run(ms(500));
     assert!(bench.link.status().link_up);
     assert!(
         bench.link.status().limits.is_some(),
         "slow data read at start"
     );
-    (bench, fake)
+    bench
 }
 
 fn amps(a: u16) -> Amps {
@@ -305,9 +246,8 @@ fn detects_sync_by_device_identification() {
 
 #[test]
 fn detects_legacy_by_device_identification() {
-    let mut bench = Bench::new(LinkConfig::default());
-    let mut fake = FakePowermax::legacy();
-    bench.run(&mut fake, ms(100));
+    let mut bench = Bench::with_unit(LinkConfig::default(), "pm65");
+    bench.run(ms(100));
     assert_eq!(bench.link.status().family, Some(Family::PowermaxLegacy));
     assert_eq!(
         bench.link.status().model,
@@ -442,11 +382,11 @@ fn replies_are_validated_and_errors_classified() {
 
 #[test]
 fn link_goes_down_after_consecutive_failures_and_detection_restarts() {
-    let (mut bench, mut fake) = sync_bench();
+    let mut bench = sync_bench();
     bench.events();
-    fake.silent = true;
+    bench.unplug(true);
     // 3 transactions x 3 attempts x 100 ms, with a poll interval between them.
-    bench.run(&mut fake, bench.now + Duration::from_millis(1100));
+    bench.run(bench.now + Duration::from_millis(1100));
     let events = bench.events();
     assert!(events.iter().any(|e| matches!(
         e,
@@ -473,8 +413,8 @@ fn settings_outside_the_limits_are_refused_before_anything_is_sent() {
         bench.link.submit(ms(0), LinkCommand::ExitRemote),
         Err(Refusal::LinkNotUp)
     );
-    let (mut bench, fake) = sync_bench();
-    let before = fake.writes.len();
+    let mut bench = sync_bench();
+    let before = bench.sent.len();
     let now = bench.now;
     let refuse = |bench: &mut Bench, mode, current, pressure| {
         bench.link.submit(
@@ -487,11 +427,11 @@ fn settings_outside_the_limits_are_refused_before_anything_is_sent() {
         )
     };
     assert_eq!(
-        refuse(&mut bench, OperatingMode::Cut, amps(106), Pressure::Auto),
+        refuse(&mut bench, OperatingMode::Cut, amps(66), Pressure::Auto),
         Err(Refusal::CurrentOutOfRange {
-            requested: amps(106),
+            requested: amps(66),
             min: amps(20),
-            max: amps(105)
+            max: amps(65)
         })
     );
     assert_eq!(
@@ -499,7 +439,7 @@ fn settings_outside_the_limits_are_refused_before_anything_is_sent() {
         Err(Refusal::CurrentOutOfRange {
             requested: amps(19),
             min: amps(20),
-            max: amps(105)
+            max: amps(65)
         })
     );
     let psi = |p| Psi::from_whole(p).unwrap();
@@ -524,14 +464,14 @@ fn settings_outside_the_limits_are_refused_before_anything_is_sent() {
         })
     ));
     // Nothing but polls goes out afterwards.
-    let mut fake = fake;
-    bench.run(&mut fake, now + Duration::from_millis(300));
-    assert_eq!(fake.writes.len(), before);
+    bench.run(now + Duration::from_millis(300));
+    assert!(bench.sent.len() > before);
+    assert!(bench.writes_since(before).is_empty());
 }
 
 #[test]
 fn cut_at_63_a_with_automatic_pressure_is_the_guides_frame_and_is_read_back() {
-    let (mut bench, mut fake) = sync_bench();
+    let mut bench = sync_bench();
     bench.events();
     let ticket = bench
         .link
@@ -545,37 +485,39 @@ fn cut_at_63_a_with_automatic_pressure_is_the_guides_frame_and_is_read_back() {
         )
         .unwrap();
     // Let any poll in flight finish, then the write goes out.
-    let write = loop {
-        let frame = bench.next_tx(bench.now + Duration::from_secs(1)).unwrap();
-        if frame.starts_with(b":0110") {
-            break frame;
-        }
-        let reply = fake.answer(&frame).unwrap();
-        bench.rx(5, &reply);
-    };
+    let limit = bench.now + Duration::from_secs(1);
+    let write = bench
+        .run_until_sent(limit, |f| f.starts_with(b":0110"))
+        .unwrap();
     assert_lrc(b":0110308000030600010FC0000066\r\n");
     assert_eq!(write, b":0110308000030600010FC0000066\r\n");
-    let echo = fake.answer(&write).unwrap();
-    assert_eq!(echo, b":0110308000033C\r\n");
-    bench.rx(5, &echo);
-    // Read back 0x3010-0x3012 (guide's request, LRC B8 rechecked).
-    let read_back = bench.next_tx(bench.now).unwrap();
+    // Read back 0x3010-0x3012 (guide's request, LRC B8 rechecked) after the unit's reply.
+    let limit = bench.now + Duration::from_millis(200);
+    let read_back = bench
+        .run_until_sent(limit, |f| f.starts_with(b":01043010"))
+        .unwrap();
+    assert!(bench.heard().ends_with(b":0110308000033C\r\n"));
     assert_eq!(read_back, b":010430100003B8\r\n");
-    bench.rx(5, &fake.answer(&read_back).unwrap());
+    bench.run(bench.now + Duration::from_millis(100));
     let events = bench.events();
     let applied = PowermaxSettings {
         mode: Some(OperatingMode::Cut),
         current: amps(63),
         pressure: Pressure::Auto,
     };
+    // What the unit reads back: in automatic pressure, the pressure it picked.
+    let read_back = PowermaxSettings {
+        pressure: Pressure::Set(Psi::from_whole(72).unwrap()),
+        ..applied
+    };
     assert!(events.contains(&LinkEvent::RemoteModeChanged { remote: true }));
     assert!(events.contains(&LinkEvent::SettingsApplied {
-        settings: applied,
+        settings: read_back,
         reapplied: false
     }));
     assert!(events.contains(&LinkEvent::CommandDone {
         ticket,
-        result: Ok(CommandOutput::Settings(applied))
+        result: Ok(CommandOutput::Settings(read_back))
     }));
     assert_eq!(bench.link.status().desired, Some(applied));
     assert!(bench.link.status().remote);
@@ -583,7 +525,9 @@ fn cut_at_63_a_with_automatic_pressure_is_the_guides_frame_and_is_read_back() {
 
 #[test]
 fn a_read_back_that_differs_fails_the_command() {
-    let (mut bench, mut fake) = sync_bench();
+    let mut bench = sync_bench();
+    // A unit that acknowledges the write but keeps its panel settings.
+    bench.ps().powermax().config_mut().remote_settings_apply = false;
     let ticket = bench
         .link
         .submit(
@@ -595,16 +539,11 @@ fn a_read_back_that_differs_fails_the_command() {
             },
         )
         .unwrap();
-    while let Some(frame) = bench.next_tx(bench.now + Duration::from_millis(200)) {
-        let mut reply = fake.answer(&frame).unwrap();
-        if frame == b":010430100003B8\r\n" {
-            reply = mb(&words_pdu(0x04, &[1, 45 * 64, 0]));
-        }
-        bench.rx(5, &reply);
-        if frame == b":010430100003B8\r\n" {
-            break;
-        }
-    }
+    let limit = bench.now + Duration::from_millis(200);
+    bench
+        .run_until_sent(limit, |f| f == b":010430100003B8\r\n")
+        .unwrap();
+    bench.run(bench.now + Duration::from_millis(100));
     let events = bench.events();
     assert!(events.iter().any(|e| matches!(
         e,
@@ -615,18 +554,15 @@ fn a_read_back_that_differs_fails_the_command() {
 
 #[test]
 fn exit_remote_writes_zeros_to_all_three_registers() {
-    let (mut bench, mut fake) = sync_bench();
+    let mut bench = sync_bench();
     bench
         .link
         .submit(bench.now, LinkCommand::ExitRemote)
         .unwrap();
-    let write = loop {
-        let frame = bench.next_tx(bench.now + Duration::from_secs(1)).unwrap();
-        if frame.starts_with(b":0110") {
-            break frame;
-        }
-        bench.rx(5, &fake.answer(&frame).unwrap());
-    };
+    let limit = bench.now + Duration::from_secs(1);
+    let write = bench
+        .run_until_sent(limit, |f| f.starts_with(b":0110"))
+        .unwrap();
     // The SYNC guide prints `:01103080000306000000000000036`, which has one '0' too many
     // (15 characters after 06 instead of 12 zeros + LRC). Recomputed: LRC 36 over
     // 01 10 30 80 00 03 06 00 00 00 00 00 00.
@@ -636,7 +572,7 @@ fn exit_remote_writes_zeros_to_all_three_registers() {
 
 #[test]
 fn kept_settings_are_reapplied_when_the_unit_reverts_after_a_power_cycle() {
-    let (mut bench, mut fake) = sync_bench();
+    let mut bench = sync_bench();
     bench
         .link
         .submit(
@@ -648,15 +584,15 @@ fn kept_settings_are_reapplied_when_the_unit_reverts_after_a_power_cycle() {
             },
         )
         .unwrap();
-    bench.run(&mut fake, bench.now + Duration::from_millis(300));
+    bench.run(bench.now + Duration::from_millis(300));
     assert!(bench.link.status().remote);
     bench.events();
-    fake.writes.clear();
+    let mark = bench.sent.len();
     // Power cycle: the unit is back on its own settings.
-    fake.regs.insert(0x3010, 1);
-    fake.regs.insert(0x3011, 45 * 64);
-    fake.regs.insert(0x3012, 0x2600);
-    bench.run(&mut fake, bench.now + Duration::from_millis(300));
+    let now = bench.now;
+    bench.ps().unit().power_off(now);
+    bench.ps().unit().power_on(now);
+    bench.run(bench.now + Duration::from_millis(300));
     let events = bench.events();
     assert!(events.contains(&LinkEvent::RemoteModeChanged { remote: false }));
     assert!(events.iter().any(|e| matches!(
@@ -667,7 +603,7 @@ fn kept_settings_are_reapplied_when_the_unit_reverts_after_a_power_cycle() {
         }
     )));
     assert_eq!(
-        fake.writes.first().map(|w| w.as_slice()),
+        bench.writes_since(mark).first().map(|w| w.as_slice()),
         Some(&b":0110308000030600010FC0000066\r\n"[..])
     );
     assert!(bench.link.status().remote);
@@ -675,7 +611,7 @@ fn kept_settings_are_reapplied_when_the_unit_reverts_after_a_power_cycle() {
 
 #[test]
 fn kept_settings_are_reapplied_when_the_link_returns() {
-    let (mut bench, mut fake) = sync_bench();
+    let mut bench = sync_bench();
     bench
         .link
         .submit(
@@ -687,20 +623,20 @@ fn kept_settings_are_reapplied_when_the_link_returns() {
             },
         )
         .unwrap();
-    bench.run(&mut fake, bench.now + Duration::from_millis(300));
-    fake.silent = true;
-    bench.run(&mut fake, bench.now + Duration::from_millis(1000));
+    bench.run(bench.now + Duration::from_millis(300));
+    bench.unplug(true);
+    bench.run(bench.now + Duration::from_millis(1000));
     assert!(!bench.link.status().link_up);
     assert!(
         bench.link.status().desired.is_some(),
         "kept across the link-down"
     );
-    fake.silent = false;
-    fake.writes.clear();
-    bench.run(&mut fake, bench.now + Duration::from_millis(2000));
+    bench.unplug(false);
+    let mark = bench.sent.len();
+    bench.run(bench.now + Duration::from_millis(2000));
     assert!(bench.link.status().link_up);
     assert_eq!(
-        fake.writes.first().map(|w| w.as_slice()),
+        bench.writes_since(mark).first().map(|w| w.as_slice()),
         Some(&b":0110308000030600010FC0000066\r\n"[..])
     );
 }
@@ -710,11 +646,11 @@ fn kept_settings_are_reapplied_when_the_link_returns() {
 
 #[test]
 fn a_new_fault_is_reported_within_one_poll_interval() {
-    let (mut bench, mut fake) = sync_bench();
+    let mut bench = sync_bench();
     bench.events();
     let t0 = bench.now;
-    fake.regs.insert(0x301A, 500);
-    bench.run(&mut fake, t0 + Duration::from_millis(200));
+    bench.fault(500);
+    bench.run(t0 + Duration::from_millis(200));
     let events = bench.events();
     let raised = LinkEvent::FaultRaised {
         code: ActiveFault::Powermax(FaultCode(500)),
@@ -722,8 +658,8 @@ fn a_new_fault_is_reported_within_one_poll_interval() {
     };
     assert!(events.contains(&raised));
     assert!(!bench.link.status().ready);
-    fake.regs.insert(0x301A, 0);
-    bench.run(&mut fake, bench.now + Duration::from_millis(200));
+    bench.fault(0);
+    bench.run(bench.now + Duration::from_millis(200));
     assert!(bench.events().contains(&LinkEvent::FaultCleared {
         code: ActiveFault::Powermax(FaultCode(500))
     }));
@@ -732,38 +668,35 @@ fn a_new_fault_is_reported_within_one_poll_interval() {
 
 #[test]
 fn quick_restart_needs_0_50_0_and_is_followed_by_2_s_of_silence() {
-    let (mut bench, mut fake) = sync_bench();
+    let mut bench = sync_bench();
     assert_eq!(
         bench.link.submit(bench.now, LinkCommand::QuickRestart),
         Err(Refusal::QuickRestartNeeds050 { active: None })
     );
-    fake.regs.insert(0x301A, 121);
-    bench.run(&mut fake, bench.now + Duration::from_millis(200));
+    bench.fault(121);
+    bench.run(bench.now + Duration::from_millis(200));
     assert_eq!(
         bench.link.submit(bench.now, LinkCommand::QuickRestart),
         Err(Refusal::QuickRestartNeeds050 {
             active: Some(FaultCode(121))
         })
     );
-    fake.regs.insert(0x301A, 500);
-    bench.run(&mut fake, bench.now + Duration::from_millis(200));
+    bench.fault(500);
+    bench.run(bench.now + Duration::from_millis(200));
     let ticket = bench
         .link
         .submit(bench.now, LinkCommand::QuickRestart)
         .unwrap();
-    let restart = loop {
-        let frame = bench.next_tx(bench.now + Duration::from_secs(1)).unwrap();
-        if frame.starts_with(b":0110308E") {
-            break frame;
-        }
-        bench.rx(5, &fake.answer(&frame).unwrap());
-    };
+    let limit = bench.now + Duration::from_secs(1);
+    let restart = bench
+        .run_until_sent(limit, |f| f.starts_with(b":0110308E"))
+        .unwrap();
     assert_lrc(b":0110308E0002040404061805\r\n");
     assert_eq!(restart, b":0110308E0002040404061805\r\n");
-    let echo = fake.answer(&restart).unwrap();
-    assert_eq!(echo, b":0110308E00022F\r\n");
-    bench.rx(5, &echo);
-    let t_reply = bench.now;
+    // The unit's reply; nothing goes out afterwards (the quiet time).
+    bench.run(bench.now + Duration::from_millis(100));
+    assert!(bench.heard().ends_with(b":0110308E00022F\r\n"));
+    let t_reply = bench.ps().heard.last().unwrap().0;
     assert!(bench.events().contains(&LinkEvent::CommandDone {
         ticket,
         result: Ok(CommandOutput::Done)
@@ -797,14 +730,19 @@ fn quick_restart_needs_0_50_0_and_is_followed_by_2_s_of_silence() {
 
 #[test]
 fn gas_test_writes_the_coil() {
-    let (mut bench, mut fake) = sync_bench();
+    let mut bench = sync_bench();
     bench
         .link
         .submit(bench.now, LinkCommand::GasTest { on: true })
         .unwrap();
-    bench.run(&mut fake, bench.now + Duration::from_millis(200));
+    bench.run(bench.now + Duration::from_millis(200));
     assert_lrc(b":01053180FF004A\r\n");
-    assert!(fake.writes.iter().any(|w| w == b":01053180FF004A\r\n"));
+    assert!(
+        bench
+            .writes_since(0)
+            .iter()
+            .any(|w| w == b":01053180FF004A\r\n")
+    );
 }
 
 // ---------------------------------------------------------------------------------------
@@ -812,10 +750,10 @@ fn gas_test_writes_the_coil() {
 
 #[test]
 fn sync_block_read_falls_back_to_documented_parts_and_remembers() {
-    let mut bench = Bench::new(LinkConfig::default());
-    let mut fake = FakePowermax::sync();
-    fake.undocumented = std::vec![0x3015];
-    bench.run(&mut fake, ms(1000));
+    let mut bench = Bench::with_unit(LinkConfig::default(), "sync65");
+    // A unit that refuses block reads over 0x3013-0x3017.
+    bench.ps().powermax().config_mut().undocumented = UndocumentedAddresses::Refuse;
+    bench.run(ms(1000));
     let polls: Vec<&Vec<u8>> = bench
         .sent
         .iter()
@@ -839,8 +777,8 @@ fn sync_block_read_falls_back_to_documented_parts_and_remembers() {
             .count()
             >= 3
     );
-    fake.regs.insert(0x301A, 500);
-    bench.run(&mut fake, ms(1300));
+    bench.fault(500);
+    bench.run(ms(1300));
     assert_eq!(
         bench.link.status().active_fault,
         Some(ActiveFault::Powermax(FaultCode(500)))
@@ -849,12 +787,13 @@ fn sync_block_read_falls_back_to_documented_parts_and_remembers() {
 
 #[test]
 fn legacy_block_read_falls_back_and_drops_refused_parts() {
-    let mut bench = Bench::new(LinkConfig::default());
-    let mut fake = FakePowermax::legacy();
+    let mut bench = Bench::with_unit(LinkConfig::default(), "pm65");
     // A unit that refuses the gaps and the write-only force registers.
-    fake.undocumented = std::vec![0x2093, 0x2095, 0x2096, 0x2097, 0x209B];
-    fake.regs.insert(0x2098, 111);
-    bench.run(&mut fake, ms(1000));
+    let config = bench.ps().powermax().config_mut();
+    config.undocumented = UndocumentedAddresses::Refuse;
+    config.refused_registers = std::vec![0x2093, 0x2094, 0x2096];
+    bench.fault(111);
+    bench.run(ms(1000));
     let sent: Vec<Vec<u8>> = bench.sent.iter().map(|(_, f)| f.clone()).collect();
     let whole = mb(&[0x04, 0x20, 0x93, 0x00, 0x0D]);
     let force = mb(&[0x04, 0x20, 0x93, 0x00, 0x02]);
@@ -880,9 +819,9 @@ fn legacy_block_read_falls_back_and_drops_refused_parts() {
 
 #[test]
 fn legacy_settings_use_the_three_force_registers() {
-    let mut bench = Bench::new(LinkConfig::default());
-    let mut fake = FakePowermax::legacy();
-    bench.run(&mut fake, ms(300));
+    let mut bench = Bench::with_unit(LinkConfig::default(), "pm65");
+    bench.run(ms(300));
+    let mark = bench.sent.len();
     let ticket = bench
         .link
         .submit(
@@ -894,7 +833,7 @@ fn legacy_settings_use_the_three_force_registers() {
             },
         )
         .unwrap();
-    bench.run(&mut fake, bench.now + Duration::from_millis(300));
+    bench.run(bench.now + Duration::from_millis(300));
     // Legacy guide samples (LRCs 45, F5, 20 rechecked).
     for seed in [
         &b":01062093000145\r\n"[..],
@@ -903,7 +842,8 @@ fn legacy_settings_use_the_three_force_registers() {
     ] {
         assert_lrc(seed);
     }
-    let writes: Vec<&[u8]> = fake.writes.iter().map(|w| w.as_slice()).collect();
+    let writes = bench.writes_since(mark);
+    let writes: Vec<&[u8]> = writes.iter().map(|w| w.as_slice()).collect();
     assert_eq!(
         writes,
         std::vec![
@@ -913,17 +853,17 @@ fn legacy_settings_use_the_three_force_registers() {
         ]
     );
     assert!(bench.events().iter().any(|e| matches!(e, LinkEvent::CommandDone { ticket: t, result: Ok(CommandOutput::Settings(_)) } if *t == ticket)));
-    fake.writes.clear();
+    let mark = bench.sent.len();
     bench
         .link
         .submit(bench.now, LinkCommand::ExitRemote)
         .unwrap();
-    bench.run(&mut fake, bench.now + Duration::from_millis(300));
+    bench.run(bench.now + Duration::from_millis(300));
     let zeros: Vec<Vec<u8>> = [0x93u8, 0x94, 0x96]
         .iter()
         .map(|&r| mb(&[0x06, 0x20, r, 0, 0]))
         .collect();
-    assert_eq!(fake.writes, zeros);
+    assert_eq!(bench.writes_since(mark), zeros);
 }
 
 // ---------------------------------------------------------------------------------------
@@ -931,7 +871,7 @@ fn legacy_settings_use_the_three_force_registers() {
 
 #[test]
 fn raw_modbus_reads_are_forwarded_and_unlisted_writes_refused() {
-    let (mut bench, mut fake) = sync_bench();
+    let mut bench = sync_bench();
     fn raw(bytes: &[u8]) -> LinkCommand<'_> {
         LinkCommand::Raw(bytes)
     }
@@ -959,8 +899,8 @@ fn raw_modbus_reads_are_forwarded_and_unlisted_writes_refused() {
         ))
     ));
     let ticket = bench.link.submit(now, raw(b":0104301A0001B0\r\n")).unwrap();
-    fake.regs.insert(0x301A, 500);
-    bench.run(&mut fake, now + Duration::from_millis(200));
+    bench.fault(500);
+    bench.run(now + Duration::from_millis(200));
     let done = bench.events().into_iter().find_map(|e| match e {
         LinkEvent::CommandDone { ticket: t, result } if t == ticket => Some(result),
         _ => None,
@@ -1100,6 +1040,7 @@ fn hpr_settings_are_range_checked_and_preceded_by_remote_mode() {
     assert_eq!(frame, b">05813031<");
     bench.rx(2, b">058013061<");
     let events = bench.events();
+    std::println!("{events:?}");
     assert!(events.contains(&LinkEvent::RemoteModeChanged { remote: true }));
     assert!(events.contains(&LinkEvent::CommandDone {
         ticket,
@@ -1204,7 +1145,7 @@ fn hpr_errors_raise_and_clear_faults() {
 
 #[test]
 fn reconfiguring_pins_the_protocol_and_restarts_detection() {
-    let (mut bench, _fake) = sync_bench();
+    let mut bench = sync_bench();
     bench.events();
     let config = LinkConfig {
         protocol: ProtocolChoice::Hpr,
@@ -1239,13 +1180,13 @@ fn invalid_configurations_are_refused_or_clamped() {
 
 #[test]
 fn noise_and_late_replies_do_not_disturb_the_link() {
-    let (mut bench, mut fake) = sync_bench();
+    let mut bench = sync_bench();
     // Nothing awaited: a stray frame and line noise are counted and ignored.
     bench
         .link
         .handle_rx(bench.now, b"\x00\xff:0104020508EC\r\n>0041C5<garbage");
     assert_eq!(bench.link.diagnostics().unsolicited_frames, 1);
-    bench.run(&mut fake, bench.now + Duration::from_millis(300));
+    bench.run(bench.now + Duration::from_millis(300));
     assert!(bench.link.status().link_up);
 }
 
@@ -1286,17 +1227,19 @@ fn the_echo_of_our_own_request_is_ignored() {
 
 #[test]
 fn a_reply_equal_to_its_request_is_told_from_the_echo_once_the_line_is_known_to_echo() {
-    // Legacy settings use function 06, whose reply repeats the request.
+    // Legacy settings use function 06, whose reply repeats the request. On a 2-wire line with
+    // the bridge's receiver on, every request also comes back as it goes out.
     let mut bench = Bench::new(LinkConfig::default());
-    let mut fake = FakePowermax::legacy();
+    let echoing = Wiring::TwoWire { master_echo: true };
+    bench.unit = Some(SimPs::on_line(
+        SimModel::Pm65.build(&SimOptions::default()),
+        echoing,
+    ));
     // Detection teaches the link that the line echoes.
-    let request = bench.next_tx(ms(0)).unwrap();
-    bench.rx(9, &request);
-    let reply = fake.answer(&request).unwrap();
-    bench.rx(12, &reply);
+    bench.run(ms(300));
     assert_eq!(bench.link.status().family, Some(Family::PowermaxLegacy));
-    bench.run(&mut fake, ms(300));
-    bench
+    let mark = bench.sent.len();
+    let ticket = bench
         .link
         .submit(
             bench.now,
@@ -1307,30 +1250,20 @@ fn a_reply_equal_to_its_request_is_told_from_the_echo_once_the_line_is_known_to_
             },
         )
         .unwrap();
-    let write = loop {
-        let frame = bench.next_tx(bench.now + Duration::from_secs(1)).unwrap();
-        if frame[3..5] == *b"06" {
-            break frame;
-        }
-        let reply = fake.answer(&frame).unwrap();
-        bench.rx(10, &reply);
-    };
-    let reply = fake.answer(&write).unwrap();
-    assert_eq!(reply, write);
-    // The echo: ignored.
-    bench.rx(9, &write);
-    assert_eq!(bench.link.diagnostics().echoes, 2);
-    // The unit's reply, equal to it: taken.
-    bench.rx(12, &reply);
-    assert_eq!(bench.link.diagnostics().echoes, 2);
-    assert_eq!(bench.link.diagnostics().transactions_failed, 0);
-    let next = bench.next_tx(bench.now + Duration::from_secs(1)).unwrap();
-    assert_ne!(next, write, "the write was answered, the next step follows");
+    bench.run(bench.now + Duration::from_millis(300));
+    let writes = bench.writes_since(mark);
+    assert!(writes.len() >= 3, "mode, current, pressure: {writes:?}");
+    assert!(writes.iter().all(|w| w[3..5] == *b"06"));
+    // Every echo was ignored once; every reply equal to its request was taken.
+    let d = bench.link.diagnostics();
+    assert_eq!(d.echoes as usize, bench.sent.len());
+    assert_eq!(d.transactions_failed, 0);
+    assert!(bench.events().iter().any(|e| matches!(e, LinkEvent::CommandDone { ticket: t, result: Ok(CommandOutput::Settings(_)) } if *t == ticket)));
 }
 
 #[test]
 fn damaged_replies_are_no_silence_and_do_not_take_the_link_down_early() {
-    let (mut bench, _fake) = sync_bench();
+    let mut bench = sync_bench();
     bench.events();
     let damaged = b":0104020005F0\r\n"; // LRC should be F5
     let mut failed = 0;
@@ -1390,8 +1323,8 @@ fn a_unit_found_by_the_legacy_probe_is_identified_again_later() {
     bench.rx(5, b":010402006F8A\r\n");
     assert_eq!(bench.link.status().family, Some(Family::PowermaxLegacy));
     // At the next slow-data refresh the unit says it is a SYNC.
-    let mut fake = FakePowermax::sync();
-    bench.run(&mut fake, ms(2000));
+    bench.unit = Some(SimPs::new("sync65"));
+    bench.run(ms(2000));
     assert_eq!(bench.link.status().family, Some(Family::PowermaxSync));
     let ups = bench
         .events()
@@ -1404,9 +1337,9 @@ fn a_unit_found_by_the_legacy_probe_is_identified_again_later() {
 
 #[test]
 fn after_a_link_down_the_known_good_probe_alternates_with_the_search() {
-    let (mut bench, mut fake) = sync_bench();
-    fake.silent = true;
-    bench.run(&mut fake, bench.now + Duration::from_millis(1100));
+    let mut bench = sync_bench();
+    bench.unplug(true);
+    bench.run(bench.now + Duration::from_millis(1100));
     assert!(!bench.link.status().link_up);
     let device_id = b":012B0E0401C1\r\n".to_vec();
     // Probes (3 attempts each) and their ports for the next 8 s, nobody answering.
@@ -1460,7 +1393,7 @@ fn after_a_link_down_the_known_good_probe_alternates_with_the_search() {
 
 #[test]
 fn a_reapply_waiting_for_limits_does_not_make_poll_at_spin() {
-    let (mut bench, mut fake) = sync_bench();
+    let mut bench = sync_bench();
     bench
         .link
         .submit(
@@ -1472,19 +1405,19 @@ fn a_reapply_waiting_for_limits_does_not_make_poll_at_spin() {
             },
         )
         .unwrap();
-    bench.run(&mut fake, bench.now + Duration::from_millis(300));
-    fake.silent = true;
-    bench.run(&mut fake, bench.now + Duration::from_millis(1000));
+    bench.run(bench.now + Duration::from_millis(300));
+    bench.unplug(true);
+    bench.run(bench.now + Duration::from_millis(1000));
     assert!(!bench.link.status().link_up);
     // Back, but the limits cannot be read: the re-apply waits, and `Bench` checks that
     // `poll_at` is never left in the past meanwhile.
-    fake.silent = false;
-    fake.undocumented.push(0x3001);
-    fake.writes.clear();
-    bench.run(&mut fake, bench.now + Duration::from_millis(3000));
+    bench.unplug(false);
+    bench.ps().powermax().config_mut().refused_registers = std::vec![0x3001];
+    let mark = bench.sent.len();
+    bench.run(bench.now + Duration::from_millis(3000));
     assert!(bench.link.status().link_up);
     assert!(bench.link.status().limits.is_none());
-    assert!(fake.writes.is_empty());
+    assert!(bench.writes_since(mark).is_empty());
 }
 
 /// An HPR130 in state 3 that took REMOTE_MODE and 058 at 100 A.

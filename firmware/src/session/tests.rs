@@ -1,21 +1,13 @@
-//! End-to-end tests of the CNC side: a [`Bridge`] driven against scripted power supplies, the
-//! CNC bytes in and the reply bytes out checked exactly.
-//!
-//! The fakes answer like the manuals describe: the Powermax fake from its register map
-//! (frames encoded by `modbus_ascii::encode`, LRC computed there), the HPR fake with
-//! `hpr::Reply::emit`. The expected lines here are the ones `docs/cnc-protocol.md` shows.
+//! End-to-end tests of the CNC side: a [`Bridge`] driven against the simulated units of
+//! `plasma-sim` over the line model ([`SimPs`]), the CNC bytes in and the reply bytes out
+//! checked exactly. The expected lines here are the ones `docs/cnc-protocol.md` shows.
 
 extern crate std;
 
-use std::collections::BTreeMap;
 use std::string::{String, ToString};
 use std::vec::Vec;
 
 use plasma_protocol::cnc::phoenix::{self, Format};
-use plasma_protocol::hpr::{
-    self, Acceptance, ErrorCode as HprError, Frame, GasPressures, PsInfo, Reply,
-    Request as HprRequest, StateCode, SystemId, TimerCounter,
-};
 use plasma_protocol::modbus_ascii::{self, Request};
 use proptest::prelude::*;
 
@@ -25,249 +17,17 @@ use crate::link::ProtocolChoice;
 use crate::session::SimCommand;
 use crate::settings::{Process, SaveError, Settings};
 use crate::storage::Settings as _;
+use crate::testing::SimPs;
 use plasma_protocol::time::{Duration, Instant};
-
-// ---------------------------------------------------------------------------------------
-// scripted power supplies
-
-/// A Powermax answering from its registers.
-pub(crate) struct FakePowermax {
-    pub regs: BTreeMap<u16, u16>,
-    product_code: &'static str,
-    pub silent: bool,
-    /// Remote writes do not show up in the settings registers (read-back differs).
-    pub ignore_settings: bool,
-    /// Every write request received, as (start address, values).
-    pub writes: Vec<(u16, Vec<u16>)>,
-}
-
-fn words_pdu(function: u8, words: &[u16]) -> Vec<u8> {
-    let mut pdu = std::vec![function, (words.len() * 2) as u8];
-    for w in words {
-        pdu.extend_from_slice(&w.to_be_bytes());
-    }
-    pdu
-}
+use plasma_sim::clock::{Accumulator, earliest};
+use plasma_sim::hpr::HprCounters;
+use plasma_sim::powermax::{Counters, Settings as PanelSettings};
 
 /// A Modbus ASCII frame for node 1 (LRC computed by the encoder).
 pub(crate) fn mb(pdu: &[u8]) -> Vec<u8> {
     let mut out = [0u8; 600];
     let n = modbus_ascii::encode(1, pdu, &mut out).unwrap();
     out[..n].to_vec()
-}
-
-impl FakePowermax {
-    /// A Powermax65 SYNC (0x3000 low byte 0x01) with a cartridge that permits cut and
-    /// expanded metal, 20-65 A, 58-78 psi; set to cut, 45 A, 76 psi.
-    pub(crate) fn sync65() -> Self {
-        let mut regs = BTreeMap::new();
-        for (a, v) in [
-            (0x3000, 0x0501),
-            (0x3001, 0x0201),
-            (0x3002, 20 * 64),
-            (0x3003, 65 * 64),
-            (0x3004, 58 * 128),
-            (0x3005, 78 * 128),
-            (0x3010, 1),
-            (0x3011, 45 * 64),
-            (0x3012, 76 * 128),
-            (0x3014, 0),
-            (0x3018, 44 * 64 + 32),
-            (0x3019, 71 * 128),
-            (0x3028, 1200),
-            (0x302A, 300),
-            (0x302C, 1100),
-            (0x302E, 5000),
-            (0x303B, 3),
-            (0x303C, 45 * 64),
-            (0x3040, 17),
-            (0x3041, 40),
-            (0x3042, 15),
-            (0x3043, 20),
-            (0x3044, 200),
-            (0x3045, 500),
-        ] {
-            regs.insert(a, v);
-        }
-        for (i, b) in b"E00401D0036FB25D".chunks(2).enumerate() {
-            regs.insert(0x3030 + i as u16, u16::from_be_bytes([b[0], b[1]]));
-        }
-        for (i, b) in b"428936".chunks(2).enumerate() {
-            regs.insert(0x3038 + i as u16, u16::from_be_bytes([b[0], b[1]]));
-        }
-        FakePowermax {
-            regs,
-            product_code: "081335",
-            silent: false,
-            ignore_settings: false,
-            writes: Vec::new(),
-        }
-    }
-
-    /// The fault shown in 0x301A.
-    pub(crate) fn set_fault(&mut self, code: u16) {
-        self.regs.insert(0x301A, code);
-    }
-
-    fn answer(&mut self, frame: &[u8]) -> Option<Vec<u8>> {
-        if self.silent {
-            return None;
-        }
-        let mut buf = [0u8; 300];
-        let decoded = modbus_ascii::decode(frame, &mut buf).unwrap();
-        let request = Request::parse(decoded.pdu).unwrap();
-        let pdu: Vec<u8> = match request {
-            Request::ReadInputRegisters { start, quantity }
-            | Request::ReadHoldingRegisters { start, quantity } => {
-                let words: Vec<u16> = (start..start + quantity)
-                    .map(|a| *self.regs.get(&a).unwrap_or(&0))
-                    .collect();
-                words_pdu(decoded.pdu[0], &words)
-            }
-            Request::ReadDeviceIdentification { .. } => {
-                let code = self.product_code;
-                let mut pdu = std::vec![0x2B, 0x0E, 0x04, 0x81, 0x00, 0x00, 0x01, 0x01];
-                pdu.push(code.len() as u8);
-                pdu.extend_from_slice(code.as_bytes());
-                pdu
-            }
-            Request::WriteMultipleRegisters { start, values } => {
-                let values: Vec<u16> = values.iter().collect();
-                for (i, v) in values.iter().enumerate() {
-                    let a = start + i as u16;
-                    self.regs.insert(a, *v);
-                    if (0x3080..=0x3082).contains(&a) && !self.ignore_settings {
-                        self.regs.insert(a - 0x70, *v);
-                    }
-                }
-                if start == 0x308E {
-                    // Quick restart clears 0-50-0.
-                    self.regs.insert(0x301A, 0);
-                }
-                let n = values.len() as u16;
-                self.writes.push((start, values));
-                let mut p = std::vec![0x10];
-                p.extend_from_slice(&start.to_be_bytes());
-                p.extend_from_slice(&n.to_be_bytes());
-                p
-            }
-            Request::WriteSingleCoil { address, on } => {
-                self.writes.push((address, std::vec![on as u16]));
-                let mut p = std::vec![0x05];
-                p.extend_from_slice(&address.to_be_bytes());
-                p.extend_from_slice(if on { &[0xFF, 0x00] } else { &[0, 0] });
-                p
-            }
-            other => panic!("unexpected request {other:?}"),
-        };
-        Some(mb(&pdu))
-    }
-}
-
-/// An HPR or MaxPro200 answering with `Reply::emit`.
-pub(crate) struct FakeHpr {
-    system: SystemId,
-    pub state: u16,
-    pub error: u16,
-    amps: u16,
-    pub requests: Vec<u16>,
-}
-
-impl FakeHpr {
-    pub(crate) fn new(identity: &[u8]) -> Self {
-        FakeHpr {
-            system: SystemId::parse(identity).unwrap(),
-            state: 3,
-            error: 0,
-            amps: 130,
-            requests: Vec::new(),
-        }
-    }
-
-    fn answer(&mut self, frame: &[u8]) -> Option<Vec<u8>> {
-        let frame = Frame::parse(frame).unwrap();
-        self.requests.push(frame.id);
-        let ack = Reply::Ack {
-            command: frame.id,
-            result: Acceptance::Accepted,
-        };
-        let reply = match HprRequest::parse(&frame).unwrap() {
-            HprRequest::Hello => Reply::Hello(self.system),
-            HprRequest::GetState => Reply::State(StateCode(self.state)),
-            HprRequest::GetPsInfo if self.system.is_maxpro200() => {
-                Reply::MaxProPsInfo(hpr::MaxProPsInfo {
-                    state: StateCode(self.state),
-                    error: HprError(self.error),
-                    plasma_gas: hpr::GasCode(5),
-                    plasma_setpoint: 56,
-                    shield_gas: hpr::GasCode(5),
-                    shield_setpoint: 58,
-                    current_setpoint: self.amps,
-                    display_mode: 1,
-                    locked: false,
-                })
-            }
-            HprRequest::GetPsInfo => Reply::PsInfo(PsInfo {
-                pressures: GasPressures::default(),
-                current_setpoint: self.amps,
-                state: StateCode(self.state),
-                error: HprError(self.error),
-            }),
-            HprRequest::SetNominalAmps { amps } => {
-                self.amps = amps;
-                Reply::NominalAmps(amps)
-            }
-            HprRequest::SetCornerCurrent { percent } => Reply::CornerCurrentSet(percent.into()),
-            HprRequest::ReadErrorLog => {
-                Reply::ErrorLog([HprError(44), HprError(20), HprError(0), HprError(0)])
-            }
-            HprRequest::GetTimerCounter => Reply::TimerCounter(TimerCounter {
-                arc_on_seconds: 3600,
-                system_on_minutes: 900,
-                starts: 420,
-                start_errors: 3,
-                rampdown_errors: 1,
-                write_counter: 0,
-                memory_block: 0,
-            }),
-            _ => ack,
-        };
-        let mut out = [0u8; hpr::MAX_FRAME_LEN];
-        let n = reply.emit(&mut out).unwrap();
-        Some(out[..n].to_vec())
-    }
-}
-
-pub(crate) enum Unit {
-    None,
-    Powermax(FakePowermax),
-    Hpr(FakeHpr),
-}
-
-impl Unit {
-    fn answer(&mut self, frame: &[u8]) -> Option<Vec<u8>> {
-        match self {
-            Unit::None => None,
-            // Frames for the other family (auto-detection) go unanswered, as on a real line.
-            Unit::Powermax(fake) if frame.first() == Some(&b':') => fake.answer(frame),
-            Unit::Hpr(fake) if frame.first() == Some(&b'>') => fake.answer(frame),
-            _ => None,
-        }
-    }
-
-    pub(crate) fn powermax(&mut self) -> &mut FakePowermax {
-        match self {
-            Unit::Powermax(fake) => fake,
-            _ => panic!("not a Powermax"),
-        }
-    }
-
-    pub(crate) fn hpr(&mut self) -> &mut FakeHpr {
-        match self {
-            Unit::Hpr(fake) => fake,
-            _ => panic!("not an HPR"),
-        }
-    }
 }
 
 // ---------------------------------------------------------------------------------------
@@ -278,7 +38,8 @@ pub(crate) type Token = String;
 
 pub(crate) struct Rig {
     pub bridge: Bridge,
-    pub unit: Unit,
+    /// The power supply on the PS port (`None`: nothing connected).
+    pub unit: Option<SimPs>,
     pub now: Instant,
     /// Every token the CNC received.
     pub received: Vec<Token>,
@@ -293,10 +54,12 @@ pub(crate) const ACK_TOKEN: &str = "<ACK>";
 pub(crate) const NAK_TOKEN: &str = "<NAK>";
 
 impl Rig {
-    pub(crate) fn new(settings: Settings, unit: Unit) -> Self {
+    /// A bridge with `settings` and the simulated `model` (pbtool's names: `sync65`,
+    /// `hpr130`...; `None`: nothing on the PS port).
+    pub(crate) fn new(settings: Settings, model: Option<&str>) -> Self {
         Rig {
             bridge: Bridge::new(settings, Instant::ZERO),
-            unit,
+            unit: model.map(SimPs::new),
             now: Instant::ZERO,
             received: Vec::new(),
             partial: Vec::new(),
@@ -305,16 +68,37 @@ impl Rig {
         }
     }
 
-    /// A rig with a SYNC unit found and its slow data read.
+    /// A rig with a SYNC unit found and its slow data read. The unit's panel is set to cut,
+    /// 45 A, 76 psi, and its life counters and cartridge carry some history, so that every
+    /// field a reply shows is a real value.
     pub(crate) fn sync65(settings: Settings) -> Self {
-        let mut rig = Rig::new(settings, Unit::Powermax(FakePowermax::sync65()));
+        let mut rig = Rig::new(settings, Some("sync65"));
+        let unit = rig.ps().powermax();
+        unit.set_panel(PanelSettings {
+            mode: 1,
+            current: 45 * 64,
+            pressure: 76 * 128,
+        });
+        unit.set_counters(Counters {
+            starts: 1200,
+            pilot: Accumulator::from_secs(300),
+            transfers: 1100,
+            transfer: Accumulator::from_secs(5000),
+        });
+        let cartridge = unit.cartridge_mut().expect("a SYNC unit has a cartridge");
+        cartridge.starts = 17;
+        cartridge.pilot = Accumulator::from_secs(40);
+        cartridge.transfers = 15;
+        cartridge.transfer = Accumulator::from_secs(40);
+        cartridge.fault_log = [200, 500, 0, 0];
         rig.run(600);
         assert!(rig.bridge.status().link_up);
         assert!(rig.bridge.status().cartridge.is_some());
         rig
     }
 
-    pub(crate) fn hpr(identity: &[u8]) -> Self {
+    /// A rig with the HPR or MaxPro200 `model` found, its state read.
+    pub(crate) fn hpr(model: &str) -> Self {
         let settings = Settings {
             link: crate::link::LinkConfig {
                 protocol: ProtocolChoice::Hpr,
@@ -322,10 +106,15 @@ impl Rig {
             },
             ..Settings::default()
         };
-        let mut rig = Rig::new(settings, Unit::Hpr(FakeHpr::new(identity)));
+        let mut rig = Rig::new(settings, Some(model));
         rig.run(300);
         assert!(rig.bridge.status().link_up);
-        assert!(rig.bridge.status().hpr.state.is_some());
+        // Through power-up and the gas purge to state 3 (idle2 / ready for start).
+        let ready = rig.now + Duration::from_secs(5);
+        while rig.bridge.status().hpr.state.map(|s| s.0) != Some(3) && rig.now < ready {
+            rig.run(100);
+        }
+        assert_eq!(rig.bridge.status().hpr.state.map(|s| s.0), Some(3));
         rig
     }
 
@@ -364,30 +153,61 @@ impl Rig {
             self.saved = Some(record[..len].to_vec());
             self.bridge.save_finished(self.now, result);
         }
-        if let Some(frame) = self.bridge.poll_ps_transmit(self.now) {
-            let frame = frame.to_vec();
-            if let Some(reply) = self.unit.answer(&frame) {
-                self.now = self.now + Duration::from_millis(5);
-                self.bridge.handle_ps_rx(self.now, &reply);
-            }
-            self.collect();
-            return true;
-        }
+        let line_next = self.exchange();
         self.bridge.poll(self.now);
         self.collect();
-        let next = match self.bridge.poll_at() {
+        // What the poll queued goes on the wire at once.
+        let line_next = earliest(line_next, self.exchange());
+        let next = match earliest(self.bridge.poll_at(), line_next) {
             Some(at) if at > self.now => at,
             Some(_) => self.now + Duration::from_millis(1),
             None => limit,
         };
         if next >= limit {
             self.now = limit;
+            self.exchange();
             self.bridge.poll(self.now);
             self.collect();
             return false;
         }
         self.now = next;
         true
+    }
+
+    /// The bridge's frames to the unit, the unit's replies to the bridge (with nothing
+    /// connected, frames go nowhere); the next instant the line or the unit is due.
+    fn exchange(&mut self) -> Option<Instant> {
+        let next = match &mut self.unit {
+            Some(unit) => unit.exchange(&mut self.bridge, self.now),
+            None => {
+                while self.bridge.poll_ps_transmit(self.now).is_some() {}
+                None
+            }
+        };
+        self.collect();
+        next
+    }
+
+    /// The simulated unit.
+    pub(crate) fn ps(&mut self) -> &mut SimPs {
+        self.unit.as_mut().expect("a rig with a unit")
+    }
+
+    /// The unit raises fault `code` now (its own numbering: 500 is 0-50-0, HPR error ids);
+    /// 0 clears it.
+    pub(crate) fn fault(&mut self, code: u16) {
+        let now = self.now;
+        let unit = self.ps().unit();
+        match code {
+            0 => unit.clear_fault(now),
+            code => unit.inject_fault(now, code),
+        }
+    }
+
+    /// Pulls the unit's serial cable now (true), or plugs it back (false).
+    pub(crate) fn unplug(&mut self, unplugged: bool) {
+        let now = self.now;
+        self.ps().unplug(now, unplugged);
     }
 
     /// Let `ms` of virtual time pass.
@@ -415,9 +235,30 @@ impl Rig {
         replies[0].clone()
     }
 
-    /// Frames the unit received that were writes: (address, values).
+    /// The Modbus writes the bridge sent the unit: (address, values); a coil as one value.
     pub(crate) fn writes(&mut self) -> Vec<(u16, Vec<u16>)> {
-        self.unit.powermax().writes.clone()
+        let mut writes = Vec::new();
+        for (_, frame) in &self.ps().sent {
+            let mut buf = [0u8; 300];
+            let Ok(decoded) = modbus_ascii::decode(frame, &mut buf) else {
+                continue;
+            };
+            match Request::parse(decoded.pdu) {
+                Ok(Request::WriteMultipleRegisters { start, values }) => {
+                    writes.push((start, values.iter().collect()))
+                }
+                Ok(Request::WriteSingleCoil { address, on }) => {
+                    writes.push((address, std::vec![on as u16]))
+                }
+                _ => {}
+            }
+        }
+        writes
+    }
+
+    /// The HPR command ids the unit received, in order.
+    pub(crate) fn hpr_commands(&mut self) -> Vec<u16> {
+        self.ps().hpr().commands_received().to_vec()
     }
 }
 
@@ -463,8 +304,8 @@ fn set_process_answers_once_after_the_read_back() {
     rig.run(300);
     assert_eq!(
         rig.cmd("STATUS"),
-        "OK link=UP model=Powermax65 family=SYNC remote=ON mode=CUT amps=45 psi=AUTO \
-         out_amps=44.5 out_psi=71 fault=none start=OFF motion=OFF arc_ok=OFF ready=ON"
+        "OK link=UP model=Powermax65 family=SYNC remote=ON mode=CUT amps=45 psi=72 \
+         out_amps=0 out_psi=0 fault=none start=OFF motion=OFF arc_ok=OFF ready=ON"
     );
 }
 
@@ -486,7 +327,7 @@ fn status_is_one_line_with_the_io_snapshot() {
     assert_eq!(
         rig.cmd("status"),
         "OK link=UP model=Powermax65 family=SYNC remote=OFF mode=CUT amps=45 psi=76 \
-         out_amps=44.5 out_psi=71 fault=none start=ON motion=ON arc_ok=ON ready=ON"
+         out_amps=0 out_psi=0 fault=none start=ON motion=ON arc_ok=ON ready=ON"
     );
 }
 
@@ -546,13 +387,13 @@ fn set_mode_amps_and_psi_combine_with_the_other_two_values() {
 #[test]
 fn settings_that_do_not_read_back_are_an_error_with_the_read_back_values() {
     let mut rig = Rig::sync65(Settings::default());
-    rig.unit.powermax().ignore_settings = true;
+    rig.ps().powermax().config_mut().remote_settings_apply = false;
     assert_eq!(
         rig.cmd("SET PROCESS CUT 50 AUTO"),
         "ERR LINK settings not confirmed: the unit reads back mode=CUT amps=45 psi=76"
     );
     assert_eq!(rig.bridge.settings().process, None);
-    rig.unit.powermax().silent = true;
+    rig.unplug(true);
     assert_eq!(
         rig.cmd("SET PROCESS CUT 50 AUTO"),
         "ERR LINK settings not applied: the unit did not answer in time"
@@ -586,8 +427,8 @@ fn every_command_on_a_sync_unit() {
     );
     assert_eq!(
         rig.cmd("CARTRIDGE"),
-        "OK uid=E00401D0036FB25D part=428936 rev=3 nominal_amps=45 starts=17 pilot_arc_s=40 \
-         transfers=15 transfer_s=40"
+        "OK uid=E00401D0036FB25D part=428930 rev=1 nominal_amps=65 name=C_MECH starts=17 \
+         pilot_arc_s=40 transfers=15 transfer_s=40"
     );
     assert_eq!(rig.cmd("GASTEST ON"), "OK gastest=ON");
     assert_eq!(rig.cmd("GASTEST OFF"), "OK gastest=OFF");
@@ -595,7 +436,7 @@ fn every_command_on_a_sync_unit() {
         rig.cmd("RESTART"),
         "ERR STATE quick restart needs fault 0-50-0, no fault active"
     );
-    rig.unit.powermax().set_fault(500);
+    rig.fault(500);
     rig.run(300);
     assert_eq!(
         rig.cmd("FAULT"),
@@ -678,7 +519,7 @@ fn raw_frames_are_forwarded_or_refused_by_the_allow_list() {
 
 #[test]
 fn without_a_unit_commands_that_need_one_say_link() {
-    let mut rig = Rig::new(Settings::default(), Unit::None);
+    let mut rig = Rig::new(Settings::default(), None);
     rig.run(50);
     for line in [
         "SET PROCESS CUT 45 AUTO",
@@ -718,7 +559,7 @@ fn without_a_unit_commands_that_need_one_say_link() {
 
 #[test]
 fn every_command_on_an_hpr() {
-    let mut rig = Rig::hpr(b"HYPERFORMANCE130AUTO");
+    let mut rig = Rig::hpr("hpr130");
     assert_eq!(
         rig.cmd("STATUS"),
         "OK link=UP model=HPR130 family=HPR remote=OFF mode=- amps=130 psi=- out_amps=- \
@@ -727,7 +568,7 @@ fn every_command_on_an_hpr() {
     );
     assert_eq!(rig.cmd("LIMITS"), "OK amps=5..130 corner=50..100");
     assert_eq!(rig.cmd("SET AMPS 100"), "OK amps=100");
-    let requests = &rig.unit.hpr().requests;
+    let requests = rig.hpr_commands();
     let set = requests.iter().position(|&id| id == 58).unwrap();
     assert_eq!(requests[set - 1], 4, "REMOTE_MODE before the first setting");
     assert_eq!(
@@ -763,7 +604,18 @@ fn every_command_on_an_hpr() {
         rig.cmd("RESET"),
         "ERR STATE not allowed in state 3 (IDLE2) with error 000 (NO ERROR)"
     );
+    // Two errors come and go before the bridge polls: only the log keeps them.
+    rig.fault(20);
+    rig.fault(44);
+    rig.fault(0);
     assert_eq!(rig.cmd("FAULTLOG"), "OK log=044,020");
+    rig.ps().hpr().set_counters(HprCounters {
+        arc_on: Accumulator::from_secs(3600),
+        system_on: Accumulator::from_secs(900 * 60),
+        starts: 420,
+        start_errors: 3,
+        rampdown_errors: 1,
+    });
     assert!(rig.cmd("COUNTERS").starts_with(
         "OK arc_s=3600 system_min=900 starts=420 start_errors=3 rampdown_errors=1 link_ok="
     ));
@@ -786,7 +638,7 @@ fn every_command_on_an_hpr() {
         rig.cmd("RAW >12093<"),
         "ERR REFUSED raw command 120 not allowed"
     );
-    rig.unit.hpr().error = 44;
+    rig.fault(44);
     rig.run(300);
     assert_eq!(
         rig.cmd("FAULT"),
@@ -796,7 +648,7 @@ fn every_command_on_an_hpr() {
 
 #[test]
 fn maxpro200_commands_that_do_not_apply_say_why() {
-    let mut rig = Rig::hpr(b"MaxPro200");
+    let mut rig = Rig::hpr("maxpro200");
     assert_eq!(rig.cmd("LIMITS"), "OK amps=5..200");
     assert_eq!(rig.cmd("SET AMPS 200"), "OK amps=200");
     assert_eq!(rig.cmd("GASES AIR AIR"), "OK plasma=AIR shield=AIR");
@@ -825,7 +677,7 @@ fn maxpro200_commands_that_do_not_apply_say_why() {
 
 #[test]
 fn events_report_link_faults_settings_and_arc_when_on() {
-    let mut rig = Rig::new(events_on(), Unit::Powermax(FakePowermax::sync65()));
+    let mut rig = Rig::new(events_on(), Some("sync65"));
     rig.run(600);
     assert!(
         rig.received
@@ -838,11 +690,12 @@ fn events_report_link_faults_settings_and_arc_when_on() {
         tokens,
         [
             "!REMOTE ON",
-            "!SETTINGS applied mode=CUT amps=45 psi=AUTO",
+            // The read-back: in automatic pressure the unit shows the pressure it picked.
+            "!SETTINGS applied mode=CUT amps=45 psi=72",
             "OK mode=CUT amps=45 psi=AUTO"
         ]
     );
-    rig.unit.powermax().set_fault(200);
+    rig.fault(200);
     let start = rig.received.len();
     rig.run(300);
     assert_eq!(
@@ -852,7 +705,7 @@ fn events_report_link_faults_settings_and_arc_when_on() {
           process, operating mode, torch, lead length, and cartridge type."
         ]
     );
-    rig.unit.powermax().set_fault(0);
+    rig.fault(0);
     let start = rig.received.len();
     rig.run(300);
     assert_eq!(rig.received[start..], ["!FAULT CLEARED code=0-20-0"]);
@@ -876,7 +729,7 @@ fn events_report_link_faults_settings_and_arc_when_on() {
         ]
     );
     assert_eq!(rig.cmd("EVENTS OFF"), "OK events=OFF");
-    rig.unit.powermax().set_fault(200);
+    rig.fault(200);
     let start = rig.received.len();
     rig.run(300);
     rig.bridge.on_io_event(rig.now, IoEvent::ArcOn);
@@ -887,7 +740,7 @@ fn events_report_link_faults_settings_and_arc_when_on() {
         &rig.received[start..]
     );
     assert_eq!(rig.cmd("EVENTS ON"), "OK events=ON");
-    rig.unit.powermax().silent = true;
+    rig.unplug(true);
     let start = rig.received.len();
     rig.run(2000);
     assert!(
@@ -900,9 +753,12 @@ fn events_report_link_faults_settings_and_arc_when_on() {
 
 #[test]
 fn hpr_state_changes_are_events() {
-    let mut rig = Rig::hpr(b"HYPERFORMANCE260");
+    let mut rig = Rig::hpr("hpr260");
     assert_eq!(rig.cmd("EVENTS ON"), "OK events=ON");
-    rig.unit.hpr().state = 4;
+    // A start held by HOLD: the unit stays in preflow.
+    let now = rig.now;
+    rig.ps().hpr().set_hold(now, true);
+    rig.ps().unit().set_start(now, true);
     let start = rig.received.len();
     rig.run(300);
     assert_eq!(rig.received[start..], ["!STATE 4 name=PREFLOW from=3"]);
@@ -1090,7 +946,7 @@ fn config_get_set_and_save_round_trip_through_the_settings_record() {
         "ERR STORAGE settings not saved: flash write failed"
     );
     // After a power cycle the bridge runs with what was saved.
-    let mut rig = Rig::new(restored, Unit::Powermax(FakePowermax::sync65()));
+    let mut rig = Rig::new(restored, Some("sync65"));
     assert_eq!(rig.cmd("CONFIG timeout_ms"), "OK timeout_ms=80");
     assert_eq!(rig.cmd("CONFIG events"), "OK events=ON");
 }
@@ -1100,7 +956,7 @@ fn config_get_set_and_save_round_trip_through_the_settings_record() {
 
 #[test]
 fn torch_is_handed_to_the_simulator_driver() {
-    let mut rig = Rig::new(Settings::default(), Unit::None);
+    let mut rig = Rig::new(Settings::default(), None);
     assert_eq!(
         rig.cmd("TORCH ON"),
         "ERR UNSUPPORTED TORCH is a simulator command"
@@ -1188,7 +1044,7 @@ proptest! {
         lines in proptest::collection::vec((line_content(), terminator()), 1..12),
         chunk in 1usize..48,
     ) {
-        let mut rig = Rig::new(Settings::default(), Unit::None);
+        let mut rig = Rig::new(Settings::default(), None);
         let mut bytes = Vec::new();
         let mut expected = 0;
         for (content, end) in &lines {
@@ -1246,7 +1102,7 @@ fn documented_replies_not_covered_above() {
         rig.cmd("EVENTS MAYBE"),
         "ERR SYNTAX EVENTS argument: expected ON|OFF"
     );
-    rig.unit.powermax().set_fault(500);
+    rig.fault(500);
     rig.run(300);
     assert_eq!(rig.cmd("RESTART"), "OK restart=done quiet_ms=2000");
     assert!(
@@ -1254,10 +1110,9 @@ fn documented_replies_not_covered_above() {
             .starts_with("ERR BUSY the unit restarts: quiet for another "),
     );
 
-    let mut rig = Rig::hpr(b"HYPERFORMANCE400XD");
+    let mut rig = Rig::hpr("hpr400xd");
     // RESET only in a shutdown error (state 14, error above 79).
-    rig.unit.hpr().state = 14;
-    rig.unit.hpr().error = 80;
+    rig.fault(80);
     rig.run(300);
     assert_eq!(rig.cmd("RESET"), "OK reset=done");
     assert!(rig.cmd("STATUS").contains(" model=HPR400XD family=HPR "));

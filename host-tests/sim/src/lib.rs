@@ -1,5 +1,5 @@
 //! Simulated Hypertherm power supplies behind one byte-level interface, and the serial line
-//! between them and a master in virtual time ([`line`]).
+//! between them and a master in virtual time ([`line`](mod@line)).
 //!
 //! This crate depends on the wire formats (`plasma-protocol`) only, never on the bridge: the
 //! firmware's own tests, the scenario harness and `pbtool` all use these same units.

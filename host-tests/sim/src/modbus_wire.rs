@@ -79,7 +79,7 @@ fn emit(response: &Response<'_>) -> Vec<u8> {
     }
 }
 
-/// What a unit answers, owned so a model can build it; [`Reply::response`] borrows it as the
+/// What a unit answers, owned so a model can build it; [`Reply::to_pdu`] emits it through the
 /// protocol crate's typed [`Response`].
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub enum Reply {

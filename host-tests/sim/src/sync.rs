@@ -743,6 +743,36 @@ mod tests {
     }
 
     #[test]
+    fn a_unit_whose_remote_settings_do_not_apply_reads_back_its_panel() {
+        let mut u = unit(Model::Sync65);
+        u.config_mut().remote_settings_apply = false;
+        let panel = read(&mut u, ms(0), 0x3010, 3);
+        let echo = exchange(
+            &mut u,
+            ms(10),
+            &request(1, &write_multiple_pdu(0x3080, &[2, 40 * 64, 0])),
+        )
+        .unwrap();
+        assert_eq!(pdu(&echo)[0], 0x10, "acknowledged");
+        assert_eq!(read(&mut u, ms(20), 0x3010, 3), panel);
+    }
+
+    #[test]
+    fn refused_registers_fail_every_read_that_touches_them() {
+        let mut u = unit(Model::Sync65);
+        u.config_mut().refused_registers = vec![0x3001];
+        let ask = |u: &mut Powermax, start: u16, quantity: u16| {
+            let mut p = vec![0x04];
+            p.extend_from_slice(&start.to_be_bytes());
+            p.extend_from_slice(&quantity.to_be_bytes());
+            pdu(&exchange(u, ms(0), &request(1, &p)).unwrap())
+        };
+        assert_eq!(ask(&mut u, 0x3000, 6), vec![0x84, 0x02]);
+        assert_eq!(ask(&mut u, 0x3001, 1), vec![0x84, 0x02]);
+        assert_eq!(ask(&mut u, 0x3002, 4)[0], 0x04);
+    }
+
+    #[test]
     fn start_held_at_power_up_is_a_stuck_start_until_released() {
         let mut u = unit(Model::Sync65);
         u.power_off(ms(0));

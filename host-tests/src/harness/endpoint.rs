@@ -46,18 +46,6 @@ pub trait PsEndpoint {
     }
 }
 
-/// The supply state the discrete I/O should see for `status` (what `Bridge::supply_state`
-/// computes for the board).
-pub fn supply_state_of(status: &UnitStatus) -> SupplyState {
-    SupplyState {
-        link_up: status.link_up,
-        fault_requires_action: status.active_fault.is_some_and(|f| f.action_required()),
-        fault_active: status.active_fault.is_some(),
-        restart_blackout_until: status.restart_blackout_until,
-        unit_ready: status.ready,
-    }
-}
-
 impl PsEndpoint for PsLink {
     fn handle_ps_rx(&mut self, now: Instant, bytes: &[u8]) {
         self.handle_rx(now, bytes);
@@ -86,7 +74,8 @@ impl PsEndpoint for PsLink {
     }
 
     fn supply_state(&self) -> SupplyState {
-        supply_state_of(PsLink::status(self))
+        // The firmware's own translation (what `Bridge::supply_state` uses), not a copy.
+        SupplyState::from(PsLink::status(self))
     }
 
     fn status(&self) -> &UnitStatus {

@@ -14,8 +14,9 @@
 //! 4. the endpoint's [`SupplyState`](plasma_firmware::io::SupplyState) goes to the
 //!    [`Interlocks`](plasma_firmware::io::Interlocks), whose START drives the unit's Start
 //!    input;
-//! 5. the independent [`SafetyMonitor`](plasma_firmware::io::SafetyMonitor) checks TORCH_ON /
-//!    START / blackout. A broken rule panics at once (with the last frames on the wire), so
+//! 5. the independent [`SafetyMonitor`](plasma_firmware::io::SafetyMonitor), fed the input
+//!    edges as the harness drives them (never the interlocks' view), checks them against
+//!    START and the blackout. A broken rule panics at once (with the last frames on the wire), so
 //!    every scenario enforces the safety rules.
 //!
 //! The endpoint is anything implementing [`PsEndpoint`]: a bare
@@ -47,7 +48,7 @@ mod trace;
 mod world;
 
 pub use bridge::{BridgeEndpoint, CNC_REPLY_TIMEOUT, CncItem, CncRecord};
-pub use endpoint::{PsEndpoint, supply_state_of};
+pub use endpoint::PsEndpoint;
 pub use options::{RxErrors, WorldOptions};
 pub use trace::{Direction, TraceFrame, WireTrace};
 pub use world::{Timeout, World, WorldStats};

@@ -4,7 +4,7 @@
 use std::fmt;
 
 use plasma_firmware::io::{
-    Input, Interlocks, IoConfig, IoEvent, SafetyMonitor, SupplyState, Transition,
+    Input, Inputs, Interlocks, IoConfig, IoEvent, SafetyMonitor, SupplyState, Transition,
 };
 use plasma_firmware::link::{
     CommandFailure, CommandOutput, LinkCommand, LinkEvent, PsLink, Refusal, Ticket,
@@ -67,6 +67,9 @@ pub struct World<E: PsEndpoint = PsLink> {
     unit: Box<dyn SimulatedUnit>,
     line: Line,
     io: Interlocks,
+    /// The input levels at the board's pins, as driven: what the monitors and a reset see,
+    /// kept apart from the interlocks' own view.
+    pins_in: Inputs,
     monitor: SafetyMonitor,
     /// A second monitor started at the last [`World::reset_bridge`]: the power-up rules
     /// (START off at reset, a held TORCH_ON ignored) apply again from there.
@@ -155,14 +158,15 @@ impl<E: PsEndpoint> World<E> {
         if let Some(density) = options.noise_density {
             line.set_noise_density(density);
         }
-        let io = Interlocks::new(options.io, Instant::ZERO, Default::default());
+        let io = Interlocks::new(options.io, Instant::ZERO, Inputs::NONE);
         let mut world = World {
             now: Instant::ZERO,
             endpoint,
             unit,
             line,
             io,
-            monitor: SafetyMonitor::new(),
+            pins_in: Inputs::NONE,
+            monitor: SafetyMonitor::new(false),
             reset_monitor: None,
             rx_errors: options.rx_errors,
             events: Vec::new(),
@@ -248,9 +252,9 @@ impl<E: PsEndpoint> World<E> {
         while let Some(t) = self.io.poll_transition() {
             self.transitions.push(t);
         }
-        self.io = Interlocks::new(io, now, self.io.inputs());
+        self.io = Interlocks::new(io, now, self.pins_in);
         self.last_supply = SupplyState::default();
-        self.reset_monitor = Some(SafetyMonitor::new());
+        self.reset_monitor = Some(SafetyMonitor::new(self.pins_in.torch_on));
         self.process();
     }
 
@@ -277,16 +281,24 @@ impl<E: PsEndpoint> World<E> {
 
     /// Drive the CNC's TORCH_ON input.
     pub fn set_torch(&mut self, on: bool) {
-        let now = self.now;
-        self.io.on_input(now, Input::TorchOn, on);
-        self.process();
+        self.set_input(Input::TorchOn, on);
     }
 
     /// Drive another CNC input (HOLD, CORNER_CURRENT...).
     pub fn set_input(&mut self, input: Input, on: bool) {
-        let now = self.now;
-        self.io.on_input(now, input, on);
+        self.drive_input(input, on);
         self.process();
+    }
+
+    /// An edge at the board's input pin now: the monitors see it as it arrives, then the
+    /// interlocks get it.
+    fn drive_input(&mut self, input: Input, on: bool) {
+        self.pins_in.set(input, on);
+        self.monitor.input(input, on);
+        if let Some(monitor) = &mut self.reset_monitor {
+            monitor.input(input, on);
+        }
+        self.io.on_input(self.now, input, on);
     }
 
     /// The interlocks.
@@ -528,8 +540,8 @@ impl<E: PsEndpoint> World<E> {
         }
         self.take_unit_noise();
         let motion = self.unit.motion();
-        if motion != self.io.inputs().motion {
-            self.io.on_input(now, Input::Motion, motion);
+        if motion != self.pins_in.motion {
+            self.drive_input(Input::Motion, motion);
         }
 
         // The bridge side.
@@ -564,7 +576,7 @@ impl<E: PsEndpoint> World<E> {
         // What the endpoint asks of the machine: a simulator-only TORCH_ON level, a new
         // interlock configuration.
         while let Some(on) = self.endpoint.poll_torch_request() {
-            self.io.on_input(now, Input::TorchOn, on);
+            self.drive_input(Input::TorchOn, on);
         }
         if let Some(config) = self.endpoint.take_io_config_change() {
             self.io.set_config(now, config);
@@ -592,19 +604,10 @@ impl<E: PsEndpoint> World<E> {
         }
         self.endpoint
             .set_io_snapshot(self.io.inputs(), self.io.outputs());
-        self.monitor.check(
-            now,
-            self.io.inputs().torch_on,
-            start,
-            supply.restart_blackout_until,
-        );
+        self.monitor
+            .check(now, start, supply.restart_blackout_until);
         if let Some(monitor) = &mut self.reset_monitor {
-            monitor.check(
-                now,
-                self.io.inputs().torch_on,
-                start,
-                supply.restart_blackout_until,
-            );
+            monitor.check(now, start, supply.restart_blackout_until);
         }
         self.assert_safe();
     }
