@@ -71,18 +71,9 @@ enum HprJob {
 }
 
 impl HprJob {
+    /// Settings need remote mode (004) first.
     fn needs_remote(&self) -> bool {
-        matches!(
-            self,
-            HprJob::Typed(
-                Request::SetNominalAmps { .. }
-                    | Request::SetProcess { .. }
-                    | Request::SetAllParameters(_)
-                    | Request::SetAllParametersMaxPro200(_)
-                    | Request::SetInletGases(_)
-                    | Request::SetCornerCurrent { .. }
-            )
-        )
+        matches!(self, HprJob::Typed(request) if kept::sets(request) != 0)
     }
 }
 
@@ -150,7 +141,7 @@ fn is_cutting(state: Option<StateCode>) -> bool {
 
 impl HprDriver {
     /// A driver for a unit that answered HELLO with `system`.
-    pub fn new(system: SystemId, now: Instant, core: &mut Core) -> Self {
+    pub(crate) fn new(system: SystemId, now: Instant, core: &mut Core) -> Self {
         let maxpro = system == SystemId::MaxPro200;
         if !core.hpr_kept.is_empty() && core.hpr_kept.system() != Some(system) {
             // Another unit is on the line: the kept settings were meant for the one before.
@@ -198,17 +189,6 @@ impl HprDriver {
         }
     }
 
-    /// True when the active command is a RAW forward.
-    pub fn active_is_raw(&self) -> bool {
-        matches!(
-            self.active,
-            Some(ActiveJob {
-                job: HprJob::Raw { .. },
-                ..
-            })
-        )
-    }
-
     fn in_pilot_arc(&self, core: &Core) -> bool {
         core.status
             .hpr
@@ -217,7 +197,7 @@ impl HprDriver {
     }
 
     /// Earliest time the driver wants to send something.
-    pub fn wake_at(&self, core: &Core) -> Option<Instant> {
+    pub(crate) fn wake_at(&self, core: &Core) -> Option<Instant> {
         if let Some(until) = self.pause_until.filter(|&u| self.now < u) {
             return Some(until);
         }
@@ -239,7 +219,7 @@ impl HprDriver {
     }
 
     /// The next frame to send, if any, and what it is for.
-    pub fn next_request(
+    pub(crate) fn next_request(
         &mut self,
         now: Instant,
         core: &mut Core,
@@ -347,7 +327,7 @@ impl HprDriver {
         None
     }
     /// The link went down: every pending command fails.
-    pub fn abort(&mut self, core: &mut Core) {
+    pub(crate) fn abort(&mut self, core: &mut Core) {
         let active = self.active.take().and_then(|active| active.ticket);
         core.fail_commands(active, &mut self.queue);
         // Kept settings stay (in the core) and are re-applied when the unit is back.
