@@ -1,5 +1,5 @@
 //! The emulated board's measurements (`emu-probe:` log lines of its board layer, see
-//! firmware/src/bin/plasma-bridge-emu/probe.rs), and `pbtool emu --measure`: QEMU with
+//! firmware/boards/emu/src/probe.rs), and `pbtool emu --measure`: QEMU with
 //! instruction counting (`-icount shift=0`: one guest nanosecond per instruction), TORCH_ON
 //! toggled with the link up and the unit ready, the figures summarised.
 

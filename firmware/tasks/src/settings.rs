@@ -1,6 +1,6 @@
 //! The settings task: loads the settings at boot and stores `CONFIG SAVE` off the bridge task,
 //! so both serial ports keep being served while flash pages are erased. The flash behind it is
-//! the board's (`board::SettingsFlash`).
+//! the board's ([`Board::SettingsFlash`]).
 
 use core::future::Future;
 use core::ops::Range;
@@ -15,15 +15,15 @@ use plasma_firmware::storage::{LoadOutcome, LoadedSettings, SettingsStore};
 use plasma_firmware::supervisor::SettingsSaver;
 use plasma_firmware::watchdog::TaskId;
 
-use super::progress::report;
-use crate::board::{SettingsFlash, flash_errors_seen};
+use crate::Board;
+use crate::progress::report;
 
 /// The store over the board's settings flash.
-pub type Store = SettingsStore<SettingsFlash>;
+pub type Store<B> = SettingsStore<<B as Board>::SettingsFlash>;
 
 /// The store over `region` of `flash`, or `None` (logged) if the region does not suit it: a
 /// mismatch between the board's region and the flash's page size, a build mistake.
-pub fn open(flash: SettingsFlash, region: Range<u32>) -> Option<Store> {
+pub fn open<B: Board>(flash: B::SettingsFlash, region: Range<u32>) -> Option<Store<B>> {
     match SettingsStore::new(flash, region) {
         Ok(store) => Some(store),
         Err(e) => {
@@ -37,8 +37,8 @@ pub fn open(flash: SettingsFlash, region: Range<u32>) -> Option<Store> {
 }
 
 /// Logs flash read errors the board saw while the store was read (torn writes).
-fn report_flash_errors() {
-    let errors = flash_errors_seen();
+fn report_flash_errors<B: Board>() {
+    let errors = B::flash_errors_seen();
     if errors > 0 {
         warn!(
             "settings: {} double ECC error(s) read (torn writes), skipped",
@@ -48,7 +48,7 @@ fn report_flash_errors() {
 }
 
 /// Loads the settings at boot: the stored ones, or the defaults and why (logged).
-pub async fn load(store: Option<&mut Store>) -> LoadedSettings<Settings> {
+pub async fn load<B: Board>(store: Option<&mut Store<B>>) -> LoadedSettings<Settings> {
     let loaded = match store {
         Some(store) => store.load_settings::<Settings>().await,
         None => LoadedSettings {
@@ -56,7 +56,7 @@ pub async fn load(store: Option<&mut Store>) -> LoadedSettings<Settings> {
             outcome: LoadOutcome::FlashError,
         },
     };
-    report_flash_errors();
+    report_flash_errors::<B>();
     if loaded.outcome.is_problem() {
         warn!("settings: {}", loaded.outcome);
     } else {
@@ -96,9 +96,9 @@ impl SettingsSaver<Settings, SaveError> for BoardSaver {
     }
 }
 
-/// Writes settings to flash when the bridge asks (`CONFIG SAVE`).
-#[embassy_executor::task]
-pub async fn settings(mut store: Option<Store>, progress: TaskId) {
+/// Writes settings to flash when the bridge asks (`CONFIG SAVE`). The body of the board's
+/// settings task.
+pub async fn run<B: Board>(mut store: Option<Store<B>>, progress: TaskId) {
     loop {
         let request = select(SAVE_REQUEST.wait(), Timer::after_millis(250)).await;
         report(progress);
@@ -116,7 +116,7 @@ pub async fn settings(mut store: Option<Store>, progress: TaskId) {
             Ok(()) => info!("settings saved"),
             Err(e) => warn!("settings not saved: {}", e),
         }
-        report_flash_errors();
+        report_flash_errors::<B>();
         SAVE_RESULT.signal(result);
     }
 }

@@ -8,24 +8,24 @@ use plasma_firmware::supervisor::Supervisor;
 use plasma_firmware::watchdog::TaskId;
 use plasma_protocol::serial::PortConfig;
 
-use super::clock::EmbassyClock;
-use super::io::BoardIo;
-use super::progress::report;
-use super::settings::BoardSaver;
-use crate::board::{CNC_TX_BUFFER, CncUart, PsUart};
+use crate::Board;
+use crate::clock::EmbassyClock;
+use crate::io::BoardIo;
+use crate::progress::report;
+use crate::settings::BoardSaver;
 
-/// The bridge arrives by reference: a task's arguments live in its future next to the state
-/// the body keeps across awaits, so a `Bridge` by value would take its ~8 KB of RAM twice.
-#[embassy_executor::task]
-pub async fn bridge(
+/// The body of the bridge task. The bridge arrives by reference: a task's arguments live in
+/// its future next to the state the body keeps across awaits, so a `Bridge` by value would
+/// take its ~8 KB of RAM twice.
+pub async fn run<B: Board>(
     bridge: &'static mut Bridge,
-    ps: PsUart,
-    cnc: CncUart,
+    ps: B::PsUart,
+    cnc: B::CncUart,
     io: BoardIo,
     progress: TaskId,
 ) {
     let clock = EmbassyClock;
-    let mut supervisor = Supervisor::new(ps, cnc, CNC_TX_BUFFER, io, BoardSaver);
+    let mut supervisor = Supervisor::new(ps, cnc, B::CNC_TX_BUFFER, io, BoardSaver);
     let mut applied: Option<PortConfig> = None;
     let mut status = Seen::default();
     loop {

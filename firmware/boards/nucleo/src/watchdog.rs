@@ -1,11 +1,11 @@
 //! The independent watchdog (IWDG), fed only while every task reports progress
-//! (`tasks::progress`).
+//! (`plasma_tasks::progress`).
 
 use embassy_stm32::wdg::IndependentWatchdog;
 use embassy_stm32::{Peri, pac, peripherals};
 use embassy_time::Timer;
 
-use crate::tasks::progress::should_feed;
+use plasma_tasks::progress::should_feed;
 
 /// How long the IWDG runs without a feed before it resets the MCU.
 const IWDG_TIMEOUT_US: u32 = 1_000_000;

@@ -1,5 +1,5 @@
 //! The watchdog task. QEMU models no IWDG, so the emulated board does in software what the
-//! IWDG does on the Nucleo: once a task stops reporting progress (`tasks::progress`, the
+//! IWDG does on the Nucleo: once a task stops reporting progress (`plasma_tasks::progress`, the
 //! same check as the Nucleo's), the outputs go safe at once and, after the IWDG's time-out,
 //! the core resets.
 //!
@@ -15,7 +15,7 @@
 use defmt::warn;
 use embassy_time::{Duration, Instant, Timer};
 
-use crate::tasks::progress::should_feed;
+use plasma_tasks::progress::should_feed;
 
 /// The IWDG time-out of the Nucleo image.
 const TIMEOUT: Duration = Duration::from_millis(1000);

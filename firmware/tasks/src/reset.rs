@@ -6,7 +6,7 @@ use core::mem::MaybeUninit;
 
 use plasma_firmware::safe_state::{BootReport, PANIC_MARKER};
 
-use crate::board::pac::RCC;
+use crate::chip;
 
 /// A word the reset does not clear (cortex-m-rt's `.uninit`), for the panic marker.
 #[unsafe(link_section = ".uninit.PANIC_MARKER")]
@@ -31,9 +31,8 @@ fn take_panic_marker() -> u32 {
 
 /// Why the MCU reset, from RCC_CSR and the panic marker; clears both for the next boot.
 pub fn boot_report() -> BootReport {
-    let csr = RCC.csr().read().0;
-    let report = BootReport::read(csr, take_panic_marker());
-    RCC.csr().modify(|w| w.set_rmvf(true));
+    let report = BootReport::read(chip::reset_flags(), take_panic_marker());
+    chip::clear_reset_flags();
     report
 }
 

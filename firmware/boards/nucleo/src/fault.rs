@@ -1,5 +1,5 @@
 //! Panic, HardFault and NMI: outputs to safe state first, a marker that survives the reset
-//! (`tasks::reset`, which reads it back at boot), a log line, reset.
+//! (`plasma_tasks::reset`, which reads it back at boot), a log line, reset.
 
 use core::sync::atomic::{AtomicU32, Ordering};
 
@@ -7,9 +7,10 @@ use cortex_m_rt::{ExceptionFrame, exception};
 use defmt::error;
 use embassy_stm32::pac;
 
+use plasma_tasks::reset::mark_panic;
+use plasma_tasks::safe_state::drive_safe_state;
+
 use crate::flash::{FLASH_BANK2, FLASH_BASE, settings_region};
-use crate::tasks::pin_map::drive_safe_state;
-use crate::tasks::reset::mark_panic;
 
 /// Safe state, marker, log, reset.
 fn fail(reason: impl FnOnce()) -> ! {

@@ -1,11 +1,11 @@
 //! Panic and HardFault: outputs to safe state first, a marker that survives the reset
-//! (`tasks::reset`), a log line, reset (SYSRESETREQ, which QEMU models).
+//! (`plasma_tasks::reset`), a log line, reset (SYSRESETREQ, which QEMU models).
 
 use cortex_m_rt::{ExceptionFrame, exception};
 use defmt::error;
 
-use crate::tasks::pin_map::drive_safe_state;
-use crate::tasks::reset::mark_panic;
+use plasma_tasks::reset::mark_panic;
+use plasma_tasks::safe_state::drive_safe_state;
 
 fn fail(reason: impl FnOnce()) -> ! {
     cortex_m::interrupt::disable();

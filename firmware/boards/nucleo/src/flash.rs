@@ -4,18 +4,15 @@
 use core::ops::Range;
 use core::sync::atomic::Ordering;
 
-use embassy_stm32::flash::{Async, Flash};
+use plasma_tasks::settings::Store;
 
+use crate::board::Nucleo;
 use crate::fault::SETTINGS_ECC_ERRORS;
-use crate::tasks::settings::Store;
 
 /// Start of flash in the address map.
 pub const FLASH_BASE: u32 = 0x0800_0000;
 /// Start of bank 2.
 pub const FLASH_BANK2: u32 = 0x0808_0000;
-
-/// The flash the settings store writes.
-pub type SettingsFlash = Flash<'static, Async>;
 
 /// The settings region from memory.x, as offsets from the start of flash.
 pub fn settings_region() -> Range<u32> {
@@ -30,8 +27,8 @@ pub fn settings_region() -> Range<u32> {
 }
 
 /// The store over the settings region; build.rs checks the region against the page size.
-pub fn open(flash: SettingsFlash) -> Option<Store> {
-    crate::tasks::settings::open(flash, settings_region())
+pub fn open(flash: <Nucleo as plasma_tasks::Board>::SettingsFlash) -> Option<Store<Nucleo>> {
+    plasma_tasks::settings::open::<Nucleo>(flash, settings_region())
 }
 
 /// Double ECC errors the NMI handler skipped in the settings region since the last call.

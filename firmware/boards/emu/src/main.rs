@@ -3,13 +3,14 @@
 //! (`pbtool emu`) runs it with a simulated power supply; the end-to-end tests in
 //! host-tests/tests/emu_*.rs drive it.
 //!
-//! The tasks are the Nucleo image's, unchanged ([`tasks`], from `../tasks`), over the same
-//! bridge library. Only this board layer differs, because QEMU models too little for
+//! The tasks are the Nucleo image's, unchanged (the `plasma-tasks` crate, over the
+//! [`board::Emulated`] implementation of its `Board` trait), over the same bridge library and
+//! the same pin table. Only this board layer differs, because QEMU models too little for
 //! embassy-stm32 (no PWR, FLASH, DMA, timers or watchdog; see docs/board.md):
 //!
 //! - [`rcc`]: clocks by register (80 MHz, as on the Nucleo);
 //! - [`time_driver`]: embassy-time on SysTick;
-//! - [`gpio`]: the same pins, EXTI inputs and outputs by register;
+//! - [`gpio`]: the pins of the one pin table, EXTI inputs and outputs by register;
 //! - [`usart`]: USART1 (power supply, hardware DE) and USART2 (CNC) by register;
 //! - [`flash`]: the settings store on a RAM model of the flash;
 //! - [`watchdog`]: the progress check of the Nucleo, with a software reset for the IWDG;
@@ -29,6 +30,8 @@ fn main() {
 }
 
 #[cfg(target_os = "none")]
+mod board;
+#[cfg(target_os = "none")]
 mod executor;
 #[cfg(target_os = "none")]
 mod fault;
@@ -41,56 +44,38 @@ mod probe;
 #[cfg(target_os = "none")]
 mod rcc;
 #[cfg(target_os = "none")]
-#[path = "../tasks/mod.rs"]
-mod tasks;
-#[cfg(target_os = "none")]
 mod time_driver;
 #[cfg(target_os = "none")]
 mod usart;
 #[cfg(target_os = "none")]
 mod watchdog;
 
-/// What the shared tasks take from this board (see `../tasks/mod.rs`).
-#[cfg(target_os = "none")]
-mod board {
-    pub use crate::flash::{SettingsFlash, flash_errors_seen};
-    pub use crate::gpio::{InputPins, Led, OutputPins};
-    pub use crate::usart::Uart as PsUart;
-    pub use crate::usart::Uart as CncUart;
-    pub use stm32_metapac as pac;
-
-    /// The CNC writes are byte by byte here; pieces of this size keep the Nucleo's rhythm.
-    pub const CNC_TX_BUFFER: usize = 256;
-}
-
 #[cfg(target_os = "none")]
 mod image {
-    use core::fmt::Write as _;
-
     use cortex_m::peripheral::NVIC;
     use defmt::{info, warn};
     use defmt_semihosting as _;
     use embassy_executor::{InterruptExecutor, Spawner};
-    use heapless::String;
     use plasma_firmware::bridge::Bridge;
     use plasma_firmware::inputs::InputConfig;
+    use plasma_firmware::pins::{CNC_UART, PS_UART};
     use plasma_firmware::safe_state::BootReport;
-    use plasma_firmware::storage::LoadOutcome;
     use plasma_protocol::serial::PortConfig;
     use plasma_protocol::time::Duration;
+    use plasma_tasks::boot::boot_text;
+    use plasma_tasks::clock::now;
+    use plasma_tasks::io::BoardIo;
+    use plasma_tasks::progress::register;
+    use plasma_tasks::reset;
+    use plasma_tasks::safe_state::drive_safe_state;
+    use plasma_tasks::settings as shared_settings;
     use static_cell::StaticCell;
     use stm32_metapac::gpio::vals::Moder;
-    use stm32_metapac::{GPIOA, Interrupt, USART1, USART2, interrupt};
+    use stm32_metapac::{Interrupt, USART1, USART2, interrupt};
 
+    use crate::board::{Emulated, bridge_task, heartbeat_task, io_task, settings_task};
     use crate::flash::{SETTINGS_SIZE, SettingsFlash};
-    use crate::gpio::{InputPins, Led, OutputPins};
-    use crate::tasks::bridge::bridge as bridge_task;
-    use crate::tasks::clock::now;
-    use crate::tasks::io::{BoardIo, io_task};
-    use crate::tasks::pin_map::drive_safe_state;
-    use crate::tasks::progress::{heartbeat, register};
-    use crate::tasks::reset;
-    use crate::tasks::settings::{self as settings_task, outcome_word};
+    use crate::gpio::{InputPins, Led, OutputPins, gpio};
     use crate::usart::{Uart, UartState, on_interrupt};
     use crate::{executor, probe, rcc, time_driver, watchdog};
 
@@ -132,28 +117,15 @@ mod image {
         unsafe { WATCHDOG_EXECUTOR.on_interrupt() }
     }
 
-    static BOOT_TEXT: StaticCell<String<64>> = StaticCell::new();
     static BRIDGE: StaticCell<Bridge> = StaticCell::new();
 
-    /// `<reset cause>,settings:<outcome>` for the CNC port.
-    fn boot_text(boot: &BootReport, outcome: LoadOutcome) -> &'static str {
-        let text = BOOT_TEXT.init(String::new());
-        // 64 bytes hold the longest cause and outcome; a cut text is still a report.
-        let _ = write!(
-            text,
-            "{},settings:{}",
-            boot.cause.as_str(),
-            outcome_word(outcome)
-        );
-        text.as_str()
-    }
-
-    /// PA9/PA10/PA12 (USART1 TX/RX/DE) and PA2/PA3 (USART2 TX/RX) to AF7, as wired on the
-    /// Nucleo; QEMU routes the USARTs to its sockets whatever the pins say.
+    /// The UARTs' pins (the pin table's, as wired on the Nucleo) to AF7; QEMU routes the
+    /// USARTs to its sockets whatever the pins say.
     fn route_uart_pins() {
-        for pin in [2, 3, 9, 10, 12] {
-            GPIOA.afr(pin / 8).modify(|w| w.set_afr(pin % 8, 7));
-            GPIOA.moder().modify(|w| w.set_moder(pin, Moder::ALTERNATE));
+        for pin in PS_UART.pins().chain(CNC_UART.pins()) {
+            let (port, n) = (gpio(pin.port), pin.number as usize);
+            port.afr(n / 8).modify(|w| w.set_afr(n % 8, 7));
+            port.moder().modify(|w| w.set_moder(n, Moder::ALTERNATE));
         }
     }
 
@@ -209,8 +181,9 @@ mod image {
 
     #[embassy_executor::task]
     async fn boot_task(spawner: Spawner, boot: BootReport) {
-        let mut store = settings_task::open(SettingsFlash::new(), 0..SETTINGS_SIZE as u32);
-        let loaded = settings_task::load(store.as_mut()).await;
+        let mut store =
+            shared_settings::open::<Emulated>(SettingsFlash::new(), 0..SETTINGS_SIZE as u32);
+        let loaded = shared_settings::load::<Emulated>(store.as_mut()).await;
         let settings = loaded.settings;
         let input_config = InputConfig::default();
 
@@ -258,11 +231,10 @@ mod image {
             )
             .unwrap(),
         );
+        spawner.spawn(settings_task(store, register("settings", Duration::from_secs(1))).unwrap());
         spawner.spawn(
-            settings_task::settings(store, register("settings", Duration::from_secs(1))).unwrap(),
+            heartbeat_task(Led::new(), register("heartbeat", Duration::from_secs(1))).unwrap(),
         );
-        spawner
-            .spawn(heartbeat(Led::new(), register("heartbeat", Duration::from_secs(1))).unwrap());
         WATCHDOG_EXECUTOR
             .start(Interrupt::USART3)
             .spawn(watchdog::watchdog().unwrap());

@@ -24,9 +24,9 @@ use plasma_firmware::supervisor::IoExchange;
 use plasma_firmware::watchdog::TaskId;
 use plasma_protocol::time::{Duration, Instant, div_rem_u16};
 
-use super::clock::{embassy_instant, now};
-use super::progress::report;
 use crate::board::{InputPins, OutputPins};
+use crate::clock::{embassy_instant, now};
+use crate::progress::report;
 
 /// The link's view of the supply, latest wins (bridge → I/O).
 pub static SUPPLY: Signal<CriticalSectionRawMutex, SupplyState> = Signal::new();
@@ -41,12 +41,11 @@ pub static EVENTS: Channel<CriticalSectionRawMutex, (Instant, IoEvent), 16> = Ch
 /// often, whatever happens.
 const MAX_WAIT: Duration = Duration::from_millis(50);
 
-/// The I/O task. Each board runs it on an interrupt executor above every serial interrupt
-/// (the board's `start_io_executor`), so the START path never waits behind serial work.
-#[embassy_executor::task]
-pub async fn io_task(
-    mut pins: InputPins,
-    mut outputs: OutputPins,
+/// The body of the I/O task. Each board runs it on an interrupt executor above every serial
+/// interrupt, so the START path never waits behind serial work.
+pub async fn run(
+    mut pins: impl InputPins,
+    mut outputs: impl OutputPins,
     config: (IoConfig, InputConfig),
     progress: TaskId,
 ) {

@@ -11,8 +11,3 @@ pub const SETTINGS_SIZE: usize = 8192;
 
 /// The flash the settings store writes.
 pub type SettingsFlash = RamFlash<SETTINGS_SIZE>;
-
-/// Read errors seen while the store was read: the RAM model has no ECC.
-pub fn flash_errors_seen() -> u32 {
-    0
-}

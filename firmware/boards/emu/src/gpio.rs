@@ -1,6 +1,6 @@
 //! The discrete pins by register: inputs with pull-ups on EXTI lines, push-pull outputs, the
-//! LED. Same pins as the Nucleo (docs/board.md); QEMU's GPIO, SYSCFG and EXTI models carry
-//! an edge driven from its qtest socket to the EXTI interrupt.
+//! LED, all placed by the one pin table (`plasma_firmware::pins`, the Nucleo's). QEMU's GPIO,
+//! SYSCFG and EXTI models carry an edge driven from its qtest socket to the EXTI interrupt.
 
 use core::future::poll_fn;
 use core::sync::atomic::{AtomicBool, Ordering};
@@ -9,30 +9,40 @@ use core::task::Poll;
 use cortex_m::peripheral::NVIC;
 use embassy_sync::waitqueue::AtomicWaker;
 use plasma_firmware::inputs::{InputConfig, PinLevels, Pull};
-use plasma_firmware::io::{Input, Outputs};
+use plasma_firmware::io::{self, Input, Outputs};
+use plasma_firmware::pins::{self, Pin, Port};
 use stm32_metapac::gpio::Gpio;
-use stm32_metapac::gpio::vals::{Moder, Pupdr};
-use stm32_metapac::{EXTI, GPIOA, GPIOB, Interrupt, SYSCFG, interrupt};
+use stm32_metapac::gpio::vals::{Idr, Moder, Pupdr};
+use stm32_metapac::{EXTI, GPIOA, GPIOB, GPIOC, Interrupt, SYSCFG, interrupt};
 
 use crate::probe;
 
-/// Where each input is: port, port index for SYSCFG_EXTICR (A = 0), pin (= EXTI line).
-const fn input_pin(input: Input) -> (Gpio, u8, usize) {
-    match input {
-        Input::TorchOn => (GPIOA, 0, 0),
-        Input::Motion => (GPIOA, 0, 1),
-        Input::Hold => (GPIOA, 0, 4),
-        Input::PierceComplete => (GPIOA, 0, 6),
-        Input::CornerCurrent => (GPIOA, 0, 7),
-        Input::NotReady => (GPIOA, 0, 8),
-        Input::RampdownError => (GPIOB, 1, 10),
+/// The register block of a port of the table.
+pub const fn gpio(port: Port) -> Gpio {
+    match port {
+        Port::A => GPIOA,
+        Port::B => GPIOB,
+        Port::C => GPIOC,
     }
 }
 
 /// The EXTI line of TORCH_ON, whose edges the latency probe stamps.
-const TORCH_ON_LINE: usize = input_pin(Input::TorchOn).2;
+const TORCH_ON_LINE: usize = pins::input(Input::TorchOn).pin.number as usize;
 
-/// The interrupts of the input lines: 0, 1, 4, 5-9, 10-15.
+/// The interrupt of EXTI line `line`.
+const fn exti_irq(line: u8) -> Interrupt {
+    match line {
+        0 => Interrupt::EXTI0,
+        1 => Interrupt::EXTI1,
+        2 => Interrupt::EXTI2,
+        3 => Interrupt::EXTI3,
+        4 => Interrupt::EXTI4,
+        5..=9 => Interrupt::EXTI9_5,
+        _ => Interrupt::EXTI15_10,
+    }
+}
+
+/// The interrupts of the input lines; the handlers below exist for these only.
 const EXTI_IRQS: [Interrupt; 5] = [
     Interrupt::EXTI0,
     Interrupt::EXTI1,
@@ -40,6 +50,25 @@ const EXTI_IRQS: [Interrupt; 5] = [
     Interrupt::EXTI9_5,
     Interrupt::EXTI15_10,
 ];
+
+// Every input's line must raise one of the interrupts handled here.
+const _: () = {
+    let mut i = 0;
+    while i < Input::ALL.len() {
+        let irq = exti_irq(pins::input(Input::ALL[i]).pin.number) as u16;
+        let mut handled = false;
+        let mut j = 0;
+        while j < EXTI_IRQS.len() {
+            handled |= EXTI_IRQS[j] as u16 == irq;
+            j += 1;
+        }
+        assert!(
+            handled,
+            "an input's EXTI interrupt has no handler in gpio.rs"
+        );
+        i += 1;
+    }
+};
 
 /// The seven inputs, owned by the I/O task.
 pub struct InputPins(());
@@ -54,7 +83,8 @@ impl InputPins {
     /// task).
     pub fn new(config: &InputConfig) -> Self {
         for input in Input::ALL {
-            let (port, port_index, pin) = input_pin(input);
+            let Pin { port, number } = pins::input(input).pin;
+            let (port_index, pin, port) = (port.index(), number as usize, gpio(port));
             let pull = match config.get(input).polarity.pull() {
                 Pull::Up => Pupdr::PULL_UP,
                 Pull::Down => Pupdr::PULL_DOWN,
@@ -78,22 +108,20 @@ impl InputPins {
         }
         InputPins(())
     }
+}
 
-    /// Reads every pin now.
-    pub fn levels(&self) -> PinLevels {
+impl plasma_tasks::board::InputPins for InputPins {
+    fn levels(&self) -> PinLevels {
         Input::ALL
             .iter()
             .fold(PinLevels::ALL_LOW, |levels, &input| {
-                let (port, _, pin) = input_pin(input);
-                levels.with(
-                    input,
-                    port.idr().read().idr(pin) == stm32_metapac::gpio::vals::Idr::HIGH,
-                )
+                let pin = pins::input(input).pin;
+                let high = gpio(pin.port).idr().read().idr(pin.number as usize) == Idr::HIGH;
+                levels.with(input, high)
             })
     }
 
-    /// Completes on the next edge of any input (a bounce included: the caller reads levels).
-    pub async fn any_edge(&mut self) {
+    async fn any_edge(&mut self) {
         poll_fn(|cx| {
             EDGE_WAKER.register(cx.waker());
             if EDGE.swap(false, Ordering::AcqRel) {
@@ -144,8 +172,9 @@ fn EXTI15_10() {
     on_exti();
 }
 
-/// Sets pin `pin` of `port` high or low in one write.
-fn set(port: Gpio, pin: usize, high: bool) {
+/// Sets `pin` high or low in one write.
+fn set(pin: Pin, high: bool) {
+    let (port, pin) = (gpio(pin.port), pin.number as usize);
     port.bsrr().write(|w| {
         if high {
             w.set_bs(pin, true)
@@ -155,8 +184,8 @@ fn set(port: Gpio, pin: usize, high: bool) {
     });
 }
 
-/// The seven outputs, owned by the I/O task. `pin_map::drive_safe_state` made them outputs,
-/// all off, before anything else ran.
+/// The seven outputs, owned by the I/O task. `plasma_tasks::safe_state::drive_safe_state` made
+/// them outputs, all off, before anything else ran.
 pub struct OutputPins {
     start: bool,
 }
@@ -166,23 +195,12 @@ impl OutputPins {
     pub fn new() -> Self {
         OutputPins { start: false }
     }
+}
 
-    /// Sets every pin to `outputs` (all active high). START first: its latency matters.
-    pub fn drive(&mut self, outputs: Outputs) {
-        use crate::tasks::pin_map::output_pin;
-        use plasma_firmware::safe_state::Output as Signal;
-        let levels = [
-            (Signal::Start, outputs.start),
-            (Signal::PsHold, outputs.hold),
-            (Signal::PsPierceComplete, outputs.pierce_complete),
-            (Signal::PsCornerCurrent, outputs.corner_current),
-            (Signal::CncArcOk, outputs.arc_ok),
-            (Signal::CncReady, outputs.ready),
-            (Signal::CncFault, outputs.fault),
-        ];
-        for (signal, on) in levels {
-            let (port, pin) = output_pin(signal);
-            set(port, pin, on);
+impl plasma_tasks::board::OutputPins for OutputPins {
+    fn drive(&mut self, outputs: Outputs) {
+        for (output, wiring) in io::Output::ALL.into_iter().zip(pins::OUTPUTS) {
+            set(wiring.pin, wiring.level(outputs.get(output)));
         }
         if outputs.start != self.start {
             self.start = outputs.start;
@@ -191,22 +209,26 @@ impl OutputPins {
     }
 }
 
-/// The heartbeat LED (LD1 on the B-L475E-IOT01A is PA5, as LD2 on the Nucleo).
+/// The heartbeat LED (`plasma_firmware::pins::HEARTBEAT_LED`).
 pub struct Led {
     on: bool,
 }
 
 impl Led {
-    /// PA5, output, off.
+    /// The LED's pin, output, off.
     pub fn new() -> Self {
-        set(GPIOA, 5, false);
-        GPIOA.moder().modify(|w| w.set_moder(5, Moder::OUTPUT));
+        let pin = pins::HEARTBEAT_LED.pin;
+        set(pin, pins::HEARTBEAT_LED.level(false));
+        gpio(pin.port)
+            .moder()
+            .modify(|w| w.set_moder(pin.number as usize, Moder::OUTPUT));
         Led { on: false }
     }
+}
 
-    /// On ↔ off.
-    pub fn toggle(&mut self) {
+impl plasma_tasks::board::Led for Led {
+    fn toggle(&mut self) {
         self.on = !self.on;
-        set(GPIOA, 5, self.on);
+        set(pins::HEARTBEAT_LED.pin, pins::HEARTBEAT_LED.level(self.on));
     }
 }

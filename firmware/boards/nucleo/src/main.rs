@@ -4,14 +4,14 @@
 //! prints how to build it, so that `cargo build` / `cargo test` of the workspace work.
 //!
 //! The image only builds peripherals and spawns tasks. The tasks are shared with the emulated
-//! board (`../tasks`, included as [`tasks`]); what they do is the library's. This file and
-//! its modules are the board layer ([`board`] lists what the tasks take from it):
+//! board (the `plasma-tasks` crate, over the [`board::Nucleo`] implementation of its `Board`
+//! trait); what they do is the library's. This crate is the board layer:
 //!
 //! - boot: outputs to safe state before anything else, reset cause, clocks (80 MHz),
 //!   settings from flash ([`flash`]), the reset cause and the settings outcome handed to the
 //!   bridge for the CNC port (`!BOOT`, `ID`);
 //! - the I/O task on an interrupt executor above all serial work ([`io_executor`]): input
-//!   edges (EXTI, [`pins`]) to outputs;
+//!   edges (EXTI) to outputs, on the pins of the one pin table ([`pins`]);
 //! - the bridge task in thread mode: the power-supply link on USART1 with hardware
 //!   driver-enable ([`ps_uart`]), the CNC session on USART2 ([`cnc_uart`]);
 //! - the settings task that stores `CONFIG SAVE` in flash ([`flash`]);
@@ -26,6 +26,8 @@ fn main() {
 }
 
 #[cfg(target_os = "none")]
+mod board;
+#[cfg(target_os = "none")]
 mod cnc_uart;
 #[cfg(target_os = "none")]
 mod fault;
@@ -38,57 +40,37 @@ mod pins;
 #[cfg(target_os = "none")]
 mod ps_uart;
 #[cfg(target_os = "none")]
-#[path = "../tasks/mod.rs"]
-mod tasks;
-#[cfg(target_os = "none")]
 mod watchdog;
-
-/// What the shared tasks take from this board (see `../tasks/mod.rs`).
-#[cfg(target_os = "none")]
-mod board {
-    pub use crate::cnc_uart::{CncUart, TX_BUFFER as CNC_TX_BUFFER};
-    pub use crate::flash::{SettingsFlash, flash_errors_seen};
-    pub use crate::pins::{InputPins, OutputPins};
-    pub use crate::ps_uart::PsUart;
-    pub use embassy_stm32::pac;
-
-    /// The heartbeat LED (LD2, PA5).
-    pub type Led = embassy_stm32::gpio::Output<'static>;
-}
 
 #[cfg(target_os = "none")]
 mod image {
-    use core::fmt::Write;
-
     use defmt::{info, warn};
     use defmt_rtt as _;
     use embassy_executor::Spawner;
     use embassy_stm32::exti::{self, ExtiInput};
-    use embassy_stm32::gpio::{Level, Output, Speed};
     use embassy_stm32::interrupt::{self, InterruptExt};
     use embassy_stm32::usart::{self, BufferedUart};
     use embassy_stm32::{bind_interrupts, peripherals};
-    use heapless::String;
     use plasma_firmware::bridge::Bridge;
     use plasma_firmware::inputs::InputConfig;
     use plasma_firmware::io::Input;
     use plasma_firmware::link::transaction::TX_CAPACITY;
-    use plasma_firmware::safe_state::BootReport;
-    use plasma_firmware::storage::LoadOutcome;
+    use plasma_firmware::pins::{self, CNC_UART, PS_UART, Port};
     use plasma_protocol::time::Duration;
+    use plasma_tasks::boot::boot_text;
+    use plasma_tasks::clock::now;
+    use plasma_tasks::io::BoardIo;
+    use plasma_tasks::progress::register;
+    use plasma_tasks::reset;
+    use plasma_tasks::safe_state::drive_safe_state;
+    use plasma_tasks::settings as shared_settings;
     use static_cell::StaticCell;
 
+    use crate::board::{Nucleo, bridge_task, heartbeat_task, io_task, settings_task};
     use crate::cnc_uart::CncUart;
     use crate::io_executor::{SERIAL_PRIORITY, start_io_executor};
-    use crate::pins::{InputPins, OutputPins, pull};
+    use crate::pins::{InputPins, OutputPins};
     use crate::ps_uart::{PsUart, uart_config};
-    use crate::tasks::bridge::bridge as bridge_task;
-    use crate::tasks::clock::now;
-    use crate::tasks::io::{BoardIo, io_task};
-    use crate::tasks::pin_map::drive_safe_state;
-    use crate::tasks::progress::{heartbeat, register};
-    use crate::tasks::reset;
-    use crate::tasks::settings::{self as settings_task, outcome_word};
     use crate::{cnc_uart, flash, watchdog};
 
     bind_interrupts!(struct Irqs {
@@ -126,21 +108,40 @@ mod image {
     static PS_RX: StaticCell<[u8; 256]> = StaticCell::new();
     static CNC_TX: StaticCell<[u8; cnc_uart::TX_BUFFER]> = StaticCell::new();
     static CNC_RX: StaticCell<[u8; cnc_uart::RX_BUFFER]> = StaticCell::new();
-    static BOOT_TEXT: StaticCell<String<64>> = StaticCell::new();
     static BRIDGE: StaticCell<Bridge> = StaticCell::new();
 
-    /// `<reset cause>,settings:<outcome>` for the CNC port (`ID ... reset=...`,
-    /// `!BOOT reason=...`).
-    fn boot_text(boot: &BootReport, outcome: LoadOutcome) -> &'static str {
-        let text = BOOT_TEXT.init(String::new());
-        // 64 bytes hold the longest cause and outcome; a cut text is still a report.
-        let _ = write!(
-            text,
-            "{},settings:{}",
-            boot.cause.as_str(),
-            outcome_word(outcome)
-        );
-        text.as_str()
+    // The UARTs' pins are typed (each USART accepts only its own), so main takes them by
+    // name; this ties the names to the pin table, which places everything else.
+    const _: () = assert!(
+        PS_UART.tx.is(Port::A, 9)
+            && PS_UART.rx.is(Port::A, 10)
+            && matches!(PS_UART.de, Some(de) if de.is(Port::A, 12))
+            && CNC_UART.tx.is(Port::A, 2)
+            && CNC_UART.rx.is(Port::A, 3)
+            && CNC_UART.de.is_none(),
+        "the UART pins in main.rs differ from plasma_firmware::pins"
+    );
+
+    /// An EXTI input for `$input` on channel `$channel`: the channel is typed (embassy-stm32
+    /// binds its interrupt at compile time), so a compile-time check ties it to the line the
+    /// pin table gives the input.
+    macro_rules! exti_input {
+        ($p:ident, $config:expr, $input:ident, $channel:ident = $line:literal) => {{
+            const _: () = assert!(
+                pins::input(Input::$input).pin.number == $line,
+                concat!(
+                    "the pin table moved ",
+                    stringify!($input),
+                    " off ",
+                    stringify!($channel)
+                )
+            );
+            ExtiInput::from_input(
+                crate::pins::input($config, Input::$input),
+                $p.$channel,
+                Irqs,
+            )
+        }};
     }
 
     /// The UART, or a panic: the settings are fixed ones the USARTs support at 80 MHz, so an
@@ -161,15 +162,7 @@ mod image {
 
         let p = embassy_stm32::init(clock_config());
         // The HAL takes the pins over at the level they already have.
-        let outputs = OutputPins {
-            start: Output::new(p.PB0, Level::Low, Speed::Low),
-            hold: Output::new(p.PC1, Level::Low, Speed::Low),
-            pierce_complete: Output::new(p.PC0, Level::Low, Speed::Low),
-            corner_current: Output::new(p.PB8, Level::Low, Speed::Low),
-            arc_ok: Output::new(p.PB9, Level::Low, Speed::Low),
-            ready: Output::new(p.PB6, Level::Low, Speed::Low),
-            fault: Output::new(p.PC7, Level::Low, Speed::Low),
-        };
+        let outputs = OutputPins::new();
 
         info!(
             "plasma-bridge {=str} on STM32L476RG at 80 MHz; reset: {=str} (RCC_CSR flags {=u8:#04x})",
@@ -190,7 +183,7 @@ mod image {
         }
 
         let mut store = flash::open(embassy_stm32::flash::Flash::new(p.FLASH, Irqs));
-        let loaded = settings_task::load(store.as_mut()).await;
+        let loaded = shared_settings::load::<Nucleo>(store.as_mut()).await;
         let settings = loaded.settings;
         // Polarity and debounce of the inputs are not (yet) part of the stored settings.
         let input_config = InputConfig::default();
@@ -198,13 +191,13 @@ mod image {
         // Inputs in Input::ALL order, each with the pull that reads inactive when open.
         let c = &input_config;
         let inputs = InputPins([
-            ExtiInput::new(p.PA0, p.EXTI0, pull(c, Input::TorchOn), Irqs),
-            ExtiInput::new(p.PA4, p.EXTI4, pull(c, Input::Hold), Irqs),
-            ExtiInput::new(p.PA6, p.EXTI6, pull(c, Input::PierceComplete), Irqs),
-            ExtiInput::new(p.PA7, p.EXTI7, pull(c, Input::CornerCurrent), Irqs),
-            ExtiInput::new(p.PA1, p.EXTI1, pull(c, Input::Motion), Irqs),
-            ExtiInput::new(p.PA8, p.EXTI8, pull(c, Input::NotReady), Irqs),
-            ExtiInput::new(p.PB10, p.EXTI10, pull(c, Input::RampdownError), Irqs),
+            exti_input!(p, c, TorchOn, EXTI0 = 0),
+            exti_input!(p, c, Hold, EXTI4 = 4),
+            exti_input!(p, c, PierceComplete, EXTI6 = 6),
+            exti_input!(p, c, CornerCurrent, EXTI7 = 7),
+            exti_input!(p, c, Motion, EXTI1 = 1),
+            exti_input!(p, c, NotReady, EXTI8 = 8),
+            exti_input!(p, c, RampdownError, EXTI10 = 10),
         ]);
         let io_progress = register("io", Duration::from_millis(200));
         start_io_executor()
@@ -244,12 +237,10 @@ mod image {
             )
             .unwrap(),
         );
-        spawner.spawn(
-            settings_task::settings(store, register("settings", Duration::from_secs(1))).unwrap(),
-        );
+        spawner.spawn(settings_task(store, register("settings", Duration::from_secs(1))).unwrap());
 
-        let led = Output::new(p.PA5, Level::Low, Speed::Low);
-        spawner.spawn(heartbeat(led, register("heartbeat", Duration::from_secs(1))).unwrap());
+        let led = crate::pins::led();
+        spawner.spawn(heartbeat_task(led, register("heartbeat", Duration::from_secs(1))).unwrap());
         spawner.spawn(watchdog::watchdog(p.IWDG).unwrap());
     }
 }

@@ -10,9 +10,9 @@ use embassy_time::Timer;
 use plasma_firmware::watchdog::{ProgressMonitor, TaskId};
 use plasma_protocol::time::Duration;
 
-use super::clock::now;
-use super::pin_map::drive_safe_state;
 use crate::board::Led;
+use crate::clock::now;
+use crate::safe_state::drive_safe_state;
 
 /// One slot per task that matters: I/O, bridge (PS and CNC), settings, heartbeat.
 const TASKS: usize = 6;
@@ -54,9 +54,9 @@ pub fn should_feed() -> bool {
     false
 }
 
-/// Toggles the LED every 500 ms: a blinking LED says thread mode runs.
-#[embassy_executor::task]
-pub async fn heartbeat(mut led: Led, progress: TaskId) {
+/// Toggles the LED every 500 ms: a blinking LED says thread mode runs. The body of the
+/// board's heartbeat task.
+pub async fn heartbeat(mut led: impl Led, progress: TaskId) {
     loop {
         led.toggle();
         report(progress);
