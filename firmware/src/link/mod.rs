@@ -91,6 +91,7 @@ pub mod modbus;
 pub mod powermax;
 pub mod slow;
 pub mod status;
+pub mod support;
 pub mod sync;
 pub mod transaction;
 

@@ -258,11 +258,7 @@ pub fn write_refusal<W: Write>(
             ErrorCode::Unsupported,
             format_args!("not supported by {}", family_name(*family)),
         ),
-        Refusal::LimitsUnknown => write_error(
-            out,
-            ErrorCode::State,
-            "the unit's permitted limits have not been read yet, try again",
-        ),
+        Refusal::LimitsUnknown => write_error(out, ErrorCode::State, super::texts::LIMITS_NOT_READ),
         Refusal::ModeNotPermitted { mode, permitted } => {
             let low = permitted.low_mode().map(|m| mode_word(m, family));
             let high = permitted.high_mode().map(|m| mode_word(m, family));

@@ -7,11 +7,14 @@ use plasma_protocol::cnc::reply::ReplyWriter;
 use plasma_protocol::cnc::{ErrorCode, Pressure};
 use plasma_protocol::hpr;
 
+use super::commands::Op;
 use super::describe::{
-    FaultId, ModelName, OrDash, Text, family_name, family_word, fault_text, mode_word, on_off,
-    state_name, unit_mode, write_failure,
+    FaultId, ModelName, OrDash, Text, family_word, fault_text, mode_word, on_off, state_name,
+    unit_mode, write_failure,
 };
-use super::{Context, List, Op, ReplyLine, Uid, err_line, line, no_link, ok_line, unsupported};
+use super::events::Uid;
+use super::texts;
+use super::{Context, List, ReplyLine, err_line, line, no_link, ok_line};
 use crate::io::{Inputs, Outputs};
 use crate::link::{CommandFailure, CommandOutput, Family, Model, PsLink, UnitStatus};
 
@@ -119,10 +122,7 @@ pub(super) fn limits(status: &UnitStatus, family: Option<Family>) -> ReplyLine {
             })
         }
         (Some(family), _) => match status.limits {
-            None => err_line(
-                ErrorCode::State,
-                "the unit's permitted limits have not been read yet, try again",
-            ),
+            None => err_line(ErrorCode::State, texts::LIMITS_NOT_READ),
             Some(limits) => ok_line(|w| {
                 match limits.modes {
                     Some(modes) => {
@@ -183,34 +183,28 @@ pub(super) fn fault(status: &UnitStatus, family: Option<Family>) -> ReplyLine {
     }
 }
 
-pub(super) fn cartridge(status: &UnitStatus, family: Option<Family>) -> ReplyLine {
-    match family {
-        None => no_link(),
-        Some(Family::PowermaxSync) => match status.cartridge {
-            None => err_line(ErrorCode::State, "cartridge data not read yet, try again"),
-            Some(c) => ok_line(|w| {
-                w.field("uid", Uid(&c.uid.0))?;
-                w.field("part", OrDash(c.part_number.as_str()))?;
-                w.field("rev", c.revision)?;
-                w.field("nominal_amps", c.nominal_current())?;
-                if let Some(name) = status
-                    .cartridge_name
-                    .as_ref()
-                    .and_then(|n| n.as_str())
-                    .filter(|n| !n.is_empty())
-                {
-                    w.field("name", name)?;
-                }
-                w.field("starts", c.counters.starts)?;
-                w.field("pilot_arc_s", c.counters.pilot_arc_seconds)?;
-                w.field("transfers", c.counters.transfers)?;
-                w.field("transfer_s", c.counters.transfer_seconds())
-            }),
-        },
-        Some(f) => unsupported(format_args!(
-            "CARTRIDGE is a Powermax SYNC function; {} has no cartridge data",
-            family_name(f)
-        )),
+/// `CARTRIDGE` on a SYNC unit (the support table refuses it elsewhere).
+pub(super) fn cartridge(status: &UnitStatus) -> ReplyLine {
+    match status.cartridge {
+        None => err_line(ErrorCode::State, texts::CARTRIDGE_NOT_READ),
+        Some(c) => ok_line(|w| {
+            w.field("uid", Uid(&c.uid.0))?;
+            w.field("part", OrDash(c.part_number.as_str()))?;
+            w.field("rev", c.revision)?;
+            w.field("nominal_amps", c.nominal_current())?;
+            if let Some(name) = status
+                .cartridge_name
+                .as_ref()
+                .and_then(|n| n.as_str())
+                .filter(|n| !n.is_empty())
+            {
+                w.field("name", name)?;
+            }
+            w.field("starts", c.counters.starts)?;
+            w.field("pilot_arc_s", c.counters.pilot_arc_seconds)?;
+            w.field("transfers", c.counters.transfers)?;
+            w.field("transfer_s", c.counters.transfer_seconds())
+        }),
     }
 }
 
@@ -235,9 +229,10 @@ pub(super) fn counters_with(
     })
 }
 
-/// The reply of a command the link finished.
+/// The reply of a command the link finished. It only formats: what the outcome changes is
+/// the command handler's (`Session::keep_outcome`).
 pub(super) fn complete(
-    ctx: &mut Context<'_>,
+    ctx: &Context<'_>,
     op: Op,
     result: &Result<CommandOutput, CommandFailure>,
 ) -> ReplyLine {
@@ -251,7 +246,6 @@ pub(super) fn complete(
             let CommandOutput::Settings(read) = output else {
                 return ok_line(|w| w.field("mode", mode_word(unit_mode(process.mode), family)));
             };
-            ctx.settings.process = Some(process);
             // The unit's word for the mode read back (SYNC: EXPANDED, legacy: CPA).
             let mode = read.mode.map_or("-", |m| mode_word(m, family));
             ok_line(|w| {
@@ -263,10 +257,7 @@ pub(super) fn complete(
                 }
             })
         }
-        Op::RemoteOff => {
-            ctx.settings.process = None;
-            ok_line(|w| w.field("remote", "OFF"))
-        }
+        Op::RemoteOff => ok_line(|w| w.field("remote", "OFF")),
         Op::GasTest(on) => ok_line(|w| w.field("gastest", on_off(on))),
         Op::Restart => {
             let quiet = ctx
@@ -316,7 +307,7 @@ pub(super) fn complete(
                     let codes = log.0.iter().copied().filter(|c| !c.is_none());
                     w.field("log", List(codes))
                 }),
-                _ => err_line(ErrorCode::Link, "the fault log could not be read"),
+                _ => err_line(ErrorCode::Link, texts::FAULT_LOG_UNREADABLE),
             }
         }
         Op::Counters => {
