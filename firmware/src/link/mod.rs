@@ -1,5 +1,5 @@
-//! The power-supply link (see notes/LINK-DESIGN.md): a sans-IO state machine that speaks
-//! Modbus ASCII to Powermax units and `>ID data CK<` to HPR / MaxPro200 units.
+//! The power-supply link: a sans-IO state machine that speaks Modbus ASCII to Powermax units
+//! and `>ID data CK<` to HPR / MaxPro200 units.
 //!
 //! It never reads a clock or touches a UART: the caller feeds it received bytes and the time,
 //! transmits what [`PsLink::poll_transmit`] returns with the port settings of
@@ -83,12 +83,15 @@
 
 pub mod command;
 pub mod config;
+mod detect;
 pub mod diagnostics;
 pub mod event;
 pub mod hpr;
 pub mod legacy;
 pub mod modbus;
 pub mod powermax;
+mod receive;
+mod schedule;
 pub mod slow;
 pub mod status;
 pub mod support;
@@ -99,52 +102,30 @@ pub mod transaction;
 mod tests;
 
 use heapless::Vec;
-use plasma_protocol::hpr::{self as hpr_wire, Reply, SystemId};
-use plasma_protocol::modbus_ascii::{self, Response};
-use plasma_protocol::powermax::{
-    AddressingSystem, PowerSupplyModel, device_id, legacy as pm_legacy,
-};
+use plasma_protocol::hpr as hpr_wire;
+use plasma_protocol::modbus_ascii;
 
 pub use command::{HprGasFlow, HprValue, LinkCommand, Refusal};
 pub use config::{ConfigError, LinkConfig, ProtocolChoice};
+pub use detect::{DETECT_REASKS, DETECT_ROUND_PAUSE};
 pub use diagnostics::Diagnostics;
 pub use event::{
     CommandFailure, CommandOutput, LinkDownReason, LinkEvent, SettingsFailure, Ticket,
 };
+pub use schedule::{SLEEP_QUIET, UNANSWERED_FACTOR};
 pub use status::{ActiveFault, Family, Limits, Model, PowermaxSettings, UnitStatus};
 pub use transaction::TransactionError;
 
+use detect::{DetectStep, Detector, KnownGood};
 use event::EventQueue;
+use hpr::HprDriver;
 pub use hpr::HprKept;
-use hpr::{HprDriver, HprExpect, HprPurpose};
-use modbus::MbRequest;
-use powermax::{MbPurpose, PowermaxDriver, Variant};
-use transaction::{Outcome, RetrySpacing, TX_CAPACITY, Transaction};
+use powermax::PowermaxDriver;
+use schedule::Tag;
+use transaction::{TX_CAPACITY, Transaction};
 
-use plasma_protocol::serial::{Parity, PortConfig, StopBits};
+use plasma_protocol::serial::PortConfig;
 use plasma_protocol::time::{Duration, Instant};
-
-/// Pause between two detection rounds, so a silent line is not hammered.
-pub const DETECT_ROUND_PAUSE: Duration = Duration::from_millis(250);
-/// A unit that answers, but only with damaged replies, is declared down after this many
-/// times [`LinkConfig::failures_before_down`] failed transactions in a row (a line too noisy
-/// to carry a single valid reply is no link, but a damaged reply is no silence either).
-pub const UNANSWERED_FACTOR: u8 = 4;
-/// Times a detection step whose replies all arrived damaged is asked again before detection
-/// moves on (a damaged reply shows a unit that speaks this protocol at this framing).
-pub const DETECT_REASKS: u8 = 3;
-/// Quiet time after HPR SLEEP (086), which no unit answers.
-pub const SLEEP_QUIET: Duration = Duration::from_millis(20);
-
-/// Modbus line settings tried in turn by auto-detection (the configured one first).
-const MODBUS_FRAMINGS: [(Parity, StopBits); 6] = [
-    (Parity::Even, StopBits::One),
-    (Parity::Odd, StopBits::One),
-    (Parity::None, StopBits::One),
-    (Parity::Even, StopBits::Two),
-    (Parity::Odd, StopBits::Two),
-    (Parity::None, StopBits::Two),
-];
 
 /// State shared by the link and its family drivers.
 #[derive(Debug)]
@@ -208,57 +189,6 @@ impl Core {
 enum Wire {
     Modbus,
     Hpr,
-}
-
-/// Auto-detection steps.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum DetectStep {
-    /// Read Device Identification (2B/0E, code 04, object 01).
-    DeviceId,
-    /// Plain legacy register read (0x2098) for units without device identification.
-    LegacyProbe,
-    /// HPR multi-drop: SLEEP all systems.
-    HprSleep,
-    /// HPR multi-drop: WAKE the configured id.
-    HprWake,
-    /// HPR HELLO (000).
-    HprHello,
-}
-
-#[derive(Debug, Clone)]
-struct Detector {
-    /// The step asked now.
-    step: DetectStep,
-    /// True while asking the last known-good probe ([`KnownGood`]); false in the search.
-    good: bool,
-    /// The full search: its round (which Modbus framing) and the step it asks next.
-    round: u32,
-    search: DetectStep,
-    not_before: Instant,
-    /// Times this step was asked again because its replies arrived damaged.
-    reasks: u8,
-}
-
-/// What found the unit last time: the probe (its first step) and the port settings. After a
-/// link-down it is asked first, and again between every two probes of the full search, so
-/// a unit that was switched off is found again within a probe or two of its return.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-struct KnownGood {
-    step: DetectStep,
-    port: PortConfig,
-}
-
-#[derive(Debug, Clone)]
-enum DetectExpect {
-    Modbus(MbRequest),
-    Hpr(hpr_wire::Request),
-}
-
-#[derive(Debug, Clone)]
-enum Tag {
-    Detect(DetectStep, DetectExpect),
-    Modbus(MbPurpose, MbRequest),
-    Hpr(HprPurpose, HprExpect),
 }
 
 // One phase at a time, held inline (no allocator).
@@ -337,14 +267,7 @@ impl PsLink {
                 hpr_kept: HprKept::default(),
                 events: EventQueue::new(),
             },
-            phase: Phase::Detecting(Detector {
-                step: DetectStep::DeviceId,
-                good: false,
-                round: 0,
-                search: DetectStep::DeviceId,
-                not_before: now,
-                reasks: 0,
-            }),
+            phase: Phase::Detecting(Detector::searching(DetectStep::DeviceId, 0, now)),
             port: config.modbus_port(),
             wire: Wire::Modbus,
             txn: None,
@@ -374,41 +297,13 @@ impl PsLink {
         self.now = now;
         let mut rest = bytes;
         while !rest.is_empty() {
-            match self.wire {
-                Wire::Modbus => {
-                    let (used, result) = self.modbus_rx.feed(rest);
-                    let owned = result.map(|r| {
-                        r.and_then(|frame| {
-                            Vec::<u8, { modbus_ascii::MAX_FRAME_BYTES }>::from_slice(frame.pdu)
-                                .map(|pdu| (frame.address, pdu))
-                                .map_err(|_| plasma_protocol::Error::Overlong)
-                        })
-                    });
-                    rest = rest.get(used..).unwrap_or(&[]);
-                    if let Some(result) = owned {
-                        self.on_modbus_frame(now, result);
-                    }
-                    if used == 0 {
-                        break;
-                    }
-                }
-                Wire::Hpr => {
-                    let (used, result) = self.hpr_rx.feed(rest);
-                    let owned = result.map(|r| {
-                        r.and_then(|frame| {
-                            Vec::<u8, { hpr_wire::MAX_FRAME_LEN }>::from_slice(frame.data)
-                                .map(|data| (frame.id, data))
-                                .map_err(|_| plasma_protocol::Error::Overlong)
-                        })
-                    });
-                    rest = rest.get(used..).unwrap_or(&[]);
-                    if let Some(result) = owned {
-                        self.on_hpr_frame(now, result);
-                    }
-                    if used == 0 {
-                        break;
-                    }
-                }
+            let used = match self.wire {
+                Wire::Modbus => self.receive_modbus(now, rest),
+                Wire::Hpr => self.receive_hpr(now, rest),
+            };
+            rest = rest.get(used..).unwrap_or(&[]);
+            if used == 0 {
+                break;
             }
         }
         self.core.status.update_ready(now);
@@ -477,7 +372,7 @@ impl PsLink {
             return Some(txn.poll_at());
         }
         match &self.phase {
-            Phase::Detecting(d) => Some(d.not_before),
+            Phase::Detecting(d) => Some(d.not_before()),
             Phase::Powermax(d) => d.wake_at(&self.core),
             Phase::Hpr(d) => d.wake_at(&self.core),
         }
@@ -528,17 +423,7 @@ impl PsLink {
     /// [`LinkDownReason::Reconfigured`]) and detection starts again. Kept settings stay.
     pub fn reconfigure(&mut self, now: Instant, config: LinkConfig) {
         self.now = now;
-        let was_up = match &mut self.phase {
-            Phase::Powermax(driver) => {
-                driver.abort(&mut self.core);
-                true
-            }
-            Phase::Hpr(driver) => {
-                driver.abort(&mut self.core);
-                true
-            }
-            Phase::Detecting(_) => false,
-        };
+        let was_up = self.abort_unit();
         let config = sanitize(config);
         let old = self.core.config;
         if (
@@ -572,738 +457,5 @@ impl PsLink {
     /// The configuration in use (after clamping).
     pub fn config(&self) -> &LinkConfig {
         &self.core.config
-    }
-
-    // --- detection ---------------------------------------------------------------------
-
-    fn first_step(&self) -> DetectStep {
-        match self.core.config.protocol {
-            ProtocolChoice::Hpr => self.hpr_first_step(),
-            _ => DetectStep::DeviceId,
-        }
-    }
-
-    fn hpr_first_step(&self) -> DetectStep {
-        if self.core.config.hpr_id == 0 {
-            DetectStep::HprHello
-        } else {
-            DetectStep::HprSleep
-        }
-    }
-
-    /// Begin detecting from `not_before`: the last known-good probe first, if any, then the
-    /// full search from its `round`.
-    fn start_detection(&mut self, not_before: Instant, round: u32) {
-        self.resume_detection(not_before, self.first_step(), round);
-    }
-
-    /// Like [`PsLink::start_detection`], with the search going on at `search`.
-    fn resume_detection(&mut self, not_before: Instant, search: DetectStep, round: u32) {
-        let mut detector = Detector {
-            step: search,
-            good: false,
-            round,
-            search,
-            not_before,
-            reasks: 0,
-        };
-        match self.last_good {
-            Some(good) => {
-                detector.step = good.step;
-                detector.good = true;
-                self.use_port(good.step, good.port);
-            }
-            None => self.set_port_for(search, round),
-        }
-        self.phase = Phase::Detecting(detector);
-    }
-
-    fn set_port_for(&mut self, step: DetectStep, round: u32) {
-        let port = self.port_for(step, round);
-        self.use_port(step, port);
-    }
-
-    /// The port settings for `step` in search round `round`.
-    fn port_for(&self, step: DetectStep, round: u32) -> PortConfig {
-        match step {
-            DetectStep::DeviceId | DetectStep::LegacyProbe => self.modbus_framing(round),
-            DetectStep::HprSleep | DetectStep::HprWake | DetectStep::HprHello => PortConfig::HPR,
-        }
-    }
-
-    fn use_port(&mut self, step: DetectStep, port: PortConfig) {
-        let wire = match step {
-            DetectStep::DeviceId | DetectStep::LegacyProbe => Wire::Modbus,
-            DetectStep::HprSleep | DetectStep::HprWake | DetectStep::HprHello => Wire::Hpr,
-        };
-        self.port = port;
-        if self.wire != wire {
-            self.modbus_rx.reset();
-            self.hpr_rx.reset();
-        }
-        self.wire = wire;
-    }
-
-    /// Modbus line settings for detection round `round`: the configured ones, and in auto
-    /// mode the other parity / stop-bit combinations in turn.
-    fn modbus_framing(&self, round: u32) -> PortConfig {
-        let configured = self.core.config.modbus_port();
-        if self.core.config.protocol != ProtocolChoice::Auto {
-            return configured;
-        }
-        let index = (round % MODBUS_FRAMINGS.len() as u32) as usize;
-        if index == 0 {
-            return configured;
-        }
-        MODBUS_FRAMINGS
-            .iter()
-            .filter(|(p, s)| !(*p == configured.parity && *s == configured.stop_bits))
-            .nth(index - 1)
-            .map_or(configured, |&(parity, stop_bits)| PortConfig {
-                parity,
-                stop_bits,
-                ..configured
-            })
-    }
-
-    fn detect_request(&self, step: DetectStep) -> Option<DetectExpect> {
-        match step {
-            DetectStep::DeviceId => {
-                MbRequest::from_request(&device_id::read_product_code()).map(DetectExpect::Modbus)
-            }
-            DetectStep::LegacyProbe => {
-                MbRequest::from_request(&pm_legacy::read_fault()).map(DetectExpect::Modbus)
-            }
-            DetectStep::HprSleep => Some(DetectExpect::Hpr(hpr_wire::Request::Sleep)),
-            DetectStep::HprWake => Some(DetectExpect::Hpr(hpr_wire::Request::Wake {
-                system_id: self.core.config.hpr_id,
-            })),
-            DetectStep::HprHello => Some(DetectExpect::Hpr(hpr_wire::Request::Hello)),
-        }
-    }
-
-    /// Ask the current detection step again (its replies were damaged), unless it has been
-    /// asked again [`DETECT_REASKS`] times already. Returns false when it has.
-    fn reask(&mut self, now: Instant) -> bool {
-        let Phase::Detecting(detector) = &mut self.phase else {
-            return false;
-        };
-        if detector.reasks >= DETECT_REASKS {
-            return false;
-        }
-        detector.reasks += 1;
-        detector.not_before = now;
-        true
-    }
-
-    /// The step that follows `step` in a search round, `None` at the end of the round.
-    fn step_after(&self, step: DetectStep) -> Option<DetectStep> {
-        match (step, self.core.config.protocol) {
-            (DetectStep::DeviceId, ProtocolChoice::Auto | ProtocolChoice::Legacy) => {
-                Some(DetectStep::LegacyProbe)
-            }
-            (DetectStep::LegacyProbe, ProtocolChoice::Auto) => Some(self.hpr_first_step()),
-            (DetectStep::HprSleep, _) => Some(DetectStep::HprWake),
-            (DetectStep::HprWake, _) => Some(DetectStep::HprHello),
-            _ => None,
-        }
-    }
-
-    /// The search position after the probe that begins with `first` in round `round`, and
-    /// whether the round ended (a pause follows).
-    fn search_after(&self, first: DetectStep, round: u32) -> (DetectStep, u32, bool) {
-        // SLEEP, WAKE and HELLO are one probe.
-        let last = match first {
-            DetectStep::HprSleep | DetectStep::HprWake => DetectStep::HprHello,
-            other => other,
-        };
-        match self.step_after(last) {
-            Some(next) => (next, round, false),
-            None => (self.first_step(), round.wrapping_add(1), true),
-        }
-    }
-
-    /// The step `step` did not find a unit: go on with the next one.
-    fn detect_next(&mut self, now: Instant, step: DetectStep) {
-        let Phase::Detecting(detector) = &self.phase else {
-            return;
-        };
-        let (good_probe, round, search) = (detector.good, detector.round, detector.search);
-        // SLEEP and WAKE go on to HELLO whatever came of them.
-        let chained = matches!(step, DetectStep::HprSleep | DetectStep::HprWake);
-        let Some(good) = self.last_good else {
-            // No unit known yet: the search alone, a pause after each round.
-            match self.step_after(step) {
-                Some(next) => self.enter_search(now, next, round),
-                None => self.start_detection(now + DETECT_ROUND_PAUSE, round.wrapping_add(1)),
-            }
-            return;
-        };
-        if chained && let Some(next) = self.step_after(step) {
-            let port = self.port;
-            self.use_port(next, port);
-            if let Phase::Detecting(detector) = &mut self.phase {
-                detector.step = next;
-                detector.not_before = now;
-                detector.reasks = 0;
-            }
-            return;
-        }
-        if good_probe {
-            // The known-good probe found nothing: one probe of the search, unless that is
-            // the known-good probe itself (then the one after it).
-            let mut position = (search, round, false);
-            if self.is_known_good(good, position.0, position.1) {
-                position = self.search_after(position.0, position.1);
-                if position.2 || self.is_known_good(good, position.0, position.1) {
-                    // Nothing else to try in this round: pause, then the known-good again.
-                    self.resume_detection(now + DETECT_ROUND_PAUSE, position.0, position.1);
-                    return;
-                }
-            }
-            self.enter_search(now, position.0, position.1);
-            return;
-        }
-        // A search probe found nothing: remember where the search stands, then the
-        // known-good probe again (after a pause at the end of a round).
-        let first = if step == DetectStep::HprHello {
-            self.hpr_first_step()
-        } else {
-            step
-        };
-        let (next, next_round, wrapped) = self.search_after(first, round);
-        let pause = if wrapped {
-            DETECT_ROUND_PAUSE
-        } else {
-            Duration::ZERO
-        };
-        self.resume_detection(now + pause, next, next_round);
-    }
-
-    /// True when the search probe `step` of round `round` is the known-good probe.
-    fn is_known_good(&self, good: KnownGood, step: DetectStep, round: u32) -> bool {
-        step == good.step && self.port_for(step, round) == good.port
-    }
-
-    fn enter_search(&mut self, now: Instant, step: DetectStep, round: u32) {
-        self.phase = Phase::Detecting(Detector {
-            step,
-            good: false,
-            round,
-            search: step,
-            not_before: now,
-            reasks: 0,
-        });
-        self.set_port_for(step, round);
-    }
-
-    fn link_up(&mut self, now: Instant, model: Model, family: Family) {
-        if let Phase::Detecting(detector) = &self.phase {
-            let step = match detector.step {
-                DetectStep::HprHello | DetectStep::HprWake | DetectStep::HprSleep => {
-                    self.hpr_first_step()
-                }
-                other => other,
-            };
-            self.last_good = Some(KnownGood {
-                step,
-                port: self.port,
-            });
-        }
-        self.consecutive_failures = 0;
-        self.unanswered = 0;
-        self.core.status.family = Some(family);
-        self.core.status.model = Some(model);
-        self.core.status.link_up = true;
-        self.core.emit(LinkEvent::LinkUp { model, family });
-        self.phase = match family {
-            Family::PowermaxSync => {
-                Phase::Powermax(PowermaxDriver::new(Variant::Sync, now, &self.core))
-            }
-            Family::PowermaxLegacy => {
-                Phase::Powermax(PowermaxDriver::new(Variant::Legacy, now, &self.core))
-            }
-            Family::Hpr | Family::MaxPro200 => {
-                let system = match model {
-                    Model::Hpr(system) => system,
-                    _ => SystemId::MaxPro200,
-                };
-                Phase::Hpr(HprDriver::new(system, now, &mut self.core))
-            }
-        };
-    }
-
-    /// A Modbus unit answered device identification (`model` if Table 2 knows it).
-    fn detected_modbus(&mut self, now: Instant, model: Option<PowerSupplyModel>) {
-        let choice = self.core.config.protocol;
-        let variant = match (choice, model.map(|m| m.addressing())) {
-            (ProtocolChoice::Sync, _) => Some(Family::PowermaxSync),
-            (ProtocolChoice::Legacy, _) => Some(Family::PowermaxLegacy),
-            (_, Some(AddressingSystem::Sync)) => Some(Family::PowermaxSync),
-            (_, Some(AddressingSystem::Legacy)) => Some(Family::PowermaxLegacy),
-            (_, None) => None,
-        };
-        match (variant, model) {
-            (Some(family), Some(model)) => self.link_up(now, Model::Powermax(model), family),
-            (Some(family), None) => self.link_up(now, Model::PowermaxUnidentified, family),
-            // Unknown product code: the legacy register read decides.
-            (None, _) => self.detect_next(now, DetectStep::DeviceId),
-        }
-    }
-
-    /// A unit running as legacy (found by the register probe) answered device
-    /// identification with `model`. A SYNC unit changes family: pending commands fail as on a
-    /// link-down (kept settings stay and are re-applied), and `LinkUp` reports the unit again
-    /// with its model and family.
-    fn reidentified(&mut self, now: Instant, model: Option<PowerSupplyModel>) {
-        let Some(model) = model else {
-            return;
-        };
-        if model.addressing() != AddressingSystem::Sync {
-            self.core.status.model = Some(Model::Powermax(model));
-            return;
-        }
-        if let Phase::Powermax(driver) = &mut self.phase {
-            driver.abort(&mut self.core);
-        }
-        if let Some(good) = &mut self.last_good {
-            good.step = DetectStep::DeviceId;
-        }
-        self.core.status.forget_unit();
-        self.link_up(now, Model::Powermax(model), Family::PowermaxSync);
-    }
-
-    fn link_down(&mut self, now: Instant, count: u8, last_error: TransactionError) {
-        match &mut self.phase {
-            Phase::Powermax(driver) => driver.abort(&mut self.core),
-            Phase::Hpr(driver) => driver.abort(&mut self.core),
-            Phase::Detecting(_) => return,
-        }
-        self.core.status.forget_unit();
-        self.core.diagnostics.record_link_down();
-        self.core.emit(LinkEvent::LinkDown {
-            reason: LinkDownReason::ConsecutiveFailures { count, last_error },
-        });
-        self.txn = None;
-        self.consecutive_failures = 0;
-        self.unanswered = 0;
-        self.start_detection(now, 0);
-    }
-
-    // --- transactions --------------------------------------------------------------------
-
-    fn start_next(&mut self, now: Instant) {
-        let config = self.core.config;
-        let (tag, frame, retries, spacing, no_reply): (
-            Tag,
-            Vec<u8, TX_CAPACITY>,
-            u8,
-            RetrySpacing,
-            bool,
-        ) = match &mut self.phase {
-            Phase::Detecting(detector) => {
-                if now < detector.not_before {
-                    return;
-                }
-                let (step, good_probe) = (detector.step, detector.good);
-                let Some(expect) = self.detect_request(step) else {
-                    return;
-                };
-                let mut buf = [0u8; TX_CAPACITY];
-                let (len, spacing) = match &expect {
-                    DetectExpect::Modbus(request) => (
-                        request.encode(config.node_address, &mut buf).ok(),
-                        RetrySpacing::Immediate,
-                    ),
-                    // While a Modbus unit is expected back, HPR is only checked for in
-                    // passing: its retries follow at once, so the known-good probe comes
-                    // round again soon (no HPR is cutting while no link is up).
-                    DetectExpect::Hpr(request) => (
-                        request.emit(&mut buf).ok(),
-                        if good_probe || self.last_good.is_none_or(|g| g.port == PortConfig::HPR) {
-                            RetrySpacing::RideThroughBlackout
-                        } else {
-                            RetrySpacing::Immediate
-                        },
-                    ),
-                };
-                let Some(frame) = len
-                    .and_then(|len| buf.get(..len))
-                    .and_then(|b| Vec::from_slice(b).ok())
-                else {
-                    return;
-                };
-                let no_reply = step == DetectStep::HprSleep;
-                (
-                    Tag::Detect(step, expect),
-                    frame,
-                    config.retries,
-                    spacing,
-                    no_reply,
-                )
-            }
-            Phase::Powermax(driver) => {
-                let Some((purpose, request, retries)) = driver.next_request(now, &mut self.core)
-                else {
-                    return;
-                };
-                let mut buf = [0u8; TX_CAPACITY];
-                let Some(frame) = request
-                    .encode(config.node_address, &mut buf)
-                    .ok()
-                    .and_then(|len| buf.get(..len))
-                    .and_then(|b| Vec::from_slice(b).ok())
-                else {
-                    return;
-                };
-                (
-                    Tag::Modbus(purpose, request),
-                    frame,
-                    retries.unwrap_or(config.retries),
-                    RetrySpacing::Immediate,
-                    false,
-                )
-            }
-            Phase::Hpr(driver) => {
-                let Some((purpose, expect, frame)) = driver.next_request(now, &mut self.core)
-                else {
-                    return;
-                };
-                let Ok(frame) = Vec::from_slice(&frame) else {
-                    return;
-                };
-                (
-                    Tag::Hpr(purpose, expect),
-                    frame,
-                    config.retries,
-                    RetrySpacing::RideThroughBlackout,
-                    false,
-                )
-            }
-        };
-        self.txn = if no_reply {
-            Transaction::without_reply(tag, &frame, now, SLEEP_QUIET).ok()
-        } else {
-            Transaction::new(tag, &frame, now, config.response_timeout, retries, spacing).ok()
-        };
-    }
-
-    fn handle_timeout(&mut self, now: Instant) {
-        let Some(txn) = self.txn.as_mut() else {
-            return;
-        };
-        match txn.handle_timeout(now) {
-            None => {}
-            Some(Outcome::Retrying(error)) => {
-                self.core.diagnostics.record_error(error);
-                self.core.diagnostics.record_retry();
-            }
-            Some(Outcome::Failed(error)) => {
-                self.core.diagnostics.record_error(error);
-                self.transaction_failed(now, error);
-            }
-            Some(Outcome::Sent) => {
-                let tag = self.txn.take().map(|t| t.tag().clone());
-                if let Some(Tag::Detect(step, _)) = tag {
-                    self.detect_next(now, step);
-                }
-            }
-        }
-    }
-
-    /// One attempt failed with `error` (a reply arrived but is unusable).
-    fn attempt_failed(&mut self, now: Instant, error: TransactionError) {
-        self.core.diagnostics.record_error(error);
-        let Some(txn) = self.txn.as_mut() else {
-            return;
-        };
-        match txn.attempt_failed(now, error) {
-            Outcome::Retrying(_) => self.core.diagnostics.record_retry(),
-            Outcome::Failed(error) => self.transaction_failed(now, error),
-            Outcome::Sent => {}
-        }
-    }
-
-    /// The transaction in flight failed for good.
-    fn transaction_failed(&mut self, now: Instant, error: TransactionError) {
-        let Some(txn) = self.txn.take() else {
-            return;
-        };
-        self.core.diagnostics.record_failed();
-        if matches!(txn.tag(), Tag::Modbus(MbPurpose::Identify, _)) {
-            // Optional: a unit without device identification may stay silent to it.
-        } else if !error.is_retryable() {
-            // The unit answered (exception, unknown command): it is there.
-            self.consecutive_failures = 0;
-            self.unanswered = 0;
-        } else if txn.heard_reply() {
-            // Damaged replies: the unit is there, the line is noisy. Not silence.
-            self.consecutive_failures = 0;
-            self.unanswered = self.unanswered.saturating_add(1);
-        } else {
-            self.consecutive_failures = self.consecutive_failures.saturating_add(1);
-            self.unanswered = self.unanswered.saturating_add(1);
-        }
-        match txn.tag().clone() {
-            Tag::Detect(step, _) => match (step, error) {
-                // A unit that refuses device identification is still a Modbus unit.
-                (DetectStep::DeviceId, TransactionError::Exception(_)) => {
-                    self.detected_modbus(now, None)
-                }
-                // Damaged replies: a unit answers at this framing; ask it again rather than
-                // take it for another kind (a SYNC unit also answers the legacy probe).
-                _ if txn.heard_reply() && self.reask(now) => {}
-                _ => self.detect_next(now, step),
-            },
-            Tag::Modbus(purpose, _) => {
-                if let Phase::Powermax(driver) = &mut self.phase {
-                    driver.on_failed(now, purpose, error, &mut self.core);
-                }
-            }
-            Tag::Hpr(purpose, _) => {
-                if let Phase::Hpr(driver) = &mut self.phase {
-                    driver.on_failed(now, purpose, error, &mut self.core);
-                }
-            }
-        }
-        let down = self.core.config.failures_before_down;
-        if self.consecutive_failures >= down {
-            self.link_down(now, self.consecutive_failures, error);
-        } else if self.unanswered >= down.saturating_mul(UNANSWERED_FACTOR) {
-            self.link_down(now, self.unanswered, error);
-        }
-    }
-
-    fn transaction_ok(&mut self) -> Option<Tag> {
-        let txn = self.txn.take()?;
-        self.core.diagnostics.record_ok();
-        self.consecutive_failures = 0;
-        self.unanswered = 0;
-        Some(txn.tag().clone())
-    }
-
-    fn awaited_tag(&mut self) -> Option<Tag> {
-        match &self.txn {
-            Some(txn) if txn.is_awaiting_reply() => Some(txn.tag().clone()),
-            _ => {
-                self.core.diagnostics.record_unsolicited();
-                None
-            }
-        }
-    }
-
-    /// True when `received` (re-encoded) is the request just sent, heard back on a 2-wire
-    /// line whose receiver stays on: it is counted and ignored. Most replies differ from
-    /// their request, so such a frame is an echo. A request whose genuine reply repeats it
-    /// (`answers`: Modbus 05/06, an HPR setting echoed unchanged) is only taken for its echo
-    /// once the line is known to echo (an unambiguous echo was heard, e.g. of the detection
-    /// request), and only the first such frame of an attempt.
-    fn is_echo(&mut self, received: &[u8], answers: bool) -> bool {
-        let Some(txn) = &self.txn else {
-            return false;
-        };
-        if received.is_empty() || received != txn.frame() {
-            return false;
-        }
-        let echo = !answers || (self.line_echoes && !self.echo_in_attempt);
-        if echo {
-            self.line_echoes = true;
-            self.echo_in_attempt = true;
-            self.core.diagnostics.record_echo();
-        }
-        echo
-    }
-
-    fn on_modbus_frame(
-        &mut self,
-        now: Instant,
-        result: plasma_protocol::Result<(u8, Vec<u8, { modbus_ascii::MAX_FRAME_BYTES }>)>,
-    ) {
-        let Some(tag) = self.awaited_tag() else {
-            return;
-        };
-        let (request, raw) = match &tag {
-            Tag::Detect(_, DetectExpect::Modbus(request)) => (request.clone(), false),
-            Tag::Modbus(purpose, request) => (
-                request.clone(),
-                *purpose == MbPurpose::Active
-                    && matches!(&self.phase, Phase::Powermax(d) if d.active_is_raw()),
-            ),
-            _ => return,
-        };
-        let (address, pdu) = match result {
-            Ok(frame) => frame,
-            Err(error) => return self.attempt_failed(now, modbus::classify(error)),
-        };
-        let frame = modbus_ascii::Frame { address, pdu: &pdu };
-        let validated = modbus_ascii::validate_reply(
-            &request.as_request(),
-            self.core.config.node_address,
-            &frame,
-        );
-        let mut own = [0u8; TX_CAPACITY];
-        let own_len = modbus_ascii::encode(address, &pdu, &mut own).unwrap_or(0);
-        if self.is_echo(own.get(..own_len).unwrap_or(&[]), validated.is_ok()) {
-            return;
-        }
-        let response = match validated {
-            Ok(response) => response,
-            Err(error) => return self.attempt_failed(now, modbus::classify(error)),
-        };
-        if let Response::Exception { code, .. } = response {
-            let error = TransactionError::Exception(code);
-            if !raw {
-                self.core.diagnostics.record_error(error);
-                if let Some(txn) = self.txn.as_mut()
-                    && let Outcome::Failed(error) = txn.attempt_failed(now, error)
-                {
-                    self.transaction_failed(now, error);
-                }
-                return;
-            }
-            self.core.diagnostics.record_error(error);
-        }
-        let mut raw_len = 0;
-        if raw {
-            let mut buf = [0u8; TX_CAPACITY];
-            raw_len = modbus_ascii::encode(address, &pdu, &mut buf).unwrap_or(0);
-            self.raw_reply = buf
-                .get(..raw_len)
-                .and_then(|b| Vec::from_slice(b).ok())
-                .unwrap_or_default();
-        }
-        let Some(tag) = self.transaction_ok() else {
-            return;
-        };
-        match tag {
-            Tag::Detect(DetectStep::DeviceId, _) => {
-                let model = match response {
-                    Response::ReadDeviceIdentification(id) => {
-                        device_id::model_from_device_id(&id).ok().flatten()
-                    }
-                    _ => None,
-                };
-                self.detected_modbus(now, model);
-            }
-            Tag::Detect(DetectStep::LegacyProbe, _) => {
-                let family = match self.core.config.protocol {
-                    ProtocolChoice::Sync => Family::PowermaxSync,
-                    _ => Family::PowermaxLegacy,
-                };
-                self.link_up(now, Model::PowermaxUnidentified, family);
-            }
-            Tag::Detect(step, _) => self.detect_next(now, step),
-            Tag::Modbus(MbPurpose::Identify, _) => {
-                if let Response::ReadDeviceIdentification(id) = response {
-                    let model = device_id::model_from_device_id(&id).ok().flatten();
-                    self.reidentified(now, model);
-                }
-            }
-            Tag::Modbus(purpose, _) => {
-                if let Phase::Powermax(driver) = &mut self.phase {
-                    driver.on_response(now, purpose, &response, raw_len, &mut self.core);
-                }
-            }
-            Tag::Hpr(..) => {}
-        }
-    }
-
-    fn on_hpr_frame(
-        &mut self,
-        now: Instant,
-        result: plasma_protocol::Result<(u16, Vec<u8, { hpr_wire::MAX_FRAME_LEN }>)>,
-    ) {
-        let Some(tag) = self.awaited_tag() else {
-            return;
-        };
-        let (id, data) = match result {
-            Ok(frame) => frame,
-            Err(plasma_protocol::Error::BadChecksum { .. }) => {
-                return self.attempt_failed(now, TransactionError::BadChecksum);
-            }
-            Err(_) => return self.attempt_failed(now, TransactionError::Malformed),
-        };
-        let frame = hpr_wire::Frame { id, data: &data };
-        let (typed, raw_id, purpose) = match &tag {
-            Tag::Detect(_, DetectExpect::Hpr(request)) => (Some(*request), None, None),
-            Tag::Hpr(purpose, HprExpect::Typed(request)) => (Some(*request), None, Some(*purpose)),
-            Tag::Hpr(purpose, HprExpect::Raw(raw_id)) => (None, Some(*raw_id), Some(*purpose)),
-            _ => return,
-        };
-        let answers = match (typed, raw_id) {
-            (Some(request), _) => Reply::parse_for(&request, &frame).is_ok(),
-            (None, Some(raw_id)) => id == raw_id,
-            (None, None) => false,
-        };
-        let mut own = [0u8; TX_CAPACITY];
-        let own_len = frame.emit(&mut own).unwrap_or(0);
-        if self.is_echo(own.get(..own_len).unwrap_or(&[]), answers) {
-            return;
-        }
-        if id == hpr_wire::command::id::BAD_CHECKSUM {
-            // The unit saw our request damaged: send it again.
-            return self.attempt_failed(now, TransactionError::HprBadChecksum500);
-        }
-        let mut reply = None;
-        if let Some(raw_id) = raw_id {
-            if id != raw_id && id != hpr_wire::command::id::UNKNOWN_COMMAND {
-                return self.attempt_failed(now, TransactionError::Mismatch);
-            }
-            if id == hpr_wire::command::id::UNKNOWN_COMMAND {
-                self.core
-                    .diagnostics
-                    .record_error(TransactionError::HprUnknownCommand501);
-            }
-            let mut buf = [0u8; TX_CAPACITY];
-            let len = frame.emit(&mut buf).unwrap_or(0);
-            self.raw_reply = buf
-                .get(..len)
-                .and_then(|b| Vec::from_slice(b).ok())
-                .unwrap_or_default();
-        } else if let Some(request) = typed {
-            if id == hpr_wire::command::id::UNKNOWN_COMMAND {
-                self.core
-                    .diagnostics
-                    .record_error(TransactionError::HprUnknownCommand501);
-                if let Some(txn) = self.txn.as_mut()
-                    && let Outcome::Failed(error) =
-                        txn.attempt_failed(now, TransactionError::HprUnknownCommand501)
-                {
-                    self.transaction_failed(now, error);
-                }
-                return;
-            }
-            match Reply::parse_for(&request, &frame) {
-                Ok(parsed) => reply = Some(parsed),
-                Err(plasma_protocol::Error::Mismatch) => {
-                    return self.attempt_failed(now, TransactionError::Mismatch);
-                }
-                Err(_) => return self.attempt_failed(now, TransactionError::Malformed),
-            }
-        }
-        let raw_len = self.raw_reply.len();
-        let Some(tag) = self.transaction_ok() else {
-            return;
-        };
-        match (tag, purpose) {
-            (Tag::Detect(DetectStep::HprHello, _), _) => match reply {
-                Some(Reply::Hello(system)) => {
-                    let family = if system == SystemId::MaxPro200 {
-                        Family::MaxPro200
-                    } else {
-                        Family::Hpr
-                    };
-                    self.link_up(now, Model::Hpr(system), family);
-                }
-                _ => self.detect_next(now, DetectStep::HprHello),
-            },
-            (Tag::Detect(step, _), _) => self.detect_next(now, step),
-            (Tag::Hpr(..), Some(purpose)) => {
-                if let Phase::Hpr(driver) = &mut self.phase {
-                    driver.on_reply(now, purpose, reply.as_ref(), raw_len, &mut self.core);
-                }
-            }
-            _ => {}
-        }
     }
 }

@@ -1,0 +1,155 @@
+//! The HPR / MaxPro200 settings to keep and re-apply, and which earlier setting a new one
+//! replaces.
+
+use heapless::Vec;
+use plasma_protocol::hpr::{Request, SystemId};
+
+/// Kept settings requests (one per kind at most: see [`HprKept::keep`]).
+pub const KEPT_CAPACITY: usize = 6;
+
+/// What a settings request sets (bits), to tell which earlier requests a new one replaces.
+const SETS_AMPS: u8 = 1;
+const SETS_CORNER: u8 = 2;
+const SETS_GASES: u8 = 4;
+const SETS_FLOWS: u8 = 8;
+const SETS_PRESSURES: u8 = 16;
+
+/// What `request` sets; 0 for a request that is no setting.
+pub(super) fn sets(request: &Request) -> u8 {
+    match request {
+        Request::SetNominalAmps { .. } => SETS_AMPS,
+        Request::SetCornerCurrent { .. } => SETS_CORNER,
+        Request::SetInletGases(_) => SETS_GASES,
+        Request::SetProcess { .. } => SETS_AMPS | SETS_GASES,
+        Request::SetAllParameters(_) => SETS_AMPS | SETS_CORNER | SETS_GASES | SETS_FLOWS,
+        Request::SetAllParametersMaxPro200(_) => SETS_AMPS | SETS_GASES | SETS_PRESSURES,
+        _ => 0,
+    }
+}
+
+/// The nominal current `request` sets, if it sets one.
+fn amps_of(request: &Request) -> Option<u16> {
+    match request {
+        Request::SetNominalAmps { amps } | Request::SetProcess { amps, .. } => Some(*amps),
+        Request::SetAllParameters(p) => Some(p.amps),
+        Request::SetAllParametersMaxPro200(p) => Some(p.amps),
+        _ => None,
+    }
+}
+
+/// The HPR / MaxPro200 settings the CNC asked for and the unit confirmed, oldest first. They
+/// are kept across link-downs and re-applied (after 004 REMOTE_MODE) when the unit returns or
+/// shows that it restarted, like the Powermax settings.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct HprKept {
+    requests: Vec<Request, KEPT_CAPACITY>,
+    /// The unit that confirmed them (another unit does not get them).
+    system: Option<SystemId>,
+}
+
+impl HprKept {
+    /// The kept requests, in the order they are re-applied.
+    pub fn as_slice(&self) -> &[Request] {
+        &self.requests
+    }
+
+    /// True when nothing is kept.
+    pub fn is_empty(&self) -> bool {
+        self.requests.is_empty()
+    }
+
+    /// The unit that confirmed the kept settings.
+    pub fn system(&self) -> Option<SystemId> {
+        self.system
+    }
+
+    /// Keep `request` (a setting `system` confirmed); earlier requests whose every setting
+    /// it sets again are dropped, and so is everything another unit confirmed.
+    pub fn keep(&mut self, system: SystemId, request: Request) {
+        let new = sets(&request);
+        if new == 0 {
+            return;
+        }
+        if self.system != Some(system) {
+            self.clear();
+            self.system = Some(system);
+        }
+        self.requests.retain(|old| sets(old) & !new != 0);
+        if self.requests.is_full() {
+            // Drop the oldest. Rebuilt rather than `Vec::remove`, whose overlapping move is
+            // the image's only other use of memmove (1.5 KB of flash), and pushed rather than
+            // collected (`collect` carries a capacity panic that cannot happen here).
+            let mut newer = Vec::new();
+            for request in self.requests.iter().skip(1) {
+                let _ = newer.push(*request);
+            }
+            self.requests = newer;
+        }
+        let _ = self.requests.push(request);
+    }
+
+    /// Forget everything kept.
+    pub fn clear(&mut self) {
+        self.requests.clear();
+        self.system = None;
+    }
+
+    /// The nominal current the kept settings give, if they set one.
+    pub fn amps(&self) -> Option<u16> {
+        self.requests.iter().rev().find_map(amps_of)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use plasma_protocol::hpr::{self, GasCode, GasFlows, GasPair, HprParameters};
+
+    const SYSTEM: SystemId = SystemId::MaxPro200;
+
+    #[test]
+    fn a_kept_setting_replaces_the_earlier_ones_it_sets_again() {
+        let mut kept = HprKept::default();
+        let gases = GasPair {
+            plasma: GasCode(1),
+            shield: GasCode(2),
+        };
+        kept.keep(SYSTEM, Request::SetNominalAmps { amps: 130 });
+        kept.keep(SYSTEM, Request::SetCornerCurrent { percent: 70 });
+        kept.keep(SYSTEM, Request::SetInletGases(gases));
+        kept.keep(SYSTEM, Request::SetNominalAmps { amps: 200 });
+        assert_eq!(
+            kept.as_slice(),
+            [
+                Request::SetCornerCurrent { percent: 70 },
+                Request::SetInletGases(gases),
+                Request::SetNominalAmps { amps: 200 },
+            ]
+        );
+        assert_eq!(kept.amps(), Some(200));
+        // All parameters set everything the others set.
+        let all = HprParameters {
+            amps: 260,
+            corner_percent: 80,
+            gases,
+            flows: GasFlows::default(),
+        };
+        kept.keep(SYSTEM, Request::SetAllParameters(all));
+        assert_eq!(kept.as_slice(), [Request::SetAllParameters(all)]);
+        kept.keep(SYSTEM, Request::SetCornerCurrent { percent: 60 });
+        assert_eq!(kept.as_slice().len(), 2);
+        assert_eq!(kept.amps(), Some(260));
+        // Not settings: not kept.
+        kept.keep(SYSTEM, Request::ClearWarnings);
+        assert_eq!(kept.as_slice().len(), 2);
+        // Settings another unit confirmed replace everything.
+        let hpr130 = SystemId::Hpr {
+            rating: hpr::HprRating::Hpr130,
+            console: Some(hpr::GasConsole::Auto),
+            xd: false,
+        };
+        kept.keep(hpr130, Request::SetNominalAmps { amps: 100 });
+        assert_eq!(kept.as_slice(), [Request::SetNominalAmps { amps: 100 }]);
+        assert_eq!(kept.system(), Some(hpr130));
+    }
+}

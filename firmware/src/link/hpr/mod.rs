@@ -1,0 +1,372 @@
+//! The HPR / MaxPro200 driver (`>ID data CK<`): polling GET_PS_INFO, the pilot-arc pause,
+//! remote settings and the allow-listed commands.
+//!
+//! Manual rules kept here (section VII/VIII): one command at a time, each reply awaited
+//! before the next (the transaction layer), no trailing CR/LF (frames come from the protocol
+//! crate as `>...<` only), retries spaced over more than 1 s (the transaction layer), and
+//! while the state is pilot arc "stop serial communications" for the length of an
+//! HF-ignition burst, then ask GET_STATE only until the pilot arc is over.
+
+//!
+//! The driver's jobs are split by module: this one schedules (what goes out next: the
+//! pilot-arc GET_STATE, the active command or a re-apply, polls and slow data in turn),
+//! [`kept`] keeps the settings to re-apply, `reply` reads what the unit answers, and `submit`
+//! checks a command against the manual's rules before it is queued.
+
+mod kept;
+mod reply;
+mod submit;
+
+use heapless::{Deque, Vec};
+use plasma_protocol::hpr::{self, Request, StateCode, SystemId};
+
+use super::Core;
+use super::event::{LinkEvent, SettingsFailure, Ticket};
+use super::slow::SlowData;
+use super::status::Family;
+use plasma_protocol::time::{Duration, Instant};
+
+pub use kept::{HprKept, KEPT_CAPACITY};
+
+/// How long all traffic stops when the state is pilot arc: the manual's HF-ignition burst
+/// ("can be active for up to 1 second").
+pub const PILOT_ARC_PAUSE: Duration = Duration::from_secs(1);
+/// Longest RAW HPR frame.
+pub const RAW_HPR_CAPACITY: usize = hpr::MAX_FRAME_LEN;
+const QUEUE_CAPACITY: usize = 4;
+
+/// What is expected back.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum HprExpect {
+    /// A typed request; its reply is parsed for it.
+    Typed(Request),
+    /// A RAW frame with this id; any reply echoing it (or 500/501) is forwarded.
+    Raw(u16),
+}
+
+/// What an HPR transaction is for.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum HprPurpose {
+    /// GET_PS_INFO.
+    Poll,
+    /// GET_STATE while the pilot arc lasts.
+    State,
+    /// 004 REMOTE_MODE before the first setting.
+    RemoteMode,
+    /// 134 READ ERROR LOG (slow data).
+    SlowErrorLog,
+    /// 125 GET_TIMER_COUNTER (slow data).
+    SlowTimers,
+    /// The active command.
+    Active,
+}
+
+#[derive(Debug, Clone, PartialEq, Eq)]
+enum HprJob {
+    Typed(Request),
+    Raw {
+        id: u16,
+        frame: Vec<u8, RAW_HPR_CAPACITY>,
+    },
+}
+
+impl HprJob {
+    fn needs_remote(&self) -> bool {
+        matches!(
+            self,
+            HprJob::Typed(
+                Request::SetNominalAmps { .. }
+                    | Request::SetProcess { .. }
+                    | Request::SetAllParameters(_)
+                    | Request::SetAllParametersMaxPro200(_)
+                    | Request::SetInletGases(_)
+                    | Request::SetCornerCurrent { .. }
+            )
+        )
+    }
+}
+
+const SLOW_ERROR_LOG: u8 = 1;
+const SLOW_TIMERS: u8 = 2;
+const SLOW_ALL: u8 = SLOW_ERROR_LOG | SLOW_TIMERS;
+
+/// Wait before re-applying kept settings again after a re-apply failed.
+pub const REAPPLY_BACKOFF: Duration = Duration::from_secs(5);
+
+/// The command being carried out.
+#[derive(Debug, Clone, PartialEq, Eq)]
+struct ActiveJob {
+    /// `None` for a re-apply the link started itself.
+    ticket: Option<Ticket>,
+    job: HprJob,
+    /// Sent again once after the unit did not take it (remote mode entered again first).
+    retried: bool,
+}
+
+/// Driver state for one detected HPR or MaxPro200.
+#[derive(Debug, Clone)]
+pub struct HprDriver {
+    system: SystemId,
+    next_poll_at: Instant,
+    pause_until: Option<Instant>,
+    slow: SlowData,
+    queue: Deque<(Ticket, HprJob), QUEUE_CAPACITY>,
+    active: Option<ActiveJob>,
+    /// Kept settings still to re-apply in this re-apply run.
+    reapply: Deque<Request, KEPT_CAPACITY>,
+    /// Kept settings must be re-applied (from `reapply_not_before`, in state 2 or 3).
+    reapply_pending: bool,
+    reapply_not_before: Instant,
+    /// The last transaction started was a poll (the next turn goes to due slow data).
+    polled_last: bool,
+    now: Instant,
+}
+
+/// True for the states in which the HF ignition may fire (HPR 5 PILOT ARC; MaxPro200
+/// 6 IGNITE and 7 PILOT ARC).
+fn is_pilot_arc(maxpro: bool, state: StateCode) -> bool {
+    if maxpro {
+        matches!(state.0, 6 | 7)
+    } else {
+        state.0 == 5
+    }
+}
+
+/// True for the states a unit is in right after power-up (HPR 0; MaxPro200 0 power up and
+/// 1 initial checks).
+fn is_power_up(maxpro: bool, state: StateCode) -> bool {
+    if maxpro {
+        matches!(state.0, 0 | 1)
+    } else {
+        state.0 == 0
+    }
+}
+
+/// True while cutting (states 4-10 on both families: preflow to rampdown), when the manual
+/// forbids gas changes, gas tests and resets.
+fn is_cutting(state: Option<StateCode>) -> bool {
+    state.is_some_and(|s| (4..=10).contains(&s.0))
+}
+
+impl HprDriver {
+    /// A driver for a unit that answered HELLO with `system`.
+    pub fn new(system: SystemId, now: Instant, core: &mut Core) -> Self {
+        let maxpro = system == SystemId::MaxPro200;
+        if !core.hpr_kept.is_empty() && core.hpr_kept.system() != Some(system) {
+            // Another unit is on the line: the kept settings were meant for the one before.
+            core.hpr_kept.clear();
+            core.emit(LinkEvent::SettingsFailed {
+                reason: SettingsFailure::OutsideLimits,
+            });
+        }
+        HprDriver {
+            system,
+            next_poll_at: now,
+            pause_until: None,
+            slow: SlowData::new(
+                if maxpro { 0 } else { SLOW_ALL },
+                now,
+                core.config.slow_data_interval,
+            ),
+            queue: Deque::new(),
+            active: None,
+            reapply: Deque::new(),
+            reapply_pending: !core.hpr_kept.is_empty(),
+            reapply_not_before: now,
+            polled_last: false,
+            now,
+        }
+    }
+
+    fn maxpro(&self) -> bool {
+        self.system == SystemId::MaxPro200
+    }
+
+    /// Family of the unit.
+    pub fn family(&self) -> Family {
+        if self.maxpro() {
+            Family::MaxPro200
+        } else {
+            Family::Hpr
+        }
+    }
+
+    fn max_amps(&self) -> u16 {
+        match self.system {
+            SystemId::Hpr { rating, .. } => rating.max_amps(),
+            SystemId::MaxPro200 => hpr::MAX_MAXPRO_AMPS,
+        }
+    }
+
+    /// True when the active command is a RAW forward.
+    pub fn active_is_raw(&self) -> bool {
+        matches!(
+            self.active,
+            Some(ActiveJob {
+                job: HprJob::Raw { .. },
+                ..
+            })
+        )
+    }
+
+    fn in_pilot_arc(&self, core: &Core) -> bool {
+        core.status
+            .hpr
+            .state
+            .is_some_and(|s| is_pilot_arc(self.maxpro(), s))
+    }
+
+    /// Earliest time the driver wants to send something.
+    pub fn wake_at(&self, core: &Core) -> Option<Instant> {
+        if let Some(until) = self.pause_until.filter(|&u| self.now < u) {
+            return Some(until);
+        }
+        if self.in_pilot_arc(core) {
+            return Some(self.next_poll_at);
+        }
+        if self.active.is_some()
+            || !self.queue.is_empty()
+            || !self.reapply.is_empty()
+            || self.slow.pending() != 0
+        {
+            return Some(self.now);
+        }
+        let mut at = self.next_poll_at.min(self.slow.wake_at());
+        if self.reapply_pending && self.reapply_allowed(core) {
+            at = at.min(self.reapply_not_before.max(self.now));
+        }
+        Some(at)
+    }
+
+    /// The next frame to send, if any, and what it is for.
+    pub fn next_request(
+        &mut self,
+        now: Instant,
+        core: &mut Core,
+    ) -> Option<(HprPurpose, HprExpect, Vec<u8, RAW_HPR_CAPACITY>)> {
+        self.now = now;
+        if self.pause_until.is_some_and(|until| now < until) {
+            return None;
+        }
+        if self.in_pilot_arc(core) {
+            // Only GET_STATE until the pilot arc is over.
+            if now < self.next_poll_at {
+                return None;
+            }
+            return typed(HprPurpose::State, Request::GetState);
+        }
+        if self.active.is_none() {
+            self.next_job(now, core);
+        }
+        if let Some(ActiveJob { job, .. }) = &self.active {
+            if job.needs_remote() && !core.status.hpr.remote_accepted {
+                return typed(HprPurpose::RemoteMode, Request::RemoteMode);
+            }
+            return match job {
+                HprJob::Typed(request) => typed(HprPurpose::Active, *request),
+                HprJob::Raw { id, frame } => {
+                    Some((HprPurpose::Active, HprExpect::Raw(*id), frame.clone()))
+                }
+            };
+        }
+        // Round robin: after a poll, due slow data gets one transaction before the next
+        // poll, so a short poll interval cannot starve it.
+        let poll_due = now >= self.next_poll_at;
+        if poll_due && !self.polled_last {
+            return self.start_poll(now, core);
+        }
+        if let Some(request) = self.slow_request(now, core) {
+            self.polled_last = false;
+            return Some(request);
+        }
+        if poll_due {
+            return self.start_poll(now, core);
+        }
+        None
+    }
+
+    /// States in which kept settings are re-applied: 2 (purge) and 3 (idle / ready), the
+    /// states in which every settings command is accepted (137 and MaxPro 095 need them).
+    fn reapply_allowed(&self, core: &Core) -> bool {
+        core.status.hpr.state.is_some_and(|s| matches!(s.0, 2 | 3))
+    }
+
+    /// Pick the next job: the rest of a re-apply run (older settings first), a new re-apply
+    /// run when due, or the next command.
+    fn next_job(&mut self, now: Instant, core: &mut Core) {
+        if self.reapply.is_empty()
+            && self.reapply_pending
+            && now >= self.reapply_not_before
+            && self.reapply_allowed(core)
+        {
+            self.reapply_pending = false;
+            for request in core.hpr_kept.as_slice() {
+                let _ = self.reapply.push_back(*request);
+            }
+        }
+        if let Some(request) = self.reapply.pop_front() {
+            self.active = Some(ActiveJob {
+                ticket: None,
+                job: HprJob::Typed(request),
+                retried: false,
+            });
+            return;
+        }
+        self.active = self.queue.pop_front().map(|(ticket, job)| ActiveJob {
+            ticket: Some(ticket),
+            job,
+            retried: false,
+        });
+    }
+    fn start_poll(
+        &mut self,
+        now: Instant,
+        core: &Core,
+    ) -> Option<(HprPurpose, HprExpect, Vec<u8, RAW_HPR_CAPACITY>)> {
+        self.next_poll_at = now + core.config.poll_interval;
+        self.polled_last = true;
+        typed(HprPurpose::Poll, Request::GetPsInfo)
+    }
+
+    fn slow_request(
+        &mut self,
+        now: Instant,
+        core: &Core,
+    ) -> Option<(HprPurpose, HprExpect, Vec<u8, RAW_HPR_CAPACITY>)> {
+        if self.slow.refresh_due(now, core.config.slow_data_interval) && !self.maxpro() {
+            self.slow.request(SLOW_ALL);
+        }
+        self.slow.take_due_retries(now);
+        let pending = self.slow.pending();
+        if pending & SLOW_ERROR_LOG != 0 {
+            return typed(HprPurpose::SlowErrorLog, Request::ReadErrorLog);
+        }
+        if pending & SLOW_TIMERS != 0 {
+            return typed(HprPurpose::SlowTimers, Request::GetTimerCounter);
+        }
+        None
+    }
+    /// The link went down: every pending command fails.
+    pub fn abort(&mut self, core: &mut Core) {
+        let active = self.active.take().and_then(|active| active.ticket);
+        core.fail_commands(active, &mut self.queue);
+        // Kept settings stay (in the core) and are re-applied when the unit is back.
+        self.reapply.clear();
+        self.slow.fail_all(core);
+    }
+}
+
+fn typed(
+    purpose: HprPurpose,
+    request: Request,
+) -> Option<(HprPurpose, HprExpect, Vec<u8, RAW_HPR_CAPACITY>)> {
+    let frame = emit(&request)?;
+    Some((purpose, HprExpect::Typed(request), frame))
+}
+
+/// The frame for `request`: `>ID data CK<`, nothing after `<`.
+pub fn emit(request: &Request) -> Option<Vec<u8, RAW_HPR_CAPACITY>> {
+    let mut buf = [0u8; hpr::MAX_FRAME_LEN];
+    let len = request.emit(&mut buf).ok()?;
+    Vec::from_slice(buf.get(..len)?).ok()
+}

@@ -1,0 +1,304 @@
+//! What the unit's answers mean: polls and GET_STATE update the status (state changes,
+//! the pilot-arc pause, errors, a restart the link did not see), and the reply to the active
+//! job decides whether a setting took effect.
+
+use plasma_protocol::hpr::{Acceptance, ErrorCode, Reply, Request, StateCode};
+use plasma_protocol::time::Instant;
+
+use super::super::Core;
+use super::super::event::{CommandFailure, CommandOutput, LinkEvent, SettingsFailure};
+use super::super::status::ActiveFault;
+use super::super::transaction::TransactionError;
+use super::kept::sets;
+use super::{
+    ActiveJob, HprDriver, HprJob, HprPurpose, PILOT_ARC_PAUSE, REAPPLY_BACKOFF, SLOW_ERROR_LOG,
+    SLOW_TIMERS, is_pilot_arc, is_power_up,
+};
+
+impl HprDriver {
+    /// The unit lost its settings or restarted (state back to power-up, or a set point
+    /// other than the kept one): remote mode must be entered again and the kept settings
+    /// re-applied.
+    fn settings_lost(&mut self, now: Instant, core: &mut Core) {
+        core.status.hpr.remote_accepted = false;
+        if core.status.remote {
+            core.status.remote = false;
+            core.emit(LinkEvent::RemoteModeChanged { remote: false });
+        }
+        if !core.hpr_kept.is_empty() && self.reapply.is_empty() {
+            self.reapply_pending = true;
+            self.reapply_not_before = now;
+        }
+    }
+
+    /// A settings job (re-apply or command) did not end well: a command fails with
+    /// `failure`; a re-apply reports `reason` and is tried again later.
+    fn job_failed(
+        &mut self,
+        now: Instant,
+        job: ActiveJob,
+        failure: CommandFailure,
+        reason: SettingsFailure,
+        core: &mut Core,
+    ) {
+        match job.ticket {
+            Some(ticket) => core.emit(LinkEvent::CommandDone {
+                ticket,
+                result: Err(failure),
+            }),
+            None => {
+                core.emit(LinkEvent::SettingsFailed { reason });
+                self.reapply.clear();
+                self.reapply_pending = true;
+                self.reapply_not_before = now + REAPPLY_BACKOFF;
+            }
+        }
+    }
+
+    /// A reply arrived for `purpose` (already checked to answer the request; error replies
+    /// 500/501 never get here, except for RAW forwards).
+    pub fn on_reply(
+        &mut self,
+        now: Instant,
+        purpose: HprPurpose,
+        reply: Option<&Reply<'_>>,
+        raw_len: usize,
+        core: &mut Core,
+    ) {
+        self.now = now;
+        match (purpose, reply) {
+            (HprPurpose::Poll, Some(Reply::PsInfo(info))) => {
+                core.status.hpr.ps_info = Some(*info);
+                core.status.hpr.nominal_amps = Some(info.current_setpoint);
+                self.update_state(now, info.state, core);
+                self.update_error(info.error, core);
+                self.check_setpoint(now, info.current_setpoint, core);
+            }
+            (HprPurpose::Poll, Some(Reply::MaxProPsInfo(info))) => {
+                core.status.hpr.maxpro_info = Some(*info);
+                core.status.hpr.nominal_amps = Some(info.current_setpoint);
+                self.update_state(now, info.state, core);
+                self.update_error(info.error, core);
+                self.check_setpoint(now, info.current_setpoint, core);
+            }
+            (HprPurpose::State, Some(Reply::State(state))) => {
+                self.next_poll_at = now + core.config.poll_interval;
+                self.update_state(now, *state, core);
+            }
+            (HprPurpose::RemoteMode, Some(Reply::Ack { result, .. })) => {
+                if *result == Acceptance::Accepted {
+                    core.status.hpr.remote_accepted = true;
+                    if !core.status.remote {
+                        core.status.remote = true;
+                        core.emit(LinkEvent::RemoteModeChanged { remote: true });
+                    }
+                } else if let Some(job) = self.active.take() {
+                    self.job_failed(
+                        now,
+                        job,
+                        CommandFailure::NotAccepted,
+                        SettingsFailure::NotAccepted,
+                        core,
+                    );
+                }
+            }
+            (HprPurpose::SlowErrorLog, reply) => {
+                if let Some(Reply::ErrorLog(log)) = reply {
+                    core.status.hpr.error_log = Some(*log);
+                }
+                self.slow_done(now, SLOW_ERROR_LOG, None, core);
+            }
+            (HprPurpose::SlowTimers, reply) => {
+                if let Some(Reply::TimerCounter(t)) = reply {
+                    core.status.hpr.timers = Some(*t);
+                }
+                self.slow_done(now, SLOW_TIMERS, None, core);
+            }
+            (HprPurpose::Active, reply) => {
+                let Some(active) = self.active.take() else {
+                    return;
+                };
+                self.finish_job(now, active, reply, raw_len, core);
+            }
+            _ => {}
+        }
+    }
+
+    /// The reply to the active job arrived. A setting counts as done only when the unit's
+    /// answer shows the value asked for; otherwise it is sent once more after entering remote
+    /// mode again (the unit may have restarted and left remote mode), then reported as not
+    /// accepted. Never success with another value.
+    fn finish_job(
+        &mut self,
+        now: Instant,
+        mut active: ActiveJob,
+        reply: Option<&Reply<'_>>,
+        raw_len: usize,
+        core: &mut Core,
+    ) {
+        let request = match &active.job {
+            HprJob::Typed(request) => Some(*request),
+            HprJob::Raw { .. } => None,
+        };
+        let Some(request) = request.filter(|r| sets(r) != 0) else {
+            return Self::finish_other(active, reply, raw_len, core);
+        };
+        // Whether the setting took effect, by the unit's answer.
+        let taken = match (request, reply) {
+            (Request::SetNominalAmps { amps }, Some(Reply::NominalAmps(set))) => {
+                core.status.hpr.nominal_amps = Some(*set);
+                *set == amps
+            }
+            (Request::SetCornerCurrent { percent }, Some(Reply::CornerCurrentSet(set))) => {
+                *set == u16::from(percent)
+            }
+            (_, Some(Reply::Ack { result, .. })) => *result == Acceptance::Accepted,
+            _ => false,
+        };
+        if taken {
+            core.hpr_kept.keep(self.system, request);
+            // A re-apply run still to come must not set older values again.
+            let new = sets(&request);
+            // In order, without `Deque::retain` (its swaps are memmoves, see `keep`).
+            for _ in 0..self.reapply.len() {
+                if let Some(old) = self.reapply.pop_front()
+                    && sets(&old) & !new != 0
+                {
+                    let _ = self.reapply.push_back(old);
+                }
+            }
+            if let Some(ticket) = active.ticket {
+                let output = match reply {
+                    Some(Reply::NominalAmps(set)) | Some(Reply::CornerCurrentSet(set)) => {
+                        CommandOutput::Value(*set)
+                    }
+                    _ => CommandOutput::Done,
+                };
+                core.emit(LinkEvent::CommandDone {
+                    ticket,
+                    result: Ok(output),
+                });
+            }
+        } else if !active.retried {
+            // Perhaps out of remote mode after a restart: 004 again, then once more.
+            core.status.hpr.remote_accepted = false;
+            active.retried = true;
+            self.active = Some(active);
+        } else {
+            self.job_failed(
+                now,
+                active,
+                CommandFailure::NotAccepted,
+                SettingsFailure::NotAccepted,
+                core,
+            );
+        }
+    }
+
+    /// The reply to a job that sets nothing (RAW, gas tests, logs...).
+    fn finish_other(active: ActiveJob, reply: Option<&Reply<'_>>, raw_len: usize, core: &mut Core) {
+        let Some(ticket) = active.ticket else {
+            return;
+        };
+        let result = match (&active.job, reply) {
+            (HprJob::Raw { .. }, _) => Ok(CommandOutput::Raw { len: raw_len }),
+            (_, Some(Reply::Ack { result, .. })) => {
+                if *result == Acceptance::Accepted {
+                    Ok(CommandOutput::Done)
+                } else {
+                    Err(CommandFailure::NotAccepted)
+                }
+            }
+            (_, Some(Reply::ErrorLog(log))) => {
+                core.status.hpr.error_log = Some(*log);
+                Ok(CommandOutput::ErrorLog(*log))
+            }
+            (_, Some(Reply::TimerCounter(t))) => {
+                core.status.hpr.timers = Some(*t);
+                Ok(CommandOutput::Done)
+            }
+            _ => Ok(CommandOutput::Done),
+        };
+        core.emit(LinkEvent::CommandDone { ticket, result });
+    }
+
+    /// A poll shows the unit's current set point: when kept settings say otherwise (and
+    /// no setting is under way), the unit lost them (a power blip too short for a link-down,
+    /// or a change at the unit): re-apply.
+    fn check_setpoint(&mut self, now: Instant, setpoint: u16, core: &mut Core) {
+        let busy = self.active.is_some() || !self.reapply.is_empty() || self.reapply_pending;
+        if busy {
+            return;
+        }
+        if core.hpr_kept.amps().is_some_and(|kept| kept != setpoint) {
+            self.settings_lost(now, core);
+        }
+    }
+
+    /// `purpose` failed for good.
+    pub fn on_failed(
+        &mut self,
+        now: Instant,
+        purpose: HprPurpose,
+        error: TransactionError,
+        core: &mut Core,
+    ) {
+        self.now = now;
+        match purpose {
+            HprPurpose::Poll | HprPurpose::State => {}
+            HprPurpose::SlowErrorLog => self.slow_done(now, SLOW_ERROR_LOG, Some(error), core),
+            HprPurpose::SlowTimers => self.slow_done(now, SLOW_TIMERS, Some(error), core),
+            HprPurpose::RemoteMode | HprPurpose::Active => {
+                if let Some(job) = self.active.take() {
+                    self.job_failed(
+                        now,
+                        job,
+                        CommandFailure::Transaction(error),
+                        SettingsFailure::Transaction(error),
+                        core,
+                    );
+                }
+            }
+        }
+    }
+
+    fn update_state(&mut self, now: Instant, state: StateCode, core: &mut Core) {
+        let previous = core.status.hpr.state;
+        if previous != Some(state) {
+            core.status.hpr.state = Some(state);
+            core.emit(LinkEvent::StateChanged {
+                from: previous,
+                to: state,
+            });
+            // Back in a power-up state: the unit restarted (a power blip shorter than a
+            // link-down, or a software reset) and forgot remote mode and its settings.
+            let maxpro = self.maxpro();
+            if is_power_up(maxpro, state) && previous.is_some_and(|p| !is_power_up(maxpro, p)) {
+                self.settings_lost(now, core);
+            }
+            if is_pilot_arc(self.maxpro(), state) {
+                let until = now + PILOT_ARC_PAUSE;
+                self.pause_until = Some(until);
+                self.next_poll_at = until;
+            }
+        }
+    }
+
+    fn update_error(&mut self, error: ErrorCode, core: &mut Core) {
+        let new = error.is_error().then_some(ActiveFault::Hpr(error));
+        core.status.hpr.error = Some(error);
+        core.set_active_fault(new);
+    }
+
+    /// A slow-data item is read (`error` = None) or failed for good (see [`SlowData::finish`]).
+    fn slow_done(
+        &mut self,
+        now: Instant,
+        bit: u8,
+        error: Option<TransactionError>,
+        core: &mut Core,
+    ) {
+        let interval = core.config.slow_data_interval;
+        self.slow.finish(now, bit, error, interval, core);
+    }
+}

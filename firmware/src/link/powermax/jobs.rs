@@ -1,0 +1,145 @@
+//! The active command, step by step: the request of each step, and what the answer to the
+//! last one means (a command's result, a setting confirmed or refused).
+
+use plasma_protocol::modbus_ascii::Response;
+use plasma_protocol::time::Instant;
+
+use super::super::Core;
+use super::super::event::{CommandFailure, CommandOutput, LinkEvent};
+use super::super::legacy;
+use super::super::modbus::MbRequest;
+use super::super::sync;
+use super::super::transaction::TransactionError;
+use super::settings::legacy_writes;
+use super::{Active, Job, MbPurpose, PowermaxDriver, Variant};
+
+impl PowermaxDriver {
+    pub(super) fn active_request(
+        &mut self,
+        now: Instant,
+        core: &mut Core,
+    ) -> Option<(MbPurpose, MbRequest, Option<u8>)> {
+        if self.active.is_none() {
+            if let Some((ticket, job)) = self.queue.pop_front() {
+                self.active = Some(Active {
+                    ticket: Some(ticket),
+                    job,
+                    step: 0,
+                });
+            } else if self.reapply_pending && now >= self.reapply_not_before {
+                self.start_reapply(now, core);
+            }
+        }
+        let active = self.active.as_ref()?;
+        let Some(request) = self.step_request(active) else {
+            // A step that cannot be encoded (commands are validated before, so not expected):
+            // fail the command rather than leave it in the way.
+            if let Some(Active {
+                ticket: Some(ticket),
+                ..
+            }) = self.active.take()
+            {
+                core.emit(LinkEvent::CommandDone {
+                    ticket,
+                    result: Err(CommandFailure::Transaction(TransactionError::Malformed)),
+                });
+            }
+            return None;
+        };
+        // The quick restart is never repeated: the unit may already be restarting.
+        let retries = matches!(active.job, Job::QuickRestart).then_some(0);
+        Some((MbPurpose::Active, request, retries))
+    }
+
+    fn step_request(&self, active: &Active) -> Option<MbRequest> {
+        let step = usize::from(active.step);
+        match (&active.job, self.variant) {
+            (Job::Apply(d), Variant::Sync) => match step {
+                0 => sync::settings_words(d.mode, d.current, d.pressure).map(sync::write_settings),
+                1 => Some(sync::read_back()),
+                _ => None,
+            },
+            (Job::Apply(d), Variant::Legacy) => {
+                let writes = legacy_writes(d);
+                match writes.get(step) {
+                    Some(write) => Some(write.clone()),
+                    None if step == writes.len() => Some(legacy::read_fault()),
+                    None => None,
+                }
+            }
+            (Job::Exit, Variant::Sync) => (step == 0).then(sync::exit_remote),
+            (Job::Exit, Variant::Legacy) => legacy::exit_writes().get(step).cloned(),
+            (Job::GasTest(on), Variant::Sync) => (step == 0).then(|| sync::gas_test(*on)),
+            (Job::GasTest(on), Variant::Legacy) => (step == 0).then(|| legacy::gas_test(*on)),
+            (Job::QuickRestart, _) => (step == 0).then(sync::quick_restart).flatten(),
+            (Job::Raw(request), _) => (step == 0).then(|| request.clone()),
+        }
+    }
+
+    pub(super) fn advance_active(
+        &mut self,
+        now: Instant,
+        response: &Response<'_>,
+        raw_len: usize,
+        core: &mut Core,
+    ) {
+        let Some(mut active) = self.active.take() else {
+            return;
+        };
+        let outcome: Option<Result<CommandOutput, CommandFailure>> = match &active.job {
+            Job::Apply(desired) => {
+                let is_final = self.step_request_after(&active).is_none();
+                if !is_final {
+                    None
+                } else {
+                    Some(self.confirm_settings(
+                        now,
+                        desired,
+                        response,
+                        active.ticket.is_none(),
+                        core,
+                    ))
+                }
+            }
+            Job::Exit => {
+                if self.step_request_after(&active).is_none() {
+                    core.status.desired = None;
+                    self.reapply_pending = false;
+                    if core.status.remote {
+                        core.status.remote = false;
+                        core.emit(LinkEvent::RemoteModeChanged { remote: false });
+                    }
+                    Some(Ok(CommandOutput::Done))
+                } else {
+                    None
+                }
+            }
+            Job::GasTest(_) => Some(Ok(CommandOutput::Done)),
+            Job::QuickRestart => {
+                self.start_blackout(now, core);
+                Some(Ok(CommandOutput::Done))
+            }
+            Job::Raw(_) => Some(Ok(CommandOutput::Raw { len: raw_len })),
+        };
+        match outcome {
+            None => {
+                active.step = active.step.saturating_add(1);
+                self.active = Some(active);
+            }
+            Some(result) => {
+                if let Some(ticket) = active.ticket {
+                    core.emit(LinkEvent::CommandDone { ticket, result });
+                }
+            }
+        }
+    }
+
+    fn step_request_after(&self, active: &Active) -> Option<MbRequest> {
+        let next = Active {
+            ticket: active.ticket,
+            job: active.job.clone(),
+            step: active.step.saturating_add(1),
+        };
+        self.step_request(&next)
+    }
+}

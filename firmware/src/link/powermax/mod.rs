@@ -1,0 +1,315 @@
+//! The Powermax driver (SYNC and legacy): polling, slow data, settings and commands over
+//! Modbus ASCII. Family specifics live in [`super::sync`] and [`super::legacy`].
+//!
+//! The driver's jobs are split by module: this one schedules (what goes out next: the rest of
+//! a poll cycle, the active command or a re-apply, polls and other due work in turn),
+//! `settings` owns the settings to keep and re-apply, `jobs` carries the active command
+//! through its steps, `reply` reads what the unit answers, and `submit` checks a command
+//! before it is queued.
+
+mod jobs;
+mod reply;
+mod settings;
+mod submit;
+
+use heapless::Deque;
+use plasma_protocol::powermax::device_id;
+
+use super::Core;
+use super::config::ProtocolChoice;
+use super::event::Ticket;
+use super::legacy;
+use super::modbus::{BlockPart, BlockPoller, MbRequest};
+use super::slow::SlowData;
+use super::status::{Family, Model};
+use super::sync::{self, SlowItem};
+use plasma_protocol::time::{Duration, Instant};
+
+use settings::Desired;
+pub use settings::validate_settings;
+
+/// Silence after a quick restart (SYNC guide: "wait 2 seconds before you send a new read or
+/// write request").
+pub const QUICK_RESTART_BLACKOUT: Duration = Duration::from_secs(2);
+/// How often the SYNC cartridge UID is read to notice a cartridge change.
+pub const UID_CHECK_INTERVAL: Duration = Duration::from_secs(1);
+/// Wait before re-applying kept settings again after a re-apply failed.
+pub const REAPPLY_BACKOFF: Duration = Duration::from_secs(5);
+/// Commands waiting behind the active one.
+const QUEUE_CAPACITY: usize = 4;
+
+/// Which register family.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Variant {
+    /// 0x3xxx.
+    Sync,
+    /// 0x2xxx.
+    Legacy,
+}
+
+/// What a Modbus transaction of this driver is for.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum MbPurpose {
+    /// Status poll (whole block or part).
+    Poll(BlockPart),
+    /// A slow-data span.
+    Slow(SlowItem),
+    /// The SYNC cartridge block (whole or part).
+    CartridgeBlock(BlockPart),
+    /// The UID read that notices a cartridge change.
+    UidCheck,
+    /// Read Device Identification again for a unit detection found only by the legacy
+    /// register probe (a SYNC unit whose identification replies were lost is told apart).
+    Identify,
+    /// The current step of the active command.
+    Active,
+}
+
+#[derive(Debug, Clone, PartialEq, Eq)]
+enum Job {
+    Apply(Desired),
+    Exit,
+    GasTest(bool),
+    QuickRestart,
+    Raw(MbRequest),
+}
+
+#[derive(Debug, Clone, PartialEq, Eq)]
+struct Active {
+    /// `None` for a re-apply the link started itself.
+    ticket: Option<Ticket>,
+    job: Job,
+    step: u8,
+}
+
+/// Driver state for one detected Powermax.
+#[derive(Debug, Clone)]
+pub struct PowermaxDriver {
+    variant: Variant,
+    poll: BlockPoller,
+    poll_started: Instant,
+    next_poll_at: Instant,
+    cartridge: BlockPoller,
+    slow: SlowData,
+    next_uid_check_at: Instant,
+    queue: Deque<(Ticket, Job), QUEUE_CAPACITY>,
+    active: Option<Active>,
+    reapply_pending: bool,
+    reapply_not_before: Instant,
+    blackout_until: Option<Instant>,
+    /// The unit refused device identification (an exception): it is not asked again.
+    identify_refused: bool,
+    /// The last transaction started was a poll (the next turn goes to other due work).
+    polled_last: bool,
+    now: Instant,
+}
+
+impl PowermaxDriver {
+    /// A driver for a unit just detected; slow data is read first, and kept settings are
+    /// re-applied (the link returned).
+    pub fn new(variant: Variant, now: Instant, core: &Core) -> Self {
+        let plan = match variant {
+            Variant::Sync => sync::POLL_PLAN,
+            Variant::Legacy => legacy::POLL_PLAN,
+        };
+        PowermaxDriver {
+            variant,
+            poll: BlockPoller::new(plan),
+            poll_started: now,
+            next_poll_at: now,
+            cartridge: BlockPoller::new(plasma_protocol::powermax::sync::CARTRIDGE_BLOCK),
+            slow: SlowData::new(
+                match variant {
+                    Variant::Sync => SlowItem::ALL_ITEMS,
+                    Variant::Legacy => 0,
+                },
+                now,
+                core.config.slow_data_interval,
+            ),
+            next_uid_check_at: now + UID_CHECK_INTERVAL,
+            queue: Deque::new(),
+            active: None,
+            reapply_pending: core.status.desired.is_some(),
+            reapply_not_before: now,
+            blackout_until: None,
+            identify_refused: false,
+            polled_last: false,
+            now,
+        }
+    }
+
+    /// The family this driver speaks.
+    pub fn family(&self) -> Family {
+        match self.variant {
+            Variant::Sync => Family::PowermaxSync,
+            Variant::Legacy => Family::PowermaxLegacy,
+        }
+    }
+
+    /// True when the active command is a RAW forward (its reply bytes are kept).
+    pub fn active_is_raw(&self) -> bool {
+        matches!(
+            self.active,
+            Some(Active {
+                job: Job::Raw(_),
+                ..
+            })
+        )
+    }
+
+    /// True while the quick-restart silence lasts.
+    fn in_blackout(&self, now: Instant) -> bool {
+        self.blackout_until.is_some_and(|until| now < until)
+    }
+
+    /// Earliest time the driver wants to send something. It mirrors
+    /// [`PowermaxDriver::next_request`]: a time not after the last call is only returned when
+    /// that call will send something, so a caller sleeping until then never spins.
+    pub fn wake_at(&self, core: &Core) -> Option<Instant> {
+        if let Some(until) = self.blackout_until.filter(|&u| self.now < u) {
+            return Some(until);
+        }
+        let busy = self.poll.in_cycle()
+            || self.active.is_some()
+            || !self.queue.is_empty()
+            || self.slow.pending() != 0;
+        if busy {
+            return Some(self.now);
+        }
+        let mut at = self.next_poll_at.min(self.slow.wake_at());
+        // The UID check needs a cartridge read first (slow data, retried on its own).
+        if self.variant == Variant::Sync && core.status.cartridge.is_some() {
+            at = at.min(self.next_uid_check_at);
+        }
+        // A re-apply waits for the limits (slow data, retried on its own).
+        if self.reapply_pending && core.status.limits.is_some() {
+            at = at.min(self.reapply_not_before.max(self.now));
+        }
+        Some(at)
+    }
+
+    /// The next request to send, if any (called only when nothing is in flight).
+    /// Returns the purpose, the request and a retry count overriding the configured one.
+    pub fn next_request(
+        &mut self,
+        now: Instant,
+        core: &mut Core,
+    ) -> Option<(MbPurpose, MbRequest, Option<u8>)> {
+        self.now = now;
+        if self.in_blackout(now) {
+            return None;
+        }
+        // A poll cycle split into parts finishes first.
+        if self.poll.in_cycle() {
+            return self
+                .poll
+                .request()
+                .map(|(request, part)| (MbPurpose::Poll(part), request, None));
+        }
+        if let Some(request) = self.active_request(now, core) {
+            return Some(request);
+        }
+        // Round robin: after a poll, whatever else is due (slow data, the cartridge check)
+        // gets one transaction before the next poll, so a short poll interval cannot starve
+        // it; a poll waits for at most one such transaction.
+        let poll_due = now >= self.next_poll_at;
+        if poll_due && !self.polled_last {
+            return self.start_poll(now);
+        }
+        if let Some(request) = self.other_request(now, core) {
+            self.polled_last = false;
+            return Some(request);
+        }
+        if poll_due {
+            return self.start_poll(now);
+        }
+        None
+    }
+
+    fn start_poll(&mut self, now: Instant) -> Option<(MbPurpose, MbRequest, Option<u8>)> {
+        self.poll.start();
+        self.poll_started = now;
+        self.polled_last = true;
+        self.poll
+            .request()
+            .map(|(request, part)| (MbPurpose::Poll(part), request, None))
+    }
+
+    /// Slow data, the cartridge check, the slow-data refresh: whatever is due.
+    fn other_request(
+        &mut self,
+        now: Instant,
+        core: &mut Core,
+    ) -> Option<(MbPurpose, MbRequest, Option<u8>)> {
+        self.slow.take_due_retries(now);
+        if let Some(request) = self.slow_request() {
+            return Some(request);
+        }
+        if self.variant == Variant::Sync
+            && now >= self.next_uid_check_at
+            && core.status.cartridge.is_some()
+        {
+            self.next_uid_check_at = now + UID_CHECK_INTERVAL;
+            return Some((MbPurpose::UidCheck, sync::read_uid(), None));
+        }
+        if self.slow.refresh_due(now, core.config.slow_data_interval) {
+            match self.variant {
+                Variant::Sync => {
+                    self.slow.request(SlowItem::ALL_ITEMS);
+                    return self.slow_request();
+                }
+                Variant::Legacy if self.wants_identify(core) => {
+                    return MbRequest::from_request(&device_id::read_product_code())
+                        .map(|request| (MbPurpose::Identify, request, None));
+                }
+                Variant::Legacy => {}
+            }
+        }
+        None
+    }
+
+    /// True while the unit runs as legacy only because the legacy register probe found it:
+    /// device identification is asked again at each slow-data refresh (auto-detection only).
+    fn wants_identify(&self, core: &Core) -> bool {
+        self.variant == Variant::Legacy
+            && !self.identify_refused
+            && core.config.protocol == ProtocolChoice::Auto
+            && core.status.model == Some(Model::PowermaxUnidentified)
+    }
+
+    fn slow_request(&mut self) -> Option<(MbPurpose, MbRequest, Option<u8>)> {
+        let item = SlowItem::ALL
+            .into_iter()
+            .find(|item| self.slow.pending() & item.bit() != 0)?;
+        match item.span() {
+            Some(span) => Some((MbPurpose::Slow(item), sync::read(span), None)),
+            None => {
+                if !self.cartridge.in_cycle() {
+                    self.cartridge.start();
+                }
+                self.cartridge
+                    .request()
+                    .map(|(request, part)| (MbPurpose::CartridgeBlock(part), request, None))
+            }
+        }
+    }
+
+    fn start_blackout(&mut self, now: Instant, core: &mut Core) {
+        let until = now + QUICK_RESTART_BLACKOUT;
+        self.blackout_until = Some(until);
+        core.status.restart_blackout_until = Some(until);
+        self.poll.abort();
+        self.next_poll_at = until;
+        // The restart may come with another cartridge: read its data again afterwards.
+        if self.variant == Variant::Sync {
+            self.slow.request(SlowItem::ALL_ITEMS);
+        }
+    }
+
+    /// The link went down: every pending command fails.
+    pub fn abort(&mut self, core: &mut Core) {
+        let active = self.active.take().and_then(|active| active.ticket);
+        core.fail_commands(active, &mut self.queue);
+        self.slow.fail_all(core);
+    }
+}

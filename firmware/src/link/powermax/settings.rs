@@ -1,0 +1,210 @@
+//! The settings the CNC asked for: checked against the permitted limits, written and read
+//! back, kept, and re-applied when the unit lost them (power cycle, link return, a change at
+//! the unit).
+
+use plasma_protocol::modbus_ascii::Response;
+use plasma_protocol::powermax::{Amps, FaultCode, OperatingMode, Pressure, Psi};
+use plasma_protocol::time::Instant;
+
+use super::super::Core;
+use super::super::command::Refusal;
+use super::super::event::{CommandFailure, CommandOutput, LinkEvent, SettingsFailure};
+use super::super::legacy;
+use super::super::modbus::{MbRequest, read_values};
+use super::super::status::{Limits, PowermaxSettings};
+use super::super::sync;
+use super::super::transaction::TransactionError;
+use super::{Active, Job, PowermaxDriver, REAPPLY_BACKOFF, Variant};
+
+/// Settings the CNC asked for, validated.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) struct Desired {
+    pub(super) mode: OperatingMode,
+    pub(super) current: Amps,
+    pub(super) pressure: Pressure,
+    /// Set point written first when `pressure` is automatic on a legacy unit.
+    pub(super) legacy_first_pressure: Psi,
+}
+
+impl Desired {
+    fn as_settings(&self) -> PowermaxSettings {
+        PowermaxSettings {
+            mode: Some(self.mode),
+            current: self.current,
+            pressure: self.pressure,
+        }
+    }
+
+    fn from_settings(settings: &PowermaxSettings, limits: &Limits) -> Option<Self> {
+        Some(Desired {
+            mode: settings.mode?,
+            current: settings.current,
+            pressure: settings.pressure,
+            legacy_first_pressure: limits.min_pressure,
+        })
+    }
+
+    /// True when `read` shows these settings (automatic pressure reads back as whatever the
+    /// unit chose).
+    fn matches(&self, read: &PowermaxSettings) -> bool {
+        let pressure_ok = match self.pressure {
+            Pressure::Auto => true,
+            Pressure::Set(_) => read.pressure == self.pressure,
+        };
+        read.mode == Some(self.mode) && read.current == self.current && pressure_ok
+    }
+}
+
+/// Check settings against the permitted limits (nothing is sent when this fails).
+pub fn validate_settings(
+    limits: Option<&Limits>,
+    mode: OperatingMode,
+    current: Amps,
+    pressure: Pressure,
+) -> Result<(), Refusal> {
+    let limits = limits.ok_or(Refusal::LimitsUnknown)?;
+    if let Some(permitted) = limits.modes
+        && !permitted.contains(mode)
+    {
+        return Err(Refusal::ModeNotPermitted { mode, permitted });
+    }
+    if current < limits.min_current || current > limits.max_current || !current.is_positive() {
+        return Err(Refusal::CurrentOutOfRange {
+            requested: current,
+            min: limits.min_current,
+            max: limits.max_current,
+        });
+    }
+    if let Some(psi) = pressure.psi()
+        && (psi < limits.min_pressure || psi > limits.max_pressure)
+    {
+        return Err(Refusal::PressureOutOfRange {
+            requested: psi,
+            min: limits.min_pressure,
+            max: limits.max_pressure,
+        });
+    }
+    Ok(())
+}
+
+impl PowermaxDriver {
+    pub(super) fn start_reapply(&mut self, now: Instant, core: &mut Core) {
+        let Some(settings) = core.status.desired else {
+            self.reapply_pending = false;
+            return;
+        };
+        // Limits first: they are part of the slow data read at start.
+        let Some(limits) = core.status.limits else {
+            return;
+        };
+        self.reapply_pending = false;
+        let Some(mode) = settings.mode else {
+            return;
+        };
+        if validate_settings(Some(&limits), mode, settings.current, settings.pressure).is_err() {
+            self.reapply_not_before = now + REAPPLY_BACKOFF;
+            self.reapply_pending = true;
+            core.emit(LinkEvent::SettingsFailed {
+                reason: SettingsFailure::OutsideLimits,
+            });
+            return;
+        }
+        if let Some(desired) = Desired::from_settings(&settings, &limits) {
+            self.active = Some(Active {
+                ticket: None,
+                job: Job::Apply(desired),
+                step: 0,
+            });
+        }
+    }
+
+    /// Settings differ from the kept ones while the bridge holds remote control: the unit
+    /// was power-cycled (or someone took over); re-apply.
+    pub(super) fn check_revert(&mut self, now: Instant, read: &PowermaxSettings, core: &mut Core) {
+        if self.active.is_some() || self.reapply_pending || !core.status.remote {
+            return;
+        }
+        let Some(desired) = core.status.desired else {
+            return;
+        };
+        let Some(limits) = core.status.limits else {
+            return;
+        };
+        let Some(desired) = Desired::from_settings(&desired, &limits) else {
+            return;
+        };
+        if !desired.matches(read) {
+            core.status.remote = false;
+            core.emit(LinkEvent::RemoteModeChanged { remote: false });
+            self.reapply_pending = true;
+            self.reapply_not_before = now;
+        }
+    }
+
+    /// The last step of an Apply answered: compare and report.
+    pub(super) fn confirm_settings(
+        &mut self,
+        now: Instant,
+        desired: &Desired,
+        response: &Response<'_>,
+        reapplied: bool,
+        core: &mut Core,
+    ) -> Result<CommandOutput, CommandFailure> {
+        let values = read_values(response);
+        let verdict: Result<PowermaxSettings, SettingsFailure> = match self.variant {
+            Variant::Sync => match values.and_then(sync::decode_settings) {
+                Some(read_back) if desired.matches(&read_back) => Ok(read_back),
+                Some(read_back) => Err(SettingsFailure::ReadBackDiffers {
+                    written: desired.as_settings(),
+                    read_back,
+                }),
+                None => Err(SettingsFailure::Transaction(TransactionError::Malformed)),
+            },
+            Variant::Legacy => match values.and_then(|v| v.get(0)).map(FaultCode) {
+                Some(fault) => {
+                    self.update_fault(now, fault, core);
+                    if legacy::is_setting_fault(fault) {
+                        Err(SettingsFailure::RejectedByUnit { fault })
+                    } else {
+                        Ok(desired.as_settings())
+                    }
+                }
+                None => Err(SettingsFailure::Transaction(TransactionError::Malformed)),
+            },
+        };
+        match verdict {
+            Ok(read_back) => {
+                core.status.desired = Some(desired.as_settings());
+                core.status.settings = Some(read_back);
+                if !core.status.remote {
+                    core.status.remote = true;
+                    core.emit(LinkEvent::RemoteModeChanged { remote: true });
+                }
+                core.emit(LinkEvent::SettingsApplied {
+                    settings: read_back,
+                    reapplied,
+                });
+                Ok(CommandOutput::Settings(read_back))
+            }
+            Err(reason) => {
+                core.emit(LinkEvent::SettingsFailed { reason });
+                if reapplied {
+                    self.reapply_pending = true;
+                    self.reapply_not_before = now + REAPPLY_BACKOFF;
+                }
+                Err(CommandFailure::Settings(reason))
+            }
+        }
+    }
+}
+
+pub(super) fn legacy_writes(desired: &Desired) -> heapless::Vec<MbRequest, 4> {
+    let limits = Limits {
+        modes: None,
+        min_current: desired.current,
+        max_current: desired.current,
+        min_pressure: desired.legacy_first_pressure,
+        max_pressure: desired.legacy_first_pressure,
+    };
+    legacy::settings_writes(desired.mode, desired.current, desired.pressure, &limits)
+}

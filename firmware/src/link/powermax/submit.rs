@@ -1,0 +1,104 @@
+//! A command checked before it is queued: settings against the permitted limits, the quick
+//! restart against the active fault, a RAW frame against the allow-list.
+
+use plasma_protocol::modbus_ascii::{self, Request};
+use plasma_protocol::powermax::FaultCode;
+use plasma_protocol::time::Instant;
+
+use super::super::Core;
+use super::super::command::{LinkCommand, Refusal};
+use super::super::event::{CommandOutput, LinkEvent, Ticket};
+use super::super::modbus::{self, MbRequest};
+use super::super::status::{ActiveFault, Family};
+use super::super::sync::SlowItem;
+use super::settings::{Desired, validate_settings};
+use super::{Job, PowermaxDriver, Variant};
+
+impl PowermaxDriver {
+    /// Validate and queue a command.
+    pub fn submit(
+        &mut self,
+        now: Instant,
+        ticket: Ticket,
+        command: &LinkCommand<'_>,
+        core: &mut Core,
+    ) -> Result<(), Refusal> {
+        self.now = now;
+        if let Some(until) = self.blackout_until.filter(|&u| now < u) {
+            return Err(Refusal::Blackout { until });
+        }
+        let family = self.family();
+        let job = match command {
+            LinkCommand::ApplySettings {
+                mode,
+                current,
+                pressure,
+            } => {
+                let limits = core.status.limits;
+                validate_settings(limits.as_ref(), *mode, *current, *pressure)?;
+                let limits = limits.ok_or(Refusal::LimitsUnknown)?;
+                Job::Apply(Desired {
+                    mode: *mode,
+                    current: *current,
+                    pressure: *pressure,
+                    legacy_first_pressure: limits.min_pressure,
+                })
+            }
+            LinkCommand::ExitRemote => Job::Exit,
+            LinkCommand::GasTest { on } => Job::GasTest(*on),
+            LinkCommand::QuickRestart => {
+                if self.variant != Variant::Sync {
+                    return Err(Refusal::NotSupported { family });
+                }
+                let fault = match core.status.active_fault {
+                    Some(ActiveFault::Powermax(code)) => Some(code),
+                    _ => None,
+                };
+                if fault != Some(FaultCode(500)) {
+                    return Err(Refusal::QuickRestartNeeds050 { active: fault });
+                }
+                Job::QuickRestart
+            }
+            LinkCommand::RefreshSlowData => {
+                if self.variant == Variant::Legacy {
+                    // Everything a legacy unit reports comes with each poll.
+                    self.next_poll_at = now;
+                    core.emit(LinkEvent::CommandDone {
+                        ticket,
+                        result: Ok(CommandOutput::Done),
+                    });
+                    return Ok(());
+                }
+                return self.slow.request_for(ticket, SlowItem::ALL_ITEMS);
+            }
+            LinkCommand::Raw(bytes) => {
+                Job::Raw(parse_raw(bytes, core.config.node_address, family)?)
+            }
+            _ => return Err(Refusal::NotSupported { family }),
+        };
+        self.queue
+            .push_back((ticket, job))
+            .map_err(|_| Refusal::QueueFull)
+    }
+}
+
+/// Parse and check a RAW Modbus frame: valid framing and LRC, this link's node address, a
+/// read or an allowed write.
+fn parse_raw(bytes: &[u8], node_address: u8, family: Family) -> Result<MbRequest, Refusal> {
+    let mut pdu = [0u8; modbus_ascii::MAX_FRAME_BYTES];
+    let frame = modbus_ascii::decode(bytes, &mut pdu).map_err(Refusal::RawMalformed)?;
+    if frame.address != node_address {
+        return Err(Refusal::RawWrongAddress {
+            expected: node_address,
+            found: frame.address,
+        });
+    }
+    let request = Request::parse(frame.pdu).map_err(|e| match e {
+        plasma_protocol::Error::Unsupported => Refusal::RawFunctionNotAllowed {
+            function: frame.pdu.first().copied().unwrap_or(0),
+        },
+        other => Refusal::RawMalformed(other),
+    })?;
+    modbus::check_raw_request(family, &request)?;
+    MbRequest::from_request(&request).ok_or(Refusal::RawMalformed(plasma_protocol::Error::Overlong))
+}
