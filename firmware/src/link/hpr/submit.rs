@@ -9,6 +9,7 @@ use plasma_protocol::time::Instant;
 use super::super::Core;
 use super::super::command::{HprGasFlow, HprValue, LinkCommand, Refusal};
 use super::super::event::{CommandOutput, LinkEvent, Ticket};
+use super::super::support;
 use super::{HprDriver, HprJob, SLOW_ALL, is_cutting};
 
 impl HprDriver {
@@ -24,6 +25,9 @@ impl HprDriver {
         let family = self.family();
         let maxpro = self.maxpro();
         let unsupported = Refusal::NotSupported { family };
+        if !support::accepts(family, command.op()) {
+            return Err(unsupported);
+        }
         let state = core.status.hpr.state;
         let error = core.status.hpr.error;
         let forbidden = Refusal::StateForbids { state, error };
@@ -33,9 +37,6 @@ impl HprDriver {
                 Request::SetNominalAmps { amps: *amps }
             }
             LinkCommand::HprSetProcess { amps, gases } => {
-                if !maxpro {
-                    return Err(unsupported);
-                }
                 check_amps(*amps, hpr::MAX_MAXPRO_AMPS)?;
                 check_gases(gases)?;
                 // "only accepted when the system is in state #2 or #3".
@@ -55,7 +56,7 @@ impl HprDriver {
                         ..
                     }
                 );
-                if maxpro || !auto_console {
+                if !auto_console {
                     return Err(unsupported);
                 }
                 check_amps(parameters.amps, self.max_amps())?;
@@ -68,9 +69,6 @@ impl HprDriver {
                 Request::SetAllParameters(*parameters)
             }
             LinkCommand::MaxProSetAllParameters(parameters) => {
-                if !maxpro {
-                    return Err(unsupported);
-                }
                 check_amps(parameters.amps, hpr::MAX_MAXPRO_AMPS)?;
                 check_gases(&parameters.gases)?;
                 for psi in [parameters.pressures.plasma, parameters.pressures.shield] {
@@ -89,18 +87,10 @@ impl HprDriver {
                 Request::SetInletGases(*gases)
             }
             LinkCommand::HprSetCornerCurrent { percent } => {
-                if maxpro {
-                    return Err(unsupported);
-                }
                 check_corner(*percent)?;
                 Request::SetCornerCurrent { percent: *percent }
             }
-            LinkCommand::HprClearWarnings => {
-                if maxpro {
-                    return Err(unsupported);
-                }
-                Request::ClearWarnings
-            }
+            LinkCommand::HprClearWarnings => Request::ClearWarnings,
             LinkCommand::HprSoftwareReset => {
                 let allowed = if maxpro {
                     // "only valid when the system is not cutting".
@@ -115,9 +105,6 @@ impl HprDriver {
                 Request::SoftwareReset
             }
             LinkCommand::HprGasTest { flow, on } => {
-                if maxpro {
-                    return Err(unsupported);
-                }
                 if is_cutting(state) {
                     return Err(forbidden);
                 }
@@ -128,18 +115,8 @@ impl HprDriver {
                     (HprGasFlow::Cutflow, false) => Request::GasCutflowTestStop,
                 }
             }
-            LinkCommand::HprReadErrorLog => {
-                if maxpro {
-                    return Err(unsupported);
-                }
-                Request::ReadErrorLog
-            }
-            LinkCommand::HprReadTimers => {
-                if maxpro {
-                    return Err(unsupported);
-                }
-                Request::GetTimerCounter
-            }
+            LinkCommand::HprReadErrorLog => Request::ReadErrorLog,
+            LinkCommand::HprReadTimers => Request::GetTimerCounter,
             LinkCommand::RefreshSlowData => {
                 if maxpro {
                     core.emit(LinkEvent::CommandDone {
@@ -157,6 +134,7 @@ impl HprDriver {
                     .push_back((ticket, job))
                     .map_err(|_| Refusal::QueueFull);
             }
+            // The support table routes no other command to an HPR or MaxPro200.
             _ => return Err(unsupported),
         };
         // Belt and braces: the typed commands above are all on the allow-list.

@@ -10,6 +10,7 @@ use super::super::command::{LinkCommand, Refusal};
 use super::super::event::{CommandOutput, LinkEvent, Ticket};
 use super::super::modbus::{self, MbRequest};
 use super::super::status::{ActiveFault, Family};
+use super::super::support;
 use super::super::sync::SlowItem;
 use super::settings::{Desired, validate_settings};
 use super::{Job, PowermaxDriver, Variant};
@@ -28,6 +29,9 @@ impl PowermaxDriver {
             return Err(Refusal::Blackout { until });
         }
         let family = self.family();
+        if !support::accepts(family, command.op()) {
+            return Err(Refusal::NotSupported { family });
+        }
         let job = match command {
             LinkCommand::ApplySettings {
                 mode,
@@ -47,9 +51,6 @@ impl PowermaxDriver {
             LinkCommand::ExitRemote => Job::Exit,
             LinkCommand::GasTest { on } => Job::GasTest(*on),
             LinkCommand::QuickRestart => {
-                if self.variant != Variant::Sync {
-                    return Err(Refusal::NotSupported { family });
-                }
                 let fault = match core.status.active_fault {
                     Some(ActiveFault::Powermax(code)) => Some(code),
                     _ => None,
@@ -74,6 +75,7 @@ impl PowermaxDriver {
             LinkCommand::Raw(bytes) => {
                 Job::Raw(parse_raw(bytes, core.config.node_address, family)?)
             }
+            // The support table routes no other command to a Powermax.
             _ => return Err(Refusal::NotSupported { family }),
         };
         self.queue
