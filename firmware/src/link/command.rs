@@ -2,7 +2,7 @@
 
 use core::fmt;
 
-use plasma_protocol::hpr::{ErrorCode, GasPair, HprParameters, MaxProParameters, StateCode};
+use plasma_protocol::hpr::{ErrorCode, GasPair, StateCode};
 use plasma_protocol::powermax::sync::PermittedModes;
 use plasma_protocol::powermax::{Amps, FaultCode, OperatingMode, Pressure, Psi};
 
@@ -13,14 +13,13 @@ use plasma_protocol::time::{Decimal, Instant};
 /// refuses a longer one before it reaches the link.
 pub const RAW_CAPACITY: usize = 520;
 
-/// Which HPR gas test.
+/// Which HPR gas test. Only the preflow test is offered: no CNC command asks for the
+/// cutflow test (066 / 067), which the protocol crate still knows as a manual command.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum HprGasFlow {
     /// Preflow gases (064 / 065).
     Preflow,
-    /// Cutflow gases (066 / 067).
-    Cutflow,
 }
 
 /// An operation asked of the link; it completes with `LinkEvent::CommandDone`.
@@ -66,10 +65,6 @@ pub enum LinkCommand<'a> {
         /// Plasma and shield gas.
         gases: GasPair,
     },
-    /// HPR (auto gas): set every parameter (095).
-    HprSetAllParameters(HprParameters),
-    /// MaxPro200: set every parameter (095, MaxPro form).
-    MaxProSetAllParameters(MaxProParameters),
     /// HPR (auto gas) / MaxPro200: set the inlet gases (096).
     HprSetInletGases(GasPair),
     /// HPR: corner current percent 50-100 (070).

@@ -78,8 +78,6 @@ pub enum LinkOp {
     RefreshSlowData,
     HprSetNominalAmps,
     HprSetProcess,
-    HprSetAllParameters,
-    MaxProSetAllParameters,
     HprSetInletGases,
     HprSetCornerCurrent,
     HprClearWarnings,
@@ -101,8 +99,6 @@ impl LinkCommand<'_> {
             LinkCommand::RefreshSlowData => LinkOp::RefreshSlowData,
             LinkCommand::HprSetNominalAmps { .. } => LinkOp::HprSetNominalAmps,
             LinkCommand::HprSetProcess { .. } => LinkOp::HprSetProcess,
-            LinkCommand::HprSetAllParameters(_) => LinkOp::HprSetAllParameters,
-            LinkCommand::MaxProSetAllParameters(_) => LinkOp::MaxProSetAllParameters,
             LinkCommand::HprSetInletGases(_) => LinkOp::HprSetInletGases,
             LinkCommand::HprSetCornerCurrent { .. } => LinkOp::HprSetCornerCurrent,
             LinkCommand::HprClearWarnings => LinkOp::HprClearWarnings,
@@ -127,8 +123,10 @@ pub enum Route {
     Unsupported,
 }
 
-/// The table: what `command` becomes on `family`.
-pub const fn route(command: UnitCommand, family: Family) -> Route {
+/// The table: what `command` becomes on `family`. (One copy in the image: the session and
+/// the link both call it.)
+#[inline(never)]
+pub fn route(command: UnitCommand, family: Family) -> Route {
     use LinkOp as L;
     use Route::{Link, Local, Unsupported as No};
     use UnitCommand as C;
@@ -180,8 +178,6 @@ pub const fn link_only(op: LinkOp, family: Family) -> bool {
     matches!(
         (op, family),
         (LinkOp::HprSetProcess, Family::MaxPro200)
-            | (LinkOp::MaxProSetAllParameters, Family::MaxPro200)
-            | (LinkOp::HprSetAllParameters, Family::Hpr)
             // Nothing to read: the command completes at once.
             | (LinkOp::RefreshSlowData, Family::MaxPro200)
     )

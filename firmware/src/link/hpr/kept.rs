@@ -11,8 +11,6 @@ pub const KEPT_CAPACITY: usize = 6;
 const SETS_AMPS: u8 = 1;
 const SETS_CORNER: u8 = 2;
 const SETS_GASES: u8 = 4;
-const SETS_FLOWS: u8 = 8;
-const SETS_PRESSURES: u8 = 16;
 
 /// What `request` sets; 0 for a request that is no setting.
 pub(super) fn sets(request: &Request) -> u8 {
@@ -21,8 +19,6 @@ pub(super) fn sets(request: &Request) -> u8 {
         Request::SetCornerCurrent { .. } => SETS_CORNER,
         Request::SetInletGases(_) => SETS_GASES,
         Request::SetProcess { .. } => SETS_AMPS | SETS_GASES,
-        Request::SetAllParameters(_) => SETS_AMPS | SETS_CORNER | SETS_GASES | SETS_FLOWS,
-        Request::SetAllParametersMaxPro200(_) => SETS_AMPS | SETS_GASES | SETS_PRESSURES,
         _ => 0,
     }
 }
@@ -31,8 +27,6 @@ pub(super) fn sets(request: &Request) -> u8 {
 fn amps_of(request: &Request) -> Option<u16> {
     match request {
         Request::SetNominalAmps { amps } | Request::SetProcess { amps, .. } => Some(*amps),
-        Request::SetAllParameters(p) => Some(p.amps),
-        Request::SetAllParametersMaxPro200(p) => Some(p.amps),
         _ => None,
     }
 }
@@ -103,7 +97,7 @@ impl HprKept {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use plasma_protocol::hpr::{self, GasCode, GasFlows, GasPair, HprParameters};
+    use plasma_protocol::hpr::{self, GasCode, GasPair};
 
     const SYSTEM: SystemId = SystemId::MaxPro200;
 
@@ -127,18 +121,19 @@ mod tests {
             ]
         );
         assert_eq!(kept.amps(), Some(200));
-        // All parameters set everything the others set.
-        let all = HprParameters {
-            amps: 260,
-            corner_percent: 80,
-            gases,
-            flows: GasFlows::default(),
-        };
-        kept.keep(SYSTEM, Request::SetAllParameters(all));
-        assert_eq!(kept.as_slice(), [Request::SetAllParameters(all)]);
+        // A process sets the current and the gases: it replaces both, not the corner current.
+        let process = Request::SetProcess { amps: 150, gases };
+        kept.keep(SYSTEM, process);
+        assert_eq!(
+            kept.as_slice(),
+            [Request::SetCornerCurrent { percent: 70 }, process]
+        );
         kept.keep(SYSTEM, Request::SetCornerCurrent { percent: 60 });
-        assert_eq!(kept.as_slice().len(), 2);
-        assert_eq!(kept.amps(), Some(260));
+        assert_eq!(
+            kept.as_slice(),
+            [process, Request::SetCornerCurrent { percent: 60 }]
+        );
+        assert_eq!(kept.amps(), Some(150));
         // Not settings: not kept.
         kept.keep(SYSTEM, Request::ClearWarnings);
         assert_eq!(kept.as_slice().len(), 2);

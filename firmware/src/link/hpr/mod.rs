@@ -71,18 +71,9 @@ enum HprJob {
 }
 
 impl HprJob {
+    /// Settings need remote mode (004) first.
     fn needs_remote(&self) -> bool {
-        matches!(
-            self,
-            HprJob::Typed(
-                Request::SetNominalAmps { .. }
-                    | Request::SetProcess { .. }
-                    | Request::SetAllParameters(_)
-                    | Request::SetAllParametersMaxPro200(_)
-                    | Request::SetInletGases(_)
-                    | Request::SetCornerCurrent { .. }
-            )
-        )
+        matches!(self, HprJob::Typed(request) if kept::sets(request) != 0)
     }
 }
 

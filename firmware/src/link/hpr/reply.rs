@@ -69,38 +69,18 @@ impl HprDriver {
         match (purpose, reply) {
             (HprPurpose::Poll, Some(Reply::PsInfo(info))) => {
                 core.status.hpr.ps_info = Some(*info);
-                core.status.hpr.nominal_amps = Some(info.current_setpoint);
-                self.update_state(now, info.state, core);
-                self.update_error(info.error, core);
-                self.check_setpoint(now, info.current_setpoint, core);
+                self.polled(now, info.state, info.error, info.current_setpoint, core);
             }
             (HprPurpose::Poll, Some(Reply::MaxProPsInfo(info))) => {
                 core.status.hpr.maxpro_info = Some(*info);
-                core.status.hpr.nominal_amps = Some(info.current_setpoint);
-                self.update_state(now, info.state, core);
-                self.update_error(info.error, core);
-                self.check_setpoint(now, info.current_setpoint, core);
+                self.polled(now, info.state, info.error, info.current_setpoint, core);
             }
             (HprPurpose::State, Some(Reply::State(state))) => {
                 self.next_poll_at = now + core.config.poll_interval;
                 self.update_state(now, *state, core);
             }
             (HprPurpose::RemoteMode, Some(Reply::Ack { result, .. })) => {
-                if *result == Acceptance::Accepted {
-                    core.status.hpr.remote_accepted = true;
-                    if !core.status.remote {
-                        core.status.remote = true;
-                        core.emit(LinkEvent::RemoteModeChanged { remote: true });
-                    }
-                } else if let Some(job) = self.active.take() {
-                    self.job_failed(
-                        now,
-                        job,
-                        CommandFailure::NotAccepted,
-                        SettingsFailure::NotAccepted,
-                        core,
-                    );
-                }
+                self.remote_mode_answered(now, *result, core);
             }
             (HprPurpose::SlowErrorLog, reply) => {
                 if let Some(Reply::ErrorLog(log)) = reply {
@@ -124,6 +104,40 @@ impl HprDriver {
         }
     }
 
+    /// A poll answered: the unit's state, error and current set point.
+    fn polled(
+        &mut self,
+        now: Instant,
+        state: StateCode,
+        error: ErrorCode,
+        setpoint: u16,
+        core: &mut Core,
+    ) {
+        core.status.hpr.nominal_amps = Some(setpoint);
+        self.update_state(now, state, core);
+        self.update_error(error, core);
+        self.check_setpoint(now, setpoint, core);
+    }
+
+    /// 004 REMOTE_MODE answered: remote mode is on, or the job that needed it fails.
+    fn remote_mode_answered(&mut self, now: Instant, result: Acceptance, core: &mut Core) {
+        if result == Acceptance::Accepted {
+            core.status.hpr.remote_accepted = true;
+            if !core.status.remote {
+                core.status.remote = true;
+                core.emit(LinkEvent::RemoteModeChanged { remote: true });
+            }
+        } else if let Some(job) = self.active.take() {
+            self.job_failed(
+                now,
+                job,
+                CommandFailure::NotAccepted,
+                SettingsFailure::NotAccepted,
+                core,
+            );
+        }
+    }
+
     /// The reply to the active job arrived. A setting counts as done only when the unit's
     /// answer shows the value asked for; otherwise it is sent once more after entering remote
     /// mode again (the unit may have restarted and left remote mode), then reported as not
@@ -143,42 +157,8 @@ impl HprDriver {
         let Some(request) = request.filter(|r| sets(r) != 0) else {
             return Self::finish_other(active, reply, raw_len, core);
         };
-        // Whether the setting took effect, by the unit's answer.
-        let taken = match (request, reply) {
-            (Request::SetNominalAmps { amps }, Some(Reply::NominalAmps(set))) => {
-                core.status.hpr.nominal_amps = Some(*set);
-                *set == amps
-            }
-            (Request::SetCornerCurrent { percent }, Some(Reply::CornerCurrentSet(set))) => {
-                *set == u16::from(percent)
-            }
-            (_, Some(Reply::Ack { result, .. })) => *result == Acceptance::Accepted,
-            _ => false,
-        };
-        if taken {
-            core.hpr_kept.keep(self.system, request);
-            // A re-apply run still to come must not set older values again.
-            let new = sets(&request);
-            // In order, without `Deque::retain` (its swaps are memmoves, see `keep`).
-            for _ in 0..self.reapply.len() {
-                if let Some(old) = self.reapply.pop_front()
-                    && sets(&old) & !new != 0
-                {
-                    let _ = self.reapply.push_back(old);
-                }
-            }
-            if let Some(ticket) = active.ticket {
-                let output = match reply {
-                    Some(Reply::NominalAmps(set)) | Some(Reply::CornerCurrentSet(set)) => {
-                        CommandOutput::Value(*set)
-                    }
-                    _ => CommandOutput::Done,
-                };
-                core.emit(LinkEvent::CommandDone {
-                    ticket,
-                    result: Ok(output),
-                });
-            }
+        if setting_taken(request, reply, core) {
+            self.setting_confirmed(active, request, reply, core);
         } else if !active.retried {
             // Perhaps out of remote mode after a restart: 004 again, then once more.
             core.status.hpr.remote_accepted = false;
@@ -192,6 +172,40 @@ impl HprDriver {
                 SettingsFailure::NotAccepted,
                 core,
             );
+        }
+    }
+
+    /// The unit took the setting `request` of `active`: it is kept, and the command (if it
+    /// is one) is done.
+    fn setting_confirmed(
+        &mut self,
+        active: ActiveJob,
+        request: Request,
+        reply: Option<&Reply<'_>>,
+        core: &mut Core,
+    ) {
+        core.hpr_kept.keep(self.system, request);
+        // A re-apply run still to come must not set older values again.
+        let new = sets(&request);
+        // In order, without `Deque::retain` (its swaps are memmoves, see `keep`).
+        for _ in 0..self.reapply.len() {
+            if let Some(old) = self.reapply.pop_front()
+                && sets(&old) & !new != 0
+            {
+                let _ = self.reapply.push_back(old);
+            }
+        }
+        if let Some(ticket) = active.ticket {
+            let output = match reply {
+                Some(Reply::NominalAmps(set)) | Some(Reply::CornerCurrentSet(set)) => {
+                    CommandOutput::Value(*set)
+                }
+                _ => CommandOutput::Done,
+            };
+            core.emit(LinkEvent::CommandDone {
+                ticket,
+                result: Ok(output),
+            });
         }
     }
 
@@ -300,5 +314,21 @@ impl HprDriver {
     ) {
         let interval = core.config.slow_data_interval;
         self.slow.finish(now, bit, error, interval, core);
+    }
+}
+
+/// Whether the setting `request` took effect, by the unit's answer `reply` (a nominal
+/// current answer also updates the status).
+fn setting_taken(request: Request, reply: Option<&Reply<'_>>, core: &mut Core) -> bool {
+    match (request, reply) {
+        (Request::SetNominalAmps { amps }, Some(Reply::NominalAmps(set))) => {
+            core.status.hpr.nominal_amps = Some(*set);
+            *set == amps
+        }
+        (Request::SetCornerCurrent { percent }, Some(Reply::CornerCurrentSet(set))) => {
+            *set == u16::from(percent)
+        }
+        (_, Some(Reply::Ack { result, .. })) => *result == Acceptance::Accepted,
+        _ => false,
     }
 }

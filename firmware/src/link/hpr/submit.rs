@@ -3,7 +3,7 @@
 
 use heapless::Vec;
 use plasma_protocol::hpr::command::id;
-use plasma_protocol::hpr::{self, Frame, GasCode, GasFlows, GasPair, Request, StateCode, SystemId};
+use plasma_protocol::hpr::{self, Frame, GasCode, GasPair, Request, StateCode};
 use plasma_protocol::time::Instant;
 
 use super::super::Core;
@@ -22,16 +22,36 @@ impl HprDriver {
         core: &mut Core,
     ) -> Result<(), Refusal> {
         self.now = now;
-        let family = self.family();
-        let maxpro = self.maxpro();
-        let unsupported = Refusal::NotSupported { family };
-        if !support::accepts(family, command.op()) {
-            return Err(unsupported);
+        if !support::accepts(self.family(), command.op()) {
+            return Err(self.unsupported());
         }
+        let job = match command {
+            LinkCommand::RefreshSlowData => return self.refresh_slow_data(ticket, core),
+            LinkCommand::Raw(bytes) => parse_raw(bytes)?,
+            command => HprJob::Typed(checked(self.settings_request(command, core)?)?),
+        };
+        self.queue
+            .push_back((ticket, job))
+            .map_err(|_| Refusal::QueueFull)
+    }
+
+    /// Read the slow data again: the error log and timers (a MaxPro200 has none: done).
+    fn refresh_slow_data(&mut self, ticket: Ticket, core: &mut Core) -> Result<(), Refusal> {
+        if self.maxpro() {
+            core.emit(LinkEvent::CommandDone {
+                ticket,
+                result: Ok(CommandOutput::Done),
+            });
+            return Ok(());
+        }
+        self.slow.request_for(ticket, SLOW_ALL)
+    }
+
+    /// The request a setting command becomes, checked against the unit's rating, the
+    /// manual's ranges and the state; other commands go on to [`Self::service_request`].
+    fn settings_request(&self, command: &LinkCommand<'_>, core: &Core) -> Result<Request, Refusal> {
         let state = core.status.hpr.state;
-        let error = core.status.hpr.error;
-        let forbidden = Refusal::StateForbids { state, error };
-        let request = match command {
+        Ok(match command {
             LinkCommand::HprSetNominalAmps { amps } => {
                 check_amps(*amps, self.max_amps())?;
                 Request::SetNominalAmps { amps: *amps }
@@ -41,48 +61,17 @@ impl HprDriver {
                 check_gases(gases)?;
                 // "only accepted when the system is in state #2 or #3".
                 if !state.is_some_and(|s| matches!(s.0, 2 | 3)) {
-                    return Err(forbidden);
+                    return Err(forbidden(core));
                 }
                 Request::SetProcess {
                     amps: *amps,
                     gases: *gases,
                 }
             }
-            LinkCommand::HprSetAllParameters(parameters) => {
-                let auto_console = matches!(
-                    self.system,
-                    SystemId::Hpr {
-                        console: Some(hpr::GasConsole::Auto | hpr::GasConsole::AutoMix) | None,
-                        ..
-                    }
-                );
-                if !auto_console {
-                    return Err(unsupported);
-                }
-                check_amps(parameters.amps, self.max_amps())?;
-                check_corner(parameters.corner_percent)?;
-                check_gases(&parameters.gases)?;
-                check_flows(&parameters.flows)?;
-                if is_cutting(state) {
-                    return Err(forbidden);
-                }
-                Request::SetAllParameters(*parameters)
-            }
-            LinkCommand::MaxProSetAllParameters(parameters) => {
-                check_amps(parameters.amps, hpr::MAX_MAXPRO_AMPS)?;
-                check_gases(&parameters.gases)?;
-                for psi in [parameters.pressures.plasma, parameters.pressures.shield] {
-                    check_range(HprValue::GasParameter, psi, 0, hpr::MAX_FLOW_PSI)?;
-                }
-                if !state.is_some_and(|s| matches!(s.0, 2 | 3)) {
-                    return Err(forbidden);
-                }
-                Request::SetAllParametersMaxPro200(*parameters)
-            }
             LinkCommand::HprSetInletGases(gases) => {
                 check_gases(gases)?;
                 if is_cutting(state) {
-                    return Err(forbidden);
+                    return Err(forbidden(core));
                 }
                 Request::SetInletGases(*gases)
             }
@@ -90,9 +79,18 @@ impl HprDriver {
                 check_corner(*percent)?;
                 Request::SetCornerCurrent { percent: *percent }
             }
+            command => return self.service_request(command, core),
+        })
+    }
+
+    /// The request a command that sets nothing becomes (warnings, reset, gas test, logs),
+    /// checked against the family and the state.
+    fn service_request(&self, command: &LinkCommand<'_>, core: &Core) -> Result<Request, Refusal> {
+        let (state, error) = (core.status.hpr.state, core.status.hpr.error);
+        Ok(match command {
             LinkCommand::HprClearWarnings => Request::ClearWarnings,
             LinkCommand::HprSoftwareReset => {
-                let allowed = if maxpro {
+                let allowed = if self.maxpro() {
                     // "only valid when the system is not cutting".
                     state.is_some() && !is_cutting(state)
                 } else {
@@ -100,53 +98,49 @@ impl HprDriver {
                     state == Some(StateCode(14)) && error.is_some_and(|e| e.is_shutdown_error())
                 };
                 if !allowed {
-                    return Err(forbidden);
+                    return Err(forbidden(core));
                 }
                 Request::SoftwareReset
             }
             LinkCommand::HprGasTest { flow, on } => {
                 if is_cutting(state) {
-                    return Err(forbidden);
+                    return Err(forbidden(core));
                 }
                 match (flow, on) {
                     (HprGasFlow::Preflow, true) => Request::GasPreflowTestStart,
                     (HprGasFlow::Preflow, false) => Request::GasPreflowTestStop,
-                    (HprGasFlow::Cutflow, true) => Request::GasCutflowTestStart,
-                    (HprGasFlow::Cutflow, false) => Request::GasCutflowTestStop,
                 }
             }
             LinkCommand::HprReadErrorLog => Request::ReadErrorLog,
             LinkCommand::HprReadTimers => Request::GetTimerCounter,
-            LinkCommand::RefreshSlowData => {
-                if maxpro {
-                    core.emit(LinkEvent::CommandDone {
-                        ticket,
-                        result: Ok(CommandOutput::Done),
-                    });
-                    return Ok(());
-                }
-                return self.slow.request_for(ticket, SLOW_ALL);
-            }
-            LinkCommand::Raw(bytes) => {
-                let job = parse_raw(bytes)?;
-                return self
-                    .queue
-                    .push_back((ticket, job))
-                    .map_err(|_| Refusal::QueueFull);
-            }
             // The support table routes no other command to an HPR or MaxPro200.
-            _ => return Err(unsupported),
-        };
-        // Belt and braces: the typed commands above are all on the allow-list.
-        if !hpr::is_allowed(request.id()) {
-            return Err(Refusal::RawCommandNotAllowed { id: request.id() });
-        }
-        let mut buf = [0u8; hpr::MAX_FRAME_LEN];
-        request.emit(&mut buf).map_err(Refusal::RawMalformed)?;
-        self.queue
-            .push_back((ticket, HprJob::Typed(request)))
-            .map_err(|_| Refusal::QueueFull)
+            _ => return Err(self.unsupported()),
+        })
     }
+
+    fn unsupported(&self) -> Refusal {
+        Refusal::NotSupported {
+            family: self.family(),
+        }
+    }
+}
+
+/// The unit's state does not allow the command now.
+fn forbidden(core: &Core) -> Refusal {
+    Refusal::StateForbids {
+        state: core.status.hpr.state,
+        error: core.status.hpr.error,
+    }
+}
+
+/// Belt and braces: every typed command is on the allow-list and encodes.
+fn checked(request: Request) -> Result<Request, Refusal> {
+    if !hpr::is_allowed(request.id()) {
+        return Err(Refusal::RawCommandNotAllowed { id: request.id() });
+    }
+    let mut buf = [0u8; hpr::MAX_FRAME_LEN];
+    request.emit(&mut buf).map_err(Refusal::RawMalformed)?;
+    Ok(request)
 }
 
 fn check_range(value: HprValue, requested: u16, min: u16, max: u16) -> Result<(), Refusal> {
@@ -179,18 +173,6 @@ fn check_corner(percent: u8) -> Result<(), Refusal> {
 fn check_gases(gases: &GasPair) -> Result<(), Refusal> {
     for gas in [gases.plasma, gases.shield] {
         check_range(HprValue::GasParameter, gas.0, 1, GasCode::MAX)?;
-    }
-    Ok(())
-}
-
-fn check_flows(flows: &GasFlows) -> Result<(), Refusal> {
-    for (i, psi) in flows.to_array().into_iter().enumerate() {
-        let max = if i < 4 {
-            hpr::MAX_FLOW_PSI
-        } else {
-            hpr::MAX_MIX_PSI
-        };
-        check_range(HprValue::GasParameter, psi, 0, max)?;
     }
     Ok(())
 }

@@ -5,13 +5,13 @@ use plasma_protocol::modbus_ascii::Response;
 use plasma_protocol::time::Instant;
 
 use super::super::Core;
-use super::super::event::{CommandFailure, CommandOutput, LinkEvent};
+use super::super::event::{CommandFailure, CommandOutput, LinkEvent, SettingsFailure};
 use super::super::legacy;
 use super::super::modbus::MbRequest;
 use super::super::sync;
 use super::super::transaction::TransactionError;
 use super::settings::legacy_writes;
-use super::{Active, Job, MbPurpose, PowermaxDriver, Variant};
+use super::{Active, Job, MbPurpose, PowermaxDriver, REAPPLY_BACKOFF, Variant};
 
 impl PowermaxDriver {
     pub(super) fn active_request(
@@ -102,17 +102,8 @@ impl PowermaxDriver {
                 }
             }
             Job::Exit => {
-                if self.step_request_after(&active).is_none() {
-                    core.status.desired = None;
-                    self.reapply_pending = false;
-                    if core.status.remote {
-                        core.status.remote = false;
-                        core.emit(LinkEvent::RemoteModeChanged { remote: false });
-                    }
-                    Some(Ok(CommandOutput::Done))
-                } else {
-                    None
-                }
+                let is_final = self.step_request_after(&active).is_none();
+                is_final.then(|| self.remote_exited(core))
             }
             Job::GasTest(_) => Some(Ok(CommandOutput::Done)),
             Job::QuickRestart => {
@@ -141,5 +132,46 @@ impl PowermaxDriver {
             step: active.step.saturating_add(1),
         };
         self.step_request(&next)
+    }
+
+    /// The active command's transaction failed for good with `error`.
+    pub(super) fn active_failed(&mut self, now: Instant, error: TransactionError, core: &mut Core) {
+        let Some(active) = self.active.take() else {
+            return;
+        };
+        let failure = match active.job {
+            Job::Apply(_) => {
+                let reason = SettingsFailure::Transaction(error);
+                core.emit(LinkEvent::SettingsFailed { reason });
+                if active.ticket.is_none() {
+                    self.reapply_pending = true;
+                    self.reapply_not_before = now + REAPPLY_BACKOFF;
+                }
+                CommandFailure::Settings(reason)
+            }
+            Job::QuickRestart => {
+                // The unit may be restarting without answering: stay quiet anyway.
+                self.start_blackout(now, core);
+                CommandFailure::Transaction(error)
+            }
+            _ => CommandFailure::Transaction(error),
+        };
+        if let Some(ticket) = active.ticket {
+            core.emit(LinkEvent::CommandDone {
+                ticket,
+                result: Err(failure),
+            });
+        }
+    }
+
+    /// The unit left remote control: the kept settings are forgotten.
+    fn remote_exited(&mut self, core: &mut Core) -> Result<CommandOutput, CommandFailure> {
+        core.status.desired = None;
+        self.reapply_pending = false;
+        if core.status.remote {
+            core.status.remote = false;
+            core.emit(LinkEvent::RemoteModeChanged { remote: false });
+        }
+        Ok(CommandOutput::Done)
     }
 }

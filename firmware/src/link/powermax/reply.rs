@@ -2,19 +2,19 @@
 //! fault), slow data and the cartridge block fill in the rest, and a failed transaction ends
 //! what it was for.
 
-use plasma_protocol::modbus_ascii::Response;
+use plasma_protocol::modbus_ascii::{Registers, Response};
 use plasma_protocol::powermax::sync::{Cartridge, FaultLog, Identification, PsCounters};
 use plasma_protocol::powermax::{CartridgeName, CartridgeUid, FaultCode};
 use plasma_protocol::time::Instant;
 
 use super::super::Core;
-use super::super::event::{CommandFailure, LinkEvent, SettingsFailure};
+use super::super::event::LinkEvent;
 use super::super::legacy;
 use super::super::modbus::{self, read_values};
 use super::super::status::ActiveFault;
 use super::super::sync::{self, SlowItem};
 use super::super::transaction::TransactionError;
-use super::{Job, MbPurpose, PowermaxDriver, REAPPLY_BACKOFF, Variant};
+use super::{MbPurpose, PowermaxDriver, Variant};
 
 impl PowermaxDriver {
     /// A valid reply arrived for `purpose`. `raw_len` is the length of the reply frame kept
@@ -38,27 +38,7 @@ impl PowermaxDriver {
                 None => self.on_failed(now, purpose, TransactionError::Mismatch, core),
             },
             MbPurpose::Slow(item) => {
-                let mut error = None;
-                if let Some(values) = read_values(response) {
-                    match item {
-                        SlowItem::Permitted => match sync::limits(values) {
-                            Some(limits) => core.status.limits = Some(limits),
-                            // Settings depend on them: read them again soon.
-                            None => error = Some(TransactionError::Malformed),
-                        },
-                        SlowItem::Identification => {
-                            core.status.identification = Identification::decode(values).ok();
-                        }
-                        SlowItem::PsCounters => {
-                            core.status.ps_counters = PsCounters::decode(values).ok();
-                        }
-                        SlowItem::FaultLog => core.status.fault_log = FaultLog::decode(values).ok(),
-                        SlowItem::CartridgeName => {
-                            core.status.cartridge_name = CartridgeName::decode(values).ok();
-                        }
-                        SlowItem::Cartridge => {}
-                    }
-                }
+                let error = read_values(response).and_then(|values| store_slow(item, values, core));
                 self.slow_done(now, item, error, core);
             }
             MbPurpose::CartridgeBlock(part) => {
@@ -121,33 +101,7 @@ impl PowermaxDriver {
                     self.identify_refused = true;
                 }
             }
-            MbPurpose::Active => {
-                if let Some(active) = self.active.take() {
-                    let failure = match active.job {
-                        Job::Apply(_) => {
-                            let reason = SettingsFailure::Transaction(error);
-                            core.emit(LinkEvent::SettingsFailed { reason });
-                            if active.ticket.is_none() {
-                                self.reapply_pending = true;
-                                self.reapply_not_before = now + REAPPLY_BACKOFF;
-                            }
-                            CommandFailure::Settings(reason)
-                        }
-                        Job::QuickRestart => {
-                            // The unit may be restarting without answering: stay quiet anyway.
-                            self.start_blackout(now, core);
-                            CommandFailure::Transaction(error)
-                        }
-                        _ => CommandFailure::Transaction(error),
-                    };
-                    if let Some(ticket) = active.ticket {
-                        core.emit(LinkEvent::CommandDone {
-                            ticket,
-                            result: Err(failure),
-                        });
-                    }
-                }
-            }
+            MbPurpose::Active => self.active_failed(now, error, core),
         }
     }
 
@@ -219,4 +173,25 @@ impl PowermaxDriver {
         let interval = core.config.slow_data_interval;
         self.slow.finish(now, item.bit(), error, interval, core);
     }
+}
+
+/// Store the slow-data `item` read as `values`; an error when it must be read again soon.
+fn store_slow(item: SlowItem, values: Registers<'_>, core: &mut Core) -> Option<TransactionError> {
+    match item {
+        SlowItem::Permitted => match sync::limits(values) {
+            Some(limits) => core.status.limits = Some(limits),
+            // Settings depend on them: read them again soon.
+            None => return Some(TransactionError::Malformed),
+        },
+        SlowItem::Identification => {
+            core.status.identification = Identification::decode(values).ok();
+        }
+        SlowItem::PsCounters => core.status.ps_counters = PsCounters::decode(values).ok(),
+        SlowItem::FaultLog => core.status.fault_log = FaultLog::decode(values).ok(),
+        SlowItem::CartridgeName => {
+            core.status.cartridge_name = CartridgeName::decode(values).ok();
+        }
+        SlowItem::Cartridge => {}
+    }
+    None
 }

@@ -50,28 +50,8 @@ impl PowermaxDriver {
             }
             LinkCommand::ExitRemote => Job::Exit,
             LinkCommand::GasTest { on } => Job::GasTest(*on),
-            LinkCommand::QuickRestart => {
-                let fault = match core.status.active_fault {
-                    Some(ActiveFault::Powermax(code)) => Some(code),
-                    _ => None,
-                };
-                if fault != Some(FaultCode(500)) {
-                    return Err(Refusal::QuickRestartNeeds050 { active: fault });
-                }
-                Job::QuickRestart
-            }
-            LinkCommand::RefreshSlowData => {
-                if self.variant == Variant::Legacy {
-                    // Everything a legacy unit reports comes with each poll.
-                    self.next_poll_at = now;
-                    core.emit(LinkEvent::CommandDone {
-                        ticket,
-                        result: Ok(CommandOutput::Done),
-                    });
-                    return Ok(());
-                }
-                return self.slow.request_for(ticket, SlowItem::ALL_ITEMS);
-            }
+            LinkCommand::QuickRestart => self.quick_restart_job(core)?,
+            LinkCommand::RefreshSlowData => return self.refresh_slow_data(now, ticket, core),
             LinkCommand::Raw(bytes) => {
                 Job::Raw(parse_raw(bytes, core.config.node_address, family)?)
             }
@@ -81,6 +61,38 @@ impl PowermaxDriver {
         self.queue
             .push_back((ticket, job))
             .map_err(|_| Refusal::QueueFull)
+    }
+
+    /// A quick restart (the support table allows it on SYNC only), allowed with fault
+    /// 0-50-0 active.
+    fn quick_restart_job(&self, core: &Core) -> Result<Job, Refusal> {
+        let fault = match core.status.active_fault {
+            Some(ActiveFault::Powermax(code)) => Some(code),
+            _ => None,
+        };
+        if fault != Some(FaultCode(500)) {
+            return Err(Refusal::QuickRestartNeeds050 { active: fault });
+        }
+        Ok(Job::QuickRestart)
+    }
+
+    /// Read the slow data again; a legacy unit reports everything with each poll, so the
+    /// next poll comes at once.
+    fn refresh_slow_data(
+        &mut self,
+        now: Instant,
+        ticket: Ticket,
+        core: &mut Core,
+    ) -> Result<(), Refusal> {
+        if self.variant == Variant::Legacy {
+            self.next_poll_at = now;
+            core.emit(LinkEvent::CommandDone {
+                ticket,
+                result: Ok(CommandOutput::Done),
+            });
+            return Ok(());
+        }
+        self.slow.request_for(ticket, SlowItem::ALL_ITEMS)
     }
 }
 
