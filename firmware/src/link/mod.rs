@@ -41,11 +41,12 @@
 //!   without a valid reply take the link down.
 //!
 //! # Kept settings
-//! Settings the CNC set and the unit confirmed are kept and re-applied after the unit
-//! power-cycles or the link returns: Powermax mode, current and pressure
-//! ([`UnitStatus::desired`]); HPR / MaxPro200 nominal current, corner current, process,
-//! all parameters and inlet gases ([`PsLink::hpr_kept_settings`], a later setting replacing
-//! what it sets again), re-applied after 004 REMOTE_MODE once the unit is in state 2 or 3
+//! Settings the CNC set and the unit confirmed are kept ([`kept`], the one place that decides
+//! what is re-applied and when) and re-applied after the unit power-cycles or the link
+//! returns: Powermax mode, current and pressure ([`Kept::powermax`], and once after start-up
+//! the persisted process, [`PsLink::restore`]); HPR / MaxPro200 nominal current, corner
+//! current, process and inlet gases ([`Kept::hpr_requests`], a later setting replacing what
+//! it sets again), re-applied after 004 REMOTE_MODE once the unit is in state 2 or 3
 //! (another HPR model on the line does not get them: `SettingsFailed { OutsideLimits }`).
 //! An HPR setting counts as done only when the unit's answer shows the value asked for;
 //! otherwise 004 is sent again and the setting once more (the unit may have restarted and
@@ -87,6 +88,7 @@ mod detect;
 pub mod diagnostics;
 pub mod event;
 pub mod hpr;
+pub mod kept;
 pub mod legacy;
 pub mod modbus;
 pub mod powermax;
@@ -120,6 +122,7 @@ use detect::{DetectStep, Detector, KnownGood};
 use event::EventQueue;
 use hpr::HprDriver;
 pub use hpr::HprKept;
+pub use kept::Kept;
 use powermax::PowermaxDriver;
 use schedule::Tag;
 use transaction::{TX_CAPACITY, Transaction};
@@ -136,9 +139,8 @@ pub struct Core {
     pub status: UnitStatus,
     /// Counters.
     pub diagnostics: Diagnostics,
-    /// HPR / MaxPro200 settings to keep and re-apply (the Powermax ones are
-    /// [`UnitStatus::desired`]).
-    pub hpr_kept: HprKept,
+    /// What is re-applied, for every family (see [`kept`]).
+    pub kept: Kept,
     events: EventQueue,
 }
 
@@ -264,7 +266,7 @@ impl PsLink {
                 config,
                 status: UnitStatus::default(),
                 diagnostics: Diagnostics::default(),
-                hpr_kept: HprKept::default(),
+                kept: Kept::default(),
                 events: EventQueue::new(),
             },
             phase: Phase::Detecting(Detector::searching(DetectStep::DeviceId, 0, now)),
@@ -385,6 +387,8 @@ impl PsLink {
 
     /// Ask for an operation. Validates against the unit's limits BEFORE anything is sent;
     /// Err = refused with a precise reason, nothing sent.
+    // Not inlined into its one caller in the image (the session): that costs ~300 B of flash.
+    #[inline(never)]
     pub fn submit(&mut self, now: Instant, command: LinkCommand<'_>) -> Result<Ticket, Refusal> {
         self.now = now;
         let ticket = Ticket(self.next_ticket);
@@ -410,7 +414,19 @@ impl PsLink {
     /// The HPR / MaxPro200 settings the CNC set and the unit confirmed, kept across
     /// link-downs and re-applied (after 004 REMOTE_MODE) when the unit returns or restarts.
     pub fn hpr_kept_settings(&self) -> &[plasma_protocol::hpr::Request] {
-        self.core.hpr_kept.as_slice()
+        self.core.kept.hpr_requests()
+    }
+
+    /// What the link re-applies (see [`kept`]).
+    pub fn kept(&self) -> &Kept {
+        &self.core.kept
+    }
+
+    /// Apply `settings` (the persisted process) once a Powermax with known limits answers,
+    /// unless the CNC sets a process first. Refused settings are reported with
+    /// [`LinkEvent::RestoreRefused`] and dropped.
+    pub fn restore(&mut self, settings: PowermaxSettings) {
+        self.core.kept.restore(settings);
     }
 
     /// The reply frame of the last RAW command (see [`CommandOutput::Raw`]).

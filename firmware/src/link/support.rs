@@ -178,8 +178,8 @@ pub const fn link_only(op: LinkOp, family: Family) -> bool {
     matches!(
         (op, family),
         (LinkOp::HprSetProcess, Family::MaxPro200)
-            // Nothing to read: the command completes at once.
-            | (LinkOp::RefreshSlowData, Family::MaxPro200)
+            // Every family's slow data can be read again (a MaxPro200 has none: done at once).
+            | (LinkOp::RefreshSlowData, _)
     )
 }
 
@@ -239,6 +239,7 @@ mod tests {
         assert!(!accepts(Family::PowermaxLegacy, LinkOp::QuickRestart));
         assert!(accepts(Family::PowermaxLegacy, LinkOp::RefreshSlowData));
         assert!(accepts(Family::MaxPro200, LinkOp::RefreshSlowData));
+        assert!(accepts(Family::Hpr, LinkOp::RefreshSlowData));
         assert!(!accepts(Family::PowermaxSync, LinkOp::HprSetProcess));
         assert!(!accepts(Family::Hpr, LinkOp::ApplySettings));
         for family in FAMILIES {

@@ -577,7 +577,7 @@ fn cut_at_63_a_with_automatic_pressure_is_the_guides_frame_and_is_read_back() {
         ticket,
         result: Ok(CommandOutput::Settings(applied))
     }));
-    assert_eq!(bench.link.status().desired, Some(applied));
+    assert_eq!(bench.link.kept().powermax(), Some(applied));
     assert!(bench.link.status().remote);
 }
 
@@ -610,7 +610,7 @@ fn a_read_back_that_differs_fails_the_command() {
         e,
         LinkEvent::CommandDone { ticket: t, result: Err(CommandFailure::Settings(SettingsFailure::ReadBackDiffers { .. })) } if *t == ticket
     )));
-    assert_eq!(bench.link.status().desired, None);
+    assert_eq!(bench.link.kept().powermax(), None);
 }
 
 #[test]
@@ -692,7 +692,7 @@ fn kept_settings_are_reapplied_when_the_link_returns() {
     bench.run(&mut fake, bench.now + Duration::from_millis(1000));
     assert!(!bench.link.status().link_up);
     assert!(
-        bench.link.status().desired.is_some(),
+        bench.link.kept().powermax().is_some(),
         "kept across the link-down"
     );
     fake.silent = false;

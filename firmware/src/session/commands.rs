@@ -310,12 +310,11 @@ fn events(ctx: &mut Context<'_>, on: bool) -> ReplyLine {
     ok_line(|w| w.field("events", on_off(on)))
 }
 
-/// The process a partial `SET` starts from: the one asked for last, or failing that the
-/// unit's (as the link keeps or reads it).
+/// The process a partial `SET` starts from: the one asked for last (its persisted copy), or
+/// failing that the unit's (as the link keeps or reads it).
 fn base_process(ctx: &Context<'_>, family: Family) -> Option<Process> {
-    let status = ctx.link.status();
     ctx.settings.process.or_else(|| {
-        let known = status.desired.or(status.settings)?;
+        let known = ctx.link.kept().powermax().or(ctx.link.status().settings)?;
         Some(Process {
             mode: cnc_mode(known.mode?, Some(family)),
             amps: known.current,

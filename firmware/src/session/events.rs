@@ -12,7 +12,7 @@ use super::describe::{
 use super::replies::complete;
 use super::{Context, Pending, ReplyLine, Session};
 use crate::io::{Interlock, IoEvent};
-use crate::link::{Family, LinkDownReason, LinkEvent, Refusal, UnitStatus};
+use crate::link::{Family, LinkDownReason, LinkEvent, UnitStatus};
 
 impl Session {
     /// A link event: the reply of the command in progress, and/or an event line.
@@ -69,18 +69,6 @@ impl Session {
             w.finish().map(|_| ())
         });
     }
-
-    /// An event line for settings the bridge applied by itself (after power-up), refused
-    /// before sending.
-    pub fn restore_refused(&mut self, ctx: &Context<'_>, refusal: &Refusal) {
-        self.event(ctx, |l| {
-            let mut w = ReplyWriter::event(l, "SETTINGS")?;
-            w.word("failed")?;
-            w.field("reason", "refused")?;
-            w.field("why", refusal)?;
-            w.finish().map(|_| ())
-        });
-    }
 }
 
 /// The event line of a link event other than `CommandDone` (which has none).
@@ -121,6 +109,14 @@ fn write_link_event(l: &mut ReplyLine, event: &LinkEvent, status: &UnitStatus) -
             let mut w = ReplyWriter::event(l, "SETTINGS")?;
             w.word("failed")?;
             w.field("reason", settings_failure_word(&reason))?;
+            w.finish().map(|_| ())
+        }
+        // The persisted process, refused before sending.
+        LinkEvent::RestoreRefused { refusal } => {
+            let mut w = ReplyWriter::event(l, "SETTINGS")?;
+            w.word("failed")?;
+            w.field("reason", "refused")?;
+            w.field("why", refusal)?;
             w.finish().map(|_| ())
         }
         LinkEvent::CartridgeChanged { uid } => {
