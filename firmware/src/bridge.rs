@@ -30,10 +30,8 @@
 //!
 //! bridge.handle_cnc_rx(Instant::from_millis(1), b"SET AMPS 45\r\n");
 //! let reply = bridge.poll_cnc_output().unwrap();
-//! assert_eq!(
-//!     reply,
-//!     b"ERR LINK no power supply connected (the bridge is looking for one)\r\n"
-//! );
+//! let expected = format!("ERR LINK {}\r\n", plasma_firmware::session::texts::NO_LINK);
+//! assert_eq!(reply, expected.as_bytes());
 //! ```
 
 use crate::io::{Inputs, IoConfig, IoEvent, Outputs, SupplyState};
@@ -365,8 +363,7 @@ mod tests {
             rig.received,
             [
                 NAK_TOKEN,
-                "ERR SYNTAX Phoenix message incomplete: the next one began or the line went \
-                 quiet (NAK sent)"
+                std::format!("ERR SYNTAX {}", crate::session::texts::PHOENIX_TRUNCATED).as_str()
             ]
         );
         // Text lines work again at once.
