@@ -411,12 +411,6 @@ impl PsLink {
         &self.core.diagnostics
     }
 
-    /// The HPR / MaxPro200 settings the CNC set and the unit confirmed, kept across
-    /// link-downs and re-applied (after 004 REMOTE_MODE) when the unit returns or restarts.
-    pub fn hpr_kept_settings(&self) -> &[plasma_protocol::hpr::Request] {
-        self.core.kept.hpr_requests()
-    }
-
     /// What the link re-applies (see [`kept`]).
     pub fn kept(&self) -> &Kept {
         &self.core.kept

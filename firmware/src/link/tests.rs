@@ -1510,7 +1510,7 @@ fn hpr_at_100_a() -> Bench {
     assert_eq!(bench.next_tx(bench.now).unwrap(), hf(58, "100"));
     bench.rx(2, &hf(58, "0100"));
     assert_eq!(
-        bench.link.hpr_kept_settings(),
+        bench.link.kept().hpr_requests(),
         [plasma_protocol::hpr::Request::SetNominalAmps { amps: 100 }]
     );
     bench.events();
@@ -1593,7 +1593,7 @@ fn an_hpr_setting_answered_with_another_value_is_never_a_success() {
     }));
     // What is kept is what the unit confirmed.
     assert_eq!(
-        bench.link.hpr_kept_settings(),
+        bench.link.kept().hpr_requests(),
         [plasma_protocol::hpr::Request::SetNominalAmps { amps: 100 }]
     );
 }
@@ -1606,7 +1606,7 @@ fn kept_hpr_settings_are_not_given_to_another_model() {
         bench.next_tx(bench.now + Duration::from_secs(10)).unwrap();
     }
     assert!(
-        !bench.link.hpr_kept_settings().is_empty(),
+        !bench.link.kept().hpr_requests().is_empty(),
         "kept across the link-down"
     );
     // An HPR260 answers HELLO instead.
@@ -1619,7 +1619,7 @@ fn kept_hpr_settings_are_not_given_to_another_model() {
     bench.events();
     bench.rx(3, &hf(0, "HYPERFORMANCE260AUTO"));
     assert!(bench.link.status().link_up);
-    assert!(bench.link.hpr_kept_settings().is_empty());
+    assert!(bench.link.kept().hpr_requests().is_empty());
     assert!(bench.events().contains(&LinkEvent::SettingsFailed {
         reason: SettingsFailure::OutsideLimits
     }));

@@ -7,7 +7,7 @@
 //! in `docs/cnc-protocol.md`.
 //!
 //! # Input
-//! A byte that opens a Phoenix frame (SOH or STX, [`phoenix::is_frame_start`]) between two
+//! A byte that opens a Phoenix frame (SOH or STX, [`phoenix::is_frame_start`](plasma_protocol::cnc::phoenix::is_frame_start)) between two
 //! inputs goes to the [`Deframer`] of the configured format; everything else to the
 //! [`LineAssembler`] (CR, LF or CR LF; at most 128 characters). A text line that a frame
 //! start interrupts is dropped with an `ERR`.

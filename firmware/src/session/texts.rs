@@ -43,7 +43,7 @@ pub const PHOENIX_TRUNCATED: &str =
 pub const PHOENIX_FRAMING: &str =
     "Phoenix message framing: a framing byte is missing or out of place (NAK sent)";
 
-/// A line that found the queue of [`QUEUE_CAPACITY`] full (a test ties the number).
+/// A line that found the queue of [`QUEUE_CAPACITY`](super::QUEUE_CAPACITY) full (a test ties the number).
 pub const QUEUE_FULL: &str = "4 commands are already waiting, line dropped";
 
 /// Why a Phoenix message was refused (NAK): its `ERR` line.
