@@ -1,25 +1,21 @@
-//! Auto-detection, and the moves between detecting and talking to a unit.
+//! Auto-detection.
 //!
 //! Owns which probe is asked at which port settings (the search over the Modbus framings,
 //! then HPR), the known-good probe asked first after a link-down, re-asking a probe whose
-//! replies arrived damaged, and the phase changes: link up (a family driver takes over),
-//! re-identification of a legacy-probed unit, and link down (back to detecting).
+//! replies arrived damaged, and what a probe's answer or failure means. The move to a
+//! family driver once a unit is found is [`super::phase`]'s.
 
 use heapless::Vec;
 use plasma_protocol::hpr::{self as hpr_wire, Reply, SystemId};
 use plasma_protocol::modbus_ascii::Response;
-use plasma_protocol::powermax::{
-    AddressingSystem, PowerSupplyModel, device_id, legacy as pm_legacy,
-};
+use plasma_protocol::powermax::{PowerSupplyModel, device_id, legacy as pm_legacy};
 use plasma_protocol::serial::{Parity, PortConfig, StopBits};
 use plasma_protocol::time::{Duration, Instant};
 
-use super::hpr::HprDriver;
 use super::modbus::MbRequest;
-use super::powermax::{PowermaxDriver, Variant};
 use super::schedule::{Outgoing, Tag};
 use super::transaction::{RetrySpacing, TX_CAPACITY, TransactionError};
-use super::{Family, LinkDownReason, LinkEvent, Model, Phase, ProtocolChoice, PsLink, Wire};
+use super::{Family, Model, Phase, ProtocolChoice, PsLink, Wire};
 
 /// Pause between two detection rounds, so a silent line is not hammered.
 pub const DETECT_ROUND_PAUSE: Duration = Duration::from_millis(250);
@@ -309,7 +305,9 @@ impl PsLink {
         self.set_port_for(step, round);
     }
 
-    fn link_up(&mut self, now: Instant, model: Model, family: Family) {
+    /// Detection found a unit: what found it (the probe being asked, and the port settings)
+    /// is asked first after a link-down.
+    pub(super) fn remember_known_good(&mut self) {
         if let Phase::Detecting(detector) = &self.phase {
             let step = match detector.step {
                 DetectStep::HprHello | DetectStep::HprWake | DetectStep::HprSleep => {
@@ -322,93 +320,13 @@ impl PsLink {
                 port: self.port,
             });
         }
-        self.consecutive_failures = 0;
-        self.unanswered = 0;
-        self.core.status.family = Some(family);
-        self.core.status.model = Some(model);
-        self.core.status.link_up = true;
-        self.core.emit(LinkEvent::LinkUp { model, family });
-        self.phase = match family {
-            Family::PowermaxSync => {
-                Phase::Powermax(PowermaxDriver::new(Variant::Sync, now, &self.core))
-            }
-            Family::PowermaxLegacy => {
-                Phase::Powermax(PowermaxDriver::new(Variant::Legacy, now, &self.core))
-            }
-            Family::Hpr | Family::MaxPro200 => {
-                let system = match model {
-                    Model::Hpr(system) => system,
-                    _ => SystemId::MaxPro200,
-                };
-                Phase::Hpr(HprDriver::new(system, now, &mut self.core))
-            }
-        };
     }
 
-    /// A Modbus unit answered device identification (`model` if Table 2 knows it).
-    fn detected_modbus(&mut self, now: Instant, model: Option<PowerSupplyModel>) {
-        let choice = self.core.config.protocol;
-        let variant = match (choice, model.map(|m| m.addressing())) {
-            (ProtocolChoice::Sync, _) => Some(Family::PowermaxSync),
-            (ProtocolChoice::Legacy, _) => Some(Family::PowermaxLegacy),
-            (_, Some(AddressingSystem::Sync)) => Some(Family::PowermaxSync),
-            (_, Some(AddressingSystem::Legacy)) => Some(Family::PowermaxLegacy),
-            (_, None) => None,
-        };
-        match (variant, model) {
-            (Some(family), Some(model)) => self.link_up(now, Model::Powermax(model), family),
-            (Some(family), None) => self.link_up(now, Model::PowermaxUnidentified, family),
-            // Unknown product code: the legacy register read decides.
-            (None, _) => self.detect_next(now, DetectStep::DeviceId),
-        }
-    }
-
-    /// A unit running as legacy (found by the register probe) answered device
-    /// identification with `model`. A SYNC unit changes family: pending commands fail as on a
-    /// link-down (kept settings stay and are re-applied), and `LinkUp` reports the unit again
-    /// with its model and family.
-    pub(super) fn reidentified(&mut self, now: Instant, model: Option<PowerSupplyModel>) {
-        let Some(model) = model else {
-            return;
-        };
-        if model.addressing() != AddressingSystem::Sync {
-            self.core.status.model = Some(Model::Powermax(model));
-            return;
-        }
-        if let Phase::Powermax(driver) = &mut self.phase {
-            driver.abort(&mut self.core);
-        }
+    /// The known-good probe, if any, becomes `step` (same port settings).
+    pub(super) fn known_good_asks(&mut self, step: DetectStep) {
         if let Some(good) = &mut self.last_good {
-            good.step = DetectStep::DeviceId;
+            good.step = step;
         }
-        self.core.status.forget_unit();
-        self.link_up(now, Model::Powermax(model), Family::PowermaxSync);
-    }
-
-    pub(super) fn link_down(&mut self, now: Instant, count: u8, last_error: TransactionError) {
-        if !self.abort_unit() {
-            return;
-        }
-        self.core.status.forget_unit();
-        self.core.diagnostics.record_link_down();
-        self.core.emit(LinkEvent::LinkDown {
-            reason: LinkDownReason::ConsecutiveFailures { count, last_error },
-        });
-        self.txn = None;
-        self.consecutive_failures = 0;
-        self.unanswered = 0;
-        self.start_detection(now, 0);
-    }
-
-    /// The unit's driver gives up whatever it was doing (every pending command fails).
-    /// False while detecting (no unit to abort).
-    pub(super) fn abort_unit(&mut self) -> bool {
-        match &mut self.phase {
-            Phase::Powermax(driver) => driver.abort(&mut self.core),
-            Phase::Hpr(driver) => driver.abort(&mut self.core),
-            Phase::Detecting(_) => return false,
-        }
-        true
     }
 
     /// The probe to send now, if detection is due for one.

@@ -65,9 +65,9 @@
 //! for at most one other transaction (a new fault is still known within 250 ms p99 on SYNC).
 //!
 //! Slow data (limits first) is read at start, on a cartridge change, on request and at each
-//! refresh. A read that fails on the line is tried again soon, at the first turn after
-//! [`slow::SLOW_RETRY_FIRST`], the wait doubling with each further failure up to the
-//! slow-data interval; an exception waits for the next refresh.
+//! refresh. A read that fails on the line is tried again soon, at the first turn after a
+//! short wait (`slow::SLOW_RETRY_FIRST`), the wait doubling with each further failure up to
+//! the slow-data interval; an exception waits for the next refresh.
 //!
 //! ```
 //! use plasma_firmware::link::{LinkConfig, PsLink};
@@ -87,17 +87,18 @@ pub mod config;
 mod detect;
 pub mod diagnostics;
 pub mod event;
-pub mod hpr;
+pub(crate) mod hpr;
 pub mod kept;
-pub mod legacy;
-pub mod modbus;
-pub mod powermax;
+pub(crate) mod legacy;
+pub(crate) mod modbus;
+mod phase;
+pub(crate) mod powermax;
 mod receive;
 mod schedule;
-pub mod slow;
+pub(crate) mod slow;
 pub mod status;
 pub mod support;
-pub mod sync;
+pub(crate) mod sync;
 pub mod transaction;
 
 #[cfg(test)]
@@ -120,39 +121,39 @@ pub use transaction::TransactionError;
 
 use detect::{DetectStep, Detector, KnownGood};
 use event::EventQueue;
-use hpr::HprDriver;
 pub use hpr::HprKept;
 pub use kept::Kept;
-use powermax::PowermaxDriver;
+use phase::Phase;
 use schedule::Tag;
 use transaction::{TX_CAPACITY, Transaction};
 
 use plasma_protocol::serial::PortConfig;
 use plasma_protocol::time::{Duration, Instant};
 
-/// State shared by the link and its family drivers.
+/// State shared by the link and its family drivers (the link's own; [`PsLink`] shows it
+/// read-only).
 #[derive(Debug)]
-pub struct Core {
+pub(crate) struct Core {
     /// The (validated) configuration.
-    pub config: LinkConfig,
+    pub(super) config: LinkConfig,
     /// What is known about the unit.
-    pub status: UnitStatus,
+    pub(super) status: UnitStatus,
     /// Counters.
-    pub diagnostics: Diagnostics,
+    pub(super) diagnostics: Diagnostics,
     /// What is re-applied, for every family (see [`kept`]).
-    pub kept: Kept,
+    pub(super) kept: Kept,
     events: EventQueue,
 }
 
 impl Core {
     /// Queue an event.
-    pub fn emit(&mut self, event: LinkEvent) {
+    pub(super) fn emit(&mut self, event: LinkEvent) {
         self.events.push(event, &mut self.diagnostics);
     }
 
     /// The link went down: the active command (`active`, when there is one) and every queued
     /// one fail.
-    pub fn fail_commands<J, const N: usize>(
+    pub(super) fn fail_commands<J, const N: usize>(
         &mut self,
         active: Option<Ticket>,
         queue: &mut heapless::Deque<(Ticket, J), N>,
@@ -168,7 +169,7 @@ impl Core {
 
     /// The unit's active fault is now `new`: a change is reported (the old fault cleared,
     /// the new one raised). False when nothing changed.
-    pub fn set_active_fault(&mut self, new: Option<ActiveFault>) -> bool {
+    pub(super) fn set_active_fault(&mut self, new: Option<ActiveFault>) -> bool {
         if self.status.active_fault == new {
             return false;
         }
@@ -191,15 +192,6 @@ impl Core {
 enum Wire {
     Modbus,
     Hpr,
-}
-
-// One phase at a time, held inline (no allocator).
-#[allow(clippy::large_enum_variant)]
-#[derive(Debug)]
-enum Phase {
-    Detecting(Detector),
-    Powermax(PowermaxDriver),
-    Hpr(HprDriver),
 }
 
 /// The power-supply link.

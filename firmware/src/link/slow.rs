@@ -99,7 +99,7 @@ impl SlowData {
     /// failure up to `interval`. A final answer (an exception, HPR 501) waits for the next
     /// refresh. When no item is pending any more, the waiting refresh commands complete
     /// (with the round's last failure, if any).
-    pub fn finish(
+    pub(crate) fn finish(
         &mut self,
         now: Instant,
         item: u8,
@@ -131,7 +131,7 @@ impl SlowData {
     }
 
     /// The link went down: the waiting refresh commands fail.
-    pub fn fail_all(&mut self, core: &mut Core) {
+    pub(crate) fn fail_all(&mut self, core: &mut Core) {
         self.complete_tickets(Err(CommandFailure::LinkDown), core);
     }
 

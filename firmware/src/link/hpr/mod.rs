@@ -141,7 +141,7 @@ fn is_cutting(state: Option<StateCode>) -> bool {
 
 impl HprDriver {
     /// A driver for a unit that answered HELLO with `system`.
-    pub fn new(system: SystemId, now: Instant, core: &mut Core) -> Self {
+    pub(crate) fn new(system: SystemId, now: Instant, core: &mut Core) -> Self {
         let maxpro = system == SystemId::MaxPro200;
         // Only a Powermax keeps a process: the persisted one is not for this unit.
         core.kept.restore_done();
@@ -191,17 +191,6 @@ impl HprDriver {
         }
     }
 
-    /// True when the active command is a RAW forward.
-    pub fn active_is_raw(&self) -> bool {
-        matches!(
-            self.active,
-            Some(ActiveJob {
-                job: HprJob::Raw { .. },
-                ..
-            })
-        )
-    }
-
     fn in_pilot_arc(&self, core: &Core) -> bool {
         core.status
             .hpr
@@ -210,7 +199,7 @@ impl HprDriver {
     }
 
     /// Earliest time the driver wants to send something.
-    pub fn wake_at(&self, core: &Core) -> Option<Instant> {
+    pub(crate) fn wake_at(&self, core: &Core) -> Option<Instant> {
         if let Some(until) = self.pause_until.filter(|&u| self.now < u) {
             return Some(until);
         }
@@ -232,7 +221,7 @@ impl HprDriver {
     }
 
     /// The next frame to send, if any, and what it is for.
-    pub fn next_request(
+    pub(crate) fn next_request(
         &mut self,
         now: Instant,
         core: &mut Core,
@@ -340,7 +329,7 @@ impl HprDriver {
         None
     }
     /// The link went down: every pending command fails.
-    pub fn abort(&mut self, core: &mut Core) {
+    pub(crate) fn abort(&mut self, core: &mut Core) {
         let active = self.active.take().and_then(|active| active.ticket);
         core.fail_commands(active, &mut self.queue);
         // Kept settings stay (in the core) and are re-applied when the unit is back.

@@ -57,7 +57,7 @@ impl HprDriver {
 
     /// A reply arrived for `purpose` (already checked to answer the request; error replies
     /// 500/501 never get here, except for RAW forwards).
-    pub fn on_reply(
+    pub(crate) fn on_reply(
         &mut self,
         now: Instant,
         purpose: HprPurpose,
@@ -250,7 +250,7 @@ impl HprDriver {
     }
 
     /// `purpose` failed for good.
-    pub fn on_failed(
+    pub(crate) fn on_failed(
         &mut self,
         now: Instant,
         purpose: HprPurpose,

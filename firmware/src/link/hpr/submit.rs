@@ -14,7 +14,7 @@ use super::{HprDriver, HprJob, SLOW_ALL, is_cutting};
 
 impl HprDriver {
     /// Validate and queue a command.
-    pub fn submit(
+    pub(crate) fn submit(
         &mut self,
         now: Instant,
         ticket: Ticket,

@@ -26,7 +26,6 @@ use super::sync::{self, SlowItem};
 use plasma_protocol::time::{Duration, Instant};
 
 use settings::Desired;
-pub use settings::validate_settings;
 
 /// Silence after a quick restart (SYNC guide: "wait 2 seconds before you send a new read or
 /// write request").
@@ -110,7 +109,7 @@ pub struct PowermaxDriver {
 impl PowermaxDriver {
     /// A driver for a unit just detected; slow data is read first, and kept settings are
     /// re-applied (the link returned).
-    pub fn new(variant: Variant, now: Instant, core: &Core) -> Self {
+    pub(crate) fn new(variant: Variant, now: Instant, core: &Core) -> Self {
         let plan = match variant {
             Variant::Sync => sync::POLL_PLAN,
             Variant::Legacy => legacy::POLL_PLAN,
@@ -168,7 +167,7 @@ impl PowermaxDriver {
     /// Earliest time the driver wants to send something. It mirrors
     /// [`PowermaxDriver::next_request`]: a time not after the last call is only returned when
     /// that call will send something, so a caller sleeping until then never spins.
-    pub fn wake_at(&self, core: &Core) -> Option<Instant> {
+    pub(crate) fn wake_at(&self, core: &Core) -> Option<Instant> {
         if let Some(until) = self.blackout_until.filter(|&u| self.now < u) {
             return Some(until);
         }
@@ -193,7 +192,7 @@ impl PowermaxDriver {
 
     /// The next request to send, if any (called only when nothing is in flight).
     /// Returns the purpose, the request and a retry count overriding the configured one.
-    pub fn next_request(
+    pub(crate) fn next_request(
         &mut self,
         now: Instant,
         core: &mut Core,
@@ -310,7 +309,7 @@ impl PowermaxDriver {
     }
 
     /// The link went down: every pending command fails.
-    pub fn abort(&mut self, core: &mut Core) {
+    pub(crate) fn abort(&mut self, core: &mut Core) {
         let active = self.active.take().and_then(|active| active.ticket);
         core.fail_commands(active, &mut self.queue);
         self.slow.fail_all(core);

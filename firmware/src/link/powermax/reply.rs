@@ -19,7 +19,7 @@ use super::{MbPurpose, PowermaxDriver, Variant};
 impl PowermaxDriver {
     /// A valid reply arrived for `purpose`. `raw_len` is the length of the reply frame kept
     /// for a RAW command.
-    pub fn on_response(
+    pub(crate) fn on_response(
         &mut self,
         now: Instant,
         purpose: MbPurpose,
@@ -65,7 +65,7 @@ impl PowermaxDriver {
     }
 
     /// `purpose` failed for good (retries used, or a final answer such as an exception).
-    pub fn on_failed(
+    pub(crate) fn on_failed(
         &mut self,
         now: Instant,
         purpose: MbPurpose,

@@ -57,7 +57,7 @@ impl Desired {
 }
 
 /// Check settings against the permitted limits (nothing is sent when this fails).
-pub fn validate_settings(
+pub(super) fn validate_settings(
     limits: Option<&Limits>,
     mode: OperatingMode,
     current: Amps,

@@ -17,7 +17,7 @@ use super::{Job, PowermaxDriver, Variant};
 
 impl PowermaxDriver {
     /// Validate and queue a command.
-    pub fn submit(
+    pub(crate) fn submit(
         &mut self,
         now: Instant,
         ticket: Ticket,
