@@ -41,11 +41,12 @@
 //!   without a valid reply take the link down.
 //!
 //! # Kept settings
-//! Settings the CNC set and the unit confirmed are kept and re-applied after the unit
-//! power-cycles or the link returns: Powermax mode, current and pressure
-//! ([`UnitStatus::desired`]); HPR / MaxPro200 nominal current, corner current, process,
-//! all parameters and inlet gases ([`PsLink::hpr_kept_settings`], a later setting replacing
-//! what it sets again), re-applied after 004 REMOTE_MODE once the unit is in state 2 or 3
+//! Settings the CNC set and the unit confirmed are kept ([`kept`], the one place that decides
+//! what is re-applied and when) and re-applied after the unit power-cycles or the link
+//! returns: Powermax mode, current and pressure ([`Kept::powermax`], and once after start-up
+//! the persisted process, [`PsLink::restore`]); HPR / MaxPro200 nominal current, corner
+//! current, process and inlet gases ([`Kept::hpr_requests`], a later setting replacing what
+//! it sets again), re-applied after 004 REMOTE_MODE once the unit is in state 2 or 3
 //! (another HPR model on the line does not get them: `SettingsFailed { OutsideLimits }`).
 //! An HPR setting counts as done only when the unit's answer shows the value asked for;
 //! otherwise 004 is sent again and the setting once more (the unit may have restarted and
@@ -87,6 +88,7 @@ mod detect;
 pub mod diagnostics;
 pub mod event;
 pub(crate) mod hpr;
+pub mod kept;
 pub(crate) mod legacy;
 pub(crate) mod modbus;
 mod phase;
@@ -95,6 +97,7 @@ mod receive;
 mod schedule;
 pub(crate) mod slow;
 pub mod status;
+pub mod support;
 pub(crate) mod sync;
 pub mod transaction;
 
@@ -119,6 +122,7 @@ pub use transaction::TransactionError;
 use detect::{DetectStep, Detector, KnownGood};
 use event::EventQueue;
 pub use hpr::HprKept;
+pub use kept::Kept;
 use phase::Phase;
 use schedule::Tag;
 use transaction::{TX_CAPACITY, Transaction};
@@ -136,9 +140,8 @@ pub(crate) struct Core {
     pub(super) status: UnitStatus,
     /// Counters.
     pub(super) diagnostics: Diagnostics,
-    /// HPR / MaxPro200 settings to keep and re-apply (the Powermax ones are
-    /// [`UnitStatus::desired`]).
-    pub(super) hpr_kept: HprKept,
+    /// What is re-applied, for every family (see [`kept`]).
+    pub(super) kept: Kept,
     events: EventQueue,
 }
 
@@ -255,7 +258,7 @@ impl PsLink {
                 config,
                 status: UnitStatus::default(),
                 diagnostics: Diagnostics::default(),
-                hpr_kept: HprKept::default(),
+                kept: Kept::default(),
                 events: EventQueue::new(),
             },
             phase: Phase::Detecting(Detector::searching(DetectStep::DeviceId, 0, now)),
@@ -376,6 +379,8 @@ impl PsLink {
 
     /// Ask for an operation. Validates against the unit's limits BEFORE anything is sent;
     /// Err = refused with a precise reason, nothing sent.
+    // Not inlined into its one caller in the image (the session): that costs ~300 B of flash.
+    #[inline(never)]
     pub fn submit(&mut self, now: Instant, command: LinkCommand<'_>) -> Result<Ticket, Refusal> {
         self.now = now;
         let ticket = Ticket(self.next_ticket);
@@ -398,10 +403,16 @@ impl PsLink {
         &self.core.diagnostics
     }
 
-    /// The HPR / MaxPro200 settings the CNC set and the unit confirmed, kept across
-    /// link-downs and re-applied (after 004 REMOTE_MODE) when the unit returns or restarts.
-    pub fn hpr_kept_settings(&self) -> &[plasma_protocol::hpr::Request] {
-        self.core.hpr_kept.as_slice()
+    /// What the link re-applies (see [`kept`]).
+    pub fn kept(&self) -> &Kept {
+        &self.core.kept
+    }
+
+    /// Apply `settings` (the persisted process) once a Powermax with known limits answers,
+    /// unless the CNC sets a process first. Refused settings are reported with
+    /// [`LinkEvent::RestoreRefused`] and dropped.
+    pub fn restore(&mut self, settings: PowermaxSettings) {
+        self.core.kept.restore(settings);
     }
 
     /// The reply frame of the last RAW command (see [`CommandOutput::Raw`]).
