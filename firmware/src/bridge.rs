@@ -30,13 +30,14 @@
 //!
 //! bridge.handle_cnc_rx(Instant::from_millis(1), b"SET AMPS 45\r\n");
 //! let reply = bridge.poll_cnc_output().unwrap();
-//! let expected = format!("ERR LINK {}\r\n", plasma_firmware::session::texts::NO_LINK);
+//! let expected = format!("ERR LINK {}\r\n", plasma_firmware::texts::NO_LINK);
 //! assert_eq!(reply, expected.as_bytes());
 //! ```
 
 use crate::io::{Inputs, IoConfig, IoEvent, Outputs, SupplyState};
 use crate::link::{Diagnostics, PowermaxSettings, PsLink, UnitStatus};
-use crate::session::{Context, Session, SessionStats, SimCommand};
+pub use crate::session::SimCommand;
+use crate::session::{Context, Session, SessionStats};
 use crate::settings::{Process, SaveError, Settings};
 use plasma_protocol::serial::PortConfig;
 use plasma_protocol::time::Instant;

@@ -234,13 +234,9 @@ impl EventQueue {
     }
 
     /// Number of queued events.
+    #[cfg(test)]
     pub fn len(&self) -> usize {
         self.events.len()
-    }
-
-    /// True when nothing is queued.
-    pub fn is_empty(&self) -> bool {
-        self.events.is_empty()
     }
 }
 

@@ -29,7 +29,7 @@
 //!   still found. While a Modbus unit is expected back, the HPR probe's retries follow at
 //!   once instead of riding through an HF-ignition blackout (no HPR cuts without a link).
 //! - A step whose replies all arrived damaged (bad LRC, garbled) is asked again, up to
-//!   [`DETECT_REASKS`] times: a damaged reply shows a unit that speaks this protocol at this
+//!   [`DETECT_REASKS`](detect::DETECT_REASKS) times: a damaged reply shows a unit that speaks this protocol at this
 //!   framing. Only silence or a clean exception moves detection on (a SYNC unit also answers
 //!   the legacy probe, so it must not get there by accident).
 //! - A unit the legacy probe found (no model known) is asked for its device identification
@@ -37,7 +37,7 @@
 //!   as on a link-down, `LinkUp` reports the unit again, kept settings are re-applied).
 //! - Only silence counts toward link-down: [`LinkConfig::failures_before_down`] failed
 //!   transactions in a row that heard nothing. Damaged replies prove the unit is there: they
-//!   are counted and retried, and only [`UNANSWERED_FACTOR`] times as many failures in a row
+//!   are counted and retried, and only [`UNANSWERED_FACTOR`](schedule::UNANSWERED_FACTOR) times as many failures in a row
 //!   without a valid reply take the link down.
 //!
 //! # Kept settings
@@ -82,13 +82,13 @@
 //! assert!(link.status().link_up);
 //! ```
 
-pub mod command;
-pub mod config;
+pub(crate) mod command;
+pub(crate) mod config;
 mod detect;
-pub mod diagnostics;
-pub mod event;
+pub(crate) mod diagnostics;
+pub(crate) mod event;
 pub(crate) mod hpr;
-pub mod kept;
+pub(crate) mod kept;
 pub(crate) mod legacy;
 pub(crate) mod modbus;
 mod phase;
@@ -96,10 +96,10 @@ pub(crate) mod powermax;
 mod receive;
 mod schedule;
 pub(crate) mod slow;
-pub mod status;
+pub(crate) mod status;
 pub mod support;
 pub(crate) mod sync;
-pub mod transaction;
+pub(crate) mod transaction;
 
 #[cfg(test)]
 mod tests;
@@ -108,24 +108,22 @@ use heapless::Vec;
 use plasma_protocol::hpr as hpr_wire;
 use plasma_protocol::modbus_ascii;
 
-pub use command::{HprGasFlow, HprValue, LinkCommand, Refusal};
+pub use command::{HprGasFlow, HprValue, LinkCommand, RAW_CAPACITY, Refusal};
 pub use config::{ConfigError, LinkConfig, ProtocolChoice};
-pub use detect::{DETECT_REASKS, DETECT_ROUND_PAUSE};
 pub use diagnostics::Diagnostics;
 pub use event::{
     CommandFailure, CommandOutput, LinkDownReason, LinkEvent, SettingsFailure, Ticket,
 };
-pub use schedule::{SLEEP_QUIET, UNANSWERED_FACTOR};
 pub use status::{ActiveFault, Family, Limits, Model, PowermaxSettings, UnitStatus};
 pub use transaction::TransactionError;
 
 use detect::{DetectStep, Detector, KnownGood};
 use event::EventQueue;
-pub use hpr::HprKept;
 pub use kept::Kept;
 use phase::Phase;
 use schedule::Tag;
-use transaction::{TX_CAPACITY, Transaction};
+pub use transaction::TX_CAPACITY;
+use transaction::Transaction;
 
 use plasma_protocol::serial::PortConfig;
 use plasma_protocol::time::{Duration, Instant};

@@ -11,6 +11,7 @@ use std::vec::Vec;
 use plasma_protocol::hpr::{ErrorCode, GasCode, GasPair, StateCode, SystemId};
 use plasma_protocol::powermax::{Amps, FaultCode, OperatingMode, PowerSupplyModel, Pressure, Psi};
 
+use super::schedule::UNANSWERED_FACTOR;
 use super::*;
 use crate::testing::SimPs;
 use plasma_protocol::serial::{Parity, PortConfig};

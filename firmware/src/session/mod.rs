@@ -53,7 +53,7 @@ use crate::settings::{SaveError, Settings};
 use plasma_protocol::time::{Duration, Instant};
 
 use commands::Op;
-pub use describe::{ModelName, cnc_mode, family_word, mode_word, unit_mode};
+pub(crate) use describe::unit_mode;
 use input::Item;
 
 /// Command lines that can wait behind a command in progress.
@@ -245,11 +245,6 @@ impl Session {
     /// Counters.
     pub fn stats(&self) -> &SessionStats {
         &self.stats
-    }
-
-    /// True while a command waits for the link or for a save.
-    pub fn is_busy(&self) -> bool {
-        self.pending.is_some()
     }
 
     /// Bytes received from the CNC (any chunking).

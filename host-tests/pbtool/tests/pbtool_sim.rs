@@ -175,7 +175,7 @@ fn phoenix_frames_on_stdin_are_acked() {
         expected: 0x4A,
         found: 0x4B,
     };
-    let reply = plasma_firmware::session::texts::frame_error(check_byte);
+    let reply = plasma_firmware::texts::frame_error(check_byte);
     assert_eq!(lines[1], format!("<NAK>{}", reply.trim_end()));
     assert!(lines[2].starts_with("OK bridge="));
 }
