@@ -33,9 +33,9 @@ use plasma_firmware::inputs::{InputConfig, PinLevels};
 use plasma_firmware::io::{Input, SafetyMonitor, SupplyState};
 use plasma_firmware::link::transaction::TX_CAPACITY;
 use plasma_firmware::session::{MAX_REPLY_LEN, OUTPUT_CAPACITY};
-use plasma_protocol::cnc::phoenix::{ACK, NAK};
 use plasma_firmware::settings::{SaveError, Settings};
 use plasma_firmware::storage::{MAX_PAYLOAD, Settings as _};
+use plasma_protocol::cnc::phoenix::{ACK, NAK};
 use plasma_protocol::cnc::{ConfigKey, Gas, Mode};
 use plasma_protocol::hpr::{self, Class};
 use plasma_protocol::modbus_ascii::{self, Request};
@@ -48,6 +48,8 @@ use plasma_sim::{Model, SimOptions, SimulatedUnit};
 const FRAMES_PER_TURN: usize = 4;
 /// Bytes per CNC read on the board (`supervisor::CNC_RX_CHUNK`).
 const CNC_RX_CHUNK: usize = 64;
+/// Bytes per power-supply read on the board (`supervisor::PS_RX_CHUNK`).
+const PS_RX_CHUNK: usize = 64;
 /// The board's task waits at most this long (`runner::MAX_WAIT`).
 const MAX_WAIT: Duration = Duration::from_millis(100);
 /// Times one instant may be processed again because the bridge still asks for it, as the
@@ -59,11 +61,30 @@ const MAX_OUTPUT_PIECES: usize = 1024;
 /// Command words for [`Step::CncLine`]: a seed for the search, not a specification (the
 /// parser is the one source; a word missing here only costs coverage).
 const VERBS: [&str; 20] = [
-    "HELP", "ID", "STATUS", "LIMITS", "FAULT", "FAULTLOG", "COUNTERS", "CARTRIDGE", "RESTART",
-    "RESET", "CLEARWARN", "SET", "REMOTE", "GASTEST", "EVENTS", "TORCH", "GASES", "CORNER",
-    "CONFIG", "RAW",
+    "HELP",
+    "ID",
+    "STATUS",
+    "LIMITS",
+    "FAULT",
+    "FAULTLOG",
+    "COUNTERS",
+    "CARTRIDGE",
+    "RESTART",
+    "RESET",
+    "CLEARWARN",
+    "SET",
+    "REMOTE",
+    "GASTEST",
+    "EVENTS",
+    "TORCH",
+    "GASES",
+    "CORNER",
+    "CONFIG",
+    "RAW",
 ];
-const WORDS: [&str; 8] = ["MODE", "AMPS", "PSI", "PROCESS", "SAVE", "ON", "OFF", "AUTO"];
+const WORDS: [&str; 8] = [
+    "MODE", "AMPS", "PSI", "PROCESS", "SAVE", "ON", "OFF", "AUTO",
+];
 
 #[derive(Arbitrary, Debug)]
 struct Scenario {
@@ -198,10 +219,8 @@ fn check_allowed(frame: &[u8]) {
                 Request::WriteSingleRegister { address, .. } => {
                     registers::registers_writable(address, 1)
                 }
-                Request::WriteMultipleRegisters { start, values } => {
-                    u16::try_from(values.len())
-                        .is_ok_and(|n| registers::registers_writable(start, n))
-                }
+                Request::WriteMultipleRegisters { start, values } => u16::try_from(values.len())
+                    .is_ok_and(|n| registers::registers_writable(start, n)),
             };
             assert!(allowed, "sent a write off the allow-list: {request:?}");
         }
@@ -264,7 +283,10 @@ impl Board {
         for (bit, input) in Input::ALL.into_iter().enumerate() {
             pins = pins.with(input, scenario.pins & (1 << bit) != 0);
         }
-        let torch_on = inputs.get(Input::TorchOn).polarity.is_active(pins.is_high(Input::TorchOn));
+        let torch_on = inputs
+            .get(Input::TorchOn)
+            .polarity
+            .is_active(pins.is_high(Input::TorchOn));
         let mut bridge = Bridge::new(settings, now);
         if scenario.boot_report {
             bridge.set_boot_report(now, "power-on");
@@ -296,17 +318,24 @@ impl Board {
     }
 
     /// An edge at an input pin: the monitor sees it as it arrives, then the I/O task.
-    fn input(&mut self, input: Input, active: bool) {
+    fn drive_input(&mut self, input: Input, active: bool) {
         let high = self.inputs.get(input).polarity.is_active(true) == active;
         self.pins = self.pins.with(input, high);
         self.monitor.input(input, active);
         self.io.on_pins(self.now, self.pins);
-        self.turn();
+    }
+
+    /// Whether `input` is active at its pin.
+    fn pin_active(&self, input: Input) -> bool {
+        self.inputs
+            .get(input)
+            .polarity
+            .is_active(self.pins.is_high(input))
     }
 
     /// Characters arrived from the power supply now.
     fn ps_rx(&mut self, bytes: &[u8]) {
-        for chunk in bytes.chunks(CNC_RX_CHUNK) {
+        for chunk in bytes.chunks(PS_RX_CHUNK) {
             self.bridge.handle_ps_rx(self.now, chunk);
         }
         self.turn();
@@ -326,7 +355,10 @@ impl Board {
             let wakeups = [
                 ("bridge", self.bridge.poll_at()),
                 ("I/O", self.io.poll_at()),
-                ("unit", self.unit.as_ref().and_then(|u| u.unit.next_wakeup())),
+                (
+                    "unit",
+                    self.unit.as_ref().and_then(|u| u.unit.next_wakeup()),
+                ),
                 // The board's tasks wake at least this often.
                 ("task", Some(self.now + MAX_WAIT)),
             ];
@@ -370,7 +402,8 @@ impl Board {
         self.unit_side();
 
         // Supervisor: the I/O task's levels and events in.
-        self.bridge.set_io_snapshot(self.io.inputs(), self.io.outputs());
+        self.bridge
+            .set_io_snapshot(self.io.inputs(), self.io.outputs());
         while let Some(event) = self.io.poll_event() {
             self.bridge.on_io_event(now, event);
         }
@@ -411,7 +444,10 @@ impl Board {
         if let Some(settings) = self.bridge.take_save_request() {
             let mut payload = [0u8; MAX_PAYLOAD];
             let len = settings.encode(&mut payload);
-            assert!(len <= MAX_PAYLOAD, "settings record over {MAX_PAYLOAD} bytes");
+            assert!(
+                len <= MAX_PAYLOAD,
+                "settings record over {MAX_PAYLOAD} bytes"
+            );
             assert_eq!(
                 Settings::decode(&payload[..len]),
                 Some(settings),
@@ -459,21 +495,11 @@ impl Board {
                 }
             }
         }
-        let motion = unit.unit.motion();
         // MOTION is the unit's output, wired to the board's input.
-        if motion != self.monitor_motion() {
-            let high = self.inputs.get(Input::Motion).polarity.is_active(true) == motion;
-            self.pins = self.pins.with(Input::Motion, high);
-            self.monitor.input(Input::Motion, motion);
-            self.io.on_pins(now, self.pins);
+        let motion = unit.unit.motion();
+        if motion != self.pin_active(Input::Motion) {
+            self.drive_input(Input::Motion, motion);
         }
-    }
-
-    fn monitor_motion(&self) -> bool {
-        self.inputs
-            .get(Input::Motion)
-            .polarity
-            .is_active(self.pins.is_high(Input::Motion))
     }
 
     fn drain_cnc_output(&mut self) {
@@ -520,7 +546,10 @@ impl Board {
                 self.turn();
             }
             Step::Wait(units) => self.wait(Duration::from_micros(u64::from(*units) * 64)),
-            Step::Input { input, active } => self.input(pick(&Input::ALL, *input), *active),
+            Step::Input { input, active } => {
+                self.drive_input(pick(&Input::ALL, *input), *active);
+                self.turn();
+            }
             Step::FailNextSave(i) => self.next_save = Err(pick(&SAVE_ERRORS, *i)),
             Step::UnitFault(code) => self.on_unit(|u, now| u.unit.inject_fault(now, *code)),
             Step::UnitClearFault => self.on_unit(|u, now| u.unit.clear_fault(now)),
@@ -532,7 +561,9 @@ impl Board {
                 }
             }),
             Step::Noise(us) => self.on_unit(|u, now| {
-                u.noisy_until = u.noisy_until.max(now + Duration::from_micros(u64::from(*us)));
+                u.noisy_until = u
+                    .noisy_until
+                    .max(now + Duration::from_micros(u64::from(*us)));
             }),
         }
     }
