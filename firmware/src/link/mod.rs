@@ -120,6 +120,7 @@ use detect::{DetectStep, Detector, KnownGood};
 use event::EventQueue;
 pub use hpr::HprKept;
 use phase::Phase;
+pub use powermax::FAULT_CHECK_INTERVAL;
 use schedule::Tag;
 use transaction::{TX_CAPACITY, Transaction};
 

@@ -2,7 +2,8 @@
 //! Modbus ASCII. Family specifics live in [`super::sync`] and [`super::legacy`].
 //!
 //! The driver's jobs are split by module: this one schedules (what goes out next: the rest of
-//! a poll cycle, the active command or a re-apply, polls and other due work in turn),
+//! the active command, the fault register when it is due, the rest of a poll cycle, then
+//! polls, commands and other due work in turn),
 //! `settings` owns the settings to keep and re-apply, `jobs` carries the active command
 //! through its steps, `reply` reads what the unit answers, and `submit` checks a command
 //! before it is queued.
@@ -36,6 +37,14 @@ pub const UID_CHECK_INTERVAL: Duration = Duration::from_secs(1);
 pub const REAPPLY_BACKOFF: Duration = Duration::from_secs(5);
 /// Commands waiting behind the active one.
 const QUEUE_CAPACITY: usize = 4;
+/// The active fault is read at least this often, from the start of one read of the fault
+/// register to the next. The status poll reads it too; between two polls of the default
+/// 100 ms schedule one read of the fault register alone (17 + 15 characters, about 20 ms of
+/// wire) goes out 60 ms after the poll, which splits the wait so that a fault is known within
+/// about 75 ms of its appearing whichever read sees it first (the poll's reply is the longer).
+/// A poll interval at or below it needs no such read. The SYNC guide's rule, "at least every
+/// 1 s", is far inside.
+pub const FAULT_CHECK_INTERVAL: Duration = Duration::from_millis(60);
 
 /// Which register family.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -62,6 +71,30 @@ pub enum MbPurpose {
     Identify,
     /// The current step of the active command.
     Active,
+    /// The fault register alone, between status polls.
+    FaultCheck,
+}
+
+/// What kind of work had the last turn on the line (see [`PowermaxDriver::next_turn`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Turn {
+    /// A status poll or a fault check.
+    Status,
+    /// A command (or a re-apply).
+    Command,
+    /// Slow data, the cartridge check, identification.
+    Other,
+}
+
+impl Turn {
+    /// The kinds of work in the order they are offered the line after `self`.
+    fn after(self) -> [Turn; 3] {
+        match self {
+            Turn::Status => [Turn::Command, Turn::Other, Turn::Status],
+            Turn::Command => [Turn::Other, Turn::Status, Turn::Command],
+            Turn::Other => [Turn::Status, Turn::Command, Turn::Other],
+        }
+    }
 }
 
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -98,8 +131,12 @@ pub struct PowermaxDriver {
     blackout_until: Option<Instant>,
     /// The unit refused device identification (an exception): it is not asked again.
     identify_refused: bool,
-    /// The last transaction started was a poll (the next turn goes to other due work).
-    polled_last: bool,
+    /// The kind of work that had the last turn (the next goes to another kind, if due).
+    last_turn: Turn,
+    /// When the fault register is due to be read again.
+    fault_check_at: Instant,
+    /// The unit refused a read of the fault register alone: the polls alone read it.
+    fault_read_refused: bool,
     now: Instant,
 }
 
@@ -132,7 +169,9 @@ impl PowermaxDriver {
             reapply_not_before: now,
             blackout_until: None,
             identify_refused: false,
-            polled_last: false,
+            last_turn: Turn::Other,
+            fault_check_at: now,
+            fault_read_refused: false,
             now,
         }
     }
@@ -176,6 +215,9 @@ impl PowermaxDriver {
             return Some(self.now);
         }
         let mut at = self.next_poll_at.min(self.slow.wake_at());
+        if !self.fault_read_refused {
+            at = at.min(self.fault_check_at);
+        }
         // The UID check needs a cartridge read first (slow data, retried on its own).
         if self.variant == Variant::Sync && core.status.cartridge.is_some() {
             at = at.min(self.next_uid_check_at);
@@ -198,37 +240,91 @@ impl PowermaxDriver {
         if self.in_blackout(now) {
             return None;
         }
-        // A poll cycle split into parts finishes first.
-        if self.poll.in_cycle() {
-            return self
-                .poll
-                .request()
-                .map(|(request, part)| (MbPurpose::Poll(part), request, None));
-        }
-        if let Some(request) = self.active_request(now, core) {
+        // The active command's steps go back to back (the legacy force registers are written
+        // with nothing in between).
+        if self.active.is_some()
+            && let Some(request) = self.active_request(now, core)
+        {
             return Some(request);
         }
-        // Round robin: after a poll, whatever else is due (slow data, the cartridge check)
-        // gets one transaction before the next poll, so a short poll interval cannot starve
-        // it; a poll waits for at most one such transaction.
-        let poll_due = now >= self.next_poll_at;
-        if poll_due && !self.polled_last {
-            return self.start_poll(now);
+        let next = if !self.fault_read_refused && now >= self.fault_check_at {
+            self.fault_check(now)
+        } else if self.poll.in_cycle() {
+            // A poll cycle split into parts finishes first.
+            self.poll_part()
+        } else {
+            self.next_turn(now, core)
+        };
+        if let Some((MbPurpose::Poll(_) | MbPurpose::FaultCheck, request, _)) = &next
+            && self.reads_fault(request)
+        {
+            self.fault_check_at = now + FAULT_CHECK_INTERVAL;
         }
-        if let Some(request) = self.other_request(now, core) {
-            self.polled_last = false;
-            return Some(request);
+        next
+    }
+
+    /// The fault register is due: the poll reads it when its next read covers it (a poll due
+    /// now starts first), otherwise the fault register is read alone. It goes before the
+    /// round robin and leaves the turns as they are (a check coming due during every command
+    /// would otherwise always hand the next turn back to the commands).
+    fn fault_check(&mut self, now: Instant) -> Option<(MbPurpose, MbRequest, Option<u8>)> {
+        if !self.poll.in_cycle() && now >= self.next_poll_at {
+            self.start_poll(now);
         }
-        if poll_due {
-            return self.start_poll(now);
+        if let Some((request, part)) = self.poll.request()
+            && self.reads_fault(&request)
+        {
+            return Some((MbPurpose::Poll(part), request, None));
+        }
+        let request = match self.variant {
+            Variant::Sync => sync::read_fault(),
+            Variant::Legacy => legacy::read_fault(),
+        };
+        Some((MbPurpose::FaultCheck, request, None))
+    }
+
+    /// True when `request` reads the register holding the active fault.
+    fn reads_fault(&self, request: &MbRequest) -> bool {
+        let fault = match self.variant {
+            Variant::Sync => plasma_protocol::powermax::sync::ACTIVE_FAULT,
+            Variant::Legacy => plasma_protocol::powermax::legacy::FAULT_CODE,
+        };
+        matches!(*request, MbRequest::ReadInput { start, quantity }
+            if start <= fault && fault - start < quantity)
+    }
+
+    /// Round robin: whatever is due (a poll, a new command, slow data or the cartridge check)
+    /// waits for at most one turn of each other kind, so neither a short poll interval nor a
+    /// stream of commands starves the rest.
+    fn next_turn(
+        &mut self,
+        now: Instant,
+        core: &mut Core,
+    ) -> Option<(MbPurpose, MbRequest, Option<u8>)> {
+        for turn in self.last_turn.after() {
+            let next = match turn {
+                Turn::Status if now >= self.next_poll_at => {
+                    self.start_poll(now);
+                    self.poll_part()
+                }
+                Turn::Status => None,
+                Turn::Command => self.active_request(now, core),
+                Turn::Other => self.other_request(now, core),
+            };
+            if next.is_some() {
+                self.last_turn = turn;
+                return next;
+            }
         }
         None
     }
 
-    fn start_poll(&mut self, now: Instant) -> Option<(MbPurpose, MbRequest, Option<u8>)> {
+    fn start_poll(&mut self, now: Instant) {
         self.poll.start();
         self.poll_started = now;
-        self.polled_last = true;
+    }
+
+    fn poll_part(&self) -> Option<(MbPurpose, MbRequest, Option<u8>)> {
         self.poll
             .request()
             .map(|(request, part)| (MbPurpose::Poll(part), request, None))
