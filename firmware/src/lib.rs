@@ -1,7 +1,7 @@
 //! The bridge's behaviour, free of any HAL: built and tested on the host.
 //!
 //! Every piece is a sans-IO state machine that takes `now` and events and returns actions, so
-//! the board glue (src/bin) and the host simulators drive exactly the same code.
+//! the board layers (firmware/boards/) and the host simulators drive exactly the same code.
 //!
 //! - [`bridge`]: the façade the board and the host harness drive: link, CNC session and
 //!   settings behind one sans-IO object.
@@ -12,6 +12,8 @@
 //!   independent [`io::SafetyMonitor`] used by every scenario test.
 //! - [`safe_state`], [`watchdog`], [`storage`]: the board's reset/panic policy, task-progress
 //!   watchdog feeding and power-cut-safe settings storage, as logic.
+//! - [`pins`]: the board's pin map, the one table every board layer and the QEMU harness
+//!   read.
 //! - [`inputs`], [`discrete`]: input polarity and debounce in front of [`io::Interlocks`],
 //!   as the board's I/O task runs them.
 //! - [`runner`], [`supervisor`]: the async loops around the link and the bridge, over any
@@ -68,6 +70,7 @@ pub mod discrete;
 pub mod inputs;
 pub mod io;
 pub mod link;
+pub mod pins;
 pub mod runner;
 pub mod safe_state;
 pub mod session;

@@ -20,54 +20,11 @@
 //! assert_eq!(report.cause.as_str(), "panic");
 //! ```
 
-/// An output of the bridge (the pin map is in docs/board.md; the lib only knows the signals).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub enum Output {
-    /// Plasma start to the power supply.
-    Start,
-    /// HPR/MaxPro200 hold ignition.
-    PsHold,
-    /// HPR pierce complete.
-    PsPierceComplete,
-    /// HPR corner current.
-    PsCornerCurrent,
-    /// Arc OK (transfer) to the CNC.
-    CncArcOk,
-    /// Bridge and power supply ready, to the CNC.
-    CncReady,
-    /// Fault to the CNC.
-    CncFault,
-}
+/// The outputs are the I/O's; where each one is: [`crate::pins`].
+pub use crate::io::Output;
 
-impl Output {
-    /// Every output, START first.
-    pub const ALL: [Output; 7] = [
-        Output::Start,
-        Output::PsHold,
-        Output::PsPierceComplete,
-        Output::PsCornerCurrent,
-        Output::CncArcOk,
-        Output::CncReady,
-        Output::CncFault,
-    ];
-
-    const fn bit(self) -> u8 {
-        1 << self as u8
-    }
-
-    /// The signal's name as docs/board.md writes it.
-    pub const fn name(self) -> &'static str {
-        match self {
-            Output::Start => "START",
-            Output::PsHold => "PS_HOLD",
-            Output::PsPierceComplete => "PS_PIERCE_COMPLETE",
-            Output::PsCornerCurrent => "PS_CORNER_CURRENT",
-            Output::CncArcOk => "ARC_OK",
-            Output::CncReady => "READY",
-            Output::CncFault => "FAULT",
-        }
-    }
+const fn bit(output: Output) -> u8 {
+    1 << output as u8
 }
 
 /// A set of outputs that are on (asserted); every other output is off.
@@ -82,18 +39,18 @@ impl OutputSet {
     /// This set with `output` on.
     #[must_use]
     pub const fn with(self, output: Output) -> Self {
-        OutputSet(self.0 | output.bit())
+        OutputSet(self.0 | bit(output))
     }
 
     /// This set with `output` off.
     #[must_use]
     pub const fn without(self, output: Output) -> Self {
-        OutputSet(self.0 & !output.bit())
+        OutputSet(self.0 & !bit(output))
     }
 
     /// Whether `output` is on.
     pub const fn is_on(self, output: Output) -> bool {
-        self.0 & output.bit() != 0
+        self.0 & bit(output) != 0
     }
 
     /// The level each output should have, in [`Output::ALL`] order.
@@ -382,7 +339,7 @@ mod tests {
     #[test]
     fn safe_state_has_every_output_off() {
         for (output, on) in SAFE_OUTPUTS.levels() {
-            assert!(!on, "{} on in safe state", output.name());
+            assert!(!on, "{} on in safe state", output.as_str());
         }
         assert_eq!(SAFE_OUTPUTS.levels().count(), Output::ALL.len());
         assert_eq!(Output::ALL[0], Output::Start);
@@ -390,12 +347,12 @@ mod tests {
 
     #[test]
     fn output_set_tracks_each_output_separately() {
-        let set = OutputSet::NONE.with(Output::Start).with(Output::CncReady);
-        assert!(set.is_on(Output::Start) && set.is_on(Output::CncReady));
-        assert!(!set.is_on(Output::CncFault));
+        let set = OutputSet::NONE.with(Output::Start).with(Output::Ready);
+        assert!(set.is_on(Output::Start) && set.is_on(Output::Ready));
+        assert!(!set.is_on(Output::Fault));
         let set = set.without(Output::Start);
-        assert!(!set.is_on(Output::Start) && set.is_on(Output::CncReady));
-        let names: Vec<&str> = Output::ALL.iter().map(|o| o.name()).collect();
+        assert!(!set.is_on(Output::Start) && set.is_on(Output::Ready));
+        let names: Vec<&str> = Output::ALL.iter().map(|o| o.as_str()).collect();
         let mut unique = names.clone();
         unique.sort();
         unique.dedup();

@@ -5,11 +5,9 @@
 //!   and the safety monitor checked after every step.
 //! - [`emu`]: the firmware image itself on an emulated board (QEMU), with a simulated unit on
 //!   its PS port in real time, for end-to-end tests and `pbtool emu`.
-//! - [`console`]: `pbtool sim`, the bridge against a simulated unit with the CNC protocol on
-//!   stdin/stdout.
+//!
+//! pbtool (host-tests/pbtool) builds its consoles on both.
 #![warn(missing_docs)]
 
-pub mod console;
-pub mod decode;
 pub mod emu;
 pub mod harness;

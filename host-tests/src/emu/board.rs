@@ -155,7 +155,7 @@ impl Board {
         let epoch = Instant::now();
         for input in Input::ALL {
             let active = options.active_at_power_up.contains(&input);
-            let mark = qtest.set_pin(input_pin(input), input_level(active))?;
+            let mark = qtest.set_pin(input_pin(input), input_level(input, active))?;
             driven.push(Driven {
                 mark,
                 at: epoch,
@@ -164,7 +164,10 @@ impl Board {
             });
         }
         qtest.intercept_outputs(WATCHED_PORT)?;
-        let start_at_power_up = output_active(qtest.output_level(output_pin(Output::Start))?);
+        let start_at_power_up = output_active(
+            Output::Start,
+            qtest.output_level(output_pin(Output::Start))?,
+        );
 
         let (on_motion, output_edges) = match options.wiring {
             Wiring::Unit => {
@@ -172,7 +175,7 @@ impl Board {
                 let motion = input_pin(Input::Motion);
                 let on_motion: Box<dyn FnMut(bool) + Send> = Box::new(move |on| {
                     // An error means QEMU is gone: the board is being dropped.
-                    let _ = for_motion.set_pin(motion, input_level(on));
+                    let _ = for_motion.set_pin(motion, input_level(Input::Motion, on));
                 });
                 (Some(on_motion), Some(qtest.subscribe()))
             }
@@ -255,7 +258,9 @@ impl Board {
 
     /// Drives an input signal (`active` = the opto-coupler conducts: the pin is low).
     pub fn set_input(&self, input: Input, active: bool) -> Result<()> {
-        let mark = self.qtest.set_pin(input_pin(input), input_level(active))?;
+        let mark = self
+            .qtest
+            .set_pin(input_pin(input), input_level(input, active))?;
         lock(&self.driven).push(Driven {
             mark,
             at: Instant::now(),
@@ -267,7 +272,10 @@ impl Board {
 
     /// An output signal now.
     pub fn output(&self, output: Output) -> Result<bool> {
-        Ok(output_active(self.qtest.output_level(output_pin(output))?))
+        Ok(output_active(
+            output,
+            self.qtest.output_level(output_pin(output))?,
+        ))
     }
 
     /// Waits until `output` is `on`; returns how long that took.
@@ -334,7 +342,7 @@ impl Board {
             .edges()
             .into_iter()
             .filter(|e| e.pin == pin)
-            .map(|e| (e.at, output_active(e.high)))
+            .map(|e| (e.at, output_active(output, e.high)))
             .collect()
     }
 
@@ -390,7 +398,7 @@ impl Board {
             if edge.pin == start {
                 observed.push(Observed::Start {
                     at: edge.at,
-                    on: output_active(edge.high),
+                    on: output_active(Output::Start, edge.high),
                 });
             }
         }

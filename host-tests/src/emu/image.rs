@@ -1,5 +1,7 @@
-//! The emulated board's firmware image: built once per process with `cargo emu-fw` (the
-//! workspace alias for the `plasma-bridge-emu` binary), wherever the caller runs from.
+//! The emulated board's firmware image: built once per process with `cargo emu-fw`, wherever
+//! the caller runs from. The alias builds the `plasma-bridge-emu` binary through
+//! firmware/image, with the build machine's paths remapped, so the tests run the very bytes a
+//! build by hand gives.
 //!
 //! Cargo is asked for the artifact's path (`--message-format=json`), so `CARGO_TARGET_DIR`
 //! and the workspace's settings apply exactly as for a build by hand. `PLASMA_EMU_ELF` names

@@ -14,9 +14,9 @@
 //! - [`image`]: builds the image (`cargo emu-fw`) once per process.
 //! - [`board`]: all of it as one [`Board`], with the safety rules of [`safety`] checked on
 //!   what it observed.
-//! - [`console`]: `pbtool emu`, the CNC port on stdin/stdout.
-//! - [`measure`]: the `emu-probe` figures (instructions from a TORCH_ON edge to START, idle
-//!   time) under QEMU's instruction counting.
+//!
+//! `pbtool emu` (crate pbtool) is its console, with the CNC port on stdin/stdout, and its
+//! measurements under QEMU's instruction counting (`--measure`).
 //!
 //! ```no_run
 //! use std::time::Duration;
@@ -34,11 +34,9 @@
 
 pub mod board;
 pub mod cnc;
-pub mod console;
 pub mod error;
 pub mod image;
 pub mod log;
-pub mod measure;
 pub mod pins;
 pub mod qemu;
 pub mod qmp;

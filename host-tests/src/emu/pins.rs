@@ -1,25 +1,23 @@
-//! The emulated board's pin map (docs/board.md, the same as the Nucleo-L476RG board): which
-//! GPIO port and pin carries each discrete signal, and how QEMU names and maps them.
-//!
-//! Inputs are active LOW with pull-ups (an opto-coupler pulls the pin down when the signal is
-//! on); outputs are active HIGH.
+//! The emulated board's pins as QEMU sees them. Where each signal is and which level is active
+//! come from the firmware's one pin table (`plasma_firmware::pins`, docs/board.md); this module
+//! adds only what is QEMU's: the ports' QOM paths and the data registers the harness reads.
 
 use plasma_firmware::io::{Input, Output};
+pub use plasma_firmware::pins::{Pin, Port};
+use plasma_firmware::pins::{input, output};
 
-/// A GPIO port of the STM32L475 that the board uses.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub enum Port {
-    /// GPIOA.
-    A,
-    /// GPIOB.
-    B,
-    /// GPIOC.
-    C,
+/// What the harness needs of a GPIO port under QEMU.
+pub trait QemuPort {
+    /// The port's QOM path, as qtest's `set_irq_in` and `irq_intercept_out` name it.
+    fn qom_path(self) -> &'static str;
+    /// Address of the port's output data register (ODR, offset 0x14).
+    fn odr_address(self) -> u64;
+    /// Address of the port's input data register (IDR, offset 0x10).
+    fn idr_address(self) -> u64;
 }
 
-impl Port {
-    /// The port's QOM path, as qtest's `set_irq_in` and `irq_intercept_out` name it.
-    pub const fn qom_path(self) -> &'static str {
+impl QemuPort for Port {
+    fn qom_path(self) -> &'static str {
         match self {
             Port::A => "/machine/soc/gpioa",
             Port::B => "/machine/soc/gpiob",
@@ -27,93 +25,33 @@ impl Port {
         }
     }
 
-    /// Address of the port's output data register (ODR, offset 0x14).
-    pub const fn odr_address(self) -> u64 {
-        self.base() + 0x14
+    fn odr_address(self) -> u64 {
+        u64::from(self.register_block()) + 0x14
     }
 
-    /// Address of the port's input data register (IDR, offset 0x10).
-    pub const fn idr_address(self) -> u64 {
-        self.base() + 0x10
-    }
-
-    const fn base(self) -> u64 {
-        match self {
-            Port::A => 0x4800_0000,
-            Port::B => 0x4800_0400,
-            Port::C => 0x4800_0800,
-        }
-    }
-}
-
-/// A pin: port and number (0-15).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub struct Pin {
-    /// The port.
-    pub port: Port,
-    /// The pin number within the port.
-    pub number: u8,
-}
-
-impl Pin {
-    const fn new(port: Port, number: u8) -> Pin {
-        Pin { port, number }
-    }
-
-    /// This pin's bit in a port register.
-    pub const fn mask(self) -> u32 {
-        1 << self.number
-    }
-}
-
-impl core::fmt::Display for Pin {
-    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        let port = match self.port {
-            Port::A => 'A',
-            Port::B => 'B',
-            Port::C => 'C',
-        };
-        write!(f, "P{port}{}", self.number)
+    fn idr_address(self) -> u64 {
+        u64::from(self.register_block()) + 0x10
     }
 }
 
 /// The pin of a discrete input.
-pub const fn input_pin(input: Input) -> Pin {
-    match input {
-        Input::TorchOn => Pin::new(Port::A, 0),
-        Input::Motion => Pin::new(Port::A, 1),
-        Input::Hold => Pin::new(Port::A, 4),
-        Input::PierceComplete => Pin::new(Port::A, 6),
-        Input::CornerCurrent => Pin::new(Port::A, 7),
-        Input::NotReady => Pin::new(Port::A, 8),
-        Input::RampdownError => Pin::new(Port::B, 10),
-    }
+pub const fn input_pin(signal: Input) -> Pin {
+    input(signal).pin
 }
 
 /// The pin of a discrete output.
-pub const fn output_pin(output: Output) -> Pin {
-    match output {
-        Output::Start => Pin::new(Port::B, 0),
-        Output::Hold => Pin::new(Port::C, 1),
-        Output::PierceComplete => Pin::new(Port::C, 0),
-        Output::CornerCurrent => Pin::new(Port::B, 8),
-        Output::ArcOk => Pin::new(Port::B, 9),
-        Output::Ready => Pin::new(Port::B, 6),
-        Output::Fault => Pin::new(Port::C, 7),
-    }
+pub const fn output_pin(signal: Output) -> Pin {
+    output(signal).pin
 }
 
-/// The green heartbeat LED (LD2).
-pub const HEARTBEAT_LED: Pin = Pin::new(Port::A, 5);
-
-/// The level to drive on an input pin for a signal that is `active` (inputs are active low).
-pub const fn input_level(active: bool) -> bool {
-    !active
+/// The level to drive on `signal`'s pin for it to be `active`.
+pub const fn input_level(signal: Input, active: bool) -> bool {
+    input(signal).level(active)
 }
 
-/// The signal read back from an output pin's level (outputs are active high).
-pub const fn output_active(level: bool) -> bool {
-    level
+/// Whether `signal` is active at pin level `high`.
+pub const fn output_active(signal: Output, high: bool) -> bool {
+    output(signal).is_on(high)
 }
 
 /// The port whose output edges the harness streams with qtest's `irq_intercept_out`: START,
@@ -133,25 +71,19 @@ mod tests {
     use super::*;
 
     #[test]
-    fn pins_match_the_board_map() {
-        assert_eq!(input_pin(Input::TorchOn).to_string(), "PA0");
-        assert_eq!(input_pin(Input::RampdownError).to_string(), "PB10");
-        assert_eq!(output_pin(Output::Start).to_string(), "PB0");
-        assert_eq!(output_pin(Output::Fault).to_string(), "PC7");
+    fn the_registers_are_the_ports() {
         assert_eq!(Port::B.odr_address(), 0x4800_0414);
         assert_eq!(Port::C.odr_address(), 0x4800_0814);
-        assert_eq!(output_pin(Output::ArcOk).mask(), 1 << 9);
+        assert_eq!(Port::A.idr_address(), 0x4800_0010);
+        assert_eq!(Port::B.qom_path(), "/machine/soc/gpiob");
     }
 
     #[test]
-    fn no_two_signals_share_a_pin() {
-        let mut pins: Vec<Pin> = Input::ALL.into_iter().map(input_pin).collect();
-        pins.extend(Output::ALL.into_iter().map(output_pin));
-        pins.push(HEARTBEAT_LED);
-        let count = pins.len();
-        pins.sort_by_key(|p| (p.port as u8, p.number));
-        pins.dedup();
-        assert_eq!(pins.len(), count);
+    fn levels_follow_the_table() {
+        // Inputs active low, outputs active high (docs/board.md).
+        assert!(!input_level(Input::TorchOn, true));
+        assert!(input_level(Input::TorchOn, false));
+        assert!(output_active(Output::Start, true));
     }
 
     #[test]

@@ -15,7 +15,7 @@ use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 use super::error::{Error, Result};
-use super::pins::{Pin, Port};
+use super::pins::{Pin, Port, QemuPort};
 
 /// How long a command may wait for its reply (QEMU answers in microseconds; a loaded machine
 /// and a busy main loop can take far longer, but not this long).

@@ -427,7 +427,7 @@ impl Station {
             .collect();
         for high in changes {
             let now = self.now();
-            self.unit.set_start(now, output_active(high));
+            self.unit.set_start(now, output_active(Output::Start, high));
         }
     }
 

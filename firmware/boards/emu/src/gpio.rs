@@ -1,0 +1,234 @@
+//! The discrete pins by register: inputs with pull-ups on EXTI lines, push-pull outputs, the
+//! LED, all placed by the one pin table (`plasma_firmware::pins`, the Nucleo's). QEMU's GPIO,
+//! SYSCFG and EXTI models carry an edge driven from its qtest socket to the EXTI interrupt.
+
+use core::future::poll_fn;
+use core::sync::atomic::{AtomicBool, Ordering};
+use core::task::Poll;
+
+use cortex_m::peripheral::NVIC;
+use embassy_sync::waitqueue::AtomicWaker;
+use plasma_firmware::inputs::{InputConfig, PinLevels, Pull};
+use plasma_firmware::io::{self, Input, Outputs};
+use plasma_firmware::pins::{self, Pin, Port};
+use stm32_metapac::gpio::Gpio;
+use stm32_metapac::gpio::vals::{Idr, Moder, Pupdr};
+use stm32_metapac::{EXTI, GPIOA, GPIOB, GPIOC, Interrupt, SYSCFG, interrupt};
+
+use crate::probe;
+
+/// The register block of a port of the table.
+pub const fn gpio(port: Port) -> Gpio {
+    match port {
+        Port::A => GPIOA,
+        Port::B => GPIOB,
+        Port::C => GPIOC,
+    }
+}
+
+/// The EXTI line of TORCH_ON, whose edges the latency probe stamps.
+const TORCH_ON_LINE: usize = pins::input(Input::TorchOn).pin.number as usize;
+
+/// The interrupt of EXTI line `line`.
+const fn exti_irq(line: u8) -> Interrupt {
+    match line {
+        0 => Interrupt::EXTI0,
+        1 => Interrupt::EXTI1,
+        2 => Interrupt::EXTI2,
+        3 => Interrupt::EXTI3,
+        4 => Interrupt::EXTI4,
+        5..=9 => Interrupt::EXTI9_5,
+        _ => Interrupt::EXTI15_10,
+    }
+}
+
+/// The interrupts of the input lines; the handlers below exist for these only.
+const EXTI_IRQS: [Interrupt; 5] = [
+    Interrupt::EXTI0,
+    Interrupt::EXTI1,
+    Interrupt::EXTI4,
+    Interrupt::EXTI9_5,
+    Interrupt::EXTI15_10,
+];
+
+// Every input's line must raise one of the interrupts handled here.
+const _: () = {
+    let mut i = 0;
+    while i < Input::ALL.len() {
+        let irq = exti_irq(pins::input(Input::ALL[i]).pin.number) as u16;
+        let mut handled = false;
+        let mut j = 0;
+        while j < EXTI_IRQS.len() {
+            handled |= EXTI_IRQS[j] as u16 == irq;
+            j += 1;
+        }
+        assert!(
+            handled,
+            "an input's EXTI interrupt has no handler in gpio.rs"
+        );
+        i += 1;
+    }
+};
+
+/// The seven inputs, owned by the I/O task.
+pub struct InputPins(());
+
+/// An edge on some input since the I/O task last looked.
+static EDGE: AtomicBool = AtomicBool::new(false);
+static EDGE_WAKER: AtomicWaker = AtomicWaker::new();
+
+impl InputPins {
+    /// Inputs with the pull that reads inactive when open, both edges on their EXTI lines,
+    /// the EXTI interrupts at the highest priority (as on the Nucleo: they only wake the I/O
+    /// task).
+    pub fn new(config: &InputConfig) -> Self {
+        for input in Input::ALL {
+            let Pin { port, number } = pins::input(input).pin;
+            let (port_index, pin, port) = (port.index(), number as usize, gpio(port));
+            let pull = match config.get(input).polarity.pull() {
+                Pull::Up => Pupdr::PULL_UP,
+                Pull::Down => Pupdr::PULL_DOWN,
+            };
+            port.pupdr().modify(|w| w.set_pupdr(pin, pull));
+            port.moder().modify(|w| w.set_moder(pin, Moder::INPUT));
+            SYSCFG
+                .exticr(pin / 4)
+                .modify(|w| w.set_exti(pin % 4, port_index));
+            EXTI.rtsr(0).modify(|w| w.set_line(pin, true));
+            EXTI.ftsr(0).modify(|w| w.set_line(pin, true));
+            EXTI.imr(0).modify(|w| w.set_line(pin, true));
+        }
+        let mut nvic = unsafe { cortex_m::Peripherals::steal() }.NVIC;
+        for irq in EXTI_IRQS {
+            // SAFETY: the handlers below only touch atomics and the EXTI pending register.
+            unsafe {
+                nvic.set_priority(irq, 0);
+                NVIC::unmask(irq);
+            }
+        }
+        InputPins(())
+    }
+}
+
+impl plasma_tasks::board::InputPins for InputPins {
+    fn levels(&self) -> PinLevels {
+        Input::ALL
+            .iter()
+            .fold(PinLevels::ALL_LOW, |levels, &input| {
+                let pin = pins::input(input).pin;
+                let high = gpio(pin.port).idr().read().idr(pin.number as usize) == Idr::HIGH;
+                levels.with(input, high)
+            })
+    }
+
+    async fn any_edge(&mut self) {
+        poll_fn(|cx| {
+            EDGE_WAKER.register(cx.waker());
+            if EDGE.swap(false, Ordering::AcqRel) {
+                Poll::Ready(())
+            } else {
+                Poll::Pending
+            }
+        })
+        .await
+    }
+}
+
+/// Every input EXTI interrupt: clear what is pending, stamp TORCH_ON for the probe, wake the
+/// I/O task.
+fn on_exti() {
+    let pending = EXTI.pr(0).read();
+    // Write-1-to-clear, only the lines that were seen.
+    EXTI.pr(0).write_value(pending);
+    if pending.line(TORCH_ON_LINE) {
+        probe::torch_on_edge();
+    }
+    EDGE.store(true, Ordering::Release);
+    EDGE_WAKER.wake();
+}
+
+#[interrupt]
+fn EXTI0() {
+    on_exti();
+}
+
+#[interrupt]
+fn EXTI1() {
+    on_exti();
+}
+
+#[interrupt]
+fn EXTI4() {
+    on_exti();
+}
+
+#[interrupt]
+fn EXTI9_5() {
+    on_exti();
+}
+
+#[interrupt]
+fn EXTI15_10() {
+    on_exti();
+}
+
+/// Sets `pin` high or low in one write.
+fn set(pin: Pin, high: bool) {
+    let (port, pin) = (gpio(pin.port), pin.number as usize);
+    port.bsrr().write(|w| {
+        if high {
+            w.set_bs(pin, true)
+        } else {
+            w.set_br(pin, true)
+        }
+    });
+}
+
+/// The seven outputs, owned by the I/O task. `plasma_tasks::safe_state::drive_safe_state` made
+/// them outputs, all off, before anything else ran.
+pub struct OutputPins {
+    start: bool,
+}
+
+impl OutputPins {
+    /// The outputs as the safe state left them.
+    pub fn new() -> Self {
+        OutputPins { start: false }
+    }
+}
+
+impl plasma_tasks::board::OutputPins for OutputPins {
+    fn drive(&mut self, outputs: Outputs) {
+        for (output, wiring) in io::Output::ALL.into_iter().zip(pins::OUTPUTS) {
+            set(wiring.pin, wiring.level(outputs.get(output)));
+        }
+        if outputs.start != self.start {
+            self.start = outputs.start;
+            probe::start_changed(outputs.start);
+        }
+    }
+}
+
+/// The heartbeat LED (`plasma_firmware::pins::HEARTBEAT_LED`).
+pub struct Led {
+    on: bool,
+}
+
+impl Led {
+    /// The LED's pin, output, off.
+    pub fn new() -> Self {
+        let pin = pins::HEARTBEAT_LED.pin;
+        set(pin, pins::HEARTBEAT_LED.level(false));
+        gpio(pin.port)
+            .moder()
+            .modify(|w| w.set_moder(pin.number as usize, Moder::OUTPUT));
+        Led { on: false }
+    }
+}
+
+impl plasma_tasks::board::Led for Led {
+    fn toggle(&mut self) {
+        self.on = !self.on;
+        set(pins::HEARTBEAT_LED.pin, pins::HEARTBEAT_LED.level(self.on));
+    }
+}

@@ -1,0 +1,242 @@
+//! The board image for the emulated board: QEMU's `b-l475e-iot01a` (STM32L475VG, the same
+//! family, flash and RAM as the Nucleo's STM32L476RG). `cargo emu-fw` builds it; `cargo emu`
+//! (`pbtool emu`) runs it with a simulated power supply; the end-to-end tests in
+//! host-tests/tests/emu_*.rs drive it.
+//!
+//! The tasks are the Nucleo image's, unchanged (the `plasma-tasks` crate, over the
+//! [`board::Emulated`] implementation of its `Board` trait), over the same bridge library and
+//! the same pin table. Only this board layer differs, because QEMU models too little for
+//! embassy-stm32 (no PWR, FLASH, DMA, timers or watchdog; see docs/board.md):
+//!
+//! - [`rcc`]: clocks by register (80 MHz, as on the Nucleo);
+//! - [`time_driver`]: embassy-time on SysTick;
+//! - [`gpio`]: the pins of the one pin table, EXTI inputs and outputs by register;
+//! - [`usart`]: USART1 (power supply, hardware DE) and USART2 (CNC) by register;
+//! - [`flash`]: the settings store on a RAM model of the flash;
+//! - [`watchdog`]: the progress check of the Nucleo, with a software reset for the IWDG;
+//! - [`executor`]: the thread executor with sleep accounting, and [`probe`]: the latency
+//!   and idle measurements;
+//! - [`fault`]: panic and HardFault leave every output off and reset;
+//! - logs: defmt over semihosting (`defmt-semihosting`), for QEMU's
+//!   `-semihosting-config enable=on,target=native`.
+#![cfg_attr(target_os = "none", no_std)]
+#![cfg_attr(target_os = "none", no_main)]
+
+#[cfg(not(target_os = "none"))]
+fn main() {
+    eprintln!(
+        "plasma-bridge-emu is firmware for QEMU's b-l475e-iot01a: build it with `cargo emu-fw`."
+    );
+}
+
+#[cfg(target_os = "none")]
+mod board;
+#[cfg(target_os = "none")]
+mod executor;
+#[cfg(target_os = "none")]
+mod fault;
+#[cfg(target_os = "none")]
+mod flash;
+#[cfg(target_os = "none")]
+mod gpio;
+#[cfg(target_os = "none")]
+mod probe;
+#[cfg(target_os = "none")]
+mod rcc;
+#[cfg(target_os = "none")]
+mod time_driver;
+#[cfg(target_os = "none")]
+mod usart;
+#[cfg(target_os = "none")]
+mod watchdog;
+
+#[cfg(target_os = "none")]
+mod image {
+    use cortex_m::peripheral::NVIC;
+    use defmt::{info, warn};
+    use defmt_semihosting as _;
+    use embassy_executor::{InterruptExecutor, Spawner};
+    use plasma_firmware::bridge::Bridge;
+    use plasma_firmware::inputs::InputConfig;
+    use plasma_firmware::pins::{CNC_UART, PS_UART};
+    use plasma_firmware::safe_state::BootReport;
+    use plasma_protocol::serial::PortConfig;
+    use plasma_protocol::time::Duration;
+    use plasma_tasks::boot::boot_text;
+    use plasma_tasks::clock::now;
+    use plasma_tasks::io::BoardIo;
+    use plasma_tasks::progress::register;
+    use plasma_tasks::reset;
+    use plasma_tasks::safe_state::drive_safe_state;
+    use plasma_tasks::settings as shared_settings;
+    use static_cell::StaticCell;
+    use stm32_metapac::gpio::vals::Moder;
+    use stm32_metapac::{Interrupt, USART1, USART2, interrupt};
+
+    use crate::board::{Emulated, bridge_task, heartbeat_task, io_task, settings_task};
+    use crate::flash::{SETTINGS_SIZE, SettingsFlash};
+    use crate::gpio::{InputPins, Led, OutputPins, gpio};
+    use crate::usart::{Uart, UartState, on_interrupt};
+    use crate::{executor, probe, rcc, time_driver, watchdog};
+
+    /// NVIC priorities as on the Nucleo (4 bits, upper nibble): EXTI and SysTick 0, the I/O
+    /// executor 1, the USARTs 4. The watchdog's executor stands in for the IWDG, which no
+    /// task can block: 0, above every task.
+    const WATCHDOG_PRIORITY: u8 = 0;
+    const IO_EXECUTOR_PRIORITY: u8 = 1 << 4;
+    const SERIAL_PRIORITY: u8 = 4 << 4;
+
+    static PS_STATE: UartState = UartState::new();
+    static CNC_STATE: UartState = UartState::new();
+
+    #[interrupt]
+    fn USART1() {
+        on_interrupt(USART1, &PS_STATE);
+    }
+
+    #[interrupt]
+    fn USART2() {
+        on_interrupt(USART2, &CNC_STATE);
+    }
+
+    /// The I/O task's executor, on the UART4 interrupt as on the Nucleo.
+    static IO_EXECUTOR: InterruptExecutor = InterruptExecutor::new();
+
+    #[interrupt]
+    fn UART4() {
+        // SAFETY: called from its own interrupt only, after it was started below.
+        unsafe { IO_EXECUTOR.on_interrupt() }
+    }
+
+    /// The watchdog task's executor, on the unused USART3 vector (see [`watchdog`]).
+    static WATCHDOG_EXECUTOR: InterruptExecutor = InterruptExecutor::new();
+
+    #[interrupt]
+    fn USART3() {
+        // SAFETY: called from its own interrupt only, after it was started below.
+        unsafe { WATCHDOG_EXECUTOR.on_interrupt() }
+    }
+
+    static BRIDGE: StaticCell<Bridge> = StaticCell::new();
+
+    /// The UARTs' pins (the pin table's, as wired on the Nucleo) to AF7; QEMU routes the
+    /// USARTs to its sockets whatever the pins say.
+    fn route_uart_pins() {
+        for pin in PS_UART.pins().chain(CNC_UART.pins()) {
+            let (port, n) = (gpio(pin.port), pin.number as usize);
+            port.afr(n / 8).modify(|w| w.set_afr(n % 8, 7));
+            port.moder().modify(|w| w.set_moder(n, Moder::ALTERNATE));
+        }
+    }
+
+    /// A UART with fixed, valid settings; `None` only for a baud rate BRR cannot make, a
+    /// build mistake: panic = safe state.
+    fn uart(built: Option<Uart>) -> Uart {
+        match built {
+            Some(uart) => uart,
+            None => defmt::panic!("UART set-up: baud rate out of range"),
+        }
+    }
+
+    #[cortex_m_rt::entry]
+    fn main() -> ! {
+        // Before clocks, before anything that could fail: START and every other output off.
+        drive_safe_state();
+        let boot = reset::boot_report();
+        rcc::init();
+        let mut core = cortex_m::Peripherals::take()
+            .unwrap_or_else(|| defmt::panic!("core peripherals taken"));
+        time_driver::init(core.SYST, &mut core.SCB);
+
+        info!(
+            "plasma-bridge {=str} on the emulated STM32L475VG at 80 MHz; reset: {=str}",
+            env!("CARGO_PKG_VERSION"),
+            boot.cause.as_str()
+        );
+        if boot.is_fault() {
+            warn!(
+                "the previous run ended in a fault: {=str}",
+                boot.cause.as_str()
+            );
+        }
+
+        executor::run(
+            |spawner| start(spawner, boot, &mut core.NVIC),
+            probe::report,
+        )
+    }
+
+    /// Everything after the clocks, in the thread executor (the settings load is async).
+    fn start(spawner: Spawner, boot: BootReport, nvic: &mut NVIC) {
+        // SAFETY: priorities are set before the interrupts are unmasked; no priority-based
+        // critical sections exist in this image.
+        unsafe {
+            nvic.set_priority(Interrupt::USART3, WATCHDOG_PRIORITY);
+            nvic.set_priority(Interrupt::UART4, IO_EXECUTOR_PRIORITY);
+            nvic.set_priority(Interrupt::USART1, SERIAL_PRIORITY);
+            nvic.set_priority(Interrupt::USART2, SERIAL_PRIORITY);
+        }
+        spawner.spawn(boot_task(spawner, boot).unwrap());
+    }
+
+    #[embassy_executor::task]
+    async fn boot_task(spawner: Spawner, boot: BootReport) {
+        let mut store =
+            shared_settings::open::<Emulated>(SettingsFlash::new(), 0..SETTINGS_SIZE as u32);
+        let loaded = shared_settings::load::<Emulated>(store.as_mut()).await;
+        let settings = loaded.settings;
+        let input_config = InputConfig::default();
+
+        let inputs = InputPins::new(&input_config);
+        let outputs = OutputPins::new();
+        let io_progress = register("io", Duration::from_millis(200));
+        let io_spawner = IO_EXECUTOR.start(Interrupt::UART4);
+        io_spawner
+            .spawn(io_task(inputs, outputs, (settings.io, input_config), io_progress).unwrap());
+
+        route_uart_pins();
+        let ps_uart = uart(Uart::new(
+            USART1,
+            &PS_STATE,
+            settings.link.modbus_port(),
+            true,
+        ));
+        let cnc_uart = uart(Uart::new(
+            USART2,
+            &CNC_STATE,
+            PortConfig {
+                baud: 115_200,
+                parity: plasma_protocol::serial::Parity::None,
+                stop_bits: plasma_protocol::serial::StopBits::One,
+            },
+            false,
+        ));
+        // SAFETY: the handlers touch only their own UartState.
+        unsafe {
+            NVIC::unmask(Interrupt::USART1);
+            NVIC::unmask(Interrupt::USART2);
+        }
+
+        let bridge = BRIDGE.init_with(|| Bridge::new(settings, now()));
+        bridge.set_boot_report(now(), boot_text(&boot, loaded.outcome));
+        spawner.spawn(
+            bridge_task(
+                bridge,
+                ps_uart,
+                cnc_uart,
+                BoardIo {
+                    inputs: input_config,
+                },
+                register("bridge", Duration::from_millis(500)),
+            )
+            .unwrap(),
+        );
+        spawner.spawn(settings_task(store, register("settings", Duration::from_secs(1))).unwrap());
+        spawner.spawn(
+            heartbeat_task(Led::new(), register("heartbeat", Duration::from_secs(1))).unwrap(),
+        );
+        WATCHDOG_EXECUTOR
+            .start(Interrupt::USART3)
+            .spawn(watchdog::watchdog().unwrap());
+    }
+}

@@ -1,0 +1,71 @@
+//! What the shared tasks take from this board ([`plasma_tasks::Board`]), and the tasks
+//! themselves: `#[embassy_executor::task]` functions cannot be generic, so each is a thin
+//! wrapper with this board's types that returns the shared body's future. Not an `async fn`
+//! around `.await`: that future would keep the arguments twice (its own and the body's).
+
+use core::future::Future;
+use embassy_stm32::flash::{Async, Flash};
+
+use plasma_firmware::bridge::Bridge;
+use plasma_firmware::inputs::InputConfig;
+use plasma_firmware::io::IoConfig;
+use plasma_firmware::watchdog::TaskId;
+use plasma_tasks::Board;
+use plasma_tasks::io::BoardIo;
+use plasma_tasks::settings::Store;
+
+use crate::cnc_uart::{self, CncUart};
+use crate::pins::{InputPins, Led, OutputPins};
+use crate::ps_uart::PsUart;
+
+/// The Nucleo-L476RG.
+pub struct Nucleo;
+
+impl Board for Nucleo {
+    type InputPins = InputPins;
+    type OutputPins = OutputPins;
+    type Led = Led;
+    type PsUart = PsUart;
+    type CncUart = CncUart;
+    const CNC_TX_BUFFER: usize = cnc_uart::TX_BUFFER;
+    type SettingsFlash = Flash<'static, Async>;
+
+    fn flash_errors_seen() -> u32 {
+        crate::flash::flash_errors_seen()
+    }
+}
+
+/// The I/O task ([`plasma_tasks::io::run`]).
+#[embassy_executor::task]
+pub fn io_task(
+    inputs: InputPins,
+    outputs: OutputPins,
+    config: (IoConfig, InputConfig),
+    progress: TaskId,
+) -> impl Future<Output = ()> {
+    plasma_tasks::io::run(inputs, outputs, config, progress)
+}
+
+/// The bridge task ([`plasma_tasks::bridge::run`]).
+#[embassy_executor::task]
+pub fn bridge_task(
+    bridge: &'static mut Bridge,
+    ps: PsUart,
+    cnc: CncUart,
+    io: BoardIo,
+    progress: TaskId,
+) -> impl Future<Output = ()> {
+    plasma_tasks::bridge::run::<Nucleo>(bridge, ps, cnc, io, progress)
+}
+
+/// The settings task ([`plasma_tasks::settings::run`]).
+#[embassy_executor::task]
+pub fn settings_task(store: Option<Store<Nucleo>>, progress: TaskId) -> impl Future<Output = ()> {
+    plasma_tasks::settings::run::<Nucleo>(store, progress)
+}
+
+/// The heartbeat task ([`plasma_tasks::progress::heartbeat`]).
+#[embassy_executor::task]
+pub fn heartbeat_task(led: Led, progress: TaskId) -> impl Future<Output = ()> {
+    plasma_tasks::progress::heartbeat(led, progress)
+}

@@ -1,0 +1,79 @@
+//! Panic, HardFault and NMI: outputs to safe state first, a marker that survives the reset
+//! (`plasma_tasks::reset`, which reads it back at boot), a log line, reset.
+
+use core::sync::atomic::{AtomicU32, Ordering};
+
+use cortex_m_rt::{ExceptionFrame, exception};
+use defmt::error;
+use embassy_stm32::pac;
+
+use plasma_tasks::reset::mark_panic;
+use plasma_tasks::safe_state::drive_safe_state;
+
+use crate::flash::{FLASH_BANK2, FLASH_BASE, settings_region};
+
+/// Safe state, marker, log, reset.
+fn fail(reason: impl FnOnce()) -> ! {
+    cortex_m::interrupt::disable();
+    drive_safe_state();
+    mark_panic();
+    reason();
+    // Give a probe ~50 ms to drain the RTT buffer; the outputs are already safe.
+    cortex_m::asm::delay(4_000_000);
+    cortex_m::peripheral::SCB::sys_reset()
+}
+
+/// The outcome is the same in every build: safe state, marker (`!BOOT reason=panic`), reset.
+/// Only the log line differs: the message and location of a panic cost ~5 KB of flash (the
+/// file path and line of every panic site and the formatting behind the messages), so the
+/// standard image logs the bare fact and a debugging build (`cargo fw --features
+/// panic-message`) says where and why.
+#[panic_handler]
+fn panic(info: &core::panic::PanicInfo) -> ! {
+    #[cfg(feature = "panic-message")]
+    fail(|| error!("panic: {}", defmt::Display2Format(info)));
+    #[cfg(not(feature = "panic-message"))]
+    {
+        // Unread, the PanicInfo and everything that builds it are left out of the image.
+        let _ = info;
+        fail(|| error!("panic (cargo fw --features panic-message logs where and why)"))
+    }
+}
+
+#[exception]
+unsafe fn HardFault(frame: &ExceptionFrame) -> ! {
+    let pc = frame.pc();
+    fail(|| error!("hard fault at pc {=u32:#010x}", pc))
+}
+
+/// Double ECC errors seen in the settings region (a program cut by a power loss can leave
+/// one), for the log.
+pub static SETTINGS_ECC_ERRORS: AtomicU32 = AtomicU32::new(0);
+
+/// The L4 raises an NMI when a flash read hits a double ECC error. In the settings region
+/// that is the trace of a torn write: clear it and return; the load completes with bad data,
+/// which the store's CRCs reject. Anywhere else the program itself is damaged.
+///
+/// An NMI can interrupt a critical section, so this handler touches only an atomic and the
+/// FLASH registers; the failure path ignores that rule because it resets.
+#[exception]
+unsafe fn NonMaskableInt() {
+    let eccr = pac::FLASH.eccr().read();
+    if eccr.eccd() {
+        let bank_base = if eccr.bk_ecc() {
+            FLASH_BANK2
+        } else {
+            FLASH_BASE
+        };
+        let address = bank_base + eccr.addr_ecc();
+        // ECCD is write-1-to-clear.
+        pac::FLASH.eccr().modify(|w| w.set_eccd(true));
+        let settings = settings_region();
+        if (settings.start + FLASH_BASE..settings.end + FLASH_BASE).contains(&address) {
+            SETTINGS_ECC_ERRORS.fetch_add(1, Ordering::Relaxed);
+            return;
+        }
+        fail(|| error!("double ECC error in flash at {=u32:#010x}", address))
+    }
+    fail(|| error!("NMI"))
+}

@@ -1,0 +1,340 @@
+//! The reference board's pin map (docs/board.md): where every discrete signal and the heartbeat
+//! LED is, and which level is active. This is the one table: the Nucleo's HAL set-up, the
+//! register-level safe state of the panic and fault path, the emulated board's GPIO set-up and
+//! the QEMU harness all read it, so a signal moved here moves everywhere.
+//!
+//! ```
+//! use plasma_firmware::io::Output;
+//! use plasma_firmware::pins::{Port, output};
+//!
+//! let start = output(Output::Start);
+//! assert_eq!((start.pin.port, start.pin.number), (Port::B, 0));
+//! assert!(start.level(true), "outputs are active high");
+//! ```
+
+use core::fmt;
+
+use crate::inputs::Polarity;
+use crate::io::{Input, Output};
+use crate::safe_state::SAFE_OUTPUTS;
+
+/// A GPIO port the board uses. The STM32L476RG and the emulated STM32L475VG have the same
+/// ports at the same addresses.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Port {
+    /// GPIOA.
+    A,
+    /// GPIOB.
+    B,
+    /// GPIOC.
+    C,
+}
+
+impl Port {
+    /// The port's index: A = 0. It is the port's number in SYSCFG_EXTICR and in
+    /// embassy-stm32's pin numbering, and its clock-enable bit in RCC_AHB2ENR.
+    pub const fn index(self) -> u8 {
+        self as u8
+    }
+
+    /// The address of the port's register block (RM0351 memory map: AHB2, 0x400 apart).
+    pub const fn register_block(self) -> u32 {
+        0x4800_0000 + 0x400 * self.index() as u32
+    }
+
+    const fn letter(self) -> char {
+        match self {
+            Port::A => 'A',
+            Port::B => 'B',
+            Port::C => 'C',
+        }
+    }
+}
+
+/// A pin: port and number (0-15). The number is also the pin's EXTI line.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Pin {
+    /// The port.
+    pub port: Port,
+    /// The pin number within the port.
+    pub number: u8,
+}
+
+impl Pin {
+    const fn new(port: Port, number: u8) -> Pin {
+        Pin { port, number }
+    }
+
+    /// This pin's bit in a port register (IDR, ODR).
+    pub const fn mask(self) -> u32 {
+        1 << self.number
+    }
+
+    /// Whether this is pin `number` of `port` (for compile-time checks: `==` is not const).
+    pub const fn is(self, port: Port, number: u8) -> bool {
+        self.port as u8 == port as u8 && self.number == number
+    }
+
+    /// `port index × 16 + number`, the numbering of embassy-stm32's `AnyPin::steal`.
+    pub const fn port_pin(self) -> u8 {
+        self.port.index() * 16 + self.number
+    }
+}
+
+impl fmt::Display for Pin {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "P{}{}", self.port.letter(), self.number)
+    }
+}
+
+/// A signal's pin and which of its levels means "on".
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Wiring {
+    /// Where the signal is.
+    pub pin: Pin,
+    /// Which pin level is active.
+    pub active: Polarity,
+}
+
+impl Wiring {
+    const fn new(port: Port, number: u8, active: Polarity) -> Wiring {
+        Wiring {
+            pin: Pin::new(port, number),
+            active,
+        }
+    }
+
+    /// The pin level (`true` = high) for the signal being `on`.
+    pub const fn level(self, on: bool) -> bool {
+        match self.active {
+            Polarity::ActiveHigh => on,
+            Polarity::ActiveLow => !on,
+        }
+    }
+
+    /// Whether the signal is on at pin level `high`.
+    pub const fn is_on(self, high: bool) -> bool {
+        self.active.is_active(high)
+    }
+}
+
+/// Inputs are active low: an opto-coupler (or the HPR's open collector) pulls the pin down
+/// when the signal is on, a pull-up holds it high otherwise.
+const IN: Polarity = Polarity::ActiveLow;
+/// Outputs are active high, with an external pull-down so they are off while the pin is still
+/// high-impedance after reset.
+const OUT: Polarity = Polarity::ActiveHigh;
+
+/// Where each input is. Each is on its own EXTI line (its pin number).
+pub const fn input(input: Input) -> Wiring {
+    match input {
+        Input::TorchOn => Wiring::new(Port::A, 0, IN),
+        Input::Motion => Wiring::new(Port::A, 1, IN),
+        Input::Hold => Wiring::new(Port::A, 4, IN),
+        Input::PierceComplete => Wiring::new(Port::A, 6, IN),
+        Input::CornerCurrent => Wiring::new(Port::A, 7, IN),
+        Input::NotReady => Wiring::new(Port::A, 8, IN),
+        Input::RampdownError => Wiring::new(Port::B, 10, IN),
+    }
+}
+
+/// Where each output is.
+pub const fn output(output: Output) -> Wiring {
+    match output {
+        Output::Start => Wiring::new(Port::B, 0, OUT),
+        Output::Hold => Wiring::new(Port::C, 1, OUT),
+        Output::PierceComplete => Wiring::new(Port::C, 0, OUT),
+        Output::CornerCurrent => Wiring::new(Port::B, 8, OUT),
+        Output::ArcOk => Wiring::new(Port::B, 9, OUT),
+        Output::Ready => Wiring::new(Port::B, 6, OUT),
+        Output::Fault => Wiring::new(Port::C, 7, OUT),
+    }
+}
+
+/// The green heartbeat LED (LD2 on the Nucleo, LD1 on the B-L475E-IOT01A: PA5 on both).
+pub const HEARTBEAT_LED: Wiring = Wiring::new(Port::A, 5, Polarity::ActiveHigh);
+
+/// A UART's pins (alternate function 7 on both).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct UartPins {
+    /// Transmit.
+    pub tx: Pin,
+    /// Receive.
+    pub rx: Pin,
+    /// The RS-485/422 transceiver's driver enable, driven by the USART itself.
+    pub de: Option<Pin>,
+}
+
+impl UartPins {
+    /// Every pin the UART uses.
+    pub fn pins(self) -> impl Iterator<Item = Pin> {
+        [self.tx, self.rx].into_iter().chain(self.de)
+    }
+}
+
+/// The power-supply UART: USART1 on PA9 (TX), PA10 (RX), PA12 (DE).
+pub const PS_UART: UartPins = UartPins {
+    tx: Pin::new(Port::A, 9),
+    rx: Pin::new(Port::A, 10),
+    de: Some(Pin::new(Port::A, 12)),
+};
+
+/// The CNC UART: USART2 on PA2 (TX), PA3 (RX), the ST-LINK's virtual COM port.
+pub const CNC_UART: UartPins = UartPins {
+    tx: Pin::new(Port::A, 2),
+    rx: Pin::new(Port::A, 3),
+    de: None,
+};
+
+/// Every output's wiring, in [`Output::ALL`] order (START first): for loops that drive them all
+/// without a lookup per pin.
+#[allow(
+    clippy::indexing_slicing,
+    reason = "evaluated at compile time: an index out of range fails the build"
+)]
+pub const OUTPUTS: [Wiring; 7] = {
+    let mut all = [output(Output::Start); 7];
+    let mut i = 0;
+    while i < all.len() {
+        all[i] = output(Output::ALL[i]);
+        i += 1;
+    }
+    all
+};
+
+/// Every input's wiring, in [`Input::ALL`] order.
+#[allow(
+    clippy::indexing_slicing,
+    reason = "evaluated at compile time: an index out of range fails the build"
+)]
+pub const INPUTS: [Wiring; 7] = {
+    let mut all = [input(Input::TorchOn); 7];
+    let mut i = 0;
+    while i < all.len() {
+        all[i] = input(Input::ALL[i]);
+        i += 1;
+    }
+    all
+};
+
+/// The pin level of every output in safe state ([`SAFE_OUTPUTS`]), in [`Output::ALL`] order
+/// (START first).
+#[allow(
+    clippy::indexing_slicing,
+    reason = "evaluated at compile time: an index out of range fails the build"
+)]
+pub const SAFE_STATE: [(Pin, bool); 7] = {
+    let mut all = [(OUTPUTS[0].pin, false); 7];
+    let mut i = 0;
+    while i < all.len() {
+        all[i] = (
+            OUTPUTS[i].pin,
+            OUTPUTS[i].level(SAFE_OUTPUTS.is_on(Output::ALL[i])),
+        );
+        i += 1;
+    }
+    all
+};
+
+/// The ports that carry an output, one bit per [`Port::index`].
+#[allow(
+    clippy::indexing_slicing,
+    reason = "evaluated at compile time: an index out of range fails the build"
+)]
+pub const OUTPUT_PORTS: u32 = {
+    let mut ports = 0;
+    let mut i = 0;
+    while i < OUTPUTS.len() {
+        ports |= 1 << OUTPUTS[i].pin.port.index();
+        i += 1;
+    }
+    ports
+};
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::inputs::InputConfig;
+
+    fn every_pin() -> Vec<Pin> {
+        let mut pins: Vec<Pin> = Input::ALL.into_iter().map(|i| input(i).pin).collect();
+        pins.extend(Output::ALL.into_iter().map(|o| output(o).pin));
+        pins.push(HEARTBEAT_LED.pin);
+        pins.extend(PS_UART.pins().chain(CNC_UART.pins()));
+        pins
+    }
+
+    #[test]
+    fn no_two_signals_share_a_pin() {
+        let mut pins = every_pin();
+        let count = pins.len();
+        pins.sort();
+        pins.dedup();
+        assert_eq!(pins.len(), count);
+        assert!(every_pin().iter().all(|p| p.number < 16));
+    }
+
+    #[test]
+    fn no_two_inputs_share_an_exti_line() {
+        // PA5 and PB5 share EXTI5: SYSCFG routes one port per line.
+        let mut lines: Vec<u8> = Input::ALL
+            .into_iter()
+            .map(|i| input(i).pin.number)
+            .collect();
+        lines.sort();
+        lines.dedup();
+        assert_eq!(lines.len(), Input::ALL.len());
+    }
+
+    #[test]
+    fn the_safe_state_drives_every_output_off() {
+        for (o, (pin, level)) in Output::ALL.into_iter().zip(SAFE_STATE) {
+            assert_eq!(pin, output(o).pin, "{o}");
+            assert!(!output(o).is_on(level), "{o} on in safe state");
+            assert!(
+                OUTPUT_PORTS & 1 << pin.port.index() != 0,
+                "{o}'s port not clocked"
+            );
+        }
+        // START first: the one that matters most, driven before any other.
+        assert_eq!(SAFE_STATE[0], (output(Output::Start).pin, false));
+    }
+
+    #[test]
+    fn the_arrays_follow_the_signal_order() {
+        for (i, o) in Output::ALL.into_iter().enumerate() {
+            assert_eq!(OUTPUTS[i], output(o));
+        }
+        for (i, input_signal) in Input::ALL.into_iter().enumerate() {
+            assert_eq!(INPUTS[i], input(input_signal));
+        }
+        assert_eq!(OUTPUT_PORTS, 0b110, "outputs on GPIOB and GPIOC");
+    }
+
+    #[test]
+    fn the_default_input_polarity_is_the_boards() {
+        let config = InputConfig::default();
+        for i in Input::ALL {
+            assert_eq!(config.get(i).polarity, input(i).active, "{i}");
+        }
+    }
+
+    #[test]
+    fn pins_match_the_board_map() {
+        assert_eq!(input(Input::TorchOn).pin.to_string(), "PA0");
+        assert_eq!(input(Input::RampdownError).pin.to_string(), "PB10");
+        assert_eq!(output(Output::Start).pin.to_string(), "PB0");
+        assert_eq!(output(Output::Fault).pin.to_string(), "PC7");
+        assert_eq!(Port::C.register_block(), 0x4800_0800);
+        assert_eq!(output(Output::Fault).pin.port_pin(), 2 * 16 + 7);
+        assert_eq!(output(Output::ArcOk).pin.mask(), 1 << 9);
+        assert!(!input(Input::TorchOn).level(true), "inputs are active low");
+        assert!(input(Input::TorchOn).is_on(false));
+        assert!(output(Output::Start).pin.is(Port::B, 0));
+        assert!(!output(Output::Start).pin.is(Port::A, 0));
+        assert_eq!(PS_UART.pins().count() + CNC_UART.pins().count(), 5);
+    }
+}

@@ -1,0 +1,52 @@
+//! What a board provides to the tasks.
+
+use core::future::Future;
+
+use embedded_io_async::{Read, ReadReady, Write};
+use embedded_storage_async::nor_flash::NorFlash;
+use plasma_firmware::inputs::PinLevels;
+use plasma_firmware::io::Outputs;
+use plasma_firmware::runner::ConfigurablePort;
+
+/// The seven discrete inputs, owned by the I/O task.
+pub trait InputPins {
+    /// Reads every pin now (pin levels; the I/O logic applies the polarity).
+    fn levels(&self) -> PinLevels;
+
+    /// Completes on the next edge of any input (a bounce included: the caller reads levels).
+    fn any_edge(&mut self) -> impl Future<Output = ()>;
+}
+
+/// The seven discrete outputs, owned by the I/O task.
+pub trait OutputPins {
+    /// Sets every pin to `outputs` (logical levels; `plasma_firmware::pins` says which pin
+    /// level each means). START first: it is the one whose latency matters.
+    fn drive(&mut self, outputs: Outputs);
+}
+
+/// The heartbeat LED.
+pub trait Led {
+    /// On ↔ off.
+    fn toggle(&mut self);
+}
+
+/// A board: the types the tasks run over, and the few facts they need from it.
+pub trait Board: 'static {
+    /// The inputs.
+    type InputPins: InputPins;
+    /// The outputs.
+    type OutputPins: OutputPins;
+    /// The heartbeat LED.
+    type Led: Led;
+    /// The power-supply UART, whose line settings the link changes while detecting.
+    type PsUart: ConfigurablePort<Error: defmt::Format>;
+    /// The CNC UART.
+    type CncUart: Read<Error: defmt::Format> + ReadReady + Write;
+    /// The CNC UART's transmit buffer: the bridge writes output in pieces of at most this.
+    const CNC_TX_BUFFER: usize;
+    /// The flash the settings are stored in.
+    type SettingsFlash: NorFlash;
+
+    /// Read errors the flash reported since the last call (torn writes the store skipped).
+    fn flash_errors_seen() -> u32;
+}

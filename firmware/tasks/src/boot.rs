@@ -1,0 +1,26 @@
+//! The boot report for the CNC port: why the MCU started and how the settings loaded.
+
+use core::fmt::Write;
+
+use heapless::String;
+use plasma_firmware::safe_state::BootReport;
+use plasma_firmware::storage::LoadOutcome;
+use static_cell::StaticCell;
+
+use crate::settings::outcome_word;
+
+static BOOT_TEXT: StaticCell<String<64>> = StaticCell::new();
+
+/// `<reset cause>,settings:<outcome>` for the CNC port (`ID ... reset=...`,
+/// `!BOOT reason=...`). Call once, at boot.
+pub fn boot_text(boot: &BootReport, outcome: LoadOutcome) -> &'static str {
+    let text = BOOT_TEXT.init(String::new());
+    // 64 bytes hold the longest cause and outcome; a cut text is still a report.
+    let _ = write!(
+        text,
+        "{},settings:{}",
+        boot.cause.as_str(),
+        outcome_word(outcome)
+    );
+    text.as_str()
+}

@@ -1,0 +1,100 @@
+//! The bridge task (thread mode): `plasma_firmware::supervisor::Supervisor` around the
+//! `Bridge`, over the PS UART, the CNC UART, the I/O task and the settings task.
+
+use defmt::{debug, info, warn};
+use plasma_firmware::bridge::Bridge;
+use plasma_firmware::link::UnitStatus;
+use plasma_firmware::supervisor::Supervisor;
+use plasma_firmware::watchdog::TaskId;
+use plasma_protocol::serial::PortConfig;
+
+use crate::Board;
+use crate::clock::EmbassyClock;
+use crate::io::BoardIo;
+use crate::progress::report;
+use crate::settings::BoardSaver;
+
+/// The body of the bridge task. The bridge arrives by reference: a task's arguments live in
+/// its future next to the state the body keeps across awaits, so a `Bridge` by value would
+/// take its ~8 KB of RAM twice.
+pub async fn run<B: Board>(
+    bridge: &'static mut Bridge,
+    ps: B::PsUart,
+    cnc: B::CncUart,
+    io: BoardIo,
+    progress: TaskId,
+) {
+    let clock = EmbassyClock;
+    let mut supervisor = Supervisor::new(ps, cnc, B::CNC_TX_BUFFER, io, BoardSaver);
+    let mut applied: Option<PortConfig> = None;
+    let mut status = Seen::default();
+    loop {
+        if let Err(e) = supervisor.turn(bridge, &clock).await {
+            warn!("serial: {}", e);
+        }
+        let now_applied = supervisor.ps().applied_config();
+        if now_applied != applied {
+            applied = now_applied;
+            if let Some(config) = now_applied {
+                debug!("PS UART: {} baud {=str}", config.baud, describe(config));
+            }
+        }
+        status.log_changes(bridge.status());
+        report(progress);
+    }
+}
+
+/// What was last logged about the unit, to log changes only.
+#[derive(Default, PartialEq)]
+struct Seen {
+    link_up: bool,
+    fault: Option<plasma_firmware::link::ActiveFault>,
+    ready: bool,
+}
+
+impl Seen {
+    fn log_changes(&mut self, status: &UnitStatus) {
+        let now = Seen {
+            link_up: status.link_up,
+            fault: status.active_fault,
+            ready: status.ready,
+        };
+        if now == *self {
+            return;
+        }
+        if now.link_up != self.link_up {
+            if now.link_up {
+                info!("link up: {} ({})", status.model, status.family);
+            } else {
+                warn!("link down");
+            }
+        }
+        if now.fault != self.fault {
+            match now.fault {
+                Some(fault) => warn!(
+                    "power supply fault {} (action required: {=bool})",
+                    fault,
+                    fault.action_required()
+                ),
+                None => info!("power supply fault cleared"),
+            }
+        }
+        if now.ready != self.ready {
+            info!("power supply ready: {=bool}", now.ready);
+        }
+        *self = now;
+    }
+}
+
+/// Short text for a line setting, for logs.
+fn describe(config: PortConfig) -> &'static str {
+    use plasma_protocol::serial::{Parity, StopBits};
+    match (config.parity, config.stop_bits) {
+        (Parity::None, StopBits::One) => "8N1",
+        (Parity::Even, StopBits::One) => "8E1",
+        (Parity::Odd, StopBits::One) => "8O1",
+        (Parity::None, StopBits::Two) => "8N2",
+        (Parity::Even, StopBits::Two) => "8E2",
+        (Parity::Odd, StopBits::Two) => "8O2",
+    }
+}

@@ -1,0 +1,122 @@
+//! The settings task: loads the settings at boot and stores `CONFIG SAVE` off the bridge task,
+//! so both serial ports keep being served while flash pages are erased. The flash behind it is
+//! the board's ([`Board::SettingsFlash`]).
+
+use core::future::Future;
+use core::ops::Range;
+
+use defmt::{debug, error, info, warn};
+use embassy_futures::select::{Either, select};
+use embassy_sync::blocking_mutex::raw::CriticalSectionRawMutex;
+use embassy_sync::signal::Signal;
+use embassy_time::Timer;
+use plasma_firmware::settings::{SaveError, Settings};
+use plasma_firmware::storage::{LoadOutcome, LoadedSettings, SettingsStore};
+use plasma_firmware::supervisor::SettingsSaver;
+use plasma_firmware::watchdog::TaskId;
+
+use crate::Board;
+use crate::progress::report;
+
+/// The store over the board's settings flash.
+pub type Store<B> = SettingsStore<<B as Board>::SettingsFlash>;
+
+/// The store over `region` of `flash`, or `None` (logged) if the region does not suit it: a
+/// mismatch between the board's region and the flash's page size, a build mistake.
+pub fn open<B: Board>(flash: B::SettingsFlash, region: Range<u32>) -> Option<Store<B>> {
+    match SettingsStore::new(flash, region) {
+        Ok(store) => Some(store),
+        Err(e) => {
+            error!(
+                "settings region: {=str}; settings will not be kept",
+                e.as_str()
+            );
+            None
+        }
+    }
+}
+
+/// Logs flash read errors the board saw while the store was read (torn writes).
+fn report_flash_errors<B: Board>() {
+    let errors = B::flash_errors_seen();
+    if errors > 0 {
+        warn!(
+            "settings: {} double ECC error(s) read (torn writes), skipped",
+            errors
+        );
+    }
+}
+
+/// Loads the settings at boot: the stored ones, or the defaults and why (logged).
+pub async fn load<B: Board>(store: Option<&mut Store<B>>) -> LoadedSettings<Settings> {
+    let loaded = match store {
+        Some(store) => store.load_settings::<Settings>().await,
+        None => LoadedSettings {
+            settings: Settings::default(),
+            outcome: LoadOutcome::FlashError,
+        },
+    };
+    report_flash_errors::<B>();
+    if loaded.outcome.is_problem() {
+        warn!("settings: {}", loaded.outcome);
+    } else {
+        debug!("settings: {}", loaded.outcome);
+    }
+    loaded
+}
+
+/// One word for the boot report on the CNC port.
+pub const fn outcome_word(outcome: LoadOutcome) -> &'static str {
+    match outcome {
+        LoadOutcome::Loaded => "loaded",
+        LoadOutcome::Migrated { .. } => "migrated",
+        LoadOutcome::Empty => "defaults",
+        LoadOutcome::UnknownVersion { .. } => "defaults-unknown-version",
+        LoadOutcome::Corrupted => "defaults-corrupted",
+        LoadOutcome::FlashError => "defaults-flash-error",
+    }
+}
+
+/// Settings to store (bridge → settings task).
+static SAVE_REQUEST: Signal<CriticalSectionRawMutex, Settings> = Signal::new();
+/// How it went (settings task → bridge).
+static SAVE_RESULT: Signal<CriticalSectionRawMutex, Result<(), SaveError>> = Signal::new();
+
+/// The bridge task's handle on the settings task.
+pub struct BoardSaver;
+
+impl SettingsSaver<Settings, SaveError> for BoardSaver {
+    fn start(&mut self, settings: Settings) {
+        SAVE_RESULT.reset();
+        SAVE_REQUEST.signal(settings);
+    }
+
+    fn finished(&mut self) -> impl Future<Output = Result<(), SaveError>> {
+        SAVE_RESULT.wait()
+    }
+}
+
+/// Writes settings to flash when the bridge asks (`CONFIG SAVE`). The body of the board's
+/// settings task.
+pub async fn run<B: Board>(mut store: Option<Store<B>>, progress: TaskId) {
+    loop {
+        let request = select(SAVE_REQUEST.wait(), Timer::after_millis(250)).await;
+        report(progress);
+        let Either::First(settings) = request else {
+            continue;
+        };
+        let result = match store.as_mut() {
+            Some(store) => store
+                .save_settings(&settings)
+                .await
+                .map_err(SaveError::from),
+            None => Err(SaveError::Flash),
+        };
+        match result {
+            Ok(()) => info!("settings saved"),
+            Err(e) => warn!("settings not saved: {}", e),
+        }
+        report_flash_errors::<B>();
+        SAVE_RESULT.signal(result);
+    }
+}

@@ -1,0 +1,81 @@
+//! `pbtool run --ps-port DEV [--cnc-port DEV]`.
+
+use std::io::{self, IsTerminal};
+use std::process::ExitCode;
+
+use pbtool::realtime::{Clock, spawn_reader, spawn_stdin};
+use pbtool::run::{LineBridge, Stop, run_cnc_port, run_console};
+use pbtool::serial::{CNC_PORT, Port, SerialError, describe};
+use plasma_firmware::settings::Settings;
+use plasma_protocol::serial::PortConfig;
+
+use super::serial_failure;
+
+/// The bridge on `ps_port`; the CNC protocol on `cnc_port` or on stdin/stdout.
+pub fn run_on_ports(ps_port: &str, cnc_port: Option<&str>, events: bool) -> ExitCode {
+    let settings = Settings {
+        events,
+        ..Settings::default()
+    };
+    let clock = Clock::start();
+    let opened = open(ps_port, cnc_port, settings, clock);
+    let (mut bridge, ps_reader, mut cnc) = match opened {
+        Ok(opened) => opened,
+        Err(e) => return serial_failure("run", &e),
+    };
+    let (inbox, arrivals) = std::sync::mpsc::channel();
+    spawn_reader(ps_reader, 0, inbox.clone());
+    let framing = describe(bridge.bridge().ps_port_config());
+    let result = match cnc.as_mut() {
+        Some(cnc) => {
+            match cnc.try_clone() {
+                Ok(reader) => spawn_reader(reader, 1, inbox),
+                Err(e) => return serial_failure("run", &e),
+            }
+            eprintln!(
+                "pbtool run: the bridge on {ps_port} (from {framing}, following the unit), the \
+                 CNC protocol on {} at {}",
+                cnc.name(),
+                describe(CNC_PORT)
+            );
+            run_cnc_port(&mut bridge, &arrivals, cnc)
+        }
+        None => {
+            if io::stdin().is_terminal() {
+                eprintln!(
+                    "pbtool run: the bridge on {ps_port} (from {framing}, following the unit); \
+                     CNC protocol on stdin/stdout. HELP lists the commands, end of input \
+                     (Ctrl-D) quits."
+                );
+            }
+            spawn_stdin(inbox);
+            run_console(&mut bridge, &arrivals, &mut io::stdout(), &mut io::stderr())
+        }
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(Stop::Port(e)) => serial_failure("run", &e),
+        // A closed stdout (`| head`) ends the run quietly.
+        Err(Stop::Console(e)) if e.kind() == io::ErrorKind::BrokenPipe => ExitCode::SUCCESS,
+        Err(Stop::Console(e)) => {
+            eprintln!("pbtool run: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+/// The ports, and the bridge on the PS port; also a reading handle on that port.
+fn open(
+    ps_port: &str,
+    cnc_port: Option<&str>,
+    settings: Settings,
+    clock: Clock,
+) -> Result<(LineBridge, Port, Option<Port>), SerialError> {
+    // Opened at the Modbus default; the bridge sets what its link asks for at once.
+    let ps = Port::open(ps_port, PortConfig::MODBUS_DEFAULT)?;
+    let ps_reader = ps.try_clone()?;
+    let cnc = cnc_port
+        .map(|name| Port::open(name, CNC_PORT))
+        .transpose()?;
+    Ok((LineBridge::new(settings, ps, clock)?, ps_reader, cnc))
+}

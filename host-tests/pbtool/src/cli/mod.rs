@@ -1,0 +1,89 @@
+//! The subcommands: their arguments and how each maps onto the library.
+
+pub mod decode;
+pub mod emu;
+mod line;
+pub mod probe;
+pub mod run;
+pub mod sim;
+pub mod sniff;
+pub mod unit;
+
+use std::io::{self, BufRead};
+use std::process::ExitCode;
+use std::sync::mpsc::Receiver;
+
+use clap::Args;
+use pbtool::serial::SerialError;
+use pbtool::sim::{parse_fault, read_line};
+use plasma_sim::Model;
+
+/// Exit status for a bad argument (as clap uses).
+pub const USAGE: u8 = 2;
+
+/// The simulated unit and the session's start, common to `sim`, `emu` and `run`.
+#[derive(Args, Clone)]
+pub struct UnitArgs {
+    /// The simulated unit: sync45 sync65 sync85 sync105 pm45xp pm65 pm85 pm105 pm125 hpr130
+    /// hpr260 hpr400 hpr130xd hpr260xd hpr400xd maxpro200.
+    #[arg(long = "ps", value_name = "MODEL", default_value = "sync65")]
+    pub model: String,
+    /// Start the unit with a fault: Powermax `0-50-0` (or decimal `500`), HPR error number.
+    #[arg(long, value_name = "CODE")]
+    pub fault: Option<String>,
+    /// Event lines (`!LINK UP ...`, `!ARC ON`) on from the start.
+    #[arg(long)]
+    pub events: bool,
+    /// Seed of the simulator's response-time jitter and the line model.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+}
+
+fn model_list() -> String {
+    Model::ALL.map(Model::name).join(" ")
+}
+
+/// The unit `--ps` names and its `--fault`, or the usage status after saying what is wrong.
+pub fn simulated_unit(
+    command: &str,
+    model: &str,
+    fault: Option<&str>,
+) -> Result<(Model, Option<u16>), ExitCode> {
+    let Some(unit) = Model::from_name(model) else {
+        eprintln!(
+            "pbtool {command}: unknown model {model:?}; models: {}",
+            model_list()
+        );
+        return Err(ExitCode::from(USAGE));
+    };
+    match fault.map(|f| parse_fault(unit, f)).transpose() {
+        Ok(fault) => Ok((unit, fault)),
+        Err(e) => {
+            eprintln!("pbtool {command}: {e}");
+            Err(ExitCode::from(USAGE))
+        }
+    }
+}
+
+/// Stdin's lines on a channel, from a reader thread; the channel closes at end of input.
+pub fn stdin_lines() -> Receiver<Vec<u8>> {
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        let mut stdin = io::stdin().lock();
+        while let Ok(Some(line)) = read_line(&mut stdin as &mut dyn BufRead) {
+            if tx.send(line).is_err() {
+                break;
+            }
+        }
+    });
+    rx
+}
+
+/// Exit status for a port that cannot be opened or fails.
+pub const PORT_ERROR: u8 = 2;
+
+/// Says what is wrong with the port; the exit status for it.
+pub fn serial_failure(command: &str, e: &SerialError) -> ExitCode {
+    eprintln!("pbtool {command}: {e}");
+    ExitCode::from(PORT_ERROR)
+}

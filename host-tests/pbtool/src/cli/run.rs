@@ -1,0 +1,113 @@
+//! `pbtool run`: with `--ps-port`, the bridge on a PC's serial port; otherwise the board when
+//! a debug probe is attached, else the emulated board, else the simulator.
+
+use std::process::ExitCode;
+
+use clap::Args;
+use host_tests::emu::qemu::ensure_qemu;
+use plasma_sim::Model;
+
+use super::emu::{EmuArgs, emu};
+use super::sim::{SimArgs, sim};
+
+#[derive(Args)]
+pub struct RunArgs {
+    /// Run the bridge here, in real time, on this serial port wired to the power supply
+    /// (/dev/ttyUSB0, COM3); the CNC protocol on stdin/stdout, or on --cnc-port.
+    #[arg(long, value_name = "DEV", conflicts_with_all = ["sim", "fast", "model", "fault"])]
+    ps_port: Option<String>,
+    /// Use the simulator even when a probe is attached.
+    #[arg(long)]
+    sim: bool,
+    /// Options of the simulator (used when no board is attached).
+    #[command(flatten)]
+    sim_args: SimArgs,
+}
+
+/// The board when a probe is attached, the simulator otherwise.
+pub fn run(args: &RunArgs) -> ExitCode {
+    if let Some(ps_port) = &args.ps_port {
+        return super::line::run_on_ports(
+            ps_port,
+            args.sim_args.cnc_port.as_deref(),
+            args.sim_args.unit.events,
+        );
+    }
+    // A CNC port without a PS port: the simulator's CNC side on it.
+    if !args.sim && args.sim_args.cnc_port.is_none() {
+        if let Some(probe) = attached_probe() {
+            eprintln!("pbtool run: debug probe found ({probe}); flashing the board image");
+            return flash_board();
+        }
+        let unit = Model::from_name(&args.sim_args.unit.model)
+            .map_or("unit".to_string(), |m| m.to_string());
+        if !args.sim_args.fast {
+            match ensure_qemu() {
+                Ok(_) => {
+                    eprintln!(
+                        "pbtool run: no debug probe found; running the firmware on the emulated \
+                         board against a simulated {unit} (pbtool emu --ps {})",
+                        args.sim_args.unit.model
+                    );
+                    return emu(&EmuArgs {
+                        unit: args.sim_args.unit.clone(),
+                        log: args.sim_args.verbose,
+                        measure: false,
+                        toggles: 0,
+                        idle_windows: 0,
+                    });
+                }
+                Err(e) => eprintln!("pbtool run: no emulated board ({e})"),
+            }
+        }
+        eprintln!(
+            "pbtool run: no debug probe found; running the bridge against a simulated {unit} \
+             (pbtool sim --ps {})",
+            args.sim_args.unit.model,
+        );
+    }
+    sim(&args.sim_args)
+}
+
+/// The first probe `probe-rs list` reports, if probe-rs is installed and one is attached.
+fn attached_probe() -> Option<String> {
+    let output = std::process::Command::new("probe-rs")
+        .arg("list")
+        .output()
+        .ok()?;
+    let text = String::from_utf8_lossy(&output.stdout);
+    // Probes are listed as `[0]: STLink V2-1 -- 0483:374b:... (ST-LINK)`.
+    text.lines()
+        .map(str::trim)
+        .find(|line| line.starts_with('[') && line.contains("]:"))
+        .map(str::to_string)
+}
+
+/// `cargo flash` from the workspace root: release build, flash and run with probe-rs.
+fn flash_board() -> ExitCode {
+    let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
+    // This crate sits at host-tests/pbtool in the workspace.
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    // A fresh machine lacks the MCU target; adding it is a no-op when it is there.
+    let target = std::process::Command::new("rustup")
+        .args(["target", "add", "thumbv7em-none-eabihf"])
+        .status();
+    if !matches!(target, Ok(status) if status.success()) {
+        eprintln!(
+            "pbtool run: could not add the thumbv7em-none-eabihf target with rustup; \
+             trying the build anyway"
+        );
+    }
+    match std::process::Command::new(cargo)
+        .current_dir(root)
+        .arg("flash")
+        .status()
+    {
+        Ok(status) if status.success() => ExitCode::SUCCESS,
+        Ok(_) => ExitCode::FAILURE,
+        Err(e) => {
+            eprintln!("pbtool run: cannot start cargo: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}

@@ -1,0 +1,90 @@
+//! `pbtool sim`.
+
+use std::io::{self, IsTerminal, Write};
+use std::process::ExitCode;
+
+use clap::Args;
+use pbtool::sim::{Console, ConsoleOptions};
+
+use pbtool::realtime::spawn_reader;
+use pbtool::serial::{CNC_PORT, Port, describe};
+
+use super::{UnitArgs, serial_failure, simulated_unit, stdin_lines};
+
+#[derive(Args)]
+pub struct SimArgs {
+    #[command(flatten)]
+    pub unit: UnitArgs,
+    /// Virtual time: no waiting, the same output on every run (scripts and tests).
+    #[arg(long, alias = "virtual")]
+    pub fast: bool,
+    /// The CNC side on this serial port (115200 8N1) instead of stdin/stdout, in real time:
+    /// CNC software talks to the simulated bridge and unit.
+    #[arg(long, value_name = "DEV", conflicts_with = "fast")]
+    pub cnc_port: Option<String>,
+    /// Log every change of the discrete outputs (START, ARC_OK, READY, FAULT) with its
+    /// reason on stderr.
+    #[arg(short, long)]
+    pub verbose: bool,
+}
+
+pub fn sim(args: &SimArgs) -> ExitCode {
+    let (model, fault) = match simulated_unit("sim", &args.unit.model, args.unit.fault.as_deref()) {
+        Ok(unit) => unit,
+        Err(status) => return status,
+    };
+    let mut console = Console::new(ConsoleOptions {
+        model,
+        fault,
+        events: args.unit.events,
+        seed: args.unit.seed,
+        verbose: args.verbose,
+    });
+    if let Some(name) = &args.cnc_port {
+        return on_cnc_port(&mut console, name, model);
+    }
+    let interactive = io::stdin().is_terminal();
+    if interactive || args.verbose {
+        eprintln!(
+            "pbtool sim: the bridge against a simulated {model}{}; CNC protocol on stdin/stdout. \
+             HELP lists the commands, TORCH ON|OFF drives torch-on (simulator only), \
+             end of input (Ctrl-D) quits.",
+            if args.fast { " in virtual time" } else { "" },
+        );
+    }
+    let mut out = io::stdout().lock();
+    let mut err = io::stderr();
+    let result = if args.fast {
+        console.run_virtual(&mut io::stdin().lock(), &mut out, &mut err)
+    } else {
+        console.run_realtime(stdin_lines(), &mut out, &mut err)
+    };
+    let _ = out.flush();
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        // A closed stdout (`| head`) ends the simulation quietly.
+        Err(e) if e.kind() == io::ErrorKind::BrokenPipe => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("pbtool sim: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+/// The simulator with its CNC side on the serial port `name`, until the port fails.
+fn on_cnc_port(console: &mut Console, name: &str, model: plasma_sim::Model) -> ExitCode {
+    let opened = Port::open(name, CNC_PORT).and_then(|port| Ok((port.try_clone()?, port)));
+    let (reader, mut port) = match opened {
+        Ok(ports) => ports,
+        Err(e) => return serial_failure("sim", &e),
+    };
+    let (inbox, arrivals) = std::sync::mpsc::channel();
+    spawn_reader(reader, 0, inbox);
+    eprintln!(
+        "pbtool sim: the bridge against a simulated {model}; CNC protocol on {name} at {}. \
+         Ctrl-C quits.",
+        describe(CNC_PORT)
+    );
+    let e = console.run_cnc_port(&arrivals, &mut port);
+    serial_failure("sim", &e)
+}

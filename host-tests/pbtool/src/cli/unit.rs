@@ -1,0 +1,81 @@
+//! `pbtool unit`.
+
+use std::io;
+use std::process::ExitCode;
+
+use clap::Args;
+use pbtool::realtime::{Clock, spawn_reader, spawn_stdin};
+use pbtool::serial::Port;
+use pbtool::unit::{UnitOptions, UnitServer};
+use plasma_sim::{Family, SimOptions};
+
+use super::{USAGE, serial_failure, simulated_unit};
+
+#[derive(Args)]
+pub struct ServeArgs {
+    /// The simulated unit: sync45 sync65 sync85 sync105 pm45xp pm65 pm85 pm105 pm125 hpr130
+    /// hpr260 hpr400 hpr130xd hpr260xd hpr400xd maxpro200.
+    #[arg(long = "ps", value_name = "MODEL")]
+    model: String,
+    /// The serial port (/dev/ttyUSB0, COM3).
+    #[arg(long, value_name = "DEV")]
+    port: String,
+    /// Start with a fault: Powermax `0-50-0` (or decimal `500`), HPR error number.
+    #[arg(long, value_name = "CODE")]
+    fault: Option<String>,
+    /// Powermax: the Modbus node address (1-247; default: learnt from the first request).
+    /// HPR: the id switch (0-3, default 0).
+    #[arg(long, value_name = "N")]
+    address: Option<u8>,
+    /// Each frame (time, direction, decoded) on stderr.
+    #[arg(long)]
+    log: bool,
+    /// Seed of the unit's response-time jitter.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+}
+
+/// Serves the unit until the port fails or the process is stopped.
+pub fn unit(args: &ServeArgs) -> ExitCode {
+    let (model, fault) = match simulated_unit("unit", &args.model, args.fault.as_deref()) {
+        Ok(unit) => unit,
+        Err(status) => return status,
+    };
+    let mut sim = SimOptions {
+        seed: args.seed,
+        ..SimOptions::default()
+    };
+    match (model.family(), args.address) {
+        (_, None) => {}
+        (Family::Hpr, Some(id @ 0..=3)) => sim.hpr_id = id,
+        (Family::Sync | Family::Legacy, Some(node @ 1..=247)) => sim.modbus_address = node,
+        (_, Some(n)) => {
+            eprintln!(
+                "pbtool unit: address {n} is not one a {model} can have (Powermax 1-247, HPR 0-3)"
+            );
+            return ExitCode::from(USAGE);
+        }
+    }
+    let options = UnitOptions {
+        model,
+        fault,
+        sim,
+        log: args.log,
+    };
+    let clock = Clock::start();
+    let opened = Port::open(&args.port, model.build(&sim).port())
+        .and_then(|port| Ok((port.try_clone()?, port)))
+        .and_then(|(reader, port)| Ok((reader, UnitServer::new(&options, port, clock)?)));
+    let (reader, mut server) = match opened {
+        Ok(opened) => opened,
+        Err(e) => return serial_failure("unit", &e),
+    };
+    eprintln!("{}", server.banner());
+    let (inbox, arrivals) = std::sync::mpsc::channel();
+    spawn_reader(reader, 0, inbox.clone());
+    spawn_stdin(inbox);
+    match server.run(&arrivals, &mut io::stderr()) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => serial_failure("unit", &e),
+    }
+}

@@ -1,0 +1,224 @@
+//! `pbtool emu`: the firmware image on the emulated board with a simulated unit, and the CNC
+//! port on stdin/stdout, like `pbtool sim` (whose rules it follows: the first command once the
+//! link is up and the unit's limits are read, one command at a time, every line the board
+//! writes printed as it arrives). `TORCH ON` / `TORCH OFF` are not sent to the board: they
+//! drive its TORCH_ON input pin, as the CNC's output would. With `log`, the firmware's own
+//! log goes to stderr.
+
+use std::collections::VecDeque;
+use std::io::{self, Write};
+use std::sync::mpsc::{Receiver, RecvTimeoutError};
+use std::time::{Duration, Instant};
+
+use plasma_firmware::io::{Input, Output};
+
+use host_tests::emu::{Board, BoardOptions, Error, Result};
+use plasma_sim::{Model, SimOptions};
+
+/// The longest wait for the link (and the unit's limits) before the first command.
+const SETTLE_TIMEOUT: Duration = Duration::from_secs(10);
+/// The longest wait for one reply.
+const REPLY_TIMEOUT: Duration = Duration::from_secs(10);
+/// How long `TORCH ON|OFF` waits for START to follow before it answers anyway.
+const TORCH_SETTLE: Duration = Duration::from_millis(200);
+/// How long the console keeps printing after the last reply at the end of input.
+const LINGER: Duration = Duration::from_millis(200);
+/// The longest pause between two looks at the CNC port, stdin and the log.
+const TICK: Duration = Duration::from_millis(10);
+
+/// How `pbtool emu` runs.
+#[derive(Debug, Clone, PartialEq)]
+pub struct EmuConsoleOptions {
+    /// The simulated unit.
+    pub model: Model,
+    /// A fault the unit has from the start.
+    pub fault: Option<u16>,
+    /// Event lines on from the start.
+    pub events: bool,
+    /// The firmware's log on stderr.
+    pub log: bool,
+    /// Seed of the simulator.
+    pub seed: u64,
+}
+
+/// What a console input line asks for.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum ConsoleLine {
+    /// Nothing (a blank line).
+    Blank,
+    /// Drive TORCH_ON.
+    Torch(bool),
+    /// Send to the board's CNC port.
+    Cnc(String),
+}
+
+/// Sorts an input line (terminator included or not).
+pub fn classify(line: &[u8]) -> ConsoleLine {
+    let text = String::from_utf8_lossy(line);
+    let text = text.trim_end_matches(['\r', '\n']);
+    let words: Vec<String> = text
+        .split_ascii_whitespace()
+        .map(str::to_ascii_uppercase)
+        .collect();
+    match words
+        .iter()
+        .map(String::as_str)
+        .collect::<Vec<_>>()
+        .as_slice()
+    {
+        [] => ConsoleLine::Blank,
+        ["TORCH", "ON"] => ConsoleLine::Torch(true),
+        ["TORCH", "OFF"] => ConsoleLine::Torch(false),
+        _ => ConsoleLine::Cnc(text.to_string()),
+    }
+}
+
+/// Boots the board and runs the console until the end of `input` (a reader thread's
+/// channel, closed at end of input) and the last reply.
+pub fn run(
+    options: &EmuConsoleOptions,
+    input: Receiver<Vec<u8>>,
+    out: &mut dyn Write,
+    err: &mut dyn Write,
+) -> Result<()> {
+    let io = |e: io::Error| Error::io("writing the console", e);
+    let mut board = Board::boot(BoardOptions {
+        fault_at_power_up: options.fault,
+        sim: SimOptions {
+            seed: options.seed,
+            ..SimOptions::default()
+        },
+        ..BoardOptions::new(options.model)
+    })?;
+    let mut log_printed = 0;
+    let mut print_log = |board: &Board, err: &mut dyn Write| -> Result<()> {
+        if options.log {
+            for line in board.log().since(log_printed) {
+                writeln!(err, "[fw] {line}").map_err(io)?;
+                log_printed += 1;
+            }
+        }
+        Ok(())
+    };
+    if !settle(&mut board)? {
+        writeln!(
+            err,
+            "pbtool emu: the simulated unit was not found within {} s; commands go on without it",
+            SETTLE_TIMEOUT.as_secs()
+        )
+        .map_err(io)?;
+    }
+    if options.events {
+        board.command("EVENTS ON", REPLY_TIMEOUT)?;
+    }
+    print_log(&board, err)?;
+
+    let mut lines: VecDeque<Vec<u8>> = VecDeque::new();
+    let mut waiting: Option<Instant> = None;
+    let mut ended = false;
+    let mut ended_at: Option<Instant> = None;
+    loop {
+        // What the board said.
+        loop {
+            match board.cnc().next(Duration::ZERO) {
+                Ok(item) => {
+                    // As `pbtool sim`: ACK/NAK in front of the reply line that follows.
+                    if matches!(item.text.as_str(), "<ACK>" | "<NAK>") {
+                        write!(out, "{}", item.text).map_err(io)?;
+                        continue;
+                    }
+                    writeln!(out, "{}", item.text).map_err(io)?;
+                    if !item.is_event() {
+                        waiting = None;
+                    }
+                }
+                Err(Error::Timeout(_)) => break,
+                Err(e) => return Err(e),
+            }
+        }
+        out.flush().map_err(io)?;
+        print_log(&board, err)?;
+        if waiting.is_some_and(|since| since.elapsed() > REPLY_TIMEOUT) {
+            writeln!(
+                err,
+                "pbtool emu: no reply within {} s",
+                REPLY_TIMEOUT.as_secs()
+            )
+            .map_err(io)?;
+            waiting = None;
+        }
+        // The next command, once the board is free.
+        while waiting.is_none() {
+            let Some(line) = lines.pop_front() else { break };
+            match classify(&line) {
+                ConsoleLine::Blank => {}
+                ConsoleLine::Torch(on) => {
+                    board.set_input(Input::TorchOn, on)?;
+                    // Like the simulator's TORCH command, answer once the interlocks have
+                    // acted: START follows at once unless a rule holds it (the 50 ms gap at
+                    // most delays it).
+                    let _ = board.wait_output(Output::Start, on, TORCH_SETTLE);
+                    writeln!(out, "OK torch={}", if on { "ON" } else { "OFF" }).map_err(io)?;
+                }
+                ConsoleLine::Cnc(_) => {
+                    board.cnc().send_bytes(&line)?;
+                    waiting = Some(Instant::now());
+                }
+            }
+        }
+        if ended && lines.is_empty() && waiting.is_none() {
+            let since = *ended_at.get_or_insert_with(Instant::now);
+            if since.elapsed() >= LINGER {
+                out.flush().map_err(io)?;
+                return Ok(());
+            }
+            std::thread::sleep(TICK);
+            continue;
+        }
+        if ended {
+            std::thread::sleep(TICK);
+            continue;
+        }
+        match input.recv_timeout(TICK) {
+            Ok(line) => lines.push_back(line),
+            Err(RecvTimeoutError::Timeout) => {}
+            Err(RecvTimeoutError::Disconnected) => ended = true,
+        }
+        while let Ok(line) = input.try_recv() {
+            lines.push_back(line);
+        }
+    }
+}
+
+/// Waits until the link is up and the unit's limits (or an HPR's state) are read; false when
+/// that did not happen within [`SETTLE_TIMEOUT`].
+fn settle(board: &mut Board) -> Result<bool> {
+    let began = Instant::now();
+    while began.elapsed() < SETTLE_TIMEOUT {
+        let status = board.command("STATUS", REPLY_TIMEOUT)?;
+        if status.contains(" link=UP ")
+            && board.command("LIMITS", REPLY_TIMEOUT)?.starts_with("OK ")
+        {
+            return Ok(true);
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    Ok(false)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn torch_lines_drive_the_pin_and_the_rest_goes_to_the_board() {
+        assert_eq!(classify(b"torch on\n"), ConsoleLine::Torch(true));
+        assert_eq!(classify(b"  TORCH   OFF \r\n"), ConsoleLine::Torch(false));
+        assert_eq!(classify(b"\r\n"), ConsoleLine::Blank);
+        assert_eq!(
+            classify(b"SET PROCESS CUT 45 AUTO\n"),
+            ConsoleLine::Cnc("SET PROCESS CUT 45 AUTO".to_string())
+        );
+        assert_eq!(classify(b"TORCH\n"), ConsoleLine::Cnc("TORCH".to_string()));
+    }
+}

@@ -1,0 +1,19 @@
+//! pbtool, the plasma-bridge technician's tool, as a library: what its commands are made of.
+//!
+//! - [`decode`]: `pbtool decode`, Modbus ASCII and HPR frames explained in the manuals' terms.
+//! - [`sim`]: `pbtool sim`, the bridge's real behaviour against a simulated unit (the scenario
+//!   harness of host-tests, in real or virtual time) with the CNC protocol on stdin/stdout.
+//! - [`emu`]: `pbtool emu`, the firmware image on the emulated board (the QEMU harness of
+//!   host-tests) with its CNC port on stdin/stdout, and `--measure`.
+#![warn(missing_docs)]
+
+pub mod decode;
+pub mod emu;
+pub mod framer;
+pub mod probe;
+pub mod realtime;
+pub mod run;
+pub mod serial;
+pub mod sim;
+pub mod sniff;
+pub mod unit;

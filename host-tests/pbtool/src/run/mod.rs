@@ -1,0 +1,193 @@
+//! `pbtool run --ps-port DEV`: the bridge, the same firmware library the board runs, in real
+//! time on a PC whose serial adapter is wired to the power supply.
+//!
+//! [`LineBridge`] is what the board's tasks are around the [`Bridge`]: the PS port (its
+//! framing follows the link, 8E1/8O1/8N1 and two stop bits while detecting, 8N1 for an HPR;
+//! flagged characters counted as the link counts them), the CNC port, the settings store
+//! (in memory: a PC keeps nothing across runs), and the interlocks, which a PC has no pins
+//! for but which still decide READY and the STATUS fields. The CNC side is a console
+//! ([`run_console`]: stdin/stdout, paced like `pbtool sim`) or a second serial port
+//! ([`run_cnc_port`]: the bytes as they are).
+
+mod console;
+
+pub use console::{SETTLE_TIMEOUT, run_console};
+
+use std::io;
+use std::sync::mpsc::Receiver;
+
+use host_tests::harness::{BridgeEndpoint, PsEndpoint};
+use plasma_firmware::bridge::Bridge;
+use plasma_firmware::io::{Inputs, Interlocks, SupplyState};
+use plasma_firmware::settings::Settings;
+use plasma_protocol::time::Instant;
+
+use crate::realtime::{Arrival, Clock, wait};
+use crate::serial::{Port, Rx, SerialError};
+
+/// The bridge with its PS port, in real time.
+pub struct LineBridge {
+    endpoint: BridgeEndpoint,
+    io: Interlocks,
+    supply: SupplyState,
+    ps: Port,
+    clock: Clock,
+}
+
+impl LineBridge {
+    /// The bridge with `settings` on `ps` (its writing handle; a reader thread has the other).
+    pub fn new(settings: Settings, mut ps: Port, clock: Clock) -> Result<Self, SerialError> {
+        let now = clock.now();
+        let endpoint = BridgeEndpoint::new(settings, now, false);
+        ps.set_config(endpoint.bridge().ps_port_config())?;
+        Ok(LineBridge {
+            io: Interlocks::new(settings.io, now, Inputs::default()),
+            endpoint,
+            supply: SupplyState::default(),
+            ps,
+            clock,
+        })
+    }
+
+    /// The bridge (read only).
+    pub fn bridge(&self) -> &Bridge {
+        self.endpoint.bridge()
+    }
+
+    /// Everything the bridge wrote to the CNC, split into lines, ACK and NAK.
+    pub fn cnc_records(&self) -> &[host_tests::harness::CncRecord] {
+        self.endpoint.records()
+    }
+
+    /// Every byte the bridge wrote to the CNC.
+    pub fn cnc_bytes(&self) -> &[u8] {
+        self.endpoint.raw()
+    }
+
+    /// Reply lines (not events, not ACK/NAK) so far.
+    pub fn reply_count(&self) -> usize {
+        self.cnc_records()
+            .iter()
+            .filter(|r| r.item.is_reply())
+            .count()
+    }
+
+    /// Characters from the power supply.
+    pub fn ps_rx(&mut self, now: Instant, rx: &[Rx]) {
+        let mut good = Vec::with_capacity(rx.len());
+        for &item in rx {
+            match item {
+                Rx::Byte(b) => good.push(b),
+                Rx::Error => {
+                    // In its place among the characters, as the board's UART reports it.
+                    self.endpoint.handle_ps_rx(now, &std::mem::take(&mut good));
+                    self.endpoint.handle_ps_rx_error(now);
+                }
+            }
+        }
+        self.endpoint.handle_ps_rx(now, &good);
+    }
+
+    /// Bytes from the CNC.
+    pub fn cnc_rx(&mut self, now: Instant, bytes: &[u8]) {
+        self.endpoint.cnc_rx(now, bytes);
+    }
+
+    /// Everything due at `now`: link events into the session, frames to the unit (the port
+    /// switched to the framing the link asks for first), the interlocks.
+    pub fn service(&mut self, now: Instant) -> Result<(), SerialError> {
+        self.endpoint.poll(now, &mut Vec::new());
+        while let Some(frame) = self.endpoint.poll_ps_transmit(now).map(<[u8]>::to_vec) {
+            self.ps.set_config(self.endpoint.ps_port_config())?;
+            self.ps.write_all(&frame)?;
+        }
+        self.endpoint.poll(now, &mut Vec::new());
+        if let Some(config) = self.endpoint.take_io_config_change() {
+            self.io.set_config(now, config);
+        }
+        let supply = self.endpoint.supply_state();
+        if supply != self.supply {
+            self.io.on_supply(now, supply);
+            self.supply = supply;
+        }
+        self.io.poll(now);
+        while self.io.poll_transition().is_some() {}
+        while let Some(event) = self.io.poll_event() {
+            self.endpoint.on_io_event(now, event);
+        }
+        self.endpoint
+            .set_io_snapshot(self.io.inputs(), self.io.outputs());
+        Ok(())
+    }
+
+    /// When [`LineBridge::service`] is next due.
+    pub fn wake(&self) -> Option<Instant> {
+        match (self.endpoint.poll_at(), self.io.poll_at()) {
+            (Some(a), Some(b)) => Some(a.min(b)),
+            (a, b) => a.or(b),
+        }
+    }
+
+    /// Now, on the bridge's clock.
+    pub fn now(&self) -> Instant {
+        self.clock.now()
+    }
+}
+
+/// How a run ended other than by the end of input.
+#[derive(Debug)]
+pub enum Stop {
+    /// A port failed.
+    Port(SerialError),
+    /// Writing the console failed.
+    Console(io::Error),
+}
+
+impl From<SerialError> for Stop {
+    fn from(e: SerialError) -> Self {
+        Stop::Port(e)
+    }
+}
+
+impl From<io::Error> for Stop {
+    fn from(e: io::Error) -> Self {
+        Stop::Console(e)
+    }
+}
+
+/// The CNC protocol on a serial port (`cnc`, the writing handle; its characters come through
+/// `inbox` as port 1): bytes in both directions as they are. Runs until a port fails.
+pub fn run_cnc_port(
+    bridge: &mut LineBridge,
+    inbox: &Receiver<Arrival>,
+    cnc: &mut Port,
+) -> Result<(), Stop> {
+    let mut sent = 0;
+    loop {
+        let arrival = wait(inbox, &bridge.clock, bridge.wake());
+        let now = bridge.now();
+        match arrival {
+            Some(Arrival::Serial { port: 0, rx }) => bridge.ps_rx(now, &rx),
+            Some(Arrival::Serial { rx, .. }) => {
+                let bytes: Vec<u8> = rx
+                    .iter()
+                    .map(|r| match r {
+                        Rx::Byte(b) => *b,
+                        // The session sees a garbled character as one it cannot read.
+                        Rx::Error => b'?',
+                    })
+                    .collect();
+                bridge.cnc_rx(now, &bytes);
+            }
+            Some(Arrival::Failed(e)) => return Err(e.into()),
+            Some(Arrival::Line(_) | Arrival::EndOfInput) | None => {}
+        }
+        bridge.service(now)?;
+        let raw = bridge.cnc_bytes();
+        if raw.len() > sent {
+            let fresh = raw[sent..].to_vec();
+            sent = raw.len();
+            cnc.write_all(&fresh)?;
+        }
+    }
+}

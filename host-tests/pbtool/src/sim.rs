@@ -1,0 +1,362 @@
+//! `pbtool sim`: the bridge's real behaviour against a simulated unit, with the CNC text
+//! protocol on stdin/stdout.
+//!
+//! The [`World`] of the scenario tests ([`World::with_bridge`]) runs either in real time
+//! (advanced by the wall clock; a person types `SET PROCESS CUT 45 AUTO` and `STATUS` and sees
+//! what a CNC would see) or in virtual time (`--fast`: no sleeps, the same output on every
+//! run, for scripts and tests).
+//!
+//! Like a well-behaved CNC the console sends one command line at a time and the next only
+//! when the reply has come (so a piped script never fills the bridge's queue), and it sends
+//! the first command only once the link is up and the unit's limits are read (at most
+//! [`SETTLE_TIMEOUT`]), so piped commands get meaningful replies. Every line the bridge
+//! writes goes to stdout as it arrives (ACK/NAK as `<ACK>` / `<NAK>`); blank lines get no
+//! reply and are not waited for. With `verbose`, every change of a discrete output (START,
+//! ARC_OK, READY, FAULT and the HPR pass-throughs) is logged on stderr with its reason.
+
+use std::io::{self, BufRead, Write};
+use std::str::FromStr;
+use std::sync::mpsc::{Receiver, RecvTimeoutError};
+
+use plasma_firmware::bridge::Bridge;
+use plasma_firmware::settings::Settings;
+use plasma_protocol::cnc::phoenix::{EOT, ETX, SOH, STX};
+use plasma_protocol::powermax::FaultCode;
+use plasma_protocol::time::{Duration, Instant};
+
+use host_tests::harness::{BridgeEndpoint, CncItem, World, WorldOptions};
+
+use crate::realtime::{Arrival, Clock, wait};
+use crate::serial::{Port, Rx, SerialError};
+use plasma_sim::{Family, Model, SimOptions};
+
+/// The longest wait for the link (and the unit's limits) before the first command.
+pub const SETTLE_TIMEOUT: Duration = Duration::from_secs(5);
+/// After the link is up: one more status cycle, so faults and settings are known.
+const SETTLE_EXTRA: Duration = Duration::from_millis(250);
+/// The longest wait for one reply; beyond it the console moves on (and says so).
+pub const REPLY_TIMEOUT: Duration = Duration::from_secs(10);
+/// Virtual time: how long the world runs on after the end of input.
+const LINGER: Duration = Duration::from_millis(100);
+/// Real time: the longest sleep between two looks at stdin and the clock.
+const TICK: std::time::Duration = std::time::Duration::from_millis(10);
+
+/// How `pbtool sim` runs.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ConsoleOptions {
+    /// The simulated unit.
+    pub model: Model,
+    /// A fault the unit has from the start (Powermax decimal code, HPR error number).
+    pub fault: Option<u16>,
+    /// Event lines on from the start.
+    pub events: bool,
+    /// Seed of the simulator and the line.
+    pub seed: u64,
+    /// Log the discrete outputs' transitions on stderr.
+    pub verbose: bool,
+}
+
+/// A `--fault` argument for `model`: Powermax `X-YY-Z` (`0-50-0`) or decimal (`500`); HPR
+/// error number (`44` or `044`).
+pub fn parse_fault(model: Model, text: &str) -> Result<u16, String> {
+    let text = text.trim();
+    let code = if text.contains('-') {
+        if model.family() == Family::Hpr {
+            return Err(format!(
+                "fault {text}: an HPR/MaxPro200 error is a number (e.g. 44), not X-YY-Z"
+            ));
+        }
+        FaultCode::from_str(text)
+            .map(|c| c.0)
+            .map_err(|_| format!("fault {text}: expected X-YY-Z (e.g. 0-50-0) or a number"))?
+    } else {
+        text.parse::<u16>()
+            .map_err(|_| format!("fault {text}: expected X-YY-Z (e.g. 0-50-0) or a number"))?
+    };
+    if code == 0 {
+        return Err("fault 0 means no fault".to_string());
+    }
+    Ok(code)
+}
+
+/// The simulated installation and what has been printed of it.
+pub struct Console {
+    world: World<BridgeEndpoint>,
+    verbose: bool,
+    printed: usize,
+    transitions_printed: usize,
+    pacer: Pacer,
+}
+
+impl Console {
+    /// The bridge (default settings, events as asked) against a fresh simulated unit.
+    pub fn new(options: ConsoleOptions) -> Self {
+        let world_options = WorldOptions {
+            seed: options.seed,
+            sim: SimOptions {
+                seed: options.seed,
+                ..SimOptions::default()
+            },
+            ..WorldOptions::default()
+        };
+        let settings = Settings {
+            events: options.events,
+            ..Settings::default()
+        };
+        let mut world = World::with_bridge(options.model, world_options, settings);
+        if let Some(code) = options.fault {
+            world.inject_fault(code);
+        }
+        Console {
+            world,
+            verbose: options.verbose,
+            printed: 0,
+            transitions_printed: 0,
+            pacer: Pacer::default(),
+        }
+    }
+
+    /// The world (for tests).
+    pub fn world(&self) -> &World<BridgeEndpoint> {
+        &self.world
+    }
+
+    /// True once the link is up and what the first commands need is known.
+    fn settled(world: &World<BridgeEndpoint>) -> bool {
+        settled(world.bridge())
+    }
+
+    /// Virtual time: run the commands of `input` one by one until its end.
+    pub fn run_virtual(
+        &mut self,
+        input: &mut dyn BufRead,
+        out: &mut dyn Write,
+        err: &mut dyn Write,
+    ) -> io::Result<()> {
+        match self.world.run_until(Self::settled, SETTLE_TIMEOUT) {
+            Ok(_) => self.world.run_for(SETTLE_EXTRA),
+            Err(_) => no_unit_warning(err)?,
+        }
+        self.flush(out, err)?;
+        while let Some(line) = read_line(input)? {
+            if let Some(replies) = self.send(&line)
+                && self.world.wait_cnc_replies(replies, REPLY_TIMEOUT).is_err()
+            {
+                writeln!(
+                    err,
+                    "pbtool sim: no reply within {} s",
+                    REPLY_TIMEOUT.as_millis() / 1000
+                )?;
+            }
+            self.flush(out, err)?;
+        }
+        // What a last line may still bring (a cut text line's second reply, a message the
+        // input left open is abandoned after 50 ms).
+        self.world.run_for(LINGER);
+        self.flush(out, err)
+    }
+
+    /// Real time: lines from `input` (a reader thread's channel; closed at end of input) are
+    /// sent as the bridge becomes free; returns after the last reply once input has ended.
+    pub fn run_realtime(
+        &mut self,
+        input: Receiver<Vec<u8>>,
+        out: &mut dyn Write,
+        err: &mut dyn Write,
+    ) -> io::Result<()> {
+        let wall = std::time::Instant::now();
+        let clock = |world: &World<BridgeEndpoint>| {
+            let elapsed = u64::try_from(wall.elapsed().as_micros()).unwrap_or(u64::MAX);
+            Instant::from_micros(elapsed).saturating_since(world.now())
+        };
+        let mut settle_until: Option<Instant> = None;
+        let mut ready = false;
+        let mut waiting: Option<(usize, Instant)> = None;
+        let mut lines: std::collections::VecDeque<Vec<u8>> = std::collections::VecDeque::new();
+        let mut ended = false;
+        loop {
+            let due = clock(&self.world);
+            self.world.run_for(due);
+            self.flush(out, err)?;
+            let now = self.world.now();
+
+            if !ready {
+                if settle_until.is_none() && Self::settled(&self.world) {
+                    settle_until = Some(now + SETTLE_EXTRA);
+                }
+                if settle_until.is_some_and(|t| now >= t) {
+                    ready = true;
+                } else if now >= Instant::ZERO + SETTLE_TIMEOUT {
+                    no_unit_warning(err)?;
+                    ready = true;
+                }
+            }
+            if let Some((count, deadline)) = waiting {
+                if self.world.cnc_reply_count() >= count {
+                    waiting = None;
+                } else if now >= deadline {
+                    writeln!(
+                        err,
+                        "pbtool sim: no reply within {} s",
+                        REPLY_TIMEOUT.as_millis() / 1000
+                    )?;
+                    waiting = None;
+                }
+            }
+            while ready && waiting.is_none() {
+                let Some(line) = lines.pop_front() else { break };
+                waiting = self.send(&line).map(|count| (count, now + REPLY_TIMEOUT));
+                self.flush(out, err)?;
+            }
+            if ended && lines.is_empty() && waiting.is_none() {
+                return Ok(());
+            }
+
+            let sleep = self
+                .world
+                .next_wakeup()
+                .map(|t| std::time::Duration::from_micros(t.saturating_since(now).as_micros()))
+                .unwrap_or(TICK)
+                .min(TICK);
+            if ended {
+                std::thread::sleep(sleep);
+                continue;
+            }
+            match input.recv_timeout(sleep) {
+                Ok(line) => lines.push_back(line),
+                Err(RecvTimeoutError::Timeout) => {}
+                Err(RecvTimeoutError::Disconnected) => ended = true,
+            }
+            // Take whatever else has arrived (a paste, a pipe) in one go.
+            while let Ok(line) = input.try_recv() {
+                lines.push_back(line);
+            }
+        }
+    }
+
+    /// Real time, the CNC on a serial port: `inbox` brings the port's characters (from its
+    /// reader thread), `cnc` is its writing handle; the bytes pass as they are. Runs until the
+    /// port fails.
+    pub fn run_cnc_port(&mut self, inbox: &Receiver<Arrival>, cnc: &mut Port) -> SerialError {
+        let clock = Clock::start();
+        let mut sent = 0;
+        loop {
+            let arrival = wait(inbox, &clock, self.world.next_wakeup());
+            let due = clock.now().saturating_since(self.world.now());
+            self.world.run_for(due);
+            match arrival {
+                Some(Arrival::Serial { rx, .. }) => {
+                    let bytes: Vec<u8> = rx
+                        .iter()
+                        .map(|r| match r {
+                            Rx::Byte(b) => *b,
+                            // The session sees a garbled character as one it cannot read.
+                            Rx::Error => b'?',
+                        })
+                        .collect();
+                    self.world.cnc_send(&bytes);
+                }
+                Some(Arrival::Failed(e)) => return e,
+                _ => {}
+            }
+            let raw = self.world.cnc_bytes();
+            if raw.len() > sent {
+                let fresh = raw[sent..].to_vec();
+                sent = raw.len();
+                if let Err(e) = cnc.write_all(&fresh) {
+                    return e;
+                }
+            }
+        }
+    }
+
+    /// Hand one input line (with its terminator) to the bridge. Returns the reply count to
+    /// wait for, or `None` when no reply is due: a blank line, or a line that leaves a Phoenix
+    /// message open (its CR LF is inside the frame; the reply comes once the frame ends).
+    fn send(&mut self, line: &[u8]) -> Option<usize> {
+        let awaits_reply = self.pacer.awaits_reply(line);
+        let before = self.world.cnc_reply_count();
+        self.world.cnc_send(line);
+        awaits_reply.then_some(before + 1)
+    }
+
+    /// Print what the CNC received since the last call (stdout) and, verbose, the output
+    /// transitions (stderr).
+    fn flush(&mut self, out: &mut dyn Write, err: &mut dyn Write) -> io::Result<()> {
+        if self.verbose {
+            let transitions = self.world.transitions();
+            for t in &transitions[self.transitions_printed..] {
+                writeln!(err, "[io] {t}")?;
+            }
+            self.transitions_printed = transitions.len();
+        }
+        let records = self.world.cnc_output();
+        for record in &records[self.printed..] {
+            match &record.item {
+                CncItem::Ack => write!(out, "<ACK>")?,
+                CncItem::Nak => write!(out, "<NAK>")?,
+                CncItem::Line(line) => writeln!(out, "{line}")?,
+            }
+        }
+        self.printed = records.len();
+        out.flush()?;
+        err.flush()
+    }
+}
+
+/// True once the bridge's link is up and what the first commands need is known (a
+/// Powermax's limits, an HPR's state): a console sends its first command then.
+pub fn settled(bridge: &Bridge) -> bool {
+    let status = bridge.status();
+    status.link_up && (status.limits.is_some() || status.hpr.state.is_some())
+}
+
+/// Which console lines a reply is due for, so that a console sends the next line only once
+/// it has come, as a well-behaved CNC does.
+#[derive(Debug, Default, Clone, Copy)]
+pub struct Pacer {
+    /// A Phoenix message has begun (SOH/STX) and not yet ended (ETX/EOT).
+    frame_open: bool,
+}
+
+impl Pacer {
+    /// True when `line` (with its terminator), sent now, earns a reply: not a blank line,
+    /// nor a line that leaves a Phoenix message open (its CR LF is inside the frame; the
+    /// reply comes once the frame ends).
+    pub fn awaits_reply(&mut self, line: &[u8]) -> bool {
+        let mut content = false;
+        for &b in line {
+            match b {
+                SOH | STX => {
+                    self.frame_open = true;
+                    content = true;
+                }
+                ETX | EOT => self.frame_open = false,
+                b' ' | b'\t' | b'\r' | b'\n' => {}
+                _ => content = true,
+            }
+        }
+        content && !self.frame_open
+    }
+}
+
+fn no_unit_warning(err: &mut dyn Write) -> io::Result<()> {
+    writeln!(
+        err,
+        "pbtool sim: the simulated unit did not answer within {} s; commands go on without it",
+        SETTLE_TIMEOUT.as_millis() / 1000
+    )
+}
+
+/// One input line with its terminator; a last line without one gets LF (end of input ends
+/// the line). `None` at end of input.
+pub fn read_line(input: &mut dyn BufRead) -> io::Result<Option<Vec<u8>>> {
+    let mut line = Vec::new();
+    if input.read_until(b'\n', &mut line)? == 0 {
+        return Ok(None);
+    }
+    if line.last() != Some(&b'\n') {
+        line.push(b'\n');
+    }
+    Ok(Some(line))
+}

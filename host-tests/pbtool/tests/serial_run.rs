@@ -1,0 +1,154 @@
+//! `pbtool run --ps-port` (the firmware's bridge in real time) against `pbtool unit` over a
+//! pty cable: a SYNC, a legacy Powermax and an HPR. ID, setting the process, STATUS, a fault
+//! appearing and clearing, the unit going silent and coming back; and a port that goes away.
+
+mod common;
+
+use common::{Cable, Pbtool};
+
+struct Family {
+    model: &'static str,
+    found: &'static str,
+    set: &'static str,
+    set_reply: &'static str,
+    fault: &'static str,
+    fault_event: &'static str,
+}
+
+fn session(family: &Family) {
+    let cable = Cable::new();
+    let mut unit = Pbtool::spawn(&["unit", "--ps", family.model, "--port", &cable.b]);
+    let mut run = Pbtool::spawn(&["run", "--ps-port", &cable.a, "--events"]);
+
+    run.send("ID");
+    let id = run.expect_prefix("OK bridge=");
+    assert!(id.contains(" link=UP "), "{id}\n{}", run.transcript());
+    assert!(id.contains(family.found), "{id}");
+
+    run.send(family.set);
+    run.expect_prefix(family.set_reply);
+    run.send("STATUS");
+    let status = run.expect_prefix("OK link=");
+    assert!(
+        status.contains(" amps=45 "),
+        "{status}\n{}",
+        run.transcript()
+    );
+
+    unit.send(&format!("FAULT {}", family.fault));
+    run.expect_prefix(family.fault_event);
+    run.send("STATUS");
+    let status = run.expect_prefix("OK link=");
+    assert!(!status.contains(" fault=none "), "{status}");
+    unit.send("CLEAR");
+    run.expect_prefix("!FAULT CLEARED");
+
+    unit.send("SILENT");
+    run.expect_prefix("!LINK DOWN reason=no_answer");
+    run.send("STATUS");
+    let status = run.expect_prefix("OK link=");
+    assert!(status.starts_with("OK link=DOWN"), "{status}");
+    unit.send("ANSWER");
+    run.expect_prefix("!LINK UP");
+    run.send("STATUS");
+    let status = run.expect_prefix("OK link=");
+    assert!(status.starts_with("OK link=UP"), "{status}");
+
+    run.close_stdin();
+    let exit = run.wait();
+    assert!(exit.success(), "{exit}\n{}", run.transcript());
+    assert!(unit.stderr().contains("fault cleared"), "{}", unit.stderr());
+}
+
+#[test]
+fn the_bridge_runs_a_sync_unit_on_a_serial_line() {
+    session(&Family {
+        model: "sync65",
+        found: "family=SYNC",
+        set: "SET PROCESS CUT 45 AUTO",
+        set_reply: "OK mode=CUT amps=45",
+        fault: "0-50-0",
+        fault_event: "!FAULT 0-50-0",
+    });
+}
+
+#[test]
+fn the_bridge_runs_a_legacy_powermax_on_a_serial_line() {
+    session(&Family {
+        model: "pm65",
+        found: "family=LEGACY",
+        set: "SET PROCESS CUT 45 AUTO",
+        set_reply: "OK mode=CUT amps=45",
+        fault: "0-50-0",
+        fault_event: "!FAULT 0-50-0",
+    });
+}
+
+#[test]
+fn the_bridge_runs_an_hpr_on_a_serial_line() {
+    session(&Family {
+        model: "hpr260",
+        found: "family=HPR",
+        set: "SET AMPS 45",
+        set_reply: "OK amps=45",
+        fault: "80",
+        fault_event: "!FAULT 080",
+    });
+}
+
+#[test]
+fn a_port_that_goes_away_ends_the_run_with_a_clear_error() {
+    let mut cable = Cable::new();
+    let _unit = Pbtool::spawn(&["unit", "--ps", "sync65", "--port", &cable.b]);
+    let mut run = Pbtool::spawn(&["run", "--ps-port", &cable.a]);
+    run.send("ID");
+    run.expect_prefix("OK bridge=");
+    cable.unplug();
+    let exit = run.wait();
+    assert_eq!(exit.code(), Some(2), "{}", run.transcript());
+    assert!(run.stderr().contains("went away"), "{}", run.transcript());
+}
+
+#[test]
+fn a_missing_or_busy_port_is_an_error_that_says_so() {
+    let mut missing = Pbtool::spawn(&["run", "--ps-port", "/dev/pbtool-no-such-port"]);
+    assert_eq!(missing.wait().code(), Some(2));
+    assert!(
+        missing.stderr().contains("does not exist"),
+        "{}",
+        missing.stderr()
+    );
+
+    let cable = Cable::new();
+    let unit = Pbtool::spawn(&["unit", "--ps", "sync65", "--port", &cable.b]);
+    // Once the unit has the port, a second user is refused.
+    let deadline = std::time::Instant::now() + common::LONG;
+    while !unit.stderr().contains("pbtool unit: a simulated") {
+        assert!(
+            std::time::Instant::now() < deadline,
+            "{}",
+            unit.transcript()
+        );
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    let mut second = Pbtool::spawn(&["unit", "--ps", "pm65", "--port", &cable.b]);
+    assert_eq!(second.wait().code(), Some(2));
+    assert!(second.stderr().contains("in use"), "{}", second.stderr());
+}
+
+#[test]
+fn with_no_unit_on_the_line_the_console_says_so_and_goes_on() {
+    let cable = Cable::new();
+    let mut run = Pbtool::spawn(&["run", "--ps-port", &cable.a]);
+    run.send("ID");
+    let id = run.expect_prefix("OK bridge=");
+    assert!(!id.contains(" link=UP "), "{id}");
+    assert!(
+        run.stderr()
+            .contains("no power supply answered on the PS port within 15 s"),
+        "{}",
+        run.transcript()
+    );
+    run.close_stdin();
+    assert!(run.wait().success(), "{}", run.transcript());
+}
