@@ -129,13 +129,19 @@ fn a_new_fault_is_known_within_250_ms_p99_on_a_powermax_while_commands_are_in_fl
             "{setup:?}: p99 {} ms",
             p99.as_millis()
         );
-        // The commands are not starved either: every one was answered (COUNTERS too, which
-        // rereads the slow data), and none waited long for the line.
-        assert!(l.commands.samples.len() >= 150, "{setup:?}: {l:?}");
+        // The commands are not starved either: every one was answered, and none waited long
+        // for the line; COUNTERS, which reads the slow data again (six reads on SYNC), too.
+        assert!(l.settings.samples.len() >= 100, "{setup:?}: {l:?}");
+        assert!(l.counters.samples.len() >= 50, "{setup:?}: {l:?}");
         assert!(
-            l.commands.max() <= Duration::from_millis(500),
+            l.settings.max() <= Duration::from_millis(400),
             "{setup:?}: {:?}",
-            l.commands.max()
+            l.settings.max()
+        );
+        assert!(
+            l.counters.max() <= Duration::from_millis(600),
+            "{setup:?}: {:?}",
+            l.counters.max()
         );
     }
 }

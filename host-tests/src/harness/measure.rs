@@ -130,7 +130,9 @@ impl Setup {
                 pressure: Pressure::Auto,
             },
         };
-        [apply(45), LinkCommand::RefreshSlowData, apply(40)]
+        let mut stream = [apply(45), apply(40), apply(40)];
+        stream[COUNTERS_INDEX] = LinkCommand::RefreshSlowData;
+        stream
     }
 
     /// The fault injected for latency measurements (Powermax 0-30-0; HPR error 044).
@@ -324,8 +326,11 @@ pub struct FaultLatency {
     pub load: Load,
     /// From the fault appearing at the unit to the link's `FaultRaised`.
     pub faults: Latencies,
-    /// From submitting a command to its result ([`Load::Commands`]; empty when idle).
-    pub commands: Latencies,
+    /// From submitting a setting command (SET PROCESS; HPR: set current) to its result
+    /// ([`Load::Commands`]; empty when idle).
+    pub settings: Latencies,
+    /// From submitting COUNTERS (the slow data read again) to its result.
+    pub counters: Latencies,
 }
 
 /// One command in flight at a time, in [`Setup::command_stream`] order.
@@ -334,7 +339,8 @@ struct CommandStream {
     next: usize,
     /// The command in flight: its ticket, when it was submitted, the event count then.
     in_flight: Option<(Ticket, Instant, usize)>,
-    latencies: Vec<Duration>,
+    /// Latency of each command answered, by its index in `commands`.
+    latencies: Vec<(usize, Duration)>,
 }
 
 impl CommandStream {
@@ -362,7 +368,8 @@ impl CommandStream {
             let Some(at) = self.answered(world) else {
                 return;
             };
-            self.latencies.push(at.saturating_since(since));
+            let index = (self.next - 1) % self.commands.len();
+            self.latencies.push((index, at.saturating_since(since)));
         }
         let command = self.commands[self.next % self.commands.len()];
         self.next += 1;
@@ -441,13 +448,25 @@ pub fn fault_latency(setup: Setup, load: Load, trials: usize, seed: u64) -> Faul
         wait_event(&mut world, &mut stream, cleared, Duration::from_secs(3))
             .expect("fault cleared");
     }
+    let latencies = stream.map(|s| s.latencies).unwrap_or_default();
+    let of_kind = |counters: bool| {
+        latencies
+            .iter()
+            .filter(|(index, _)| (*index == COUNTERS_INDEX) == counters)
+            .map(|(_, latency)| *latency)
+            .collect()
+    };
     FaultLatency {
         setup,
         load,
         faults: Latencies::new(samples),
-        commands: Latencies::new(stream.map(|s| s.latencies).unwrap_or_default()),
+        settings: Latencies::new(of_kind(false)),
+        counters: Latencies::new(of_kind(true)),
     }
 }
+
+/// Where COUNTERS is in [`Setup::command_stream`].
+const COUNTERS_INDEX: usize = 1;
 
 /// Faults injected per row of the latency table.
 pub const FAULT_TRIALS: usize = 500;
@@ -517,14 +536,14 @@ pub fn report() -> String {
 
     let _ = writeln!(
         out,
-        "\n(b) Fault-detection latency, default schedule (poll {} ms, fault register at least every {} ms), {} injections at random phases;\n    idle, and with a CNC keeping one command in flight (SET PROCESS 45 A, COUNTERS, SET PROCESS 40 A; HPR: set current)",
+        "\n(b) Fault-detection latency, default schedule (poll {} ms, fault register at least every {} ms), {} injections at random phases;\n    idle, and (busy) with a CNC keeping one command in flight (SET PROCESS 45 A, COUNTERS, SET PROCESS 40 A; HPR: set current),\n    with the latency of the setting commands (set) and of COUNTERS (cnt)",
         default.as_millis(),
         plasma_firmware::link::FAULT_CHECK_INTERVAL.as_millis(),
         FAULT_TRIALS
     );
     let _ = writeln!(
         out,
-        "{:<20} {:>8} {:>8} {:>8} | {:>8} {:>8} {:>8} | {:>9} {:>9} {:>9} {:>6}",
+        "{:<20} {:>8} {:>8} {:>8} | {:>8} {:>8} {:>8} | {:>8} {:>8} {:>8} | {:>8} {:>8} {:>8}",
         "protocol",
         "p50 ms",
         "p99 ms",
@@ -532,17 +551,19 @@ pub fn report() -> String {
         "busy p50",
         "p99",
         "max",
-        "cmd p50",
-        "cmd p99",
-        "cmd max",
-        "cmds"
+        "set p50",
+        "p99",
+        "max",
+        "cnt p50",
+        "p99",
+        "max"
     );
     for setup in Setup::ALL {
         let idle = fault_latency(setup, Load::Idle, FAULT_TRIALS, 11);
         let busy = fault_latency(setup, Load::Commands, FAULT_TRIALS, 11);
         let _ = writeln!(
             out,
-            "{:<20} {:>8.1} {:>8.1} {:>8.1} | {:>8.1} {:>8.1} {:>8.1} | {:>9.1} {:>9.1} {:>9.1} {:>6}",
+            "{:<20} {:>8.1} {:>8.1} {:>8.1} | {:>8.1} {:>8.1} {:>8.1} | {:>8.1} {:>8.1} {:>8.1} | {:>8.1} {:>8.1} {:>8.1}",
             setup.label(),
             ms(idle.faults.quantile(0.5)),
             ms(idle.faults.quantile(0.99)),
@@ -550,10 +571,12 @@ pub fn report() -> String {
             ms(busy.faults.quantile(0.5)),
             ms(busy.faults.quantile(0.99)),
             ms(busy.faults.max()),
-            ms(busy.commands.quantile(0.5)),
-            ms(busy.commands.quantile(0.99)),
-            ms(busy.commands.max()),
-            busy.commands.samples.len()
+            ms(busy.settings.quantile(0.5)),
+            ms(busy.settings.quantile(0.99)),
+            ms(busy.settings.max()),
+            ms(busy.counters.quantile(0.5)),
+            ms(busy.counters.quantile(0.99)),
+            ms(busy.counters.max()),
         );
     }
 

@@ -75,7 +75,7 @@ pub enum MbPurpose {
     FaultCheck,
 }
 
-/// What kind of work had the last turn on the line (see [`PowermaxDriver::next_turn`]).
+/// A kind of work that takes turns on the line (see [`PowermaxDriver::next_turn`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum Turn {
     /// A status poll or a fault check.
@@ -84,17 +84,6 @@ enum Turn {
     Command,
     /// Slow data, the cartridge check, identification.
     Other,
-}
-
-impl Turn {
-    /// The kinds of work in the order they are offered the line after `self`.
-    fn after(self) -> [Turn; 3] {
-        match self {
-            Turn::Status => [Turn::Command, Turn::Other, Turn::Status],
-            Turn::Command => [Turn::Other, Turn::Status, Turn::Command],
-            Turn::Other => [Turn::Status, Turn::Command, Turn::Other],
-        }
-    }
 }
 
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -131,8 +120,8 @@ pub struct PowermaxDriver {
     blackout_until: Option<Instant>,
     /// The unit refused device identification (an exception): it is not asked again.
     identify_refused: bool,
-    /// The kind of work that had the last turn (the next goes to another kind, if due).
-    last_turn: Turn,
+    /// The kinds of work, the one served longest ago first.
+    turns: [Turn; 3],
     /// When the fault register is due to be read again.
     fault_check_at: Instant,
     /// The unit refused a read of the fault register alone: the polls alone read it.
@@ -169,7 +158,7 @@ impl PowermaxDriver {
             reapply_not_before: now,
             blackout_until: None,
             identify_refused: false,
-            last_turn: Turn::Other,
+            turns: [Turn::Status, Turn::Command, Turn::Other],
             fault_check_at: now,
             fault_read_refused: false,
             now,
@@ -242,12 +231,14 @@ impl PowermaxDriver {
         }
         // The active command's steps go back to back (the legacy force registers are written
         // with nothing in between).
-        if self.active.is_some()
-            && let Some(request) = self.active_request(now, core)
-        {
-            return Some(request);
-        }
-        let next = if !self.fault_read_refused && now >= self.fault_check_at {
+        let active = if self.active.is_some() {
+            self.active_request(now, core)
+        } else {
+            None
+        };
+        let next = if active.is_some() {
+            active
+        } else if !self.fault_read_refused && now >= self.fault_check_at {
             self.fault_check(now)
         } else if self.poll.in_cycle() {
             // A poll cycle split into parts finishes first.
@@ -255,19 +246,37 @@ impl PowermaxDriver {
         } else {
             self.next_turn(now, core)
         };
-        if let Some((MbPurpose::Poll(_) | MbPurpose::FaultCheck, request, _)) = &next
-            && self.reads_fault(request)
+        if let Some((purpose, request, _)) = &next
+            && self.sees_fault(*purpose, request)
         {
             self.fault_check_at = now + FAULT_CHECK_INTERVAL;
         }
         next
     }
 
+    /// True when the answer to `request`, sent for `purpose`, updates the active fault: a
+    /// poll or a check that reads the fault register, and the read that ends legacy settings
+    /// (not a RAW read, whose answer goes to the CNC only).
+    fn sees_fault(&self, purpose: MbPurpose, request: &MbRequest) -> bool {
+        let updates = match purpose {
+            MbPurpose::Poll(_) | MbPurpose::FaultCheck => true,
+            MbPurpose::Active => matches!(
+                self.active,
+                Some(Active {
+                    job: Job::Apply(_),
+                    ..
+                })
+            ),
+            _ => false,
+        };
+        updates && self.reads_fault(request)
+    }
+
     /// The fault register is due: the poll reads it when its next read covers it (a poll due
     /// now starts first), otherwise the fault register is read alone. It goes before the
-    /// round robin and leaves the turns as they are (a check coming due during every command
-    /// would otherwise always hand the next turn back to the commands).
+    /// turns and counts as the status's turn.
     fn fault_check(&mut self, now: Instant) -> Option<(MbPurpose, MbRequest, Option<u8>)> {
+        self.served(Turn::Status);
         if !self.poll.in_cycle() && now >= self.next_poll_at {
             self.start_poll(now);
         }
@@ -293,15 +302,16 @@ impl PowermaxDriver {
             if start <= fault && fault - start < quantity)
     }
 
-    /// Round robin: whatever is due (a poll, a new command, slow data or the cartridge check)
-    /// waits for at most one turn of each other kind, so neither a short poll interval nor a
+    /// Round robin: of the kinds of work that are due (a poll, a new command, slow data or
+    /// the cartridge check), the one served longest ago goes, so each waits for at most one
+    /// turn of each other kind (and the fault checks): neither a short poll interval nor a
     /// stream of commands starves the rest.
     fn next_turn(
         &mut self,
         now: Instant,
         core: &mut Core,
     ) -> Option<(MbPurpose, MbRequest, Option<u8>)> {
-        for turn in self.last_turn.after() {
+        for turn in self.turns {
             let next = match turn {
                 Turn::Status if now >= self.next_poll_at => {
                     self.start_poll(now);
@@ -312,11 +322,23 @@ impl PowermaxDriver {
                 Turn::Other => self.other_request(now, core),
             };
             if next.is_some() {
-                self.last_turn = turn;
+                self.served(turn);
                 return next;
             }
         }
         None
+    }
+
+    /// `turn` was served: it goes to the back of the line.
+    fn served(&mut self, turn: Turn) {
+        let [first, second, third] = self.turns;
+        self.turns = if turn == first {
+            [second, third, first]
+        } else if turn == second {
+            [first, third, second]
+        } else {
+            self.turns
+        };
     }
 
     fn start_poll(&mut self, now: Instant) {
