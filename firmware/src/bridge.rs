@@ -1,5 +1,5 @@
 //! The bridge façade: the power-supply link, the CNC session and the settings behind one
-//! sans-IO object (see notes/BRIDGE-DESIGN.md).
+//! sans-IO object.
 //!
 //! The discrete I/O ([`Interlocks`](crate::io::Interlocks)) is *not* inside: on the board it
 //! runs in a higher-priority context so that START never waits behind serial work. The two
@@ -30,29 +30,17 @@
 //!
 //! bridge.handle_cnc_rx(Instant::from_millis(1), b"SET AMPS 45\r\n");
 //! let reply = bridge.poll_cnc_output().unwrap();
-//! assert_eq!(
-//!     reply,
-//!     b"ERR LINK no power supply connected (the bridge is looking for one)\r\n"
-//! );
+//! let expected = format!("ERR LINK {}\r\n", plasma_firmware::texts::NO_LINK);
+//! assert_eq!(reply, expected.as_bytes());
 //! ```
 
 use crate::io::{Inputs, IoConfig, IoEvent, Outputs, SupplyState};
-use crate::link::{Diagnostics, LinkCommand, LinkEvent, PsLink, Refusal, Ticket, UnitStatus};
-use crate::session::{Context, Session, SessionStats, SimCommand};
-use crate::settings::{SaveError, Settings};
+use crate::link::{Diagnostics, PowermaxSettings, PsLink, UnitStatus};
+pub use crate::session::SimCommand;
+use crate::session::{Context, Session, SessionStats};
+use crate::settings::{Process, SaveError, Settings};
 use plasma_protocol::serial::PortConfig;
 use plasma_protocol::time::Instant;
-
-/// Re-applying the process kept in the settings after power-up.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum Restore {
-    /// Nothing to re-apply (or done).
-    Done,
-    /// Waiting for a Powermax with known limits.
-    Waiting,
-    /// Submitted; the link reports with `!SETTINGS applied|failed`.
-    Sent(Ticket),
-}
 
 /// The bridge: link, CNC session and settings. See the module docs.
 #[derive(Debug)]
@@ -62,7 +50,6 @@ pub struct Bridge {
     settings: Settings,
     io: Option<(Inputs, Outputs)>,
     boot_report: Option<&'static str>,
-    restore: Restore,
     now: Instant,
     /// The link may hold events that [`Bridge::poll`] has not moved yet.
     dirty: bool,
@@ -84,16 +71,16 @@ macro_rules! ctx {
 
 impl Bridge {
     /// A bridge that runs with `settings` (loaded from flash, or the defaults) from `now`.
-    /// A process kept in the settings is applied again once a Powermax answers.
+    /// The process persisted in the settings goes to the link, which applies it again once a
+    /// Powermax answers (the link decides what is re-applied and when: [`crate::link::kept`]).
     pub fn new(settings: Settings, now: Instant) -> Self {
+        let mut link = PsLink::new(settings.link, now);
+        if let Some(process) = settings.process {
+            link.restore(unit_settings(&process));
+        }
         Bridge {
-            link: PsLink::new(settings.link, now),
+            link,
             session: Session::new(&settings),
-            restore: if settings.process.is_some() {
-                Restore::Waiting
-            } else {
-                Restore::Done
-            },
             settings,
             io: None,
             boot_report: None,
@@ -168,8 +155,7 @@ impl Bridge {
 
     // --- time ---------------------------------------------------------------------------
 
-    /// Move link events into the session (replies, event lines), re-apply a kept process,
-    /// answer waiting lines.
+    /// Move link events into the session (replies, event lines), answer waiting lines.
     pub fn poll(&mut self, now: Instant) {
         self.service(now);
     }
@@ -188,56 +174,11 @@ impl Bridge {
     fn service(&mut self, now: Instant) {
         self.now = now;
         while let Some(event) = self.link.poll_event() {
-            if let (Restore::Sent(ticket), LinkEvent::CommandDone { ticket: done, .. }) =
-                (self.restore, &event)
-                && ticket == *done
-            {
-                // `!SETTINGS applied|failed` report the outcome.
-                self.restore = Restore::Done;
-                continue;
-            }
             self.session.on_link_event(&mut ctx!(self, now), &event);
         }
-        self.try_restore(now);
         self.session.poll(&mut ctx!(self, now));
         self.session.pump(&mut ctx!(self, now));
         self.dirty = false;
-    }
-
-    fn try_restore(&mut self, now: Instant) {
-        if self.restore != Restore::Waiting {
-            return;
-        }
-        let status = self.link.status();
-        let Some(family) = status.family.filter(|_| status.link_up) else {
-            return;
-        };
-        let Some(process) = self.settings.process else {
-            self.restore = Restore::Done;
-            return;
-        };
-        // Only a Powermax keeps a process; a CNC command already set one: nothing to do.
-        if !family.is_modbus() || status.desired.is_some() {
-            self.restore = Restore::Done;
-            return;
-        }
-        if status.limits.is_none() || self.session.is_busy() {
-            return;
-        }
-        let command = LinkCommand::ApplySettings {
-            mode: crate::session::unit_mode(process.mode),
-            current: process.amps,
-            pressure: process.pressure,
-        };
-        match self.link.submit(now, command) {
-            Ok(ticket) => self.restore = Restore::Sent(ticket),
-            Err(Refusal::Blackout { .. } | Refusal::QueueFull | Refusal::LimitsUnknown) => {}
-            Err(refusal) => {
-                self.restore = Restore::Done;
-                let ctx = ctx!(self, now);
-                self.session.restore_refused(&ctx, &refusal);
-            }
-        }
     }
 
     // --- discrete I/O exchange ----------------------------------------------------------
@@ -323,6 +264,15 @@ impl From<&UnitStatus> for SupplyState {
             restart_blackout_until: status.restart_blackout_until,
             unit_ready: status.ready,
         }
+    }
+}
+
+/// A persisted process in the unit's terms (`CPA` and `EXPANDED` are one mode).
+fn unit_settings(process: &Process) -> PowermaxSettings {
+    PowermaxSettings {
+        mode: Some(crate::session::unit_mode(process.mode)),
+        current: process.amps,
+        pressure: process.pressure,
     }
 }
 
@@ -412,8 +362,7 @@ mod tests {
             rig.received,
             [
                 NAK_TOKEN,
-                "ERR SYNTAX Phoenix message incomplete: the next one began or the line went \
-                 quiet (NAK sent)"
+                std::format!("ERR SYNTAX {}", crate::session::texts::PHOENIX_TRUNCATED).as_str()
             ]
         );
         // Text lines work again at once.

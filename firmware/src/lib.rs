@@ -73,7 +73,9 @@ pub mod link;
 pub mod pins;
 pub mod runner;
 pub mod safe_state;
-pub mod session;
+mod session;
+/// The CNC-visible texts of the ERR replies, written once: tests take them from here.
+pub use session::texts;
 pub mod settings;
 pub mod storage;
 pub mod supervisor;

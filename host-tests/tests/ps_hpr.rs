@@ -4,7 +4,7 @@
 use host_tests::harness::{World, WorldOptions};
 use plasma_firmware::io::Interlock;
 use plasma_firmware::link::{
-    CommandOutput, HprGasFlow, LinkCommand, LinkEvent, Refusal, command::RAW_CAPACITY,
+    CommandOutput, HprGasFlow, LinkCommand, LinkEvent, RAW_CAPACITY, Refusal,
 };
 use plasma_protocol::hpr::{self, Class, GasCode, GasPair, StateCode};
 use plasma_protocol::time::Duration;

@@ -130,7 +130,7 @@ fn cut_at_63_a_with_automatic_pressure_puts_the_manuals_frame_on_the_wire() {
     assert!(status.remote);
     assert_eq!(status.settings, Some(read_back), "polls read it back");
     assert_eq!(
-        status.desired,
+        world.link().kept().powermax(),
         Some(expected),
         "automatic pressure is what is kept"
     );
@@ -184,7 +184,7 @@ fn legacy_settings_are_written_to_the_force_registers_in_order() {
     );
     assert!(!world.sim::<Powermax>().in_remote_mode());
     assert!(!world.link().status().remote);
-    assert_eq!(world.link().status().desired, None);
+    assert_eq!(world.link().kept().powermax(), None);
 }
 
 #[test]
@@ -285,7 +285,7 @@ fn settings_outside_the_limits_are_refused_before_anything_is_sent() {
         world.run_for(secs(1));
         assert_eq!(writes_since(&world, mark), Vec::<Vec<u8>>::new(), "{model}");
         assert!(!world.sim::<Powermax>().in_remote_mode(), "{model}");
-        assert_eq!(world.link().status().desired, None, "{model}");
+        assert_eq!(world.link().kept().powermax(), None, "{model}");
     }
 }
 
@@ -566,7 +566,7 @@ fn power_cycle_reapplies(model: Model, pressure: Pressure, expected_sim: Setting
     world.run_for(secs(1));
     let status = world.link().status();
     assert!(status.link_up && status.remote, "{model}");
-    assert_eq!(status.desired, Some(desired), "{model}");
+    assert_eq!(world.link().kept().powermax(), Some(desired), "{model}");
     assert!(down_at > Instant::ZERO);
 }
 

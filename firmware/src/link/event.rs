@@ -4,6 +4,7 @@ use heapless::Deque;
 use plasma_protocol::hpr::{ErrorCode, StateCode};
 use plasma_protocol::powermax::FaultCode;
 
+use super::command::Refusal;
 use super::diagnostics::Diagnostics;
 use super::status::{ActiveFault, Family, Model, PowermaxSettings};
 use super::transaction::TransactionError;
@@ -129,6 +130,12 @@ pub enum LinkEvent {
         /// Why.
         reason: SettingsFailure,
     },
+    /// The persisted process ([`PsLink::restore`](super::PsLink::restore)) was refused before
+    /// sending (outside the unit's limits); it is dropped.
+    RestoreRefused {
+        /// Why.
+        refusal: Refusal,
+    },
     /// A different cartridge is installed (SYNC), new UID attached.
     CartridgeChanged {
         /// The new cartridge's UID (16 ASCII characters; zeros when the unit cannot read it).
@@ -166,6 +173,7 @@ impl LinkEvent {
                 | LinkEvent::FaultRaised { .. }
                 | LinkEvent::FaultCleared { .. }
                 | LinkEvent::SettingsFailed { .. }
+                | LinkEvent::RestoreRefused { .. }
                 | LinkEvent::CommandDone { .. }
         )
     }
@@ -226,13 +234,9 @@ impl EventQueue {
     }
 
     /// Number of queued events.
+    #[cfg(test)]
     pub fn len(&self) -> usize {
         self.events.len()
-    }
-
-    /// True when nothing is queued.
-    pub fn is_empty(&self) -> bool {
-        self.events.is_empty()
     }
 }
 

@@ -29,7 +29,7 @@
 //!   still found. While a Modbus unit is expected back, the HPR probe's retries follow at
 //!   once instead of riding through an HF-ignition blackout (no HPR cuts without a link).
 //! - A step whose replies all arrived damaged (bad LRC, garbled) is asked again, up to
-//!   [`DETECT_REASKS`] times: a damaged reply shows a unit that speaks this protocol at this
+//!   [`DETECT_REASKS`](detect::DETECT_REASKS) times: a damaged reply shows a unit that speaks this protocol at this
 //!   framing. Only silence or a clean exception moves detection on (a SYNC unit also answers
 //!   the legacy probe, so it must not get there by accident).
 //! - A unit the legacy probe found (no model known) is asked for its device identification
@@ -37,15 +37,16 @@
 //!   as on a link-down, `LinkUp` reports the unit again, kept settings are re-applied).
 //! - Only silence counts toward link-down: [`LinkConfig::failures_before_down`] failed
 //!   transactions in a row that heard nothing. Damaged replies prove the unit is there: they
-//!   are counted and retried, and only [`UNANSWERED_FACTOR`] times as many failures in a row
+//!   are counted and retried, and only [`UNANSWERED_FACTOR`](schedule::UNANSWERED_FACTOR) times as many failures in a row
 //!   without a valid reply take the link down.
 //!
 //! # Kept settings
-//! Settings the CNC set and the unit confirmed are kept and re-applied after the unit
-//! power-cycles or the link returns: Powermax mode, current and pressure
-//! ([`UnitStatus::desired`]); HPR / MaxPro200 nominal current, corner current, process,
-//! all parameters and inlet gases ([`PsLink::hpr_kept_settings`], a later setting replacing
-//! what it sets again), re-applied after 004 REMOTE_MODE once the unit is in state 2 or 3
+//! Settings the CNC set and the unit confirmed are kept ([`kept`], the one place that decides
+//! what is re-applied and when) and re-applied after the unit power-cycles or the link
+//! returns: Powermax mode, current and pressure ([`Kept::powermax`], and once after start-up
+//! the persisted process, [`PsLink::restore`]); HPR / MaxPro200 nominal current, corner
+//! current, process and inlet gases ([`Kept::hpr_requests`], a later setting replacing what
+//! it sets again), re-applied after 004 REMOTE_MODE once the unit is in state 2 or 3
 //! (another HPR model on the line does not get them: `SettingsFailed { OutsideLimits }`).
 //! An HPR setting counts as done only when the unit's answer shows the value asked for;
 //! otherwise 004 is sent again and the setting once more (the unit may have restarted and
@@ -81,12 +82,13 @@
 //! assert!(link.status().link_up);
 //! ```
 
-pub mod command;
-pub mod config;
+pub(crate) mod command;
+pub(crate) mod config;
 mod detect;
-pub mod diagnostics;
-pub mod event;
+pub(crate) mod diagnostics;
+pub(crate) mod event;
 pub(crate) mod hpr;
+pub(crate) mod kept;
 pub(crate) mod legacy;
 pub(crate) mod modbus;
 mod phase;
@@ -94,9 +96,10 @@ pub(crate) mod powermax;
 mod receive;
 mod schedule;
 pub(crate) mod slow;
-pub mod status;
+pub(crate) mod status;
+pub mod support;
 pub(crate) mod sync;
-pub mod transaction;
+pub(crate) mod transaction;
 
 #[cfg(test)]
 mod tests;
@@ -105,24 +108,23 @@ use heapless::Vec;
 use plasma_protocol::hpr as hpr_wire;
 use plasma_protocol::modbus_ascii;
 
-pub use command::{HprGasFlow, HprValue, LinkCommand, Refusal};
+pub use command::{HprGasFlow, HprValue, LinkCommand, RAW_CAPACITY, Refusal};
 pub use config::{ConfigError, LinkConfig, ProtocolChoice};
-pub use detect::{DETECT_REASKS, DETECT_ROUND_PAUSE};
 pub use diagnostics::Diagnostics;
 pub use event::{
     CommandFailure, CommandOutput, LinkDownReason, LinkEvent, SettingsFailure, Ticket,
 };
-pub use schedule::{SLEEP_QUIET, UNANSWERED_FACTOR};
 pub use status::{ActiveFault, Family, Limits, Model, PowermaxSettings, UnitStatus};
 pub use transaction::TransactionError;
 
 use detect::{DetectStep, Detector, KnownGood};
 use event::EventQueue;
-pub use hpr::HprKept;
+pub use kept::Kept;
 use phase::Phase;
 pub use powermax::FAULT_CHECK_INTERVAL;
 use schedule::Tag;
-use transaction::{TX_CAPACITY, Transaction};
+pub use transaction::TX_CAPACITY;
+use transaction::Transaction;
 
 use plasma_protocol::serial::PortConfig;
 use plasma_protocol::time::{Duration, Instant};
@@ -137,9 +139,8 @@ pub(crate) struct Core {
     pub(super) status: UnitStatus,
     /// Counters.
     pub(super) diagnostics: Diagnostics,
-    /// HPR / MaxPro200 settings to keep and re-apply (the Powermax ones are
-    /// [`UnitStatus::desired`]).
-    pub(super) hpr_kept: HprKept,
+    /// What is re-applied, for every family (see [`kept`]).
+    pub(super) kept: Kept,
     events: EventQueue,
 }
 
@@ -256,7 +257,7 @@ impl PsLink {
                 config,
                 status: UnitStatus::default(),
                 diagnostics: Diagnostics::default(),
-                hpr_kept: HprKept::default(),
+                kept: Kept::default(),
                 events: EventQueue::new(),
             },
             phase: Phase::Detecting(Detector::searching(DetectStep::DeviceId, 0, now)),
@@ -377,6 +378,8 @@ impl PsLink {
 
     /// Ask for an operation. Validates against the unit's limits BEFORE anything is sent;
     /// Err = refused with a precise reason, nothing sent.
+    // Not inlined into its one caller in the image (the session): that costs ~300 B of flash.
+    #[inline(never)]
     pub fn submit(&mut self, now: Instant, command: LinkCommand<'_>) -> Result<Ticket, Refusal> {
         self.now = now;
         let ticket = Ticket(self.next_ticket);
@@ -399,10 +402,16 @@ impl PsLink {
         &self.core.diagnostics
     }
 
-    /// The HPR / MaxPro200 settings the CNC set and the unit confirmed, kept across
-    /// link-downs and re-applied (after 004 REMOTE_MODE) when the unit returns or restarts.
-    pub fn hpr_kept_settings(&self) -> &[plasma_protocol::hpr::Request] {
-        self.core.hpr_kept.as_slice()
+    /// What the link re-applies (see [`kept`]).
+    pub fn kept(&self) -> &Kept {
+        &self.core.kept
+    }
+
+    /// Apply `settings` (the persisted process) once a Powermax with known limits answers,
+    /// unless the CNC sets a process first. Refused settings are reported with
+    /// [`LinkEvent::RestoreRefused`] and dropped.
+    pub fn restore(&mut self, settings: PowermaxSettings) {
+        self.core.kept.restore(settings);
     }
 
     /// The reply frame of the last RAW command (see [`CommandOutput::Raw`]).

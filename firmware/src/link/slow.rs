@@ -149,7 +149,7 @@ mod tests {
     use crate::link::config::LinkConfig;
     use crate::link::diagnostics::Diagnostics;
     use crate::link::event::EventQueue;
-    use crate::link::hpr::HprKept;
+    use crate::link::kept::Kept;
     use crate::link::status::UnitStatus;
 
     const INTERVAL: Duration = Duration::from_secs(1);
@@ -159,7 +159,7 @@ mod tests {
             config: LinkConfig::default(),
             status: UnitStatus::default(),
             diagnostics: Diagnostics::default(),
-            hpr_kept: HprKept::default(),
+            kept: Kept::default(),
             events: EventQueue::new(),
         }
     }

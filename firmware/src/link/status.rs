@@ -141,8 +141,6 @@ pub struct UnitStatus {
     /// Settings as the unit reports them (SYNC 0x3010-0x3012, legacy force registers read
     /// back when the unit allows it).
     pub settings: Option<PowermaxSettings>,
-    /// Settings the CNC asked for; kept and re-applied after a power cycle or link return.
-    pub desired: Option<PowermaxSettings>,
     /// Actual output current (SYNC).
     pub actual_current: Option<Amps>,
     /// Actual gas pressure (SYNC).
@@ -173,13 +171,10 @@ pub struct UnitStatus {
 }
 
 impl UnitStatus {
-    /// Forget everything learned from the unit (after link-down); desired settings stay.
+    /// Forget everything learned from the unit (after link-down); what the link re-applies
+    /// is not part of the status ([`Kept`](super::Kept)).
     pub fn forget_unit(&mut self) {
-        let desired = self.desired;
-        *self = UnitStatus {
-            desired,
-            ..UnitStatus::default()
-        };
+        *self = UnitStatus::default();
     }
 
     /// Recompute [`UnitStatus::ready`] for time `now`.

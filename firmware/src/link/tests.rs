@@ -11,6 +11,7 @@ use std::vec::Vec;
 use plasma_protocol::hpr::{ErrorCode, GasCode, GasPair, StateCode, SystemId};
 use plasma_protocol::powermax::{Amps, FaultCode, OperatingMode, PowerSupplyModel, Pressure, Psi};
 
+use super::schedule::UNANSWERED_FACTOR;
 use super::*;
 use crate::testing::SimPs;
 use plasma_protocol::serial::{Parity, PortConfig};
@@ -519,7 +520,7 @@ fn cut_at_63_a_with_automatic_pressure_is_the_guides_frame_and_is_read_back() {
         ticket,
         result: Ok(CommandOutput::Settings(read_back))
     }));
-    assert_eq!(bench.link.status().desired, Some(applied));
+    assert_eq!(bench.link.kept().powermax(), Some(applied));
     assert!(bench.link.status().remote);
 }
 
@@ -549,7 +550,7 @@ fn a_read_back_that_differs_fails_the_command() {
         e,
         LinkEvent::CommandDone { ticket: t, result: Err(CommandFailure::Settings(SettingsFailure::ReadBackDiffers { .. })) } if *t == ticket
     )));
-    assert_eq!(bench.link.status().desired, None);
+    assert_eq!(bench.link.kept().powermax(), None);
 }
 
 #[test]
@@ -628,7 +629,7 @@ fn kept_settings_are_reapplied_when_the_link_returns() {
     bench.run(bench.now + Duration::from_millis(1000));
     assert!(!bench.link.status().link_up);
     assert!(
-        bench.link.status().desired.is_some(),
+        bench.link.kept().powermax().is_some(),
         "kept across the link-down"
     );
     bench.unplug(false);
@@ -1597,7 +1598,7 @@ fn hpr_at_100_a() -> Bench {
     assert_eq!(bench.next_tx(bench.now).unwrap(), hf(58, "100"));
     bench.rx(2, &hf(58, "0100"));
     assert_eq!(
-        bench.link.hpr_kept_settings(),
+        bench.link.kept().hpr_requests(),
         [plasma_protocol::hpr::Request::SetNominalAmps { amps: 100 }]
     );
     bench.events();
@@ -1680,7 +1681,7 @@ fn an_hpr_setting_answered_with_another_value_is_never_a_success() {
     }));
     // What is kept is what the unit confirmed.
     assert_eq!(
-        bench.link.hpr_kept_settings(),
+        bench.link.kept().hpr_requests(),
         [plasma_protocol::hpr::Request::SetNominalAmps { amps: 100 }]
     );
 }
@@ -1693,7 +1694,7 @@ fn kept_hpr_settings_are_not_given_to_another_model() {
         bench.next_tx(bench.now + Duration::from_secs(10)).unwrap();
     }
     assert!(
-        !bench.link.hpr_kept_settings().is_empty(),
+        !bench.link.kept().hpr_requests().is_empty(),
         "kept across the link-down"
     );
     // An HPR260 answers HELLO instead.
@@ -1706,7 +1707,7 @@ fn kept_hpr_settings_are_not_given_to_another_model() {
     bench.events();
     bench.rx(3, &hf(0, "HYPERFORMANCE260AUTO"));
     assert!(bench.link.status().link_up);
-    assert!(bench.link.hpr_kept_settings().is_empty());
+    assert!(bench.link.kept().hpr_requests().is_empty());
     assert!(bench.events().contains(&LinkEvent::SettingsFailed {
         reason: SettingsFailure::OutsideLimits
     }));

@@ -200,13 +200,9 @@ impl<T> Transaction<T> {
     }
 
     /// Attempts transmitted so far.
+    #[cfg(test)]
     pub fn attempts_sent(&self) -> u8 {
         self.attempts_sent
-    }
-
-    /// When the latest attempt was handed out for transmission.
-    pub fn last_sent(&self) -> Option<Instant> {
-        self.last_sent
     }
 
     /// True when some attempt got a reply, even a damaged or unusable one: the unit is

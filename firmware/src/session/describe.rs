@@ -250,19 +250,55 @@ pub fn write_refusal<W: Write>(
     family: Option<Family>,
     now: Instant,
 ) -> fmt::Result {
-    let scope = limit_scope(family);
     match refusal {
+        Refusal::ModeNotPermitted { .. }
+        | Refusal::CurrentOutOfRange { .. }
+        | Refusal::PressureOutOfRange { .. }
+        | Refusal::HprValueOutOfRange { .. } => write_range_refusal(out, refusal, family),
         Refusal::LinkNotUp => write_error(out, ErrorCode::Link, "no power supply connected"),
         Refusal::NotSupported { family } => write_error(
             out,
             ErrorCode::Unsupported,
             format_args!("not supported by {}", family_name(*family)),
         ),
-        Refusal::LimitsUnknown => write_error(
+        Refusal::LimitsUnknown => write_error(out, ErrorCode::State, super::texts::LIMITS_NOT_READ),
+        Refusal::QuickRestartNeeds050 { .. } => write_error(out, ErrorCode::State, refusal),
+        Refusal::Blackout { until } => write_error(
+            out,
+            ErrorCode::Busy,
+            format_args!(
+                "the unit restarts: quiet for another {} ms",
+                until.saturating_since(now).as_millis_u32()
+            ),
+        ),
+        Refusal::QueueFull => write_error(out, ErrorCode::Busy, "the link's command queue is full"),
+        Refusal::StateForbids { state, error } => write_error(
             out,
             ErrorCode::State,
-            "the unit's permitted limits have not been read yet, try again",
+            format_args!(
+                "not allowed in state {} ({}) with error {} ({})",
+                OrDash(state.map(|s| s.0)),
+                state.map_or("unknown", |s| state_name(s, family)),
+                OrDash(error.map(HprCode)),
+                error.and_then(|e| e.name()).unwrap_or("unknown"),
+            ),
         ),
+        Refusal::RawMalformed(_)
+        | Refusal::RawWrongAddress { .. }
+        | Refusal::RawFunctionNotAllowed { .. }
+        | Refusal::RawWriteNotAllowed { .. }
+        | Refusal::RawCommandNotAllowed { .. } => write_error(out, ErrorCode::Refused, refusal),
+    }
+}
+
+/// Write the `ERR RANGE` line of a value outside what the unit permits.
+fn write_range_refusal<W: Write>(
+    out: &mut W,
+    refusal: &Refusal,
+    family: Option<Family>,
+) -> fmt::Result {
+    let scope = limit_scope(family);
+    match refusal {
         Refusal::ModeNotPermitted { mode, permitted } => {
             let low = permitted.low_mode().map(|m| mode_word(m, family));
             let high = permitted.high_mode().map(|m| mode_word(m, family));
@@ -297,16 +333,6 @@ pub fn write_refusal<W: Write>(
             ErrorCode::Range,
             format_args!("psi {requested} outside {min}..{max} {scope}"),
         ),
-        Refusal::QuickRestartNeeds050 { .. } => write_error(out, ErrorCode::State, refusal),
-        Refusal::Blackout { until } => write_error(
-            out,
-            ErrorCode::Busy,
-            format_args!(
-                "the unit restarts: quiet for another {} ms",
-                until.saturating_since(now).as_millis_u32()
-            ),
-        ),
-        Refusal::QueueFull => write_error(out, ErrorCode::Busy, "the link's command queue is full"),
         Refusal::HprValueOutOfRange {
             value,
             requested,
@@ -317,22 +343,8 @@ pub fn write_refusal<W: Write>(
             ErrorCode::Range,
             format_args!("{} {requested} outside {min}..{max} {scope}", value.word()),
         ),
-        Refusal::StateForbids { state, error } => write_error(
-            out,
-            ErrorCode::State,
-            format_args!(
-                "not allowed in state {} ({}) with error {} ({})",
-                OrDash(state.map(|s| s.0)),
-                state.map_or("unknown", |s| state_name(s, family)),
-                OrDash(error.map(HprCode)),
-                error.and_then(|e| e.name()).unwrap_or("unknown"),
-            ),
-        ),
-        Refusal::RawMalformed(_)
-        | Refusal::RawWrongAddress { .. }
-        | Refusal::RawFunctionNotAllowed { .. }
-        | Refusal::RawWriteNotAllowed { .. }
-        | Refusal::RawCommandNotAllowed { .. } => write_error(out, ErrorCode::Refused, refusal),
+        // `write_refusal` sends only the four above here.
+        _ => Ok(()),
     }
 }
 

@@ -7,13 +7,17 @@ use plasma_protocol::cnc::reply::ReplyWriter;
 use plasma_protocol::cnc::{ErrorCode, Pressure};
 use plasma_protocol::hpr;
 
+use super::commands::Op;
 use super::describe::{
-    FaultId, ModelName, OrDash, Text, family_name, family_word, fault_text, mode_word, on_off,
-    state_name, unit_mode, write_failure,
+    FaultId, ModelName, OrDash, Text, family_word, fault_text, mode_word, on_off, state_name,
+    unit_mode, write_failure,
 };
-use super::{Context, List, Op, ReplyLine, Uid, err_line, line, no_link, ok_line, unsupported};
+use super::events::Uid;
+use super::texts;
+use super::{Context, List, ReplyLine, err_line, line, no_link, ok_line};
 use crate::io::{Inputs, Outputs};
-use crate::link::{CommandFailure, CommandOutput, Family, Model, PsLink, UnitStatus};
+use crate::link::{CommandFailure, CommandOutput, Family, Limits, Model, PsLink, UnitStatus};
+use crate::settings::Process;
 
 pub(super) fn help(sim: bool) -> ReplyLine {
     ok_line(|w| {
@@ -98,66 +102,55 @@ pub(super) fn status_line(ctx: &Context<'_>) -> ReplyLine {
 pub(super) fn limits(status: &UnitStatus, family: Option<Family>) -> ReplyLine {
     match (family, status.model) {
         (None, _) => no_link(),
-        (Some(Family::Hpr | Family::MaxPro200), Some(Model::Hpr(system))) => {
-            let max = match system {
-                hpr::SystemId::Hpr { rating, .. } => rating.max_amps(),
-                hpr::SystemId::MaxPro200 => hpr::MAX_MAXPRO_AMPS,
-            };
-            ok_line(|w| {
-                w.field("amps", format_args!("{}..{max}", hpr::MIN_AMPS))?;
-                if !system.is_maxpro200() {
-                    w.field(
-                        "corner",
-                        format_args!(
-                            "{}..{}",
-                            hpr::CORNER_PERCENT.start(),
-                            hpr::CORNER_PERCENT.end()
-                        ),
-                    )?;
-                }
-                Ok(())
-            })
-        }
+        (Some(Family::Hpr | Family::MaxPro200), Some(Model::Hpr(system))) => hpr_limits(system),
         (Some(family), _) => match status.limits {
-            None => err_line(
-                ErrorCode::State,
-                "the unit's permitted limits have not been read yet, try again",
-            ),
-            Some(limits) => ok_line(|w| {
-                match limits.modes {
-                    Some(modes) => {
-                        let low = modes.low_mode();
-                        let high = modes.high_mode().filter(|h| Some(*h) != low);
-                        w.field(
-                            "modes",
-                            List(
-                                low.into_iter()
-                                    .chain(high)
-                                    .map(|m| mode_word(m, Some(family))),
-                            ),
-                        )?;
-                    }
-                    None => w.field("modes", "CUT,CPA,GOUGE")?,
-                }
-                w.field(
-                    "amps",
-                    format_args!("{}..{}", limits.min_current, limits.max_current),
-                )?;
-                w.field(
-                    "psi",
-                    format_args!("{}..{}", limits.min_pressure, limits.max_pressure),
-                )?;
-                w.field(
-                    "scope",
-                    if family == Family::PowermaxSync {
-                        "cartridge"
-                    } else {
-                        "unit"
-                    },
-                )
-            }),
+            None => err_line(ErrorCode::State, texts::LIMITS_NOT_READ),
+            Some(limits) => powermax_limits(&limits, family),
         },
     }
+}
+
+/// An HPR's or MaxPro200's ranges: from the manual and the unit's rating.
+fn hpr_limits(system: hpr::SystemId) -> ReplyLine {
+    let max = match system {
+        hpr::SystemId::Hpr { rating, .. } => rating.max_amps(),
+        hpr::SystemId::MaxPro200 => hpr::MAX_MAXPRO_AMPS,
+    };
+    ok_line(|w| {
+        w.field("amps", format_args!("{}..{max}", hpr::MIN_AMPS))?;
+        if !system.is_maxpro200() {
+            let (low, high) = (hpr::CORNER_PERCENT.start(), hpr::CORNER_PERCENT.end());
+            w.field("corner", format_args!("{low}..{high}"))?;
+        }
+        Ok(())
+    })
+}
+
+/// A Powermax's limits as it reports them (SYNC: for the installed cartridge).
+fn powermax_limits(limits: &Limits, family: Family) -> ReplyLine {
+    ok_line(|w| {
+        match limits.modes {
+            Some(modes) => {
+                let low = modes.low_mode();
+                let high = modes.high_mode().filter(|h| Some(*h) != low);
+                let words = low
+                    .into_iter()
+                    .chain(high)
+                    .map(|m| mode_word(m, Some(family)));
+                w.field("modes", List(words))?;
+            }
+            None => w.field("modes", "CUT,CPA,GOUGE")?,
+        }
+        let (min, max) = (limits.min_current, limits.max_current);
+        w.field("amps", format_args!("{min}..{max}"))?;
+        let (min, max) = (limits.min_pressure, limits.max_pressure);
+        w.field("psi", format_args!("{min}..{max}"))?;
+        let scope = match family {
+            Family::PowermaxSync => "cartridge",
+            _ => "unit",
+        };
+        w.field("scope", scope)
+    })
 }
 
 pub(super) fn fault(status: &UnitStatus, family: Option<Family>) -> ReplyLine {
@@ -183,34 +176,28 @@ pub(super) fn fault(status: &UnitStatus, family: Option<Family>) -> ReplyLine {
     }
 }
 
-pub(super) fn cartridge(status: &UnitStatus, family: Option<Family>) -> ReplyLine {
-    match family {
-        None => no_link(),
-        Some(Family::PowermaxSync) => match status.cartridge {
-            None => err_line(ErrorCode::State, "cartridge data not read yet, try again"),
-            Some(c) => ok_line(|w| {
-                w.field("uid", Uid(&c.uid.0))?;
-                w.field("part", OrDash(c.part_number.as_str()))?;
-                w.field("rev", c.revision)?;
-                w.field("nominal_amps", c.nominal_current())?;
-                if let Some(name) = status
-                    .cartridge_name
-                    .as_ref()
-                    .and_then(|n| n.as_str())
-                    .filter(|n| !n.is_empty())
-                {
-                    w.field("name", name)?;
-                }
-                w.field("starts", c.counters.starts)?;
-                w.field("pilot_arc_s", c.counters.pilot_arc_seconds)?;
-                w.field("transfers", c.counters.transfers)?;
-                w.field("transfer_s", c.counters.transfer_seconds())
-            }),
-        },
-        Some(f) => unsupported(format_args!(
-            "CARTRIDGE is a Powermax SYNC function; {} has no cartridge data",
-            family_name(f)
-        )),
+/// `CARTRIDGE` on a SYNC unit (the support table refuses it elsewhere).
+pub(super) fn cartridge(status: &UnitStatus) -> ReplyLine {
+    match status.cartridge {
+        None => err_line(ErrorCode::State, texts::CARTRIDGE_NOT_READ),
+        Some(c) => ok_line(|w| {
+            w.field("uid", Uid(&c.uid.0))?;
+            w.field("part", OrDash(c.part_number.as_str()))?;
+            w.field("rev", c.revision)?;
+            w.field("nominal_amps", c.nominal_current())?;
+            if let Some(name) = status
+                .cartridge_name
+                .as_ref()
+                .and_then(|n| n.as_str())
+                .filter(|n| !n.is_empty())
+            {
+                w.field("name", name)?;
+            }
+            w.field("starts", c.counters.starts)?;
+            w.field("pilot_arc_s", c.counters.pilot_arc_seconds)?;
+            w.field("transfers", c.counters.transfers)?;
+            w.field("transfer_s", c.counters.transfer_seconds())
+        }),
     }
 }
 
@@ -235,9 +222,12 @@ pub(super) fn counters_with(
     })
 }
 
-/// The reply of a command the link finished.
+/// The reply of a command the link finished. It only formats: what the outcome changes is
+/// the command handler's (`Session::keep_outcome`).
+// Kept out of the link-event loop it is called from: a smaller image.
+#[inline(never)]
 pub(super) fn complete(
-    ctx: &mut Context<'_>,
+    ctx: &Context<'_>,
     op: Op,
     result: &Result<CommandOutput, CommandFailure>,
 ) -> ReplyLine {
@@ -247,38 +237,10 @@ pub(super) fn complete(
         Ok(output) => *output,
     };
     match op {
-        Op::Settings(process) => {
-            let CommandOutput::Settings(read) = output else {
-                return ok_line(|w| w.field("mode", mode_word(unit_mode(process.mode), family)));
-            };
-            ctx.settings.process = Some(process);
-            // The unit's word for the mode read back (SYNC: EXPANDED, legacy: CPA).
-            let mode = read.mode.map_or("-", |m| mode_word(m, family));
-            ok_line(|w| {
-                w.field("mode", mode)?;
-                w.field("amps", read.current)?;
-                match process.pressure {
-                    Pressure::Auto => w.field("psi", "AUTO"),
-                    Pressure::Set(_) => w.field("psi", read.pressure),
-                }
-            })
-        }
-        Op::RemoteOff => {
-            ctx.settings.process = None;
-            ok_line(|w| w.field("remote", "OFF"))
-        }
+        Op::Settings(process) => settings_done(process, output, family),
+        Op::RemoteOff => ok_line(|w| w.field("remote", "OFF")),
         Op::GasTest(on) => ok_line(|w| w.field("gastest", on_off(on))),
-        Op::Restart => {
-            let quiet = ctx
-                .link
-                .status()
-                .restart_blackout_until
-                .map(|until| until.saturating_since(ctx.now).as_millis_u32());
-            ok_line(|w| {
-                w.field("restart", "done")?;
-                w.field("quiet_ms", OrDash(quiet))
-            })
-        }
+        Op::Restart => restart_done(ctx),
         Op::HprAmps => match output {
             CommandOutput::Value(amps) => ok_line(|w| w.field("amps", amps)),
             _ => ok_line(|w| w.field("amps", "set")),
@@ -293,55 +255,94 @@ pub(super) fn complete(
         },
         Op::Reset => ok_line(|w| w.field("reset", "done")),
         Op::ClearWarn => ok_line(|w| w.field("clearwarn", "done")),
-        Op::Raw => {
-            let len = match output {
-                CommandOutput::Raw { len } => len,
-                _ => 0,
-            };
-            let reply = ctx.link.raw_reply();
-            let reply = reply.get(..len).unwrap_or(reply).trim_ascii_end();
-            let text = core::str::from_utf8(reply).unwrap_or("?");
-            // `reply=` is the last field and runs to the end of the line: an HPR reply may
-            // hold spaces.
-            line(|l| write!(l, "OK reply={}\r\n", Text(text)))
-        }
-        Op::FaultLog => {
-            let status = ctx.link.status();
-            match (output, status.fault_log, status.hpr.error_log) {
-                (CommandOutput::ErrorLog(log), _, _) | (_, None, Some(log)) => ok_line(|w| {
-                    let codes = log.iter().filter(|e| e.0 != 0).map(|e| HprId(e.0));
-                    w.field("log", List(codes))
-                }),
-                (_, Some(log), _) => ok_line(|w| {
-                    let codes = log.0.iter().copied().filter(|c| !c.is_none());
-                    w.field("log", List(codes))
-                }),
-                _ => err_line(ErrorCode::Link, "the fault log could not be read"),
-            }
-        }
-        Op::Counters => {
-            let status = ctx.link.status().clone();
-            counters_with(ctx.link, |w| {
-                if let Some(c) = status.ps_counters {
-                    w.field("starts", c.starts)?;
-                    w.field("pilot_arc_s", c.pilot_arc_seconds)?;
-                    w.field("transfers", c.transfers)?;
-                    w.field("transfer_s", c.transfer_seconds)?;
-                }
-                if let Some(s) = status.arc_seconds {
-                    w.field("arc_s", s)?;
-                }
-                if let Some(t) = status.hpr.timers {
-                    w.field("arc_s", t.arc_on_seconds)?;
-                    w.field("system_min", t.system_on_minutes)?;
-                    w.field("starts", t.starts)?;
-                    w.field("start_errors", t.start_errors)?;
-                    w.field("rampdown_errors", t.rampdown_errors)?;
-                }
-                Ok(())
-            })
-        }
+        Op::Raw => raw_done(ctx, output),
+        Op::FaultLog => fault_log_done(ctx, output),
+        Op::Counters => counters_done(ctx),
     }
+}
+
+/// `SET ...` confirmed: the settings as the unit reads them back.
+fn settings_done(process: Process, output: CommandOutput, family: Option<Family>) -> ReplyLine {
+    let CommandOutput::Settings(read) = output else {
+        return ok_line(|w| w.field("mode", mode_word(unit_mode(process.mode), family)));
+    };
+    // The unit's word for the mode read back (SYNC: EXPANDED, legacy: CPA).
+    let mode = read.mode.map_or("-", |m| mode_word(m, family));
+    ok_line(|w| {
+        w.field("mode", mode)?;
+        w.field("amps", read.current)?;
+        match process.pressure {
+            Pressure::Auto => w.field("psi", "AUTO"),
+            Pressure::Set(_) => w.field("psi", read.pressure),
+        }
+    })
+}
+
+/// `RESTART` done: how long the unit stays quiet.
+fn restart_done(ctx: &Context<'_>) -> ReplyLine {
+    let quiet = ctx
+        .link
+        .status()
+        .restart_blackout_until
+        .map(|until| until.saturating_since(ctx.now).as_millis_u32());
+    ok_line(|w| {
+        w.field("restart", "done")?;
+        w.field("quiet_ms", OrDash(quiet))
+    })
+}
+
+/// `RAW` answered: the unit's reply frame.
+fn raw_done(ctx: &Context<'_>, output: CommandOutput) -> ReplyLine {
+    let len = match output {
+        CommandOutput::Raw { len } => len,
+        _ => 0,
+    };
+    let reply = ctx.link.raw_reply();
+    let reply = reply.get(..len).unwrap_or(reply).trim_ascii_end();
+    let text = core::str::from_utf8(reply).unwrap_or("?");
+    // `reply=` is the last field and runs to the end of the line: an HPR reply may hold
+    // spaces.
+    line(|l| write!(l, "OK reply={}\r\n", Text(text)))
+}
+
+/// `FAULTLOG` read: the HPR error log or the SYNC cartridge's fault log.
+fn fault_log_done(ctx: &Context<'_>, output: CommandOutput) -> ReplyLine {
+    let status = ctx.link.status();
+    match (output, status.fault_log, status.hpr.error_log) {
+        (CommandOutput::ErrorLog(log), _, _) | (_, None, Some(log)) => ok_line(|w| {
+            let codes = log.iter().filter(|e| e.0 != 0).map(|e| HprId(e.0));
+            w.field("log", List(codes))
+        }),
+        (_, Some(log), _) => ok_line(|w| {
+            let codes = log.0.iter().copied().filter(|c| !c.is_none());
+            w.field("log", List(codes))
+        }),
+        _ => err_line(ErrorCode::Link, texts::FAULT_LOG_UNREADABLE),
+    }
+}
+
+/// `COUNTERS` read: the unit's counters, then the link's.
+fn counters_done(ctx: &Context<'_>) -> ReplyLine {
+    let status = ctx.link.status().clone();
+    counters_with(ctx.link, |w| {
+        if let Some(c) = status.ps_counters {
+            w.field("starts", c.starts)?;
+            w.field("pilot_arc_s", c.pilot_arc_seconds)?;
+            w.field("transfers", c.transfers)?;
+            w.field("transfer_s", c.transfer_seconds)?;
+        }
+        if let Some(s) = status.arc_seconds {
+            w.field("arc_s", s)?;
+        }
+        if let Some(t) = status.hpr.timers {
+            w.field("arc_s", t.arc_on_seconds)?;
+            w.field("system_min", t.system_on_minutes)?;
+            w.field("starts", t.starts)?;
+            w.field("start_errors", t.start_errors)?;
+            w.field("rampdown_errors", t.rampdown_errors)?;
+        }
+        Ok(())
+    })
 }
 
 /// An HPR error code in the manual's three digits.

@@ -57,7 +57,7 @@
 )]
 
 pub mod ram_flash;
-pub mod record;
+mod record;
 
 use core::ops::Range;
 

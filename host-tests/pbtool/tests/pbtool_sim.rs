@@ -170,10 +170,13 @@ fn phoenix_frames_on_stdin_are_acked() {
     let lines = stdout_lines(&output);
     assert_eq!(lines.len(), 3, "{lines:?}");
     assert_eq!(lines[0], "<ACK>OK fault=none");
-    assert_eq!(
-        lines[1],
-        "<NAK>ERR SYNTAX Phoenix message check byte 4B, expected 4A (NAK sent)"
-    );
+    // The NAK, then the session's own `ERR` line for the check byte (its text from there).
+    let check_byte = plasma_protocol::Error::BadChecksum {
+        expected: 0x4A,
+        found: 0x4B,
+    };
+    let reply = plasma_firmware::texts::frame_error(check_byte);
+    assert_eq!(lines[1], format!("<NAK>{}", reply.trim_end()));
     assert!(lines[2].starts_with("OK bridge="));
 }
 

@@ -18,9 +18,9 @@
 use std::collections::VecDeque;
 
 use plasma_firmware::bridge::Bridge;
+use plasma_firmware::bridge::SimCommand;
 use plasma_firmware::io::{Inputs, IoConfig, IoEvent, Outputs, SupplyState};
 use plasma_firmware::link::{Diagnostics, LinkEvent, UnitStatus};
-use plasma_firmware::session::SimCommand;
 use plasma_firmware::settings::{SaveError, Settings};
 use plasma_firmware::storage::{MAX_PAYLOAD, Settings as _};
 use plasma_protocol::cnc::phoenix::{ACK, NAK};

@@ -54,7 +54,7 @@ mod image {
     use plasma_firmware::bridge::Bridge;
     use plasma_firmware::inputs::InputConfig;
     use plasma_firmware::io::Input;
-    use plasma_firmware::link::transaction::TX_CAPACITY;
+    use plasma_firmware::link::TX_CAPACITY;
     use plasma_firmware::pins::{self, CNC_UART, PS_UART, Port};
     use plasma_protocol::time::Duration;
     use plasma_tasks::boot::boot_text;

@@ -143,9 +143,11 @@ impl HprDriver {
     /// A driver for a unit that answered HELLO with `system`.
     pub(crate) fn new(system: SystemId, now: Instant, core: &mut Core) -> Self {
         let maxpro = system == SystemId::MaxPro200;
-        if !core.hpr_kept.is_empty() && core.hpr_kept.system() != Some(system) {
+        // Only a Powermax keeps a process: the persisted one is not for this unit.
+        core.kept.restore_done();
+        if !core.kept.hpr.is_empty() && core.kept.hpr.system() != Some(system) {
             // Another unit is on the line: the kept settings were meant for the one before.
-            core.hpr_kept.clear();
+            core.kept.hpr.clear();
             core.emit(LinkEvent::SettingsFailed {
                 reason: SettingsFailure::OutsideLimits,
             });
@@ -162,7 +164,7 @@ impl HprDriver {
             queue: Deque::new(),
             active: None,
             reapply: Deque::new(),
-            reapply_pending: !core.hpr_kept.is_empty(),
+            reapply_pending: !core.kept.hpr.is_empty(),
             reapply_not_before: now,
             polled_last: false,
             now,
@@ -280,7 +282,7 @@ impl HprDriver {
             && self.reapply_allowed(core)
         {
             self.reapply_pending = false;
-            for request in core.hpr_kept.as_slice() {
+            for request in core.kept.hpr.as_slice() {
                 let _ = self.reapply.push_back(*request);
             }
         }

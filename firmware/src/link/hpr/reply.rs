@@ -25,7 +25,7 @@ impl HprDriver {
             core.status.remote = false;
             core.emit(LinkEvent::RemoteModeChanged { remote: false });
         }
-        if !core.hpr_kept.is_empty() && self.reapply.is_empty() {
+        if !core.kept.hpr.is_empty() && self.reapply.is_empty() {
             self.reapply_pending = true;
             self.reapply_not_before = now;
         }
@@ -184,7 +184,7 @@ impl HprDriver {
         reply: Option<&Reply<'_>>,
         core: &mut Core,
     ) {
-        core.hpr_kept.keep(self.system, request);
+        core.kept.hpr.keep(self.system, request);
         // A re-apply run still to come must not set older values again.
         let new = sets(&request);
         // In order, without `Deque::retain` (its swaps are memmoves, see `keep`).
@@ -244,7 +244,7 @@ impl HprDriver {
         if busy {
             return;
         }
-        if core.hpr_kept.amps().is_some_and(|kept| kept != setpoint) {
+        if core.kept.hpr.amps().is_some_and(|kept| kept != setpoint) {
             self.settings_lost(now, core);
         }
     }

@@ -9,6 +9,7 @@ use plasma_protocol::time::Instant;
 use super::super::Core;
 use super::super::command::{HprGasFlow, HprValue, LinkCommand, Refusal};
 use super::super::event::{CommandOutput, LinkEvent, Ticket};
+use super::super::support;
 use super::{HprDriver, HprJob, SLOW_ALL, is_cutting};
 
 impl HprDriver {
@@ -21,6 +22,9 @@ impl HprDriver {
         core: &mut Core,
     ) -> Result<(), Refusal> {
         self.now = now;
+        if !support::accepts(self.family(), command.op()) {
+            return Err(self.unsupported());
+        }
         let job = match command {
             LinkCommand::RefreshSlowData => return self.refresh_slow_data(ticket, core),
             LinkCommand::Raw(bytes) => parse_raw(bytes)?,
@@ -53,7 +57,6 @@ impl HprDriver {
                 Request::SetNominalAmps { amps: *amps }
             }
             LinkCommand::HprSetProcess { amps, gases } => {
-                self.maxpro_only()?;
                 check_amps(*amps, hpr::MAX_MAXPRO_AMPS)?;
                 check_gases(gases)?;
                 // "only accepted when the system is in state #2 or #3".
@@ -73,7 +76,6 @@ impl HprDriver {
                 Request::SetInletGases(*gases)
             }
             LinkCommand::HprSetCornerCurrent { percent } => {
-                self.hpr_only()?;
                 check_corner(*percent)?;
                 Request::SetCornerCurrent { percent: *percent }
             }
@@ -86,10 +88,7 @@ impl HprDriver {
     fn service_request(&self, command: &LinkCommand<'_>, core: &Core) -> Result<Request, Refusal> {
         let (state, error) = (core.status.hpr.state, core.status.hpr.error);
         Ok(match command {
-            LinkCommand::HprClearWarnings => {
-                self.hpr_only()?;
-                Request::ClearWarnings
-            }
+            LinkCommand::HprClearWarnings => Request::ClearWarnings,
             LinkCommand::HprSoftwareReset => {
                 let allowed = if self.maxpro() {
                     // "only valid when the system is not cutting".
@@ -104,7 +103,6 @@ impl HprDriver {
                 Request::SoftwareReset
             }
             LinkCommand::HprGasTest { flow, on } => {
-                self.hpr_only()?;
                 if is_cutting(state) {
                     return Err(forbidden(core));
                 }
@@ -113,14 +111,9 @@ impl HprDriver {
                     (HprGasFlow::Preflow, false) => Request::GasPreflowTestStop,
                 }
             }
-            LinkCommand::HprReadErrorLog => {
-                self.hpr_only()?;
-                Request::ReadErrorLog
-            }
-            LinkCommand::HprReadTimers => {
-                self.hpr_only()?;
-                Request::GetTimerCounter
-            }
+            LinkCommand::HprReadErrorLog => Request::ReadErrorLog,
+            LinkCommand::HprReadTimers => Request::GetTimerCounter,
+            // The support table routes no other command to an HPR or MaxPro200.
             _ => return Err(self.unsupported()),
         })
     }
@@ -129,22 +122,6 @@ impl HprDriver {
         Refusal::NotSupported {
             family: self.family(),
         }
-    }
-
-    /// Refused on a MaxPro200 (an HPR command).
-    fn hpr_only(&self) -> Result<(), Refusal> {
-        if self.maxpro() {
-            return Err(self.unsupported());
-        }
-        Ok(())
-    }
-
-    /// Refused on an HPR (a MaxPro200 command).
-    fn maxpro_only(&self) -> Result<(), Refusal> {
-        if !self.maxpro() {
-            return Err(self.unsupported());
-        }
-        Ok(())
     }
 }
 

@@ -23,6 +23,7 @@ impl PowermaxDriver {
             if let Some((ticket, job)) = self.queue.pop_front() {
                 self.active = Some(Active {
                     ticket: Some(ticket),
+                    restoring: false,
                     job,
                     step: 0,
                 });
@@ -96,7 +97,7 @@ impl PowermaxDriver {
                         now,
                         desired,
                         response,
-                        active.ticket.is_none(),
+                        active.ticket.is_none() && !active.restoring,
                         core,
                     ))
                 }
@@ -128,6 +129,7 @@ impl PowermaxDriver {
     fn step_request_after(&self, active: &Active) -> Option<MbRequest> {
         let next = Active {
             ticket: active.ticket,
+            restoring: active.restoring,
             job: active.job.clone(),
             step: active.step.saturating_add(1),
         };
@@ -143,7 +145,7 @@ impl PowermaxDriver {
             Job::Apply(_) => {
                 let reason = SettingsFailure::Transaction(error);
                 core.emit(LinkEvent::SettingsFailed { reason });
-                if active.ticket.is_none() {
+                if active.ticket.is_none() && !active.restoring {
                     self.reapply_pending = true;
                     self.reapply_not_before = now + REAPPLY_BACKOFF;
                 }
@@ -166,7 +168,7 @@ impl PowermaxDriver {
 
     /// The unit left remote control: the kept settings are forgotten.
     fn remote_exited(&mut self, core: &mut Core) -> Result<CommandOutput, CommandFailure> {
-        core.status.desired = None;
+        core.kept.forget_powermax();
         self.reapply_pending = false;
         if core.status.remote {
             core.status.remote = false;

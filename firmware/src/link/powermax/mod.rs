@@ -99,6 +99,9 @@ enum Job {
 struct Active {
     /// `None` for a re-apply the link started itself.
     ticket: Option<Ticket>,
+    /// The re-apply is the persisted process after start-up: reported like a command
+    /// (`reapplied` not set), not tried again when it fails.
+    restoring: bool,
     job: Job,
     step: u8,
 }
@@ -154,7 +157,7 @@ impl PowermaxDriver {
             next_uid_check_at: now + UID_CHECK_INTERVAL,
             queue: Deque::new(),
             active: None,
-            reapply_pending: core.status.desired.is_some(),
+            reapply_pending: core.kept.powermax_due().is_some(),
             reapply_not_before: now,
             blackout_until: None,
             identify_refused: false,

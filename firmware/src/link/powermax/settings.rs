@@ -9,6 +9,7 @@ use plasma_protocol::time::Instant;
 use super::super::Core;
 use super::super::command::Refusal;
 use super::super::event::{CommandFailure, CommandOutput, LinkEvent, SettingsFailure};
+use super::super::kept::Reapply;
 use super::super::legacy;
 use super::super::modbus::{MbRequest, read_values};
 use super::super::status::{Limits, PowermaxSettings};
@@ -89,9 +90,13 @@ pub(super) fn validate_settings(
 
 impl PowermaxDriver {
     pub(super) fn start_reapply(&mut self, now: Instant, core: &mut Core) {
-        let Some(settings) = core.status.desired else {
-            self.reapply_pending = false;
-            return;
+        let (settings, restoring) = match core.kept.powermax_due() {
+            Some(Reapply::Kept(settings)) => (settings, false),
+            Some(Reapply::Restore(settings)) => (settings, true),
+            None => {
+                self.reapply_pending = false;
+                return;
+            }
         };
         // Limits first: they are part of the slow data read at start.
         let Some(limits) = core.status.limits else {
@@ -101,7 +106,16 @@ impl PowermaxDriver {
         let Some(mode) = settings.mode else {
             return;
         };
-        if validate_settings(Some(&limits), mode, settings.current, settings.pressure).is_err() {
+        if restoring {
+            // One attempt, like a command: refused or started, it is not tried again.
+            core.kept.restore_done();
+        }
+        let checked = validate_settings(Some(&limits), mode, settings.current, settings.pressure);
+        if let (Err(refusal), true) = (checked, restoring) {
+            core.emit(LinkEvent::RestoreRefused { refusal });
+            return;
+        }
+        if checked.is_err() {
             self.reapply_not_before = now + REAPPLY_BACKOFF;
             self.reapply_pending = true;
             core.emit(LinkEvent::SettingsFailed {
@@ -112,6 +126,7 @@ impl PowermaxDriver {
         if let Some(desired) = Desired::from_settings(&settings, &limits) {
             self.active = Some(Active {
                 ticket: None,
+                restoring,
                 job: Job::Apply(desired),
                 step: 0,
             });
@@ -124,7 +139,7 @@ impl PowermaxDriver {
         if self.active.is_some() || self.reapply_pending || !core.status.remote {
             return;
         }
-        let Some(desired) = core.status.desired else {
+        let Some(desired) = core.kept.powermax() else {
             return;
         };
         let Some(limits) = core.status.limits else {
@@ -174,7 +189,7 @@ impl PowermaxDriver {
         };
         match verdict {
             Ok(read_back) => {
-                core.status.desired = Some(desired.as_settings());
+                core.kept.confirmed(desired.as_settings());
                 core.status.settings = Some(read_back);
                 if !core.status.remote {
                     core.status.remote = true;

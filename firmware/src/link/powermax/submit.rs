@@ -10,6 +10,7 @@ use super::super::command::{LinkCommand, Refusal};
 use super::super::event::{CommandOutput, LinkEvent, Ticket};
 use super::super::modbus::{self, MbRequest};
 use super::super::status::{ActiveFault, Family};
+use super::super::support;
 use super::super::sync::SlowItem;
 use super::settings::{Desired, validate_settings};
 use super::{Job, PowermaxDriver, Variant};
@@ -28,6 +29,9 @@ impl PowermaxDriver {
             return Err(Refusal::Blackout { until });
         }
         let family = self.family();
+        if !support::accepts(family, command.op()) {
+            return Err(Refusal::NotSupported { family });
+        }
         let job = match command {
             LinkCommand::ApplySettings {
                 mode,
@@ -51,6 +55,7 @@ impl PowermaxDriver {
             LinkCommand::Raw(bytes) => {
                 Job::Raw(parse_raw(bytes, core.config.node_address, family)?)
             }
+            // The support table routes no other command to a Powermax.
             _ => return Err(Refusal::NotSupported { family }),
         };
         self.queue
@@ -58,13 +63,9 @@ impl PowermaxDriver {
             .map_err(|_| Refusal::QueueFull)
     }
 
-    /// A quick restart, allowed only on SYNC with fault 0-50-0 active.
+    /// A quick restart (the support table allows it on SYNC only), allowed with fault
+    /// 0-50-0 active.
     fn quick_restart_job(&self, core: &Core) -> Result<Job, Refusal> {
-        if self.variant != Variant::Sync {
-            return Err(Refusal::NotSupported {
-                family: self.family(),
-            });
-        }
         let fault = match core.status.active_fault {
             Some(ActiveFault::Powermax(code)) => Some(code),
             _ => None,

@@ -1,0 +1,89 @@
+//! The one owner of "the process to re-apply": which settings the link applies again, and
+//! when.
+//!
+//! # Why here
+//! Only the link sees the moments a re-apply is due: the unit answers again after a link-down,
+//! a Powermax reads back other settings while the bridge holds remote control (it was
+//! power-cycled), an HPR shows a restart. So the link keeps what it re-applies, for every
+//! family, in this one place, and the others hold no decision:
+//! - the CNC session submits commands; what the unit confirms the link keeps here;
+//! - [`Settings::process`](crate::settings::Settings) is only the persisted copy of the
+//!   confirmed Powermax process, so that it survives the bridge's own power cycle;
+//! - at start-up the bridge hands that copy to the link ([`PsLink::restore`]); the link
+//!   applies it once a Powermax with known limits answers, unless the CNC set a process
+//!   first. It is one attempt, like a command: a process outside the unit's limits is
+//!   reported ([`LinkEvent::RestoreRefused`]) and dropped, not tried again.
+//!
+//! [`PsLink::restore`]: super::PsLink::restore
+//! [`LinkEvent::RestoreRefused`]: super::LinkEvent::RestoreRefused
+
+use plasma_protocol::hpr::Request;
+
+use super::hpr::HprKept;
+use super::status::PowermaxSettings;
+
+/// The settings the link re-applies. See the module docs.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct Kept {
+    /// Powermax: the settings the unit confirmed last (`None` after `ExitRemote`).
+    powermax: Option<PowermaxSettings>,
+    /// Powermax: the persisted process to apply once after the bridge started.
+    restore: Option<PowermaxSettings>,
+    /// HPR / MaxPro200: the setting requests the unit confirmed.
+    pub(crate) hpr: HprKept,
+}
+
+/// Which kind of Powermax re-apply is due.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Reapply {
+    /// Confirmed settings again, after a link return or a power cycle of the unit.
+    Kept(PowermaxSettings),
+    /// The persisted process, once after the bridge started.
+    Restore(PowermaxSettings),
+}
+
+impl Kept {
+    /// The Powermax settings the unit confirmed last: re-applied after it returns or
+    /// power-cycles.
+    pub fn powermax(&self) -> Option<PowermaxSettings> {
+        self.powermax
+    }
+
+    /// The HPR / MaxPro200 settings the unit confirmed, in the order they are re-applied
+    /// (after 004 REMOTE_MODE).
+    pub fn hpr_requests(&self) -> &[Request] {
+        self.hpr.as_slice()
+    }
+
+    /// What a Powermax that just answered gets applied: its confirmed settings, or failing
+    /// those the persisted process.
+    pub(crate) fn powermax_due(&self) -> Option<Reapply> {
+        match (self.powermax, self.restore) {
+            (Some(settings), _) => Some(Reapply::Kept(settings)),
+            (None, Some(settings)) => Some(Reapply::Restore(settings)),
+            (None, None) => None,
+        }
+    }
+
+    /// Apply `settings` once when a Powermax answers (see the module docs).
+    pub(crate) fn restore(&mut self, settings: PowermaxSettings) {
+        self.restore = Some(settings);
+    }
+
+    /// The restore was started or refused: it is not tried again.
+    pub(crate) fn restore_done(&mut self) {
+        self.restore = None;
+    }
+
+    /// The unit confirmed `settings`: they are what is re-applied from now on (a restore not
+    /// yet done is superseded).
+    pub(crate) fn confirmed(&mut self, settings: PowermaxSettings) {
+        self.powermax = Some(settings);
+        self.restore = None;
+    }
+
+    /// The unit left remote control: nothing is re-applied.
+    pub(crate) fn forget_powermax(&mut self) {
+        self.powermax = None;
+    }
+}

@@ -1,0 +1,181 @@
+//! From CNC bytes to commands in turn: text lines and Phoenix frames, ACK/NAK, the queue of
+//! lines that wait behind a command in progress.
+
+use plasma_protocol::cnc::phoenix::{self, Deframer};
+use plasma_protocol::cnc::reply::write_parse_error;
+use plasma_protocol::cnc::{Command, ErrorCode, LineError, MAX_LINE_LEN, ParseError};
+
+use super::texts::{self, frame_error};
+use super::{Context, LineText, Session, err_line, line};
+
+/// Why an input could not become a command; answered in turn like a command.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum InputError {
+    Parse(ParseError),
+    Frame(plasma_protocol::Error),
+    Interrupted,
+}
+
+/// A command line (or a refused input) waiting for its turn.
+#[derive(Debug, Clone)]
+pub(super) struct Item {
+    text: LineText,
+    error: Option<InputError>,
+}
+
+impl Item {
+    fn refused(error: InputError) -> Self {
+        Item {
+            text: LineText::new(),
+            error: Some(error),
+        }
+    }
+}
+
+impl Session {
+    /// One byte from the CNC: to the deframer inside a frame, else to the line assembler.
+    pub(super) fn route(&mut self, ctx: &mut Context<'_>, byte: u8) {
+        if self.deframer.in_frame() {
+            return self.deframe(ctx, byte);
+        }
+        if phoenix::is_frame_start(byte) {
+            self.start_frame(ctx);
+            return self.deframe(ctx, byte);
+        }
+        self.push_text_byte(ctx, byte);
+    }
+
+    /// A frame begins: a text line it interrupts is answered with an `ERR`, and the deframer
+    /// takes the Phoenix format configured now.
+    fn start_frame(&mut self, ctx: &mut Context<'_>) {
+        if self.text_partial {
+            self.admit(ctx, Item::refused(InputError::Interrupted));
+        }
+        self.lines.reset();
+        self.text_partial = false;
+        self.text_discarding = false;
+        if self.deframer.format() != ctx.settings.phoenix_format {
+            self.deframer = Deframer::new(ctx.settings.phoenix_format);
+        }
+    }
+
+    fn push_text_byte(&mut self, ctx: &mut Context<'_>, byte: u8) {
+        let outcome = self
+            .lines
+            .push(byte)
+            .map(|r| r.map(|text| LineText::try_from(text).unwrap_or_default()));
+        match outcome {
+            None => self.note_partial_line(byte),
+            Some(Ok(text)) => {
+                self.text_partial = false;
+                self.text_discarding = false;
+                self.admit(ctx, Item { text, error: None });
+            }
+            Some(Err(error)) => {
+                self.text_partial = false;
+                self.text_discarding = true;
+                let error = match error {
+                    LineError::TooLong => ParseError::TooLong,
+                    LineError::Binary => ParseError::Binary,
+                };
+                self.admit(ctx, Item::refused(InputError::Parse(error)));
+            }
+        }
+    }
+
+    /// A byte the assembler kept: whether a line (not only blanks) is under way.
+    fn note_partial_line(&mut self, byte: u8) {
+        if byte == b'\r' || byte == b'\n' {
+            self.text_partial = false;
+            self.text_discarding = false;
+        } else if !self.text_discarding && byte != b' ' && byte != b'\t' {
+            self.text_partial = true;
+        }
+    }
+
+    fn deframe(&mut self, ctx: &mut Context<'_>, byte: u8) {
+        let item = match self.deframer.push(byte) {
+            None => return,
+            Some(outcome) => frame_item(outcome),
+        };
+        self.framed(ctx, item);
+    }
+
+    /// A Phoenix frame idle for too long is abandoned (NAK).
+    pub(super) fn abandon_frame(&mut self, ctx: &mut Context<'_>) {
+        if let Some(outcome) = self.deframer.idle() {
+            let item = frame_item(outcome);
+            self.framed(ctx, item);
+        }
+    }
+
+    /// A framed message is complete: ACK or NAK it at once, answer it in turn.
+    fn framed(&mut self, ctx: &mut Context<'_>, item: Item) {
+        let accepted = item.error.is_none() && self.has_room();
+        self.ack(accepted);
+        self.admit(ctx, item);
+    }
+
+    fn has_room(&self) -> bool {
+        (self.pending.is_none() && self.queue.is_empty()) || !self.queue.is_full()
+    }
+
+    /// Answer `item` now, or queue it behind the command in progress.
+    fn admit(&mut self, ctx: &mut Context<'_>, item: Item) {
+        if self.pending.is_none() && self.queue.is_empty() {
+            return self.execute(ctx, item);
+        }
+        if self.queue.push_back(item).is_err() {
+            self.send(err_line(ErrorCode::Busy, texts::QUEUE_FULL));
+        }
+    }
+
+    /// Answer one item: its input error, or the command's reply (none yet when it waits).
+    pub(super) fn execute(&mut self, ctx: &mut Context<'_>, item: Item) {
+        let reply = match item.error {
+            Some(InputError::Parse(error)) => line(|l| write_parse_error(l, &error)),
+            Some(InputError::Frame(error)) => frame_error(error),
+            Some(InputError::Interrupted) => err_line(ErrorCode::Syntax, texts::LINE_INTERRUPTED),
+            None => match Command::parse(&item.text) {
+                Err(error) => line(|l| write_parse_error(l, &error)),
+                Ok(command) => match self.run(ctx, command) {
+                    Some(reply) => reply,
+                    None => return,
+                },
+            },
+        };
+        self.send(reply);
+    }
+}
+
+/// The item for a deframer outcome.
+fn frame_item(outcome: plasma_protocol::Result<&[u8]>) -> Item {
+    match outcome {
+        Ok(payload) => message_item(payload),
+        Err(error) => Item::refused(InputError::Frame(error)),
+    }
+}
+
+/// The item for a framed message's payload: a command line, or why it is not one.
+fn message_item(payload: &[u8]) -> Item {
+    let trimmed = payload.trim_ascii();
+    let error = if trimmed.len() > MAX_LINE_LEN {
+        Some(InputError::Parse(ParseError::TooLong))
+    } else if !trimmed
+        .iter()
+        .all(|&b| b == b'\t' || (0x20..0x7F).contains(&b))
+    {
+        Some(InputError::Parse(ParseError::Binary))
+    } else {
+        None
+    };
+    let text = match error {
+        Some(_) => LineText::new(),
+        None => core::str::from_utf8(trimmed)
+            .ok()
+            .and_then(|t| LineText::try_from(t).ok())
+            .unwrap_or_default(),
+    };
+    let error = error.or_else(|| Command::parse(&text).err().map(InputError::Parse));
+    Item { text, error }
+}
