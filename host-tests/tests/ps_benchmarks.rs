@@ -2,7 +2,7 @@
 //! table comes from `cargo bench -p host-tests --bench bus`.
 
 use host_tests::harness::measure::{
-    PMX485_CHARS_PER_CYCLE, PMX485_REQUESTS_PER_CYCLE, Setup, bus_efficiency, fault_latency,
+    Load, PMX485_CHARS_PER_CYCLE, PMX485_REQUESTS_PER_CYCLE, Setup, bus_efficiency, fault_latency,
 };
 use plasma_firmware::link::LinkConfig;
 use plasma_protocol::time::Duration;
@@ -40,8 +40,14 @@ fn continuous_polling_uses_at_least_90_percent_of_the_wire() {
 #[test]
 fn a_legacy_unit_that_refuses_the_block_costs_four_transactions_and_loses_only_latency() {
     let e = bus_efficiency(Setup::LegacyParts, LinkConfig::MIN_POLL_INTERVAL, WINDOW);
-    // Four requests, each waiting for the unit's 3 ms: below 90%, not the link's doing.
-    assert!(e.efficiency >= 0.85, "{e:?}");
+    // A cycle of four parts takes 100 ms: the fault register is read alone once in each
+    // (the fault is known within 100 ms), and the polls use the rest of the wire. Four
+    // requests, each waiting for the unit's 3 ms: below 90%, not the link's doing.
+    assert!(e.fault_check_traffic > 0.1, "{e:?}");
+    assert!(
+        e.efficiency / (1.0 - e.fault_check_traffic) >= 0.85,
+        "{e:?}"
+    );
     assert_eq!(e.turnaround_ms, 0.0);
     assert!((e.requests_per_cycle - 4.0).abs() < 0.05, "{e:?}");
 }
@@ -66,16 +72,38 @@ fn a_full_status_costs_fewer_transactions_and_characters_than_pmx485() {
             e.chars_per_cycle < PMX485_CHARS_PER_CYCLE as f64,
             "{setup:?}: {e:?}"
         );
-        // The default schedule polls every 100 ms.
-        assert!((e.cycles_per_s - 10.0).abs() < 0.5, "{setup:?}: {e:?}");
+        // The default schedule polls every 100 ms; on a legacy unit that refuses the block,
+        // the cycle of four parts and the read of the fault register alone take longer, and
+        // the next cycle starts at once.
+        let expected = if setup == Setup::LegacyParts {
+            let check = (17.0 + 15.0) * e.char_time_us / 1000.0;
+            let cycle = e.chars_per_cycle * e.char_time_us / 1000.0;
+            1000.0 / (cycle + check + 5.0 * e.unit_latency_ms)
+        } else {
+            10.0
+        };
+        assert!((e.cycles_per_s - expected).abs() < 0.5, "{setup:?}: {e:?}");
+    }
+}
+
+#[test]
+fn a_new_fault_is_known_within_100_ms_p99_on_a_powermax_while_idle() {
+    for setup in [Setup::Sync, Setup::LegacyBlock, Setup::LegacyParts] {
+        let l = fault_latency(setup, Load::Idle, 150, 5);
+        let p99 = l.faults.quantile(0.99);
+        assert!(
+            p99 <= Duration::from_millis(100),
+            "{setup:?}: p99 {} ms",
+            p99.as_millis()
+        );
     }
 }
 
 #[test]
 fn a_new_fault_is_known_within_250_ms_p99_while_idle() {
     for setup in Setup::ALL {
-        let l = fault_latency(setup, 150, 5);
-        let p99 = l.quantile(0.99);
+        let l = fault_latency(setup, Load::Idle, 150, 5);
+        let p99 = l.faults.quantile(0.99);
         assert!(
             p99 <= Duration::from_millis(250),
             "{setup:?}: p99 {} ms",
@@ -84,9 +112,36 @@ fn a_new_fault_is_known_within_250_ms_p99_while_idle() {
         // Bounded by one poll interval, one other transaction (the SYNC cartridge check) and
         // the poll itself; far inside the SYNC guide's "at least every 1 s".
         assert!(
-            l.max() <= Duration::from_millis(200),
+            l.faults.max() <= Duration::from_millis(200),
             "{setup:?}: {:?}",
-            l.max()
+            l.faults.max()
+        );
+    }
+}
+
+#[test]
+fn a_new_fault_is_known_within_250_ms_p99_on_a_powermax_while_commands_are_in_flight() {
+    for setup in [Setup::Sync, Setup::LegacyBlock, Setup::LegacyParts] {
+        let l = fault_latency(setup, Load::Commands, 150, 5);
+        let p99 = l.faults.quantile(0.99);
+        assert!(
+            p99 <= Duration::from_millis(250),
+            "{setup:?}: p99 {} ms",
+            p99.as_millis()
+        );
+        // The commands are not starved either: every one was answered, and none waited long
+        // for the line; COUNTERS, which reads the slow data again (six reads on SYNC), too.
+        assert!(l.settings.samples.len() >= 100, "{setup:?}: {l:?}");
+        assert!(l.counters.samples.len() >= 50, "{setup:?}: {l:?}");
+        assert!(
+            l.settings.max() <= Duration::from_millis(400),
+            "{setup:?}: {:?}",
+            l.settings.max()
+        );
+        assert!(
+            l.counters.max() <= Duration::from_millis(600),
+            "{setup:?}: {:?}",
+            l.counters.max()
         );
     }
 }

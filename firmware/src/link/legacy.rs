@@ -115,7 +115,8 @@ fn write(address: u16, value: u16) -> MbRequest {
     MbRequest::WriteRegister { address, value }
 }
 
-/// Fault read (0x2098) that confirms the unit took the settings (no 0-11-n fault).
+/// Fault read (0x2098): between status polls, and to confirm the unit took the settings (no
+/// 0-11-n fault).
 pub fn read_fault() -> MbRequest {
     MbRequest::ReadInput {
         start: legacy::FAULT_CODE,

@@ -121,6 +121,7 @@ use detect::{DetectStep, Detector, KnownGood};
 use event::EventQueue;
 pub use kept::Kept;
 use phase::Phase;
+pub use powermax::FAULT_CHECK_INTERVAL;
 use schedule::Tag;
 pub use transaction::TX_CAPACITY;
 use transaction::Transaction;

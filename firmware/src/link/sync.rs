@@ -176,6 +176,11 @@ pub fn exit_remote() -> MbRequest {
     write_settings(sync::EXIT_REMOTE_WORDS)
 }
 
+/// The active fault alone (0x301A), read between status polls.
+pub fn read_fault() -> MbRequest {
+    read(sync::ACTIVE_FAULT_SPAN)
+}
+
 /// UID read used to notice a cartridge change (0x3030-0x3037).
 pub fn read_uid() -> MbRequest {
     read(sync::CARTRIDGE_UID_SPAN)

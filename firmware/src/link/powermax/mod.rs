@@ -2,7 +2,8 @@
 //! Modbus ASCII. Family specifics live in [`super::sync`] and [`super::legacy`].
 //!
 //! The driver's jobs are split by module: this one schedules (what goes out next: the rest of
-//! a poll cycle, the active command or a re-apply, polls and other due work in turn),
+//! the active command, the fault register when it is due, the rest of a poll cycle, then
+//! polls, commands and other due work in turn),
 //! `settings` owns the settings to keep and re-apply, `jobs` carries the active command
 //! through its steps, `reply` reads what the unit answers, and `submit` checks a command
 //! before it is queued.
@@ -36,6 +37,14 @@ pub const UID_CHECK_INTERVAL: Duration = Duration::from_secs(1);
 pub const REAPPLY_BACKOFF: Duration = Duration::from_secs(5);
 /// Commands waiting behind the active one.
 const QUEUE_CAPACITY: usize = 4;
+/// The active fault is read at least this often, from the start of one read of the fault
+/// register to the next. The status poll reads it too; between two polls of the default
+/// 100 ms schedule one read of the fault register alone (17 + 15 characters, about 20 ms of
+/// wire) goes out 60 ms after the poll, which splits the wait so that a fault is known within
+/// about 75 ms of its appearing whichever read sees it first (the poll's reply is the longer).
+/// A poll interval at or below it needs no such read. The SYNC guide's rule, "at least every
+/// 1 s", is far inside.
+pub const FAULT_CHECK_INTERVAL: Duration = Duration::from_millis(60);
 
 /// Which register family.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -62,6 +71,19 @@ pub enum MbPurpose {
     Identify,
     /// The current step of the active command.
     Active,
+    /// The fault register alone, between status polls.
+    FaultCheck,
+}
+
+/// A kind of work that takes turns on the line (see [`PowermaxDriver::next_turn`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Turn {
+    /// A status poll or a fault check.
+    Status,
+    /// A command (or a re-apply).
+    Command,
+    /// Slow data, the cartridge check, identification.
+    Other,
 }
 
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -101,8 +123,12 @@ pub struct PowermaxDriver {
     blackout_until: Option<Instant>,
     /// The unit refused device identification (an exception): it is not asked again.
     identify_refused: bool,
-    /// The last transaction started was a poll (the next turn goes to other due work).
-    polled_last: bool,
+    /// The kinds of work, the one served longest ago first.
+    turns: [Turn; 3],
+    /// When the fault register is due to be read again.
+    fault_check_at: Instant,
+    /// The unit refused a read of the fault register alone: the polls alone read it.
+    fault_read_refused: bool,
     now: Instant,
 }
 
@@ -135,7 +161,9 @@ impl PowermaxDriver {
             reapply_not_before: now,
             blackout_until: None,
             identify_refused: false,
-            polled_last: false,
+            turns: [Turn::Status, Turn::Command, Turn::Other],
+            fault_check_at: now,
+            fault_read_refused: false,
             now,
         }
     }
@@ -179,6 +207,9 @@ impl PowermaxDriver {
             return Some(self.now);
         }
         let mut at = self.next_poll_at.min(self.slow.wake_at());
+        if !self.fault_read_refused {
+            at = at.min(self.fault_check_at);
+        }
         // The UID check needs a cartridge read first (slow data, retried on its own).
         if self.variant == Variant::Sync && core.status.cartridge.is_some() {
             at = at.min(self.next_uid_check_at);
@@ -201,37 +232,124 @@ impl PowermaxDriver {
         if self.in_blackout(now) {
             return None;
         }
-        // A poll cycle split into parts finishes first.
-        if self.poll.in_cycle() {
-            return self
-                .poll
-                .request()
-                .map(|(request, part)| (MbPurpose::Poll(part), request, None));
+        // The active command's steps go back to back (the legacy force registers are written
+        // with nothing in between).
+        let active = if self.active.is_some() {
+            self.active_request(now, core)
+        } else {
+            None
+        };
+        let next = if active.is_some() {
+            active
+        } else if !self.fault_read_refused && now >= self.fault_check_at {
+            self.fault_check(now)
+        } else if self.poll.in_cycle() {
+            // A poll cycle split into parts finishes first.
+            self.poll_part()
+        } else {
+            self.next_turn(now, core)
+        };
+        if let Some((purpose, request, _)) = &next
+            && self.sees_fault(*purpose, request)
+        {
+            self.fault_check_at = now + FAULT_CHECK_INTERVAL;
         }
-        if let Some(request) = self.active_request(now, core) {
-            return Some(request);
+        next
+    }
+
+    /// True when the answer to `request`, sent for `purpose`, updates the active fault: a
+    /// poll or a check that reads the fault register, and the read that ends legacy settings
+    /// (not a RAW read, whose answer goes to the CNC only).
+    fn sees_fault(&self, purpose: MbPurpose, request: &MbRequest) -> bool {
+        let updates = match purpose {
+            MbPurpose::Poll(_) | MbPurpose::FaultCheck => true,
+            MbPurpose::Active => matches!(
+                self.active,
+                Some(Active {
+                    job: Job::Apply(_),
+                    ..
+                })
+            ),
+            _ => false,
+        };
+        updates && self.reads_fault(request)
+    }
+
+    /// The fault register is due: the poll reads it when its next read covers it (a poll due
+    /// now starts first), otherwise the fault register is read alone. It goes before the
+    /// turns and counts as the status's turn.
+    fn fault_check(&mut self, now: Instant) -> Option<(MbPurpose, MbRequest, Option<u8>)> {
+        self.served(Turn::Status);
+        if !self.poll.in_cycle() && now >= self.next_poll_at {
+            self.start_poll(now);
         }
-        // Round robin: after a poll, whatever else is due (slow data, the cartridge check)
-        // gets one transaction before the next poll, so a short poll interval cannot starve
-        // it; a poll waits for at most one such transaction.
-        let poll_due = now >= self.next_poll_at;
-        if poll_due && !self.polled_last {
-            return self.start_poll(now);
+        if let Some((request, part)) = self.poll.request()
+            && self.reads_fault(&request)
+        {
+            return Some((MbPurpose::Poll(part), request, None));
         }
-        if let Some(request) = self.other_request(now, core) {
-            self.polled_last = false;
-            return Some(request);
-        }
-        if poll_due {
-            return self.start_poll(now);
+        let request = match self.variant {
+            Variant::Sync => sync::read_fault(),
+            Variant::Legacy => legacy::read_fault(),
+        };
+        Some((MbPurpose::FaultCheck, request, None))
+    }
+
+    /// True when `request` reads the register holding the active fault.
+    fn reads_fault(&self, request: &MbRequest) -> bool {
+        let fault = match self.variant {
+            Variant::Sync => plasma_protocol::powermax::sync::ACTIVE_FAULT,
+            Variant::Legacy => plasma_protocol::powermax::legacy::FAULT_CODE,
+        };
+        matches!(*request, MbRequest::ReadInput { start, quantity }
+            if start <= fault && fault - start < quantity)
+    }
+
+    /// Round robin: of the kinds of work that are due (a poll, a new command, slow data or
+    /// the cartridge check), the one served longest ago goes, so each waits for at most one
+    /// turn of each other kind (and the fault checks): neither a short poll interval nor a
+    /// stream of commands starves the rest.
+    fn next_turn(
+        &mut self,
+        now: Instant,
+        core: &mut Core,
+    ) -> Option<(MbPurpose, MbRequest, Option<u8>)> {
+        for turn in self.turns {
+            let next = match turn {
+                Turn::Status if now >= self.next_poll_at => {
+                    self.start_poll(now);
+                    self.poll_part()
+                }
+                Turn::Status => None,
+                Turn::Command => self.active_request(now, core),
+                Turn::Other => self.other_request(now, core),
+            };
+            if next.is_some() {
+                self.served(turn);
+                return next;
+            }
         }
         None
     }
 
-    fn start_poll(&mut self, now: Instant) -> Option<(MbPurpose, MbRequest, Option<u8>)> {
+    /// `turn` was served: it goes to the back of the line.
+    fn served(&mut self, turn: Turn) {
+        let [first, second, third] = self.turns;
+        self.turns = if turn == first {
+            [second, third, first]
+        } else if turn == second {
+            [first, third, second]
+        } else {
+            self.turns
+        };
+    }
+
+    fn start_poll(&mut self, now: Instant) {
         self.poll.start();
         self.poll_started = now;
-        self.polled_last = true;
+    }
+
+    fn poll_part(&self) -> Option<(MbPurpose, MbRequest, Option<u8>)> {
         self.poll
             .request()
             .map(|(request, part)| (MbPurpose::Poll(part), request, None))

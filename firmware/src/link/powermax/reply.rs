@@ -14,7 +14,7 @@ use super::super::modbus::{self, read_values};
 use super::super::status::ActiveFault;
 use super::super::sync::{self, SlowItem};
 use super::super::transaction::TransactionError;
-use super::{MbPurpose, PowermaxDriver, Variant};
+use super::{FAULT_CHECK_INTERVAL, MbPurpose, PowermaxDriver, Variant};
 
 impl PowermaxDriver {
     /// A valid reply arrived for `purpose`. `raw_len` is the length of the reply frame kept
@@ -58,6 +58,10 @@ impl PowermaxDriver {
                     self.slow.request(SlowItem::CARTRIDGE_ITEMS);
                 }
             }
+            MbPurpose::FaultCheck => match read_values(response).and_then(|v| v.get(0)) {
+                Some(code) => self.update_fault(now, FaultCode(code), core),
+                None => self.on_failed(now, purpose, TransactionError::Mismatch, core),
+            },
             MbPurpose::Active => self.advance_active(now, response, raw_len, core),
             // The link itself acts on the answer (it may change the family).
             MbPurpose::Identify => {}
@@ -82,8 +86,15 @@ impl PowermaxDriver {
                 } else {
                     self.poll.abort();
                     self.next_poll_at = now + core.config.poll_interval;
+                    self.fault_check_at = now + FAULT_CHECK_INTERVAL;
                 }
             }
+            // A unit that refuses the register alone is left to the polls; after silence or
+            // a damaged reply the other work gets the line before the next check.
+            MbPurpose::FaultCheck => match error {
+                TransactionError::Exception(_) => self.fault_read_refused = true,
+                _ => self.fault_check_at = now + FAULT_CHECK_INTERVAL,
+            },
             MbPurpose::Slow(item) => self.slow_done(now, item, Some(error), core),
             MbPurpose::CartridgeBlock(part) => {
                 if modbus::is_illegal_address(error) {
