@@ -246,6 +246,28 @@ impl InputFilter {
         &self.config
     }
 
+    /// New settings while running. An input whose setting is unchanged keeps its state (a
+    /// level half-way through its debounce stays pending); an input whose setting changed
+    /// takes its level under the new setting from `pins` at once, as at power-up, and a
+    /// change of its level is queued. The caller decides what a re-taken TORCH_ON may do
+    /// ([`DiscreteIo`](crate::discrete::DiscreteIo) treats it like power-up).
+    pub fn set_config(&mut self, config: InputConfig, pins: PinLevels) {
+        for input in Input::ALL {
+            let setting = config.get(input);
+            if setting == self.config.get(input) {
+                continue;
+            }
+            let active = setting.polarity.is_active(pins.is_high(input));
+            let channel = pick_mut(&mut self.channels, input);
+            channel.pending = None;
+            if channel.accepted != active {
+                channel.accepted = active;
+                self.push(input, active);
+            }
+        }
+        self.config = config;
+    }
+
     /// The pins were read at `now`. Levels that need no debounce are accepted at once.
     pub fn on_pins(&mut self, now: Instant, pins: PinLevels) {
         for input in Input::ALL {
