@@ -240,3 +240,133 @@ fn inverted_polarity_input_reaches_the_interlocks() {
     assert!(io.inputs().hold);
     assert!(io.outputs().hold);
 }
+
+mod random_changes {
+    use super::*;
+    use crate::io::SafetyMonitor;
+    use proptest::prelude::*;
+
+    /// One step of the world.
+    #[derive(Debug, Clone)]
+    enum Step {
+        /// The TORCH_ON pin goes to this level.
+        TorchPin(bool),
+        /// Another input's pin (index into `Input::ALL`, skipping TORCH_ON).
+        OtherPin(usize, bool),
+        /// Time passes (µs).
+        Wait(u64),
+        /// TORCH_ON's active level and debounce change.
+        TorchSetting(bool, u64),
+        /// Another input's active level and debounce change.
+        OtherSetting(usize, bool, u64),
+        /// PS_HOLD and FAULT inverted or not.
+        OutputLevels(bool, bool),
+        /// The link comes or goes.
+        Supply(bool),
+    }
+
+    fn step() -> impl Strategy<Value = Step> {
+        prop_oneof![
+            4 => any::<bool>().prop_map(Step::TorchPin),
+            1 => (1usize..7, any::<bool>()).prop_map(|(i, h)| Step::OtherPin(i, h)),
+            4 => (0u64..80_000).prop_map(Step::Wait),
+            2 => (any::<bool>(), 0u64..20).prop_map(|(h, d)| Step::TorchSetting(h, d)),
+            1 => (1usize..7, any::<bool>(), 0u64..20)
+                .prop_map(|(i, h, d)| Step::OtherSetting(i, h, d)),
+            1 => (any::<bool>(), any::<bool>()).prop_map(|(h, f)| Step::OutputLevels(h, f)),
+            1 => any::<bool>().prop_map(Step::Supply),
+        ]
+    }
+
+    fn polarity(high: bool) -> Polarity {
+        if high {
+            Polarity::ActiveHigh
+        } else {
+            Polarity::ActiveLow
+        }
+    }
+
+    proptest! {
+        /// Random CONFIG changes interleaved with input edges: START rises only after a fresh
+        /// TORCH_ON press (as the CNC means it: the pin under the level set at that moment),
+        /// never from a change alone, and no rule of the SafetyMonitor breaks. START reaches
+        /// the pin exactly as the logic has it, whatever the output levels.
+        #[test]
+        fn changes_never_fire_the_torch(
+            torch_pin_high in any::<bool>(),
+            steps in prop::collection::vec(step(), 0..120),
+        ) {
+            let mut config = IoConfig::default();
+            let mut pins = PinLevels::ALL_HIGH.with(Input::TorchOn, torch_pin_high);
+            let mut now = 0u64;
+            let t = Instant::from_micros;
+            let mut io = DiscreteIo::new(config, t(now), pins);
+            io.on_supply(t(now), SupplyState::HEALTHY);
+            let means = |c: &IoConfig, p: PinLevels| {
+                c.inputs.get(Input::TorchOn).polarity.is_active(p.is_high(Input::TorchOn))
+            };
+            let mut monitor = SafetyMonitor::new(means(&config, pins));
+            // A press seen since the last START rise and the last TORCH_ON setting change.
+            let mut fresh = false;
+            let mut start = false;
+            monitor.check(t(now), io.table_outputs().start, None);
+            for step in steps {
+                match step {
+                    Step::TorchPin(high) => {
+                        let was = means(&config, pins);
+                        pins = pins.with(Input::TorchOn, high);
+                        let active = means(&config, pins);
+                        monitor.input(Input::TorchOn, active);
+                        fresh = active && (fresh || !was);
+                        io.on_pins(t(now), pins);
+                    }
+                    Step::OtherPin(i, high) => {
+                        pins = pins.with(Input::ALL[i], high);
+                        io.on_pins(t(now), pins);
+                    }
+                    Step::Wait(us) => {
+                        now += us;
+                        io.poll(t(now));
+                    }
+                    Step::TorchSetting(high, debounce) => {
+                        let before = config.inputs.get(Input::TorchOn);
+                        config.inputs.set_polarity(Input::TorchOn, polarity(high));
+                        config
+                            .inputs
+                            .set_debounce(Input::TorchOn, Duration::from_millis(debounce));
+                        if config.inputs.get(Input::TorchOn) != before {
+                            monitor.torch_on_redefined(means(&config, pins));
+                            fresh = false;
+                        }
+                        io.reconfigure(t(now), config, pins);
+                    }
+                    Step::OtherSetting(i, high, debounce) => {
+                        config.inputs.set_polarity(Input::ALL[i], polarity(high));
+                        config
+                            .inputs
+                            .set_debounce(Input::ALL[i], Duration::from_millis(debounce));
+                        io.reconfigure(t(now), config, pins);
+                    }
+                    Step::OutputLevels(hold, fault) => {
+                        config.outputs.set(Output::Hold, polarity(!hold)).unwrap();
+                        config.outputs.set(Output::Fault, polarity(!fault)).unwrap();
+                        io.reconfigure(t(now), config, pins);
+                    }
+                    Step::Supply(up) => {
+                        let supply = if up { SupplyState::HEALTHY } else { SupplyState::default() };
+                        io.on_supply(t(now), supply);
+                    }
+                }
+                let table = io.table_outputs();
+                prop_assert_eq!(table.start, io.outputs().start, "START never inverted");
+                if table.start && !start {
+                    prop_assert!(fresh, "START at {} us without a fresh press", now);
+                    fresh = false;
+                }
+                start = table.start;
+                monitor.check(t(now), table.start, None);
+                prop_assert_eq!(monitor.violations(), &[][..]);
+            }
+        }
+    }
+}

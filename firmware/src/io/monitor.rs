@@ -37,7 +37,8 @@ pub enum ViolationKind {
     },
     /// START on before the quick-restart blackout ended.
     StartDuringBlackout,
-    /// START on while a TORCH_ON active at power-up has not yet been seen inactive.
+    /// START on while a TORCH_ON active at power-up (or when its wiring setting changed) has
+    /// not yet been seen inactive.
     StartFromTorchOnAtPowerUp,
 }
 
@@ -110,6 +111,17 @@ impl SafetyMonitor {
                 self.torch_stuck_since_power_up = false;
             }
         }
+    }
+
+    /// TORCH_ON's meaning at the pin changed: the operator set its active level or debounce
+    /// (`CONFIG torch_on_active`, `torch_on_debounce_ms`). The monitor judges TORCH_ON as the
+    /// CNC means it, and after such a change that is the pin read with the new level:
+    /// `active`. An operator's command is observed like an edge, not taken from the
+    /// interlocks. Like power-up, a TORCH_ON active now must be seen inactive before any START
+    /// ([`ViolationKind::StartFromTorchOnAtPowerUp`]).
+    pub fn torch_on_redefined(&mut self, active: bool) {
+        self.torch_on = active;
+        self.torch_stuck_since_power_up = active;
     }
 
     /// One sample: the START pin after a step at `now`, and the blackout the link reports.
