@@ -6,6 +6,13 @@
 //! never reads the interlocks' own view of the inputs: a machine that lost or misread a
 //! TORCH_ON edge would agree with itself. Feed it every edge the board is given, and a
 //! sample after every step of whatever drives START.
+//!
+//! "Observed" means TORCH_ON as the CNC means it, not the raw pin level: a pin level means
+//! nothing without the table's wiring. The monitor is fed the pin read with the active level
+//! set at that moment, and when the operator changes TORCH_ON's level or debounce it is told
+//! the new meaning ([`SafetyMonitor::torch_on_redefined`]), an observed command like an edge,
+//! never the interlocks' view. A change then counts like power-up: a TORCH_ON active under the
+//! new setting must be seen inactive before START.
 
 use core::fmt;
 
