@@ -86,11 +86,15 @@ pub struct InputSetting {
 /// would delay the torch noticeably, on the others it would hide short signals).
 pub const MAX_DEBOUNCE: Duration = Duration::from_millis(100);
 
-/// Settings of every input.
+/// Settings of every input, in whole milliseconds (kept as the settings record stores them:
+/// the I/O task receives a copy with every settings change).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct InputConfig {
-    settings: [InputSetting; 7],
+    /// One bit per input ([`slot`]): active high.
+    active_high: u8,
+    /// Debounce per input, ms, in [`Input::ALL`] order.
+    debounce_ms: [u8; 7],
 }
 
 impl Default for InputConfig {
@@ -99,10 +103,8 @@ impl Default for InputConfig {
     /// the interlocks debounce it themselves for ARC_OK; the other signals 5 ms.
     fn default() -> Self {
         let mut config = InputConfig {
-            settings: [InputSetting {
-                polarity: Polarity::ActiveLow,
-                debounce: Duration::from_millis(5),
-            }; 7],
+            active_high: 0,
+            debounce_ms: [5; 7],
         };
         config.set_debounce(Input::TorchOn, Duration::from_millis(1));
         config.set_debounce(Input::Motion, Duration::ZERO);
@@ -113,17 +115,48 @@ impl Default for InputConfig {
 impl InputConfig {
     /// The settings of one input.
     pub const fn get(&self, input: Input) -> InputSetting {
-        pick(&self.settings, input)
+        InputSetting {
+            polarity: if self.active_high & (1 << slot(input)) != 0 {
+                Polarity::ActiveHigh
+            } else {
+                Polarity::ActiveLow
+            },
+            debounce: Duration::from_millis(pick(&self.debounce_ms, input) as u64),
+        }
     }
 
     /// Change the polarity of one input.
     pub fn set_polarity(&mut self, input: Input, polarity: Polarity) {
-        pick_mut(&mut self.settings, input).polarity = polarity;
+        let bit = 1 << slot(input);
+        match polarity {
+            Polarity::ActiveHigh => self.active_high |= bit,
+            Polarity::ActiveLow => self.active_high &= !bit,
+        }
     }
 
-    /// Change the debounce time of one input (clamped to [`MAX_DEBOUNCE`]).
+    /// Change the debounce time of one input (whole milliseconds, clamped to
+    /// [`MAX_DEBOUNCE`]).
     pub fn set_debounce(&mut self, input: Input, debounce: Duration) {
-        pick_mut(&mut self.settings, input).debounce = debounce.min(MAX_DEBOUNCE);
+        let ms = debounce.min(MAX_DEBOUNCE).as_millis();
+        *pick_mut(&mut self.debounce_ms, input) = u8::try_from(ms).unwrap_or(u8::MAX);
+    }
+
+    /// The stored form: the active-high bits (one per input, [`Input::ALL`] order) and the
+    /// debounce times in ms.
+    pub const fn to_stored(&self) -> (u8, [u8; 7]) {
+        (self.active_high, self.debounce_ms)
+    }
+
+    /// From the stored form; `None` if a bit names no input or a time is above
+    /// [`MAX_DEBOUNCE`].
+    pub fn from_stored(active_high: u8, debounce_ms: [u8; 7]) -> Option<Self> {
+        let max = MAX_DEBOUNCE.as_millis();
+        (active_high < 1 << 7 && debounce_ms.iter().all(|&ms| u64::from(ms) <= max)).then_some(
+            InputConfig {
+                active_high,
+                debounce_ms,
+            },
+        )
     }
 }
 

@@ -100,15 +100,15 @@ impl OutputConfig {
     }
 
     /// The levels to hand a board that drives its pins from the pin table: each inverted
-    /// output flipped, so its pin gets the configured level. START is never flipped.
+    /// output flipped, so its pin gets the configured level. Only the invertible ones can be:
+    /// START passes untouched.
     pub fn for_table(&self, outputs: Outputs) -> Outputs {
-        let mut table = outputs;
-        for output in Output::ALL {
-            if self.inverted & bit(output) != 0 {
-                table.set(output, !outputs.get(output));
-            }
+        let flip = |output: Output| self.inverted & bit(output) != 0;
+        Outputs {
+            hold: outputs.hold ^ flip(Output::Hold),
+            fault: outputs.fault ^ flip(Output::Fault),
+            ..outputs
         }
-        table
     }
 }
 

@@ -151,40 +151,17 @@ pub(super) const RECORD_LEN: usize = 9;
 
 /// The wiring's part of the record.
 pub(super) fn encode(io: &IoConfig) -> [u8; RECORD_LEN] {
-    let mut out = [0u8; RECORD_LEN];
-    let mut high = 0u8;
-    for ((i, input), debounce) in Input::ALL.into_iter().enumerate().zip(&mut out[1..8]) {
-        let setting = io.inputs.get(input);
-        if setting.polarity == Polarity::ActiveHigh {
-            high |= 1 << i;
-        }
-        *debounce = u8::try_from(setting.debounce.as_millis()).unwrap_or(u8::MAX);
-    }
-    out[0] = high;
-    out[8] = io.outputs.bits();
-    out
+    let (high, [a, b, c, d, e, f, g]) = io.inputs.to_stored();
+    [high, a, b, c, d, e, f, g, io.outputs.bits()]
 }
 
 /// The wiring from its part of the record; `None` if a bit or a time is out of range.
 pub(super) fn decode(bytes: &[u8; RECORD_LEN]) -> Option<(InputConfig, OutputConfig)> {
-    let [high, debounce @ .., outputs] = bytes;
-    if high & 0x80 != 0 {
-        return None;
-    }
-    let mut inputs = InputConfig::default();
-    for ((i, input), &ms) in Input::ALL.into_iter().enumerate().zip(debounce.iter()) {
-        if u32::from(ms) > debounce_range().1 {
-            return None;
-        }
-        let polarity = if high & (1 << i) != 0 {
-            Polarity::ActiveHigh
-        } else {
-            Polarity::ActiveLow
-        };
-        inputs.set_polarity(input, polarity);
-        inputs.set_debounce(input, Duration::from_millis(u64::from(ms)));
-    }
-    Some((inputs, OutputConfig::from_bits(*outputs)?))
+    let [high, a, b, c, d, e, f, g, outputs] = *bytes;
+    Some((
+        InputConfig::from_stored(high, [a, b, c, d, e, f, g])?,
+        OutputConfig::from_bits(outputs)?,
+    ))
 }
 
 #[cfg(test)]
