@@ -98,21 +98,22 @@ pub struct InputConfig {
 }
 
 impl Default for InputConfig {
-    /// The reference board: every input active low. TORCH_ON 1 ms (against contact bounce
-    /// and ignition spikes, small beside a PhotoMOS's 0.2-2 ms turn-on); MOTION none, because
-    /// the interlocks debounce it themselves for ARC_OK; the other signals 5 ms.
     fn default() -> Self {
-        let mut config = InputConfig {
-            active_high: 0,
-            debounce_ms: [5; 7],
-        };
-        config.set_debounce(Input::TorchOn, Duration::from_millis(1));
-        config.set_debounce(Input::Motion, Duration::ZERO);
-        config
+        InputConfig::REFERENCE
     }
 }
 
 impl InputConfig {
+    /// The reference board: every input active low. TORCH_ON 1 ms (against contact bounce
+    /// and ignition spikes, small beside a PhotoMOS's 0.2-2 ms turn-on); MOTION none, because
+    /// the interlocks debounce it themselves for ARC_OK; the other signals 5 ms.
+    pub const REFERENCE: InputConfig = InputConfig {
+        active_high: 0,
+        // Input::ALL order: TORCH_ON, HOLD, PIERCE_COMPLETE, CORNER_CURRENT, MOTION,
+        // NOT_READY, RAMPDOWN_ERROR.
+        debounce_ms: [1, 5, 5, 5, 0, 5, 5],
+    };
+
     /// The settings of one input.
     pub const fn get(&self, input: Input) -> InputSetting {
         InputSetting {
