@@ -546,82 +546,75 @@ impl storage::Settings for Settings {
     }
 
     fn decode(payload: &[u8]) -> Option<Self> {
-        let (v1, wiring) = payload.split_at_checked(RECORD_V1_LEN)?;
-        let (inputs, outputs) = wiring::decode(wiring.try_into().ok()?)?;
-        // Checked by decode_v1 (the wiring's own decoder checks the rest).
-        let mut settings = decode_v1(v1.try_into().ok()?)?;
-        settings.io.inputs = inputs;
-        settings.io.outputs = outputs;
-        Some(settings)
-    }
-
-    /// Version 1 had no wiring: the reference board's.
-    fn migrate(version: u8, payload: &[u8]) -> Option<Self> {
-        match version {
-            1 => decode_v1(payload.try_into().ok()?),
-            _ => None,
+        let r: &[u8; RECORD_LEN] = payload.try_into().ok()?;
+        let (inputs, outputs) = wiring::decode(r.last_chunk()?)?;
+        // Offsets are constants inside the fixed-length record.
+        let u16_at = |i: usize| {
+            r.get(i..i + 2)
+                .and_then(|b| b.try_into().ok())
+                .map_or(0, u16::from_le_bytes)
+        };
+        let millis = |i: usize| Duration::from_millis(u64::from(u16_at(i)));
+        let flags = r[21];
+        if flags & !FLAGS_KNOWN != 0 {
+            return None;
         }
-    }
-}
-
-/// The version-1 fields (the wiring at its defaults).
-fn decode_v1(r: &[u8; RECORD_V1_LEN]) -> Option<Settings> {
-    // Offsets are constants inside the fixed-length record.
-    let u16_at = |i: usize| {
-        r.get(i..i + 2)
-            .and_then(|b| b.try_into().ok())
-            .map_or(0, u16::from_le_bytes)
-    };
-    let millis = |i: usize| Duration::from_millis(u64::from(u16_at(i)));
-    let flags = r[21];
-    if flags & !FLAGS_KNOWN != 0 {
-        return None;
-    }
-    let link = LinkConfig {
-        protocol: *PROTOCOLS.get(usize::from(r[0]))?,
-        node_address: r[1],
-        modbus_parity: *PARITIES.get(usize::from(r[2]))?,
-        modbus_stop_bits: match r[3] {
-            1 => StopBits::One,
-            2 => StopBits::Two,
+        let link = LinkConfig {
+            protocol: *PROTOCOLS.get(usize::from(r[0]))?,
+            node_address: r[1],
+            modbus_parity: *PARITIES.get(usize::from(r[2]))?,
+            modbus_stop_bits: match r[3] {
+                1 => StopBits::One,
+                2 => StopBits::Two,
+                _ => return None,
+            },
+            response_timeout: millis(4),
+            retries: r[6],
+            poll_interval: millis(7),
+            slow_data_interval: Duration::from_millis(u64::from(u32::from_le_bytes([
+                r[9], r[10], r[11], r[12],
+            ]))),
+            hpr_id: r[13],
+            failures_before_down: r[14],
+        };
+        let io = IoConfig {
+            start_gap: millis(15).max(MIN_START_GAP),
+            arc_ok_debounce: millis(17),
+            arc_ok_requires_start: flags & FLAG_ARC_OK_REQUIRES_START != 0,
+            transfer_timeout: millis(19),
+            drop_start_on_transfer_timeout: flags & FLAG_DROP_START_ON_TRANSFER_TIMEOUT != 0,
+            refuse_start_on_fault: flags & FLAG_REFUSE_START_ON_FAULT != 0,
+            link_required: flags & FLAG_LINK_REQUIRED != 0,
+            inputs,
+            outputs,
+        };
+        let process = match r[23] {
+            0 if r[24..RECORD_V1_LEN].iter().all(|&b| b == 0) => None,
+            1 => Some(Process {
+                mode: *Mode::ALL.get(usize::from(r[24]))?,
+                amps: Amps::from_raw(u16_at(25)),
+                pressure: Pressure::from_raw(u16_at(27)),
+            }),
             _ => return None,
-        },
-        response_timeout: millis(4),
-        retries: r[6],
-        poll_interval: millis(7),
-        slow_data_interval: Duration::from_millis(u64::from(u32::from_le_bytes([
-            r[9], r[10], r[11], r[12],
-        ]))),
-        hpr_id: r[13],
-        failures_before_down: r[14],
-    };
-    let io = IoConfig {
-        start_gap: millis(15).max(MIN_START_GAP),
-        arc_ok_debounce: millis(17),
-        arc_ok_requires_start: flags & FLAG_ARC_OK_REQUIRES_START != 0,
-        transfer_timeout: millis(19),
-        drop_start_on_transfer_timeout: flags & FLAG_DROP_START_ON_TRANSFER_TIMEOUT != 0,
-        refuse_start_on_fault: flags & FLAG_REFUSE_START_ON_FAULT != 0,
-        link_required: flags & FLAG_LINK_REQUIRED != 0,
-        ..IoConfig::default()
-    };
-    let process = match r[23] {
-        0 if r[24..].iter().all(|&b| b == 0) => None,
-        1 => Some(Process {
-            mode: *Mode::ALL.get(usize::from(r[24]))?,
-            amps: Amps::from_raw(u16_at(25)),
-            pressure: Pressure::from_raw(u16_at(27)),
-        }),
-        _ => return None,
-    };
-    let settings = Settings {
-        link,
-        io,
-        events: flags & FLAG_EVENTS != 0,
-        phoenix_format: Format::from_value(r[22]).ok()?,
-        process,
-    };
-    settings.is_valid().then_some(settings)
+        };
+        let settings = Settings {
+            link,
+            io,
+            events: flags & FLAG_EVENTS != 0,
+            phoenix_format: Format::from_value(r[22]).ok()?,
+            process,
+        };
+        settings.is_valid().then_some(settings)
+    }
+
+    /// Version 1 is version 2 without the wiring: it loads with the reference board's.
+    fn migrate(version: u8, payload: &[u8]) -> Option<Self> {
+        let mut record = [0u8; RECORD_LEN];
+        let (v1, wiring) = record.split_at_mut(RECORD_V1_LEN);
+        (version == 1 && payload.len() == v1.len()).then(|| v1.copy_from_slice(payload))?;
+        wiring.copy_from_slice(&wiring::encode(&IoConfig::default()));
+        Self::decode(&record)
+    }
 }
 
 #[cfg(test)]
@@ -709,6 +702,9 @@ mod tests {
         assert_eq!(corrupt(22, 2), None, "no such Phoenix format");
         assert_eq!(corrupt(23, 2), None, "bad process tag");
         assert_eq!(corrupt(24, 1), None, "process bytes without a process");
+        assert_eq!(corrupt(29, 0x80), None, "an eighth input active high");
+        assert_eq!(corrupt(30, 101), None, "TORCH_ON debounce above 100 ms");
+        assert_eq!(corrupt(37, 1), None, "START inverted");
         let with_process = Settings {
             process: Some(Process {
                 mode: Mode::Cut,
