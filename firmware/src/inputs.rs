@@ -86,44 +86,78 @@ pub struct InputSetting {
 /// would delay the torch noticeably, on the others it would hide short signals).
 pub const MAX_DEBOUNCE: Duration = Duration::from_millis(100);
 
-/// Settings of every input.
+/// Settings of every input, in whole milliseconds (kept as the settings record stores them:
+/// the I/O task receives a copy with every settings change).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct InputConfig {
-    settings: [InputSetting; 7],
+    /// One bit per input ([`slot`]): active high.
+    active_high: u8,
+    /// Debounce per input, ms, in [`Input::ALL`] order.
+    debounce_ms: [u8; 7],
 }
 
 impl Default for InputConfig {
-    /// The reference board: every input active low. TORCH_ON 1 ms (against contact bounce
-    /// and ignition spikes, small beside a PhotoMOS's 0.2-2 ms turn-on); MOTION none, because
-    /// the interlocks debounce it themselves for ARC_OK; the other signals 5 ms.
     fn default() -> Self {
-        let mut config = InputConfig {
-            settings: [InputSetting {
-                polarity: Polarity::ActiveLow,
-                debounce: Duration::from_millis(5),
-            }; 7],
-        };
-        config.set_debounce(Input::TorchOn, Duration::from_millis(1));
-        config.set_debounce(Input::Motion, Duration::ZERO);
-        config
+        InputConfig::REFERENCE
     }
 }
 
 impl InputConfig {
+    /// The reference board: every input active low. TORCH_ON 1 ms (against contact bounce
+    /// and ignition spikes, small beside a PhotoMOS's 0.2-2 ms turn-on); MOTION none, because
+    /// the interlocks debounce it themselves for ARC_OK; the other signals 5 ms.
+    pub const REFERENCE: InputConfig = InputConfig {
+        active_high: 0,
+        // Input::ALL order: TORCH_ON, HOLD, PIERCE_COMPLETE, CORNER_CURRENT, MOTION,
+        // NOT_READY, RAMPDOWN_ERROR.
+        debounce_ms: [1, 5, 5, 5, 0, 5, 5],
+    };
+
     /// The settings of one input.
     pub const fn get(&self, input: Input) -> InputSetting {
-        pick(&self.settings, input)
+        InputSetting {
+            polarity: if self.active_high & (1 << slot(input)) != 0 {
+                Polarity::ActiveHigh
+            } else {
+                Polarity::ActiveLow
+            },
+            debounce: Duration::from_millis(pick(&self.debounce_ms, input) as u64),
+        }
     }
 
     /// Change the polarity of one input.
     pub fn set_polarity(&mut self, input: Input, polarity: Polarity) {
-        pick_mut(&mut self.settings, input).polarity = polarity;
+        let bit = 1 << slot(input);
+        match polarity {
+            Polarity::ActiveHigh => self.active_high |= bit,
+            Polarity::ActiveLow => self.active_high &= !bit,
+        }
     }
 
-    /// Change the debounce time of one input (clamped to [`MAX_DEBOUNCE`]).
+    /// Change the debounce time of one input (whole milliseconds, clamped to
+    /// [`MAX_DEBOUNCE`]).
     pub fn set_debounce(&mut self, input: Input, debounce: Duration) {
-        pick_mut(&mut self.settings, input).debounce = debounce.min(MAX_DEBOUNCE);
+        let ms = debounce.min(MAX_DEBOUNCE).as_millis();
+        *pick_mut(&mut self.debounce_ms, input) = u8::try_from(ms).unwrap_or(u8::MAX);
+    }
+
+    /// The stored form: the active-high bits (one per input, [`Input::ALL`] order) and the
+    /// debounce times in ms.
+    pub const fn to_stored(&self) -> (u8, [u8; 7]) {
+        (self.active_high, self.debounce_ms)
+    }
+
+    /// From the stored form; `None` if a bit names no input or a time is above
+    /// [`MAX_DEBOUNCE`].
+    pub fn from_stored(active_high: u8, debounce_ms: [u8; 7]) -> Option<Self> {
+        let max = MAX_DEBOUNCE.as_millis();
+        (active_high < 1 << 7 && debounce_ms.iter().all(|&ms| u64::from(ms) <= max)).then_some(
+            InputConfig {
+                active_high,
+                debounce_ms,
+            },
+        )
     }
 }
 
@@ -244,6 +278,28 @@ impl InputFilter {
     /// The settings in use.
     pub fn config(&self) -> &InputConfig {
         &self.config
+    }
+
+    /// New settings while running. An input whose setting is unchanged keeps its state (a
+    /// level half-way through its debounce stays pending); an input whose setting changed
+    /// takes its level under the new setting from `pins` at once, as at power-up, and a
+    /// change of its level is queued. The caller decides what a re-taken TORCH_ON may do
+    /// ([`DiscreteIo`](crate::discrete::DiscreteIo) treats it like power-up).
+    pub fn set_config(&mut self, config: InputConfig, pins: PinLevels) {
+        for input in Input::ALL {
+            let setting = config.get(input);
+            if setting == self.config.get(input) {
+                continue;
+            }
+            let active = setting.polarity.is_active(pins.is_high(input));
+            let channel = pick_mut(&mut self.channels, input);
+            channel.pending = None;
+            if channel.accepted != active {
+                channel.accepted = active;
+                self.push(input, active);
+            }
+        }
+        self.config = config;
     }
 
     /// The pins were read at `now`. Levels that need no debounce are accepted at once.

@@ -14,8 +14,8 @@
 //!   watchdog feeding and power-cut-safe settings storage, as logic.
 //! - [`pins`]: the board's pin map, the one table every board layer and the QEMU harness
 //!   read.
-//! - [`inputs`], [`discrete`]: input polarity and debounce in front of [`io::Interlocks`],
-//!   as the board's I/O task runs them.
+//! - [`inputs`], [`output_levels`], [`discrete`]: the CNC's wiring (input polarity and
+//!   debounce, output levels) around [`io::Interlocks`], as the board's I/O task runs them.
 //! - [`runner`], [`supervisor`]: the async loops around the link and the bridge, over any
 //!   `embedded-io-async` UART and clock (the board and host tests run the same code).
 #![cfg_attr(not(test), no_std)]
@@ -70,6 +70,7 @@ pub mod discrete;
 pub mod inputs;
 pub mod io;
 pub mod link;
+pub mod output_levels;
 pub mod pins;
 pub mod runner;
 pub mod safe_state;

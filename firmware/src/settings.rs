@@ -29,6 +29,8 @@ use plasma_protocol::cnc::{
 };
 
 use crate::io::{IoConfig, MIN_START_GAP};
+
+mod wiring;
 use crate::link::{LinkConfig, ProtocolChoice};
 use crate::storage::{self, StoreError};
 use plasma_protocol::serial::{Parity, StopBits};
@@ -42,8 +44,10 @@ pub const TRANSFER_TIMEOUT_MS: (u32, u32) = (100, 10_000);
 pub const START_GAP_MS: (u32, u32) = (50, 1000);
 /// The Phoenix format used until one is configured: SOH, STX, CR LF, ETX, EOT and check byte.
 pub const DEFAULT_PHOENIX_FORMAT: u8 = 113;
-/// Length of the version-1 record.
-pub const RECORD_LEN: usize = 29;
+/// Length of the version-1 record (no wiring).
+const RECORD_V1_LEN: usize = 29;
+/// Length of the version-2 record: version 1, then the CNC's wiring.
+pub const RECORD_LEN: usize = RECORD_V1_LEN + wiring::RECORD_LEN;
 
 /// The process (mode, current, pressure) the CNC asked for last, re-applied after power-up.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -315,6 +319,8 @@ impl Settings {
             ConfigKey::Events => on_off(self.events),
             ConfigKey::HprId => ConfigValue::Number(u32::from(link.hpr_id)),
             ConfigKey::PhoenixFormat => ConfigValue::Number(u32::from(self.phoenix_format.value())),
+            // The wiring keys (`wiring::KEYS`); every other key has its arm above.
+            other => wiring::get(io, other).unwrap_or(ConfigValue::Number(0)),
         }
     }
 
@@ -329,10 +335,10 @@ impl Settings {
             | ConfigKey::TransferTimeoutDropsStart
             | ConfigKey::Events => Accepted::Words(ON_OFF),
             ConfigKey::PhoenixFormat => Accepted::Words("32|33|48|49|64|65|80|81|96|97|112|113"),
-            other => {
+            other => wiring::accepted(other).unwrap_or_else(|| {
                 let (min, max) = range_of(other);
                 Accepted::Range(min, max)
-            }
+            }),
         }
     }
 
@@ -409,6 +415,8 @@ impl Settings {
                     .filter(|f| f.start_byte().is_some())
                     .ok_or(not_framed)?;
             }
+            // The wiring keys (`wiring::KEYS`); every other key has its arm above.
+            other => return wiring::set(io, other, text).unwrap_or(Ok(())),
         }
         Ok(())
     }
@@ -455,11 +463,12 @@ impl fmt::Display for Accepted {
     }
 }
 
-// --- record layout, version 1 ---------------------------------------------------------------
+// --- record layout, version 2 (version 1 is its first 29 bytes) ----------------------------
 // 0 protocol | 1 node address | 2 parity | 3 stop bits | 4-5 response time-out ms (LE)
 // 6 retries | 7-8 poll ms | 9-12 slow-data ms | 13 HPR id | 14 failures before down
 // 15-16 start gap ms | 17-18 ARC_OK debounce ms | 19-20 transfer time-out ms | 21 flags
 // 22 Phoenix format | 23 process present | 24 mode | 25-26 amps raw | 27-28 pressure raw
+// 29 active-high inputs (bit per input) | 30-36 input debounce ms | 37 inverted outputs
 
 const FLAG_ARC_OK_REQUIRES_START: u8 = 1 << 0;
 const FLAG_DROP_START_ON_TRANSFER_TIMEOUT: u8 = 1 << 1;
@@ -487,7 +496,7 @@ fn u16_ms(d: Duration) -> [u8; 2] {
 }
 
 impl storage::Settings for Settings {
-    const VERSION: u8 = 1;
+    const VERSION: u8 = 2;
 
     fn encode(&self, out: &mut [u8]) -> usize {
         let mut r = [0u8; RECORD_LEN];
@@ -519,6 +528,7 @@ impl storage::Settings for Settings {
             | flag(io.link_required, FLAG_LINK_REQUIRED)
             | flag(self.events, FLAG_EVENTS);
         r[22] = self.phoenix_format.value();
+        r[RECORD_V1_LEN..].copy_from_slice(&wiring::encode(io));
         if let Some(process) = self.process {
             r[23] = 1;
             r[24] = index_of(&Mode::ALL, &process.mode);
@@ -537,6 +547,7 @@ impl storage::Settings for Settings {
 
     fn decode(payload: &[u8]) -> Option<Self> {
         let r: &[u8; RECORD_LEN] = payload.try_into().ok()?;
+        let (inputs, outputs) = wiring::decode(r.last_chunk()?)?;
         // Offsets are constants inside the fixed-length record.
         let u16_at = |i: usize| {
             r.get(i..i + 2)
@@ -574,9 +585,11 @@ impl storage::Settings for Settings {
             drop_start_on_transfer_timeout: flags & FLAG_DROP_START_ON_TRANSFER_TIMEOUT != 0,
             refuse_start_on_fault: flags & FLAG_REFUSE_START_ON_FAULT != 0,
             link_required: flags & FLAG_LINK_REQUIRED != 0,
+            inputs,
+            outputs,
         };
         let process = match r[23] {
-            0 if r[24..].iter().all(|&b| b == 0) => None,
+            0 if r[24..RECORD_V1_LEN].iter().all(|&b| b == 0) => None,
             1 => Some(Process {
                 mode: *Mode::ALL.get(usize::from(r[24]))?,
                 amps: Amps::from_raw(u16_at(25)),
@@ -592,6 +605,15 @@ impl storage::Settings for Settings {
             process,
         };
         settings.is_valid().then_some(settings)
+    }
+
+    /// Version 1 is version 2 without the wiring: it loads with the reference board's.
+    fn migrate(version: u8, payload: &[u8]) -> Option<Self> {
+        let mut record = [0u8; RECORD_LEN];
+        let (v1, wiring) = record.split_at_mut(RECORD_V1_LEN);
+        (version == 1 && payload.len() == v1.len()).then(|| v1.copy_from_slice(payload))?;
+        wiring.copy_from_slice(&wiring::encode(&IoConfig::default()));
+        Self::decode(&record)
     }
 }
 
@@ -680,6 +702,9 @@ mod tests {
         assert_eq!(corrupt(22, 2), None, "no such Phoenix format");
         assert_eq!(corrupt(23, 2), None, "bad process tag");
         assert_eq!(corrupt(24, 1), None, "process bytes without a process");
+        assert_eq!(corrupt(29, 0x80), None, "an eighth input active high");
+        assert_eq!(corrupt(30, 101), None, "TORCH_ON debounce above 100 ms");
+        assert_eq!(corrupt(37, 1), None, "START inverted");
         let with_process = Settings {
             process: Some(Process {
                 mode: Mode::Cut,
@@ -736,6 +761,29 @@ mod tests {
             Settings::accepted(ConfigKey::PollMs).to_string(),
             "20..1000"
         );
+    }
+
+    #[test]
+    fn a_version_1_record_still_loads_with_the_reference_wiring() {
+        let mut s = Settings::default();
+        s.set(ConfigKey::TimeoutMs, "250").unwrap();
+        s.set(ConfigKey::TorchOnActive, "HIGH").unwrap();
+        let mut out = [0u8; 64];
+        let len = s.encode(&mut out);
+        assert_eq!(len, RECORD_LEN);
+        // A version-1 record is the first 29 bytes of a version-2 one.
+        let v1 = &out[..RECORD_V1_LEN];
+        assert_eq!(Settings::decode(v1), None, "not a version-2 record");
+        let migrated = Settings::migrate(1, v1).unwrap();
+        assert_eq!(migrated.link, s.link);
+        assert_eq!(migrated.io.inputs, crate::inputs::InputConfig::default());
+        assert_eq!(
+            migrated.get(ConfigKey::TorchOnActive),
+            ConfigValue::Word("LOW")
+        );
+        assert_eq!(Settings::migrate(3, v1), None);
+        // And the wiring round-trips in version 2.
+        assert_eq!(Settings::decode(&out[..len]), Some(s));
     }
 
     #[test]

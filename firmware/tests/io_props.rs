@@ -46,6 +46,7 @@ fn any_config() -> impl Strategy<Value = IoConfig> {
                 drop_start_on_transfer_timeout: drop,
                 refuse_start_on_fault: refuse_fault,
                 link_required: link,
+                ..IoConfig::default()
             },
         )
 }

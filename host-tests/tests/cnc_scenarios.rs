@@ -1167,3 +1167,49 @@ fn the_bare_bridge_is_an_endpoint_too() {
         assert!(w.io().outputs().ready || model.family() == plasma_sim::Family::Hpr);
     }
 }
+
+#[test]
+fn a_torch_on_wiring_change_during_a_cut_drops_start_until_released() {
+    let mut w = bridge_world_with(
+        Model::Pm65,
+        Settings {
+            events: true,
+            ..Settings::default()
+        },
+    );
+    settle(&mut w);
+    w.set_torch(true);
+    w.run_for(ms(200));
+    assert!(w.io().outputs().start);
+    assert_eq!(
+        w.cnc_line("CONFIG torch_on_debounce_ms 3"),
+        "OK torch_on_debounce_ms=3"
+    );
+    w.run_for(ms(100));
+    assert!(
+        !w.io().outputs().start,
+        "a change never keeps or fires START"
+    );
+    assert_eq!(
+        w.io().start_locked_by(),
+        Some(Interlock::TorchOnAtWiringChange)
+    );
+    assert!(
+        w.cnc_events()
+            .any(|e| e == "!START DROPPED reason=torch_on_at_config"),
+        "{:?}",
+        w.cnc_events().collect::<Vec<_>>()
+    );
+    w.set_torch(false);
+    w.run_for(ms(100));
+    w.set_torch(true);
+    w.run_for(ms(100));
+    assert!(w.io().outputs().start, "a fresh press fires");
+    assert_eq!(w.cnc_line("CONFIG SAVE"), "OK config=saved");
+    let saved = w.saved_settings().unwrap();
+    assert_eq!(
+        saved.io.inputs.get(Input::TorchOn).debounce,
+        Duration::from_millis(3)
+    );
+    w.assert_safe();
+}

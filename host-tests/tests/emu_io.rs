@@ -9,7 +9,8 @@ mod common;
 use std::time::Duration;
 
 use common::emu::{
-    EDGE, HOLD, boot, expect_held, expect_output, press_again, ready, ready_board, set, wait_logged,
+    EDGE, HOLD, boot, command, expect_held, expect_output, press_again, ready, ready_board, set,
+    wait_logged,
 };
 use host_tests::emu::safety::{GAP_TOLERANCE, START_GAP};
 use host_tests::emu::{BoardOptions, Wiring};
@@ -115,5 +116,33 @@ fn arc_ok_mirrors_motion() {
     let levels: Vec<bool> = changes.iter().map(|c| c.on).collect();
     assert_eq!(levels, [true, false].repeat(4), "{changes:?}");
     set(&board, Input::Motion, false);
+    board.assert_safe();
+}
+
+#[test]
+fn wiring_changes_on_the_running_board_never_fire_and_never_touch_start() {
+    let mut board = ready_board(Model::Sync65);
+    set(&board, Input::TorchOn, true);
+    expect_output(&board, Output::Start, true, EDGE);
+    // TORCH_ON's debounce changes during the cut: START drops, the held press is ignored.
+    assert_eq!(
+        command(&mut board, "CONFIG torch_on_debounce_ms 3"),
+        "OK torch_on_debounce_ms=3"
+    );
+    expect_output(&board, Output::Start, false, EDGE);
+    expect_held(&board, Output::Start, false, Duration::from_millis(200));
+    press_again(&board);
+    expect_output(&board, Output::Start, true, EDGE);
+    // FAULT inverted while cutting: its pin goes high (the harness reads pins by the table,
+    // so "on"), START stays as it is.
+    assert_eq!(
+        command(&mut board, "CONFIG fault_active LOW"),
+        "OK fault_active=LOW"
+    );
+    expect_output(&board, Output::Fault, true, EDGE);
+    expect_held(&board, Output::Start, true, Duration::from_millis(100));
+    assert!(command(&mut board, "CONFIG start_active LOW").starts_with("ERR SYNTAX"));
+    set(&board, Input::TorchOn, false);
+    expect_output(&board, Output::Start, false, EDGE);
     board.assert_safe();
 }

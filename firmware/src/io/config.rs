@@ -1,12 +1,16 @@
 //! Settings of the discrete I/O logic.
 
+use crate::inputs::InputConfig;
+use crate::output_levels::OutputConfig;
 use plasma_protocol::time::Duration;
 
 /// The Powermax manuals' minimum delay between Start signals ("to give sufficient time for
 /// the relay circuits to complete switching").
 pub const MIN_START_GAP: Duration = Duration::from_millis(50);
 
-/// Settings of [`Interlocks`](super::Interlocks). [`IoConfig::default`] is the safe choice.
+/// Settings of the discrete I/O: the CNC's wiring ([`inputs`](Self::inputs),
+/// [`outputs`](Self::outputs)), read by [`DiscreteIo`](crate::discrete::DiscreteIo), and the
+/// rules of [`Interlocks`](super::Interlocks). [`IoConfig::default`] is the safe choice.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct IoConfig {
@@ -27,6 +31,10 @@ pub struct IoConfig {
     /// down, hold READY off and FAULT on while it is down. Clear it only for a discrete-only
     /// installation.
     pub link_required: bool,
+    /// Active level and debounce of every input (the CNC's wiring).
+    pub inputs: InputConfig,
+    /// Active level of the outputs a table may need inverted.
+    pub outputs: OutputConfig,
 }
 
 impl IoConfig {
@@ -50,6 +58,8 @@ impl Default for IoConfig {
             drop_start_on_transfer_timeout: true,
             refuse_start_on_fault: true,
             link_required: true,
+            inputs: InputConfig::default(),
+            outputs: OutputConfig::default(),
         }
     }
 }

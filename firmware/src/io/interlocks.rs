@@ -179,6 +179,23 @@ impl Interlocks {
         self.step(now);
     }
 
+    /// TORCH_ON's meaning changed (its active level or debounce): `active` is its level under
+    /// the new setting. Like power-up, an active TORCH_ON is ignored until seen inactive, so
+    /// no change can fire the torch: a START that is on drops in this call.
+    pub fn rearm_torch_on(&mut self, now: Instant, active: bool) {
+        let now = self.advance(now);
+        self.inputs.torch_on = active;
+        if active {
+            let interlock = Interlock::TorchOnAtWiringChange;
+            if matches!(self.phase, StartPhase::On { .. }) {
+                self.drop_start(interlock);
+            } else {
+                self.refuse(interlock);
+            }
+        }
+        self.step(now);
+    }
+
     /// The settings in use.
     pub fn config(&self) -> &IoConfig {
         &self.config

@@ -6,6 +6,13 @@
 //! never reads the interlocks' own view of the inputs: a machine that lost or misread a
 //! TORCH_ON edge would agree with itself. Feed it every edge the board is given, and a
 //! sample after every step of whatever drives START.
+//!
+//! "Observed" means TORCH_ON as the CNC means it, not the raw pin level: a pin level means
+//! nothing without the table's wiring. The monitor is fed the pin read with the active level
+//! set at that moment, and when the operator changes TORCH_ON's level or debounce it is told
+//! the new meaning ([`SafetyMonitor::torch_on_redefined`]), an observed command like an edge,
+//! never the interlocks' view. A change then counts like power-up: a TORCH_ON active under the
+//! new setting must be seen inactive before START.
 
 use core::fmt;
 
@@ -37,7 +44,8 @@ pub enum ViolationKind {
     },
     /// START on before the quick-restart blackout ended.
     StartDuringBlackout,
-    /// START on while a TORCH_ON active at power-up has not yet been seen inactive.
+    /// START on while a TORCH_ON active at power-up (or when its wiring setting changed) has
+    /// not yet been seen inactive.
     StartFromTorchOnAtPowerUp,
 }
 
@@ -110,6 +118,17 @@ impl SafetyMonitor {
                 self.torch_stuck_since_power_up = false;
             }
         }
+    }
+
+    /// TORCH_ON's meaning at the pin changed: the operator set its active level or debounce
+    /// (`CONFIG torch_on_active`, `torch_on_debounce_ms`). The monitor judges TORCH_ON as the
+    /// CNC means it, and after such a change that is the pin read with the new level:
+    /// `active`. An operator's command is observed like an edge, not taken from the
+    /// interlocks. Like power-up, a TORCH_ON active now must be seen inactive before any START
+    /// ([`ViolationKind::StartFromTorchOnAtPowerUp`]).
+    pub fn torch_on_redefined(&mut self, active: bool) {
+        self.torch_on = active;
+        self.torch_stuck_since_power_up = active;
     }
 
     /// One sample: the START pin after a step at `now`, and the blackout the link reports.

@@ -13,6 +13,9 @@ use plasma_protocol::time::Instant;
 pub enum Interlock {
     /// TORCH_ON was already active at power-up and has not been seen inactive since.
     TorchOnAtPowerUp,
+    /// TORCH_ON read active when its active level or debounce changed, and has not been seen
+    /// inactive since (the power-up rule, for a change of what the pin means).
+    TorchOnAtWiringChange,
     /// The link to the power supply is down.
     LinkDown,
     /// The supply is restarting after a SYNC quick restart.
@@ -25,6 +28,7 @@ pub enum Interlock {
 
 log_texts!(Interlock {
     Interlock::TorchOnAtPowerUp => "torch-on active at power-up",
+    Interlock::TorchOnAtWiringChange => "torch-on active when its wiring setting changed",
     Interlock::LinkDown => "link to power supply down",
     Interlock::RestartBlackout => "quick-restart blackout",
     Interlock::FaultRequiresAction => "power supply fault requires action",

@@ -166,6 +166,7 @@ fn write_state_changed(
 fn interlock_word(interlock: Interlock) -> &'static str {
     match interlock {
         Interlock::TorchOnAtPowerUp => "torch_on_at_power_up",
+        Interlock::TorchOnAtWiringChange => "torch_on_at_config",
         Interlock::LinkDown => "link_down",
         Interlock::RestartBlackout => "restart_blackout",
         Interlock::FaultRequiresAction => "fault",

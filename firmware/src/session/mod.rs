@@ -60,8 +60,10 @@ use input::Item;
 pub const QUEUE_CAPACITY: usize = 4;
 /// Bytes of output (replies, events, ACK/NAK) held until the driver takes them.
 pub const OUTPUT_CAPACITY: usize = 4096;
-/// Longest reply or event line, CR LF included.
-pub const MAX_REPLY_LEN: usize = 400;
+/// Longest reply or event line, CR LF included: room for `CONFIG`'s list of every key
+/// (about 700 bytes with the wiring keys). A line is built on the stack and copied into the
+/// output buffer, so the size costs no static RAM.
+pub const MAX_REPLY_LEN: usize = 800;
 /// Simulator commands held until the driver takes them.
 pub const SIM_QUEUE_CAPACITY: usize = 4;
 /// A Phoenix frame that stops arriving for this long is abandoned (NAK): the CNC sends a

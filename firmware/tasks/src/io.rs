@@ -18,7 +18,6 @@ use embassy_sync::channel::Channel;
 use embassy_sync::signal::Signal;
 use embassy_time::Timer;
 use plasma_firmware::discrete::DiscreteIo;
-use plasma_firmware::inputs::InputConfig;
 use plasma_firmware::io::{self, Inputs, IoConfig, IoEvent, Outputs, SupplyState, Transition};
 use plasma_firmware::supervisor::IoExchange;
 use plasma_firmware::watchdog::TaskId;
@@ -30,8 +29,8 @@ use crate::progress::report;
 
 /// The link's view of the supply, latest wins (bridge → I/O).
 pub static SUPPLY: Signal<CriticalSectionRawMutex, SupplyState> = Signal::new();
-/// New I/O settings after a CONFIG command (bridge → I/O).
-pub static CONFIG: Signal<CriticalSectionRawMutex, (IoConfig, InputConfig)> = Signal::new();
+/// New I/O settings, the CNC's wiring included, after a CONFIG command (bridge → I/O).
+pub static CONFIG: Signal<CriticalSectionRawMutex, IoConfig> = Signal::new();
 /// Input and output levels after every change, latest wins (I/O → bridge).
 pub static SNAPSHOT: Signal<CriticalSectionRawMutex, (Inputs, Outputs)> = Signal::new();
 /// I/O events for the CNC session, in order (I/O → bridge).
@@ -46,12 +45,11 @@ const MAX_WAIT: Duration = Duration::from_millis(50);
 pub async fn run(
     mut pins: impl InputPins,
     mut outputs: impl OutputPins,
-    config: (IoConfig, InputConfig),
+    io_config: IoConfig,
     progress: TaskId,
 ) {
-    let (io_config, input_config) = config;
-    let mut io = DiscreteIo::new(io_config, input_config, now(), pins.levels());
-    outputs.drive(io.outputs());
+    let mut io = DiscreteIo::new(io_config, now(), pins.levels());
+    outputs.drive(io.table_outputs());
     debug!(
         "I/O: start gap {} ms, transfer time-out {} ms, ARC_OK debounce {} us, link required: {}",
         io_config.effective_start_gap().as_millis(),
@@ -74,8 +72,8 @@ pub async fn run(
         match woke {
             Either4::First(()) | Either4::Second(()) => {}
             Either4::Third(supply) => io.on_supply(now, supply),
-            Either4::Fourth((io_config, input_config)) => {
-                if io.reconfigure(now, io_config, input_config, pins.levels()) {
+            Either4::Fourth(io_config) => {
+                if io.reconfigure(now, io_config, pins.levels()) {
                     info!(
                         "I/O: new settings: start gap {} ms, transfer time-out {} ms, link required {=bool}",
                         io_config.effective_start_gap().as_millis(),
@@ -88,7 +86,7 @@ pub async fn run(
         // Levels, not edges: whatever woke the task, the pins decide.
         io.on_pins(now, pins.levels());
         io.poll(now);
-        outputs.drive(io.outputs());
+        outputs.drive(io.table_outputs());
         publish(&mut io, now);
         report(progress);
     }
@@ -151,10 +149,7 @@ pub fn log_event(at: Instant, event: IoEvent) {
 }
 
 /// The supervisor's side of the exchange (thread mode).
-pub struct BoardIo {
-    /// Input polarity and debounce sent along with every I/O settings change.
-    pub inputs: InputConfig,
-}
+pub struct BoardIo;
 
 impl IoExchange for BoardIo {
     fn take_snapshot(&mut self) -> Option<(Inputs, Outputs)> {
@@ -181,7 +176,7 @@ impl IoExchange for BoardIo {
     }
 
     fn send_io_config(&mut self, config: IoConfig) {
-        CONFIG.signal((config, self.inputs));
+        CONFIG.signal(config);
     }
 }
 

@@ -579,6 +579,16 @@ impl<E: PsEndpoint> World<E> {
             self.drive_input(Input::TorchOn, on);
         }
         if let Some(config) = self.endpoint.take_io_config_change() {
+            // The world's pins are the CNC's meaning: a change of TORCH_ON's wiring keeps the
+            // level and re-arms the power-up rule, as DiscreteIo does on the board.
+            let torch_on = |c: &IoConfig| c.inputs.get(Input::TorchOn);
+            if torch_on(self.io.config()) != torch_on(&config) {
+                self.io.rearm_torch_on(now, self.pins_in.torch_on);
+                self.monitor.torch_on_redefined(self.pins_in.torch_on);
+                if let Some(monitor) = &mut self.reset_monitor {
+                    monitor.torch_on_redefined(self.pins_in.torch_on);
+                }
+            }
             self.io.set_config(now, config);
         }
 

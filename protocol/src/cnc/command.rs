@@ -160,11 +160,28 @@ pub enum ConfigKey {
     Events,
     HprId,
     PhoenixFormat,
+    // The CNC's wiring: every input's active level and debounce, the invertible outputs.
+    TorchOnActive,
+    TorchOnDebounceMs,
+    HoldActive,
+    HoldDebounceMs,
+    PierceCompleteActive,
+    PierceCompleteDebounceMs,
+    CornerCurrentActive,
+    CornerCurrentDebounceMs,
+    MotionActive,
+    MotionDebounceMs,
+    NotReadyActive,
+    NotReadyDebounceMs,
+    RampdownErrorActive,
+    RampdownErrorDebounceMs,
+    PsHoldActive,
+    FaultActive,
 }
 
 impl ConfigKey {
     /// Every key, in the order `CONFIG` lists them.
-    pub const ALL: [ConfigKey; 15] = [
+    pub const ALL: [ConfigKey; 31] = [
         ConfigKey::Protocol,
         ConfigKey::Address,
         ConfigKey::Parity,
@@ -180,6 +197,22 @@ impl ConfigKey {
         ConfigKey::Events,
         ConfigKey::HprId,
         ConfigKey::PhoenixFormat,
+        ConfigKey::TorchOnActive,
+        ConfigKey::TorchOnDebounceMs,
+        ConfigKey::HoldActive,
+        ConfigKey::HoldDebounceMs,
+        ConfigKey::PierceCompleteActive,
+        ConfigKey::PierceCompleteDebounceMs,
+        ConfigKey::CornerCurrentActive,
+        ConfigKey::CornerCurrentDebounceMs,
+        ConfigKey::MotionActive,
+        ConfigKey::MotionDebounceMs,
+        ConfigKey::NotReadyActive,
+        ConfigKey::NotReadyDebounceMs,
+        ConfigKey::RampdownErrorActive,
+        ConfigKey::RampdownErrorDebounceMs,
+        ConfigKey::PsHoldActive,
+        ConfigKey::FaultActive,
     ];
 
     /// The key as written in commands and replies (lower case, `snake_case`).
@@ -200,6 +233,22 @@ impl ConfigKey {
             ConfigKey::Events => "events",
             ConfigKey::HprId => "hpr_id",
             ConfigKey::PhoenixFormat => "phoenix_format",
+            ConfigKey::TorchOnActive => "torch_on_active",
+            ConfigKey::TorchOnDebounceMs => "torch_on_debounce_ms",
+            ConfigKey::HoldActive => "hold_active",
+            ConfigKey::HoldDebounceMs => "hold_debounce_ms",
+            ConfigKey::PierceCompleteActive => "pierce_complete_active",
+            ConfigKey::PierceCompleteDebounceMs => "pierce_complete_debounce_ms",
+            ConfigKey::CornerCurrentActive => "corner_current_active",
+            ConfigKey::CornerCurrentDebounceMs => "corner_current_debounce_ms",
+            ConfigKey::MotionActive => "motion_active",
+            ConfigKey::MotionDebounceMs => "motion_debounce_ms",
+            ConfigKey::NotReadyActive => "not_ready_active",
+            ConfigKey::NotReadyDebounceMs => "not_ready_debounce_ms",
+            ConfigKey::RampdownErrorActive => "rampdown_error_active",
+            ConfigKey::RampdownErrorDebounceMs => "rampdown_error_debounce_ms",
+            ConfigKey::PsHoldActive => "ps_hold_active",
+            ConfigKey::FaultActive => "fault_active",
         }
     }
 

@@ -185,14 +185,14 @@ mod image {
             shared_settings::open::<Emulated>(SettingsFlash::new(), 0..SETTINGS_SIZE as u32);
         let loaded = shared_settings::load::<Emulated>(store.as_mut()).await;
         let settings = loaded.settings;
+        // Pulls per the board's circuit (the pin table), whatever the wiring settings say.
         let input_config = InputConfig::default();
 
         let inputs = InputPins::new(&input_config);
         let outputs = OutputPins::new();
         let io_progress = register("io", Duration::from_millis(200));
         let io_spawner = IO_EXECUTOR.start(Interrupt::UART4);
-        io_spawner
-            .spawn(io_task(inputs, outputs, (settings.io, input_config), io_progress).unwrap());
+        io_spawner.spawn(io_task(inputs, outputs, settings.io, io_progress).unwrap());
 
         route_uart_pins();
         let ps_uart = uart(Uart::new(
@@ -224,9 +224,7 @@ mod image {
                 bridge,
                 ps_uart,
                 cnc_uart,
-                BoardIo {
-                    inputs: input_config,
-                },
+                BoardIo,
                 register("bridge", Duration::from_millis(500)),
             )
             .unwrap(),

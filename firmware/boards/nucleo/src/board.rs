@@ -7,7 +7,6 @@ use core::future::Future;
 use embassy_stm32::flash::{Async, Flash};
 
 use plasma_firmware::bridge::Bridge;
-use plasma_firmware::inputs::InputConfig;
 use plasma_firmware::io::IoConfig;
 use plasma_firmware::watchdog::TaskId;
 use plasma_tasks::Board;
@@ -40,7 +39,7 @@ impl Board for Nucleo {
 pub fn io_task(
     inputs: InputPins,
     outputs: OutputPins,
-    config: (IoConfig, InputConfig),
+    config: IoConfig,
     progress: TaskId,
 ) -> impl Future<Output = ()> {
     plasma_tasks::io::run(inputs, outputs, config, progress)

@@ -185,7 +185,8 @@ mod image {
         let mut store = flash::open(embassy_stm32::flash::Flash::new(p.FLASH, Irqs));
         let loaded = shared_settings::load::<Nucleo>(store.as_mut()).await;
         let settings = loaded.settings;
-        // Polarity and debounce of the inputs are not (yet) part of the stored settings.
+        // The pulls belong to the board's input circuit (the pin table's polarity), not to
+        // the level the CNC's wiring settings call active (docs/board.md, the CNC's wiring).
         let input_config = InputConfig::default();
 
         // Inputs in Input::ALL order, each with the pull that reads inactive when open.
@@ -200,8 +201,7 @@ mod image {
             exti_input!(p, c, RampdownError, EXTI10 = 10),
         ]);
         let io_progress = register("io", Duration::from_millis(200));
-        start_io_executor()
-            .spawn(io_task(inputs, outputs, (settings.io, input_config), io_progress).unwrap());
+        start_io_executor().spawn(io_task(inputs, outputs, settings.io, io_progress).unwrap());
 
         let ps_uart = uart(BufferedUart::new_with_de(
             p.USART1,
@@ -230,9 +230,7 @@ mod image {
                 bridge,
                 PsUart(ps_uart),
                 CncUart(cnc_uart),
-                BoardIo {
-                    inputs: input_config,
-                },
+                BoardIo,
                 register("bridge", Duration::from_millis(500)),
             )
             .unwrap(),
