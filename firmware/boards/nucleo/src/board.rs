@@ -4,7 +4,6 @@
 //! around `.await`: that future would keep the arguments twice (its own and the body's).
 
 use core::future::Future;
-use embassy_stm32::flash::{Async, Flash};
 
 use plasma_firmware::bridge::Bridge;
 use plasma_firmware::inputs::InputConfig;
@@ -28,7 +27,7 @@ impl Board for Nucleo {
     type PsUart = PsUart;
     type CncUart = CncUart;
     const CNC_TX_BUFFER: usize = cnc_uart::TX_BUFFER;
-    type SettingsFlash = Flash<'static, Async>;
+    type SettingsFlash = crate::flash::SettingsFlash;
 
     fn flash_errors_seen() -> u32 {
         crate::flash::flash_errors_seen()
