@@ -63,7 +63,11 @@ impl<F: NorFlash> VerifiedFlash<F> {
             let at = offset + done as u32;
             let chunk = &mut buf[..n];
             self.0.read(at, chunk).await.map_err(VerifyError::Flash)?;
-            if chunk.iter().enumerate().any(|(i, &b)| b != expected(done + i)) {
+            if chunk
+                .iter()
+                .enumerate()
+                .any(|(i, &b)| b != expected(done + i))
+            {
                 return Ok(false);
             }
             done += n;

@@ -27,6 +27,7 @@ use plasma_protocol::time::{Duration, Instant, div_rem_u16};
 use crate::board::{InputPins, OutputPins};
 use crate::clock::{embassy_instant, now};
 use crate::progress::report;
+use crate::safe_state::drive_outputs;
 
 /// The link's view of the supply, latest wins (bridge → I/O).
 pub static SUPPLY: Signal<CriticalSectionRawMutex, SupplyState> = Signal::new();
@@ -51,7 +52,7 @@ pub async fn run(
 ) {
     let (io_config, input_config) = config;
     let mut io = DiscreteIo::new(io_config, input_config, now(), pins.levels());
-    outputs.drive(io.outputs());
+    drive_outputs(&mut outputs, io.outputs());
     debug!(
         "I/O: start gap {} ms, transfer time-out {} ms, ARC_OK debounce {} us, link required: {}",
         io_config.effective_start_gap().as_millis(),
@@ -88,7 +89,7 @@ pub async fn run(
         // Levels, not edges: whatever woke the task, the pins decide.
         io.on_pins(now, pins.levels());
         io.poll(now);
-        outputs.drive(io.outputs());
+        drive_outputs(&mut outputs, io.outputs());
         publish(&mut io, now);
         report(progress);
     }

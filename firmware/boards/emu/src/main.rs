@@ -43,6 +43,8 @@ mod gpio;
 mod probe;
 #[cfg(target_os = "none")]
 mod rcc;
+#[cfg(all(target_os = "none", feature = "test-hooks"))]
+mod test_hooks;
 #[cfg(target_os = "none")]
 mod time_driver;
 #[cfg(target_os = "none")]
@@ -238,5 +240,7 @@ mod image {
         WATCHDOG_EXECUTOR
             .start(Interrupt::USART3)
             .spawn(watchdog::watchdog().unwrap());
+        #[cfg(feature = "test-hooks")]
+        spawner.spawn(crate::test_hooks::stall_on_request().unwrap());
     }
 }

@@ -182,9 +182,9 @@ mod image {
             irq.set_priority(SERIAL_PRIORITY);
         }
 
-        let mut store = flash::open(flash::SettingsFlash::new(
-            embassy_stm32::flash::Flash::new(p.FLASH, Irqs),
-        ));
+        let mut store = flash::open(flash::SettingsFlash::new(embassy_stm32::flash::Flash::new(
+            p.FLASH, Irqs,
+        )));
         let loaded = shared_settings::load::<Nucleo>(store.as_mut()).await;
         let settings = loaded.settings;
         // Polarity and debounce of the inputs are not (yet) part of the stored settings.
