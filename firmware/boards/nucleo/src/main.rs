@@ -15,7 +15,8 @@
 //! - the bridge task in thread mode: the power-supply link on USART1 with hardware
 //!   driver-enable ([`ps_uart`]), the CNC session on USART2 ([`cnc_uart`]);
 //! - the settings task that stores `CONFIG SAVE` in flash ([`flash`]);
-//! - [`watchdog`]: the IWDG fed only while every task reports progress; the heartbeat LED;
+//! - [`watchdog`]: the IWDG, started before anything that could hang, then fed only while
+//!   every task reports progress; the heartbeat LED;
 //! - [`fault`]: panic, HardFault and NMI leave every output off and reset.
 #![cfg_attr(target_os = "none", no_std)]
 #![cfg_attr(target_os = "none", no_main)]
@@ -159,6 +160,8 @@ mod image {
         // Before clocks, before anything that could fail: START and every other output off.
         drive_safe_state();
         let boot = reset::boot_report();
+        // Before clocks, flash and UARTs, any of which could hang: a stalled boot resets.
+        watchdog::start();
 
         let p = embassy_stm32::init(clock_config());
         // The HAL takes the pins over at the level they already have.
@@ -243,6 +246,6 @@ mod image {
 
         let led = crate::pins::led();
         spawner.spawn(heartbeat_task(led, register("heartbeat", Duration::from_secs(1))).unwrap());
-        spawner.spawn(watchdog::watchdog(p.IWDG).unwrap());
+        spawner.spawn(watchdog::watchdog().unwrap());
     }
 }
