@@ -1,8 +1,9 @@
 //! The discrete I/O task, on its own interrupt executor above all serial work.
 //!
 //! It owns the input and output pins and a `plasma_firmware::discrete::DiscreteIo`. It wakes
-//! on any input edge (EXTI), on the I/O logic's own deadlines, and on news from the bridge;
-//! each time it reads every input *level* (so a missed or bouncing edge cannot leave START
+//! on any input edge (EXTI, through the always-armed latch of [`crate::edges`]: an edge while
+//! the task is busy wakes its next wait), on the I/O logic's own deadlines, and on news from
+//! the bridge; each time it reads every input *level* (so a bouncing edge cannot leave START
 //! wrong), updates the logic and drives the outputs at once; only then it logs and publishes.
 //!
 //! The exchange with the bridge (thread mode) is by small copies under a critical section:
@@ -26,6 +27,7 @@ use plasma_protocol::time::{Duration, Instant, div_rem_u16};
 
 use crate::board::{InputPins, OutputPins};
 use crate::clock::{embassy_instant, now};
+use crate::edges::EDGES;
 use crate::progress::report;
 use crate::safe_state::drive_outputs;
 
@@ -45,7 +47,7 @@ const MAX_WAIT: Duration = Duration::from_millis(50);
 /// The body of the I/O task. Each board runs it on an interrupt executor above every serial
 /// interrupt, so the START path never waits behind serial work.
 pub async fn run(
-    mut pins: impl InputPins,
+    pins: impl InputPins,
     mut outputs: impl OutputPins,
     config: (IoConfig, InputConfig),
     progress: TaskId,
@@ -65,7 +67,7 @@ pub async fn run(
         let latest = now() + MAX_WAIT;
         let deadline = io.poll_at().map_or(latest, |at| at.min(latest));
         let woke = select4(
-            pins.any_edge(),
+            EDGES.wait(),
             Timer::at(embassy_instant(deadline)),
             SUPPLY.wait(),
             CONFIG.wait(),

@@ -24,6 +24,7 @@ pub mod boot;
 pub mod bridge;
 pub mod chip;
 pub mod clock;
+pub mod edges;
 pub mod io;
 pub mod progress;
 pub mod reset;

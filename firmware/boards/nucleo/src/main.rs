@@ -11,7 +11,7 @@
 //!   settings from flash ([`flash`]), the reset cause and the settings outcome handed to the
 //!   bridge for the CNC port (`!BOOT`, `ID`);
 //! - the I/O task on an interrupt executor above all serial work ([`io_executor`]): input
-//!   edges (EXTI) to outputs, on the pins of the one pin table ([`pins`]);
+//!   edges (EXTI, lines armed for good: `plasma_tasks::edges`) to outputs, on the pins of the one pin table ([`pins`]);
 //! - the bridge task in thread mode: the power-supply link on USART1 with hardware
 //!   driver-enable ([`ps_uart`]), the CNC session on USART2 ([`cnc_uart`]);
 //! - the settings task that stores `CONFIG SAVE` in flash ([`flash`]);
@@ -48,15 +48,13 @@ mod image {
     use defmt::{info, warn};
     use defmt_rtt as _;
     use embassy_executor::Spawner;
-    use embassy_stm32::exti::{self, ExtiInput};
     use embassy_stm32::interrupt::{self, InterruptExt};
     use embassy_stm32::usart::{self, BufferedUart};
     use embassy_stm32::{bind_interrupts, peripherals};
     use plasma_firmware::bridge::Bridge;
     use plasma_firmware::inputs::InputConfig;
-    use plasma_firmware::io::Input;
     use plasma_firmware::link::transaction::TX_CAPACITY;
-    use plasma_firmware::pins::{self, CNC_UART, PS_UART, Port};
+    use plasma_firmware::pins::{CNC_UART, PS_UART, Port};
     use plasma_protocol::time::Duration;
     use plasma_tasks::boot::boot_text;
     use plasma_tasks::clock::now;
@@ -78,11 +76,6 @@ mod image {
         FLASH => embassy_stm32::flash::InterruptHandler;
         USART1 => usart::BufferedInterruptHandler<peripherals::USART1>;
         USART2 => usart::BufferedInterruptHandler<peripherals::USART2>;
-        EXTI0 => exti::InterruptHandler<interrupt::typelevel::EXTI0>;
-        EXTI1 => exti::InterruptHandler<interrupt::typelevel::EXTI1>;
-        EXTI4 => exti::InterruptHandler<interrupt::typelevel::EXTI4>;
-        EXTI9_5 => exti::InterruptHandler<interrupt::typelevel::EXTI9_5>;
-        EXTI15_10 => exti::InterruptHandler<interrupt::typelevel::EXTI15_10>;
     });
 
     /// HSI16 / 2 = 8 MHz PLL input (4..16 MHz allowed), x 20 = 160 MHz VCO (64..344 MHz),
@@ -122,28 +115,6 @@ mod image {
             && CNC_UART.de.is_none(),
         "the UART pins in main.rs differ from plasma_firmware::pins"
     );
-
-    /// An EXTI input for `$input` on channel `$channel`: the channel is typed (embassy-stm32
-    /// binds its interrupt at compile time), so a compile-time check ties it to the line the
-    /// pin table gives the input.
-    macro_rules! exti_input {
-        ($p:ident, $config:expr, $input:ident, $channel:ident = $line:literal) => {{
-            const _: () = assert!(
-                pins::input(Input::$input).pin.number == $line,
-                concat!(
-                    "the pin table moved ",
-                    stringify!($input),
-                    " off ",
-                    stringify!($channel)
-                )
-            );
-            ExtiInput::from_input(
-                crate::pins::input($config, Input::$input),
-                $p.$channel,
-                Irqs,
-            )
-        }};
-    }
 
     /// The UART, or a panic: the settings are fixed ones the USARTs support at 80 MHz, so an
     /// error is a build mistake (panic = safe state). One UART at a time: a pair of results
@@ -193,17 +164,7 @@ mod image {
         // Polarity and debounce of the inputs are not (yet) part of the stored settings.
         let input_config = InputConfig::default();
 
-        // Inputs in Input::ALL order, each with the pull that reads inactive when open.
-        let c = &input_config;
-        let inputs = InputPins([
-            exti_input!(p, c, TorchOn, EXTI0 = 0),
-            exti_input!(p, c, Hold, EXTI4 = 4),
-            exti_input!(p, c, PierceComplete, EXTI6 = 6),
-            exti_input!(p, c, CornerCurrent, EXTI7 = 7),
-            exti_input!(p, c, Motion, EXTI1 = 1),
-            exti_input!(p, c, NotReady, EXTI8 = 8),
-            exti_input!(p, c, RampdownError, EXTI10 = 10),
-        ]);
+        let inputs = InputPins::new(&input_config);
         let io_progress = register("io", Duration::from_millis(200));
         start_io_executor()
             .spawn(io_task(inputs, outputs, (settings.io, input_config), io_progress).unwrap());
