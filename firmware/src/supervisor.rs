@@ -62,8 +62,14 @@ impl PsEndpoint for Bridge {
     fn handle_ps_rx(&mut self, now: Instant, bytes: &[u8]) {
         Bridge::handle_ps_rx(self, now, bytes);
     }
+    fn handle_ps_rx_error(&mut self, now: Instant) {
+        Bridge::handle_ps_rx_error(self, now);
+    }
     fn poll_ps_transmit(&mut self, now: Instant) -> Option<&[u8]> {
         Bridge::poll_ps_transmit(self, now)
+    }
+    fn ps_transmitted(&mut self, at: Instant) {
+        Bridge::ps_transmitted(self, at);
     }
     fn ps_port_config(&self) -> PortConfig {
         Bridge::ps_port_config(self)

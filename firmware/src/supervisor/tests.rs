@@ -196,6 +196,7 @@ impl FakeBridge {
 }
 
 impl PsEndpoint for FakeBridge {
+    fn handle_ps_rx_error(&mut self, _: Instant) {}
     fn handle_ps_rx(&mut self, _: Instant, bytes: &[u8]) {
         self.ps_rx.extend_from_slice(bytes);
     }
