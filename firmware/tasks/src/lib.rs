@@ -30,5 +30,6 @@ pub mod progress;
 pub mod reset;
 pub mod safe_state;
 pub mod settings;
+pub mod uart;
 
 pub use board::Board;

@@ -13,9 +13,9 @@ use plasma_tasks::Board;
 use plasma_tasks::io::BoardIo;
 use plasma_tasks::settings::Store;
 
-use crate::cnc_uart::{self, CncUart};
+use crate::cnc_uart::CncUart;
 use crate::pins::{InputPins, Led, OutputPins};
-use crate::ps_uart::PsUart;
+use plasma_tasks::uart::Uart;
 
 /// The Nucleo-L476RG.
 pub struct Nucleo;
@@ -24,9 +24,10 @@ impl Board for Nucleo {
     type InputPins = InputPins;
     type OutputPins = OutputPins;
     type Led = Led;
-    type PsUart = PsUart;
+    type PsUart = Uart;
     type CncUart = CncUart;
-    const CNC_TX_BUFFER: usize = cnc_uart::TX_BUFFER;
+    /// The shared driver's transmit ring: the bridge writes CNC output in pieces of this.
+    const CNC_TX_BUFFER: usize = plasma_tasks::uart::TX_CAPACITY;
     type SettingsFlash = crate::flash::SettingsFlash;
 
     fn flash_errors_seen() -> u32 {
@@ -49,7 +50,7 @@ pub fn io_task(
 #[embassy_executor::task]
 pub fn bridge_task(
     bridge: &'static mut Bridge,
-    ps: PsUart,
+    ps: Uart,
     cnc: CncUart,
     io: BoardIo,
     progress: TaskId,
