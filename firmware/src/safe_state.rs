@@ -447,7 +447,7 @@ mod tests {
             idle,
         );
         io.on_supply(Instant::ZERO, SupplyState::HEALTHY);
-        let mut step = |io: &mut DiscreteIo, at_ms: u64, levels: PinLevels, pins: &mut Outputs| {
+        let step = |io: &mut DiscreteIo, at_ms: u64, levels: PinLevels, pins: &mut Outputs| {
             let now = Instant::from_millis(at_ms);
             io.on_pins(now, levels);
             io.poll(now);
