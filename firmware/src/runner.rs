@@ -3,7 +3,8 @@
 //! The link ([`PsLink`], and the bridge that wraps it) never touches a UART: it hands out
 //! whole frames, says which line settings it wants and when it needs to be polled. [`PsPort`]
 //! does the rest over any [`embedded_io_async`] port and any [`Clock`], so the same code runs
-//! on the board (embassy's `BufferedUart` and timer) and in host tests (a fake port and a
+//! on the board (the register-level USART driver of `plasma_tasks::uart` and embassy-time) and
+//! in host tests (a fake port and a
 //! virtual clock):
 //!
 //! - a frame is written whole and flushed before anything else happens, so the hardware
@@ -17,7 +18,9 @@
 //!   watchdog even on a silent line.
 //!
 //! The port's `read` must be cancel-safe (bytes that arrive while nobody reads stay in its
-//! buffer): embassy-stm32's `BufferedUart` is, since it reads from its ring buffer. Bytes
+//! buffer): the boards' driver is, since it reads from its ring buffer. A read error of kind
+//! `InvalidData` is a character received with a parity, framing or noise error: it is passed
+//! on in its place ([`PsEndpoint::handle_ps_rx_error`]), not taken as a failed turn. Bytes
 //! already waiting are passed on before the endpoint is asked for frames, because asking it
 //! also checks its reply time-out: a reply that came in time must not be taken for a
 //! time-out only because the task was busy elsewhere when it arrived.
