@@ -116,6 +116,8 @@ fn on_exti() {
     if pending & (1 << TORCH_ON_LINE) != 0 {
         probe::torch_on_edge();
     }
+    #[cfg(feature = "test-hooks")]
+    crate::test_hooks::on_edges(pending);
 }
 
 #[interrupt]
