@@ -119,6 +119,13 @@ impl Bridge {
         self.service(now);
     }
 
+    /// The frame from [`Bridge::poll_ps_transmit`] has left the wire (its last stop bit) at
+    /// `at`: its reply time-out runs from there.
+    pub fn ps_transmitted(&mut self, at: Instant) {
+        self.link.handle_transmitted(at);
+        self.dirty = true;
+    }
+
     /// The next frame to transmit to the power supply, if any (write it completely, then
     /// call again).
     pub fn poll_ps_transmit(&mut self, now: Instant) -> Option<&[u8]> {

@@ -67,6 +67,7 @@ macro_rules! log_texts {
 
 pub mod bridge;
 pub mod discrete;
+pub mod edges;
 pub mod inputs;
 pub mod io;
 pub mod link;

@@ -157,6 +157,11 @@ pub const fn output(output: Output) -> Wiring {
 /// The green heartbeat LED (LD2 on the Nucleo, LD1 on the B-L475E-IOT01A: PA5 on both).
 pub const HEARTBEAT_LED: Wiring = Wiring::new(Port::A, 5, Polarity::ActiveHigh);
 
+/// The user button (B1 on the Nucleo, PC13 on both boards): only test images read it, as the
+/// trigger that stalls thread mode on purpose (the emulated board's `test-hooks` feature,
+/// which the QEMU harness turns on to test the fail-safe). Active low, as the button.
+pub const TEST_STALL: Pin = Pin::new(Port::C, 13);
+
 /// A UART's pins (alternate function 7 on both).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub struct UartPins {
@@ -263,6 +268,7 @@ mod tests {
         let mut pins: Vec<Pin> = Input::ALL.into_iter().map(|i| input(i).pin).collect();
         pins.extend(Output::ALL.into_iter().map(|o| output(o).pin));
         pins.push(HEARTBEAT_LED.pin);
+        pins.push(TEST_STALL);
         pins.extend(PS_UART.pins().chain(CNC_UART.pins()));
         pins
     }

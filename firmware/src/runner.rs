@@ -3,12 +3,14 @@
 //! The link ([`PsLink`], and the bridge that wraps it) never touches a UART: it hands out
 //! whole frames, says which line settings it wants and when it needs to be polled. [`PsPort`]
 //! does the rest over any [`embedded_io_async`] port and any [`Clock`], so the same code runs
-//! on the board (embassy's `BufferedUart` and timer) and in host tests (a fake port and a
+//! on the board (the register-level USART driver of `plasma_tasks::uart` and embassy-time) and
+//! in host tests (a fake port and a
 //! virtual clock):
 //!
 //! - a frame is written whole and flushed before anything else happens, so the hardware
 //!   driver-enable drops right after its last stop bit and the line settings never change
-//!   in the middle of a frame;
+//!   in the middle of a frame; the end of the flush is reported to the endpoint
+//!   ([`PsEndpoint::ps_transmitted`]), whose reply time-out starts there;
 //! - the line settings are applied before each frame, as the endpoint reports them *after*
 //!   handing out the frame (auto-detection switches parity when it starts a step);
 //! - between frames it waits for received bytes, but no later than the endpoint's
@@ -16,7 +18,9 @@
 //!   watchdog even on a silent line.
 //!
 //! The port's `read` must be cancel-safe (bytes that arrive while nobody reads stay in its
-//! buffer): embassy-stm32's `BufferedUart` is, since it reads from its ring buffer. Bytes
+//! buffer): the boards' driver is, since it reads from its ring buffer. A read error of kind
+//! `InvalidData` is a character received with a parity, framing or noise error: it is passed
+//! on in its place ([`PsEndpoint::handle_ps_rx_error`]), not taken as a failed turn. Bytes
 //! already waiting are passed on before the endpoint is asked for frames, because asking it
 //! also checks its reply time-out: a reply that came in time must not be taken for a
 //! time-out only because the task was busy elsewhere when it arrived.
@@ -24,7 +28,7 @@
 use core::future::Future;
 
 use embassy_futures::select::{Either, select};
-use embedded_io_async::{Read, ReadReady, Write};
+use embedded_io_async::{Error as _, ErrorKind, Read, ReadReady, Write};
 use heapless::Vec;
 
 use crate::link::PsLink;
@@ -55,8 +59,14 @@ pub trait ConfigurablePort: Read + ReadReady + Write {
 pub trait PsEndpoint {
     /// Bytes received from the supply.
     fn handle_ps_rx(&mut self, now: Instant, bytes: &[u8]);
+    /// A character received with a parity, framing or noise error, in its place in the
+    /// stream (the port reported it as an `InvalidData` read error).
+    fn handle_ps_rx_error(&mut self, now: Instant);
     /// The next whole frame to transmit, if one is due.
     fn poll_ps_transmit(&mut self, now: Instant) -> Option<&[u8]>;
+    /// The frame handed out last has left the wire (the port's flush returned) at `at`; its
+    /// reply time-out runs from there. An endpoint without a time-out ignores it.
+    fn ps_transmitted(&mut self, _at: Instant) {}
     /// The line settings the port must use now.
     fn ps_port_config(&self) -> PortConfig;
     /// When the endpoint must be polled again at the latest (`None`: only received bytes
@@ -69,8 +79,16 @@ impl PsEndpoint for PsLink {
         self.handle_rx(now, bytes);
     }
 
+    fn handle_ps_rx_error(&mut self, now: Instant) {
+        self.handle_rx_error(now);
+    }
+
     fn poll_ps_transmit(&mut self, now: Instant) -> Option<&[u8]> {
         self.poll_transmit(now)
+    }
+
+    fn ps_transmitted(&mut self, at: Instant) {
+        self.handle_transmitted(at);
     }
 
     fn ps_port_config(&self) -> PortConfig {
@@ -116,6 +134,8 @@ pub struct PortStats {
     pub bytes_received: u32,
     /// Line-setting changes applied.
     pub config_changes: u32,
+    /// Characters received with a parity, framing or noise error.
+    pub rx_errors: u32,
 }
 
 /// What one [`PsPort::turn`] did.
@@ -205,7 +225,10 @@ impl<P: ConfigurablePort> PsPort<P> {
                 .write_all(&self.frame)
                 .await
                 .map_err(PortError::Write)?;
+            // The flush returns once the last stop bit has left (TC): the reply time-out
+            // starts now, not when the frame was handed to the UART.
             self.port.flush().await.map_err(PortError::Write)?;
+            endpoint.ps_transmitted(clock.now());
             self.stats.frames_sent = self.stats.frames_sent.saturating_add(1);
             sent += 1;
         }
@@ -238,11 +261,34 @@ impl<P: ConfigurablePort> PsPort<P> {
         let mut total = 0;
         let mut buf = [0u8; RX_CHUNK];
         while self.port.read_ready().map_err(PortError::Read)? {
-            let n = self.read(&mut buf).await?;
-            endpoint.handle_ps_rx(clock.now(), buf.get(..n).unwrap_or(&buf));
-            total += n;
+            let received = self.read(&mut buf).await;
+            total += self.hand_over(endpoint, clock, received, &buf)?;
         }
         Ok(total)
+    }
+
+    /// Passes a read's outcome to the endpoint: the bytes, or a character received in error
+    /// (a read error of kind `InvalidData`: parity, framing, noise) in its place in the
+    /// stream. Returns the characters passed on; any other error ends the turn.
+    fn hand_over<E: PsEndpoint + ?Sized>(
+        &mut self,
+        endpoint: &mut E,
+        clock: &impl Clock,
+        received: Result<usize, PortError<P::Error>>,
+        buf: &[u8],
+    ) -> Result<usize, PortError<P::Error>> {
+        match received {
+            Ok(n) => {
+                endpoint.handle_ps_rx(clock.now(), buf.get(..n).unwrap_or(buf));
+                Ok(n)
+            }
+            Err(PortError::Read(e)) if e.kind() == ErrorKind::InvalidData => {
+                self.stats.rx_errors = self.stats.rx_errors.saturating_add(1);
+                endpoint.handle_ps_rx_error(clock.now());
+                Ok(1)
+            }
+            Err(e) => Err(e),
+        }
     }
 
     /// Waits until bytes arrive (and passes them to the endpoint) or `deadline` passes.
@@ -255,11 +301,7 @@ impl<P: ConfigurablePort> PsPort<P> {
     ) -> Result<usize, PortError<P::Error>> {
         let mut buf = [0u8; RX_CHUNK];
         match select(self.read(&mut buf), clock.sleep_until(deadline)).await {
-            Either::First(received) => {
-                let n = received?;
-                endpoint.handle_ps_rx(clock.now(), buf.get(..n).unwrap_or(&buf));
-                Ok(n)
-            }
+            Either::First(received) => self.hand_over(endpoint, clock, received, &buf),
             Either::Second(()) => Ok(0),
         }
     }

@@ -20,6 +20,8 @@
 //! assert_eq!(report.cause.as_str(), "panic");
 //! ```
 
+use core::sync::atomic::{AtomicBool, Ordering};
+
 /// The outputs are the I/O's; where each one is: [`crate::pins`].
 pub use crate::io::Output;
 
@@ -224,6 +226,73 @@ impl BootReport {
     }
 }
 
+/// The fail-safe latch: once a task stalled and the outputs went to [`SAFE_OUTPUTS`], nothing
+/// may drive them again until the reset that follows.
+///
+/// Without it the I/O task, which runs on while another task hangs, would rewrite the pins at
+/// its next wake-up (START following TORCH_ON again) until the watchdog resets the MCU up to a
+/// second later. The board trips it together with its safe-state write and passes every
+/// output write through [`FailSafe::drive_unless_tripped`], both under one critical section,
+/// so no write can slip between the two.
+#[derive(Debug)]
+pub struct FailSafe(AtomicBool);
+
+impl FailSafe {
+    /// Not tripped.
+    pub const fn new() -> Self {
+        FailSafe(AtomicBool::new(false))
+    }
+
+    /// From now on every output write is refused.
+    pub fn trip(&self) {
+        self.0.store(true, Ordering::SeqCst);
+    }
+
+    /// Whether [`FailSafe::trip`] was called.
+    pub fn is_tripped(&self) -> bool {
+        self.0.load(Ordering::SeqCst)
+    }
+
+    /// Runs `drive` (an output write) unless tripped; says whether it ran.
+    pub fn drive_unless_tripped(&self, drive: impl FnOnce()) -> bool {
+        if self.is_tripped() {
+            return false;
+        }
+        drive();
+        true
+    }
+}
+
+impl Default for FailSafe {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+/// Entry into the fault path (panic, HardFault, NMI): the first entry logs and resets; an
+/// entry while that runs (a fault inside the log write, an NMI during it) must not log again,
+/// because defmt's RTT logger panics on re-entry: it only makes the outputs safe and resets.
+#[derive(Debug)]
+pub struct FaultEntry(AtomicBool);
+
+impl FaultEntry {
+    /// No fault yet.
+    pub const fn new() -> Self {
+        FaultEntry(AtomicBool::new(false))
+    }
+
+    /// `true` for the first entry only.
+    pub fn first(&self) -> bool {
+        !self.0.swap(true, Ordering::SeqCst)
+    }
+}
+
+impl Default for FaultEntry {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -357,5 +426,55 @@ mod tests {
         unique.sort();
         unique.dedup();
         assert_eq!(unique.len(), names.len());
+    }
+
+    #[test]
+    fn a_tripped_fail_safe_refuses_every_later_write() {
+        use crate::discrete::DiscreteIo;
+        use crate::inputs::PinLevels;
+        use crate::io::{Input, IoConfig, Outputs, SupplyState};
+        use plasma_protocol::time::Instant;
+
+        // The I/O task's loop in miniature: the logic decides, the gate writes the "pins".
+        let latch = FailSafe::new();
+        let mut pins = Outputs::default();
+        let idle = PinLevels::ALL_HIGH;
+        let torch = PinLevels::ALL_HIGH.with(Input::TorchOn, false);
+        let mut io = DiscreteIo::new(IoConfig::default(), Instant::ZERO, idle);
+        io.on_supply(Instant::ZERO, SupplyState::HEALTHY);
+        let step = |io: &mut DiscreteIo, at_ms: u64, levels: PinLevels, pins: &mut Outputs| {
+            let now = Instant::from_millis(at_ms);
+            io.on_pins(now, levels);
+            io.poll(now);
+            let wanted = io.outputs();
+            latch.drive_unless_tripped(|| *pins = wanted)
+        };
+        assert!(step(&mut io, 100, torch, &mut pins));
+        assert!(step(&mut io, 200, torch, &mut pins));
+        assert!(pins.start, "START follows TORCH_ON before the trip");
+
+        // A task stalled: the watchdog side trips the latch and writes the safe state.
+        latch.trip();
+        pins = Outputs::default();
+        // The I/O logic runs on and still wants START with TORCH_ON; the pins stay safe.
+        let mut wanted_start = false;
+        for at_ms in (300..2000).step_by(50) {
+            let levels = if at_ms % 200 == 0 { idle } else { torch };
+            assert!(!step(&mut io, at_ms, levels, &mut pins));
+            assert_eq!(pins, Outputs::default(), "at {at_ms} ms");
+            wanted_start |= io.outputs().start;
+        }
+        assert!(
+            wanted_start,
+            "the logic wanted START again: the latch refused it"
+        );
+    }
+
+    #[test]
+    fn only_the_first_fault_entry_may_log() {
+        let entry = FaultEntry::new();
+        assert!(entry.first());
+        assert!(!entry.first());
+        assert!(!entry.first());
     }
 }

@@ -15,8 +15,9 @@
 //!    bridge's `poll_at` (at most [`MAX_WAIT`], so the caller reports progress regularly).
 //!
 //! CNC output is written in pieces of at most the port's buffer size, each after the
-//! previous one has left (`flush`): embassy-stm32 0.6's `BufferedUart` rejects a write larger
-//! than its buffer and does not wake a writer waiting for buffer space.
+//! previous one has left (`flush`): a bounded write per turn, so a long reply never holds the
+//! loop while the power-supply side waits (the boards' driver, `plasma_tasks::uart`, would
+//! otherwise wait for ring space inside the write).
 
 use core::future::{Future, pending};
 
@@ -62,8 +63,14 @@ impl PsEndpoint for Bridge {
     fn handle_ps_rx(&mut self, now: Instant, bytes: &[u8]) {
         Bridge::handle_ps_rx(self, now, bytes);
     }
+    fn handle_ps_rx_error(&mut self, now: Instant) {
+        Bridge::handle_ps_rx_error(self, now);
+    }
     fn poll_ps_transmit(&mut self, now: Instant) -> Option<&[u8]> {
         Bridge::poll_ps_transmit(self, now)
+    }
+    fn ps_transmitted(&mut self, at: Instant) {
+        Bridge::ps_transmitted(self, at);
     }
     fn ps_port_config(&self) -> PortConfig {
         Bridge::ps_port_config(self)

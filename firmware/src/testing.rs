@@ -28,6 +28,8 @@ use crate::link::PsLink;
 pub(crate) trait Master {
     /// One whole frame to send now, if any.
     fn transmit(&mut self, now: Instant) -> Option<&[u8]>;
+    /// The frame from `transmit` left the wire at `at` (the line model's end of it).
+    fn transmitted(&mut self, at: Instant);
     /// Characters received.
     fn receive(&mut self, now: Instant, bytes: &[u8]);
     /// A character received with a parity or framing error.
@@ -39,6 +41,9 @@ pub(crate) trait Master {
 impl Master for PsLink {
     fn transmit(&mut self, now: Instant) -> Option<&[u8]> {
         self.poll_transmit(now)
+    }
+    fn transmitted(&mut self, at: Instant) {
+        self.handle_transmitted(at);
     }
     fn receive(&mut self, now: Instant, bytes: &[u8]) {
         self.handle_rx(now, bytes);
@@ -54,6 +59,9 @@ impl Master for PsLink {
 impl Master for Bridge {
     fn transmit(&mut self, now: Instant) -> Option<&[u8]> {
         self.poll_ps_transmit(now)
+    }
+    fn transmitted(&mut self, at: Instant) {
+        self.ps_transmitted(at);
     }
     fn receive(&mut self, now: Instant, bytes: &[u8]) {
         self.handle_ps_rx(now, bytes);
@@ -135,7 +143,8 @@ impl SimPs {
         }
         while let Some(frame) = master.transmit(now) {
             let frame = frame.to_vec();
-            self.line.transmit(End::Master, now, &frame);
+            let end = self.line.transmit(End::Master, now, &frame);
+            master.transmitted(end);
             self.sent.push((now, frame));
         }
         for b in self.line.receive(End::Unit, now) {

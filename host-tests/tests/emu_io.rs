@@ -9,8 +9,8 @@ mod common;
 use std::time::Duration;
 
 use common::emu::{
-    EDGE, HOLD, boot, command, expect_held, expect_output, press_again, ready, ready_board, set,
-    wait_logged,
+    EDGE, HOLD, LINK_EVENT, boot, command, expect_held, expect_output, press_again, ready,
+    ready_board, set, wait_logged,
 };
 use host_tests::emu::safety::{GAP_TOLERANCE, START_GAP};
 use host_tests::emu::{BoardOptions, Wiring};
@@ -145,4 +145,28 @@ fn wiring_changes_on_the_running_board_never_fire_and_never_touch_start() {
     set(&board, Input::TorchOn, false);
     expect_output(&board, Output::Start, false, EDGE);
     board.assert_safe();
+}
+
+#[test]
+fn once_a_task_stalls_the_outputs_stay_safe_until_the_reset() {
+    let board = ready_board(Model::Sync65);
+    set(&board, Input::TorchOn, true);
+    expect_output(&board, Output::Start, true, EDGE);
+    let mark = board.log().len();
+    board.stall_thread_mode().unwrap();
+    // The bridge task stops reporting: the watchdog makes the outputs safe at once...
+    board
+        .log()
+        .wait_for(mark, LINK_EVENT, |l| l.text.contains("silent for"))
+        .unwrap_or_else(|e| panic!("{e}\n{}", board.log().tail(20)));
+    expect_output(&board, Output::Start, false, EDGE);
+    // ...and they stay safe until the reset, although the I/O task runs on (its own
+    // executor) with TORCH_ON active, released and pressed again. The reset comes about a
+    // second of guest time after the trip; the checks below take less host time than that,
+    // and the guest's clock never runs faster than the host's.
+    expect_held(&board, Output::Start, false, Duration::from_millis(200));
+    set(&board, Input::TorchOn, false);
+    expect_held(&board, Output::Start, false, Duration::from_millis(100));
+    set(&board, Input::TorchOn, true);
+    expect_held(&board, Output::Start, false, Duration::from_millis(200));
 }

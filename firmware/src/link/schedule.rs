@@ -107,6 +107,15 @@ impl PsLink {
         })
     }
 
+    /// The frame handed out last has left the wire (its last stop bit) at `at`: its reply
+    /// time-out starts there (`Transaction::transmitted`). The board's runner reports it after
+    /// the UART's flush; the host harness from its line model.
+    pub fn handle_transmitted(&mut self, at: Instant) {
+        if let Some(txn) = self.txn.as_mut() {
+            txn.transmitted(at);
+        }
+    }
+
     /// The transaction in flight timed out (an attempt, or the quiet after a request nothing
     /// answers).
     pub(super) fn handle_timeout(&mut self, now: Instant) {

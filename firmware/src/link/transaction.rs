@@ -242,6 +242,18 @@ impl<T> Transaction<T> {
         }
     }
 
+    /// The attempt's last stop bit left the wire at `at`: the reply time-out runs from there,
+    /// so the frame's own transmission (10-25 ms of a 100 ms time-out at 19200 baud) does not
+    /// eat into it. Never moves the deadline earlier; without this call it runs from the hand
+    /// over ([`Transaction::poll_transmit`]).
+    pub fn transmitted(&mut self, at: Instant) {
+        if let Phase::AwaitingReply { deadline } = self.phase {
+            self.phase = Phase::AwaitingReply {
+                deadline: deadline.max(at + self.timeout),
+            };
+        }
+    }
+
     /// Call when time passes; reports a time-out (and what follows) once the deadline is hit.
     pub fn handle_timeout(&mut self, now: Instant) -> Option<Outcome> {
         match self.phase {
@@ -312,6 +324,25 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn the_time_out_runs_from_the_end_of_transmission() {
+        let mut t = Transaction::new((), b"abc", ms(0), T100, 2, RetrySpacing::Immediate).unwrap();
+        assert!(t.poll_transmit(ms(0)).is_some());
+        // The last stop bit leaves 20 ms later (a long frame at 19200 baud).
+        t.transmitted(ms(20));
+        assert_eq!(t.poll_at(), ms(120));
+        assert_eq!(t.handle_timeout(ms(100)), None, "not from the hand-over");
+        assert_eq!(t.handle_timeout(ms(119)), None);
+        assert_eq!(
+            t.handle_timeout(ms(120)),
+            Some(Outcome::Retrying(TransactionError::Timeout))
+        );
+        // A report from before the hand-over never shortens the wait.
+        assert!(t.poll_transmit(ms(120)).is_some());
+        t.transmitted(ms(110));
+        assert_eq!(t.poll_at(), ms(220));
     }
 
     #[test]

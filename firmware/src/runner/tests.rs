@@ -87,6 +87,11 @@ impl Read for FakePort {
             let mut w = world.borrow_mut();
             let now = w.now_us;
             match w.rx.front_mut() {
+                // An empty chunk: one character received with a parity error.
+                Some((t, bytes)) if *t <= now && bytes.is_empty() => {
+                    w.rx.pop_front();
+                    Poll::Ready(Err(ErrorKind::InvalidData))
+                }
                 Some((t, bytes)) if *t <= now => {
                     let n = bytes.len().min(buf.len());
                     buf[..n].copy_from_slice(&bytes[..n]);
@@ -245,6 +250,9 @@ fn every_frame_goes_out_whole_with_the_settings_the_link_asked_for() {
         fn handle_ps_rx(&mut self, now: Instant, bytes: &[u8]) {
             self.link.handle_rx(now, bytes);
         }
+        fn handle_ps_rx_error(&mut self, now: Instant) {
+            self.link.handle_rx_error(now);
+        }
         fn poll_ps_transmit(&mut self, now: Instant) -> Option<&[u8]> {
             self.frame = self.link.poll_transmit(now)?.to_vec();
             self.asked
@@ -309,11 +317,31 @@ fn waits_follow_the_links_deadlines() {
     let sent = writes(&world);
     assert!(sent.len() >= 3, "{sent:?}");
     // Unanswered: the next attempt goes out exactly when the previous one times out
-    // (100 ms after it was handed out, Modbus retries are immediate), not later.
-    let (t0, _, first) = &sent[0];
+    // (100 ms after its last stop bit left, the end of its flush; Modbus retries are
+    // immediate), not later, and not 100 ms after it was handed to the UART.
+    let (t0, config, first) = &sent[0];
     let (t1, _, second) = &sent[1];
     assert_eq!(first, second, "a retry repeats the frame");
-    assert_eq!(*t1 - *t0, 100_000);
+    let flushed = world
+        .borrow()
+        .seen
+        .iter()
+        .find_map(|s| match s {
+            Seen::Flush(t) if t > t0 => Some(*t),
+            _ => None,
+        })
+        .unwrap();
+    let wire_us = first.len() as u64 * config.char_time_ns() / 1000;
+    assert_eq!(
+        flushed - *t0,
+        wire_us,
+        "the fake port's flush takes the wire time"
+    );
+    assert!(
+        wire_us > 5_000,
+        "{wire_us} us: a frame long enough to matter"
+    );
+    assert_eq!(*t1 - flushed, 100_000);
 }
 
 #[test]
@@ -321,6 +349,7 @@ fn a_silent_endpoint_still_turns_every_max_wait() {
     struct Idle;
     impl PsEndpoint for Idle {
         fn handle_ps_rx(&mut self, _: Instant, _: &[u8]) {}
+        fn handle_ps_rx_error(&mut self, _: Instant) {}
         fn poll_ps_transmit(&mut self, _: Instant) -> Option<&[u8]> {
             None
         }
@@ -364,6 +393,7 @@ fn port_errors_are_reported_not_swallowed() {
     struct Impossible;
     impl PsEndpoint for Impossible {
         fn handle_ps_rx(&mut self, _: Instant, _: &[u8]) {}
+        fn handle_ps_rx_error(&mut self, _: Instant) {}
         fn poll_ps_transmit(&mut self, _: Instant) -> Option<&[u8]> {
             None
         }
@@ -400,4 +430,47 @@ fn a_reply_waiting_in_the_port_beats_the_time_out() {
     block_on(port.turn(&mut link, &clock)).unwrap();
     assert!(link.status().link_up);
     assert_eq!(link.diagnostics().timeouts, 0);
+}
+
+#[test]
+fn a_character_received_in_error_reaches_the_link_in_its_place() {
+    /// Records what the runner passes on, in order.
+    #[derive(Default)]
+    struct Heard(StdVec<Option<StdVec<u8>>>);
+    impl PsEndpoint for Heard {
+        fn handle_ps_rx(&mut self, _: Instant, bytes: &[u8]) {
+            self.0.push(Some(bytes.to_vec()));
+        }
+        fn handle_ps_rx_error(&mut self, _: Instant) {
+            self.0.push(None);
+        }
+        fn poll_ps_transmit(&mut self, _: Instant) -> Option<&[u8]> {
+            None
+        }
+        fn ps_port_config(&self) -> PortConfig {
+            PortConfig::MODBUS_DEFAULT
+        }
+        fn ps_poll_at(&self) -> Option<Instant> {
+            None
+        }
+    }
+
+    let (world, clock, mut port) = setup();
+    {
+        let mut w = world.borrow_mut();
+        w.rx.push_back((1_000, b":01".to_vec()));
+        w.rx.push_back((1_000, StdVec::new())); // a parity error
+        w.rx.push_back((1_000, b"03\r\n".to_vec()));
+    }
+    let mut heard = Heard::default();
+    block_on(async {
+        for _ in 0..4 {
+            port.turn(&mut heard, &clock).await.unwrap();
+        }
+    });
+    assert_eq!(
+        heard.0,
+        [Some(b":01".to_vec()), None, Some(b"03\r\n".to_vec())]
+    );
+    assert_eq!(port.stats().rx_errors, 1);
 }

@@ -7,6 +7,10 @@
 //! applied only some of its 1-to-0 bits, an erase only some of its 0-to-1 bits, chosen by a
 //! seeded noise source. After the cut every operation fails until [`RamFlash::power_cycle`].
 //!
+//! A silent failure can be scheduled too ([`RamFlash::fail_silently`]): steps that report
+//! success and change nothing, as embassy-stm32 0.6.0's L4 driver reports a failed program
+//! (its interrupt clears the error flags before they are read; docs/board.md).
+//!
 //! Real hardware can also leave an ECC error in a torn double word, which reads as an NMI on
 //! the L4; this model returns the torn bits instead (see docs/board.md, settings store).
 #![allow(
@@ -56,6 +60,8 @@ pub struct RamFlash<const SIZE: usize> {
     steps_before_cut: Option<u32>,
     dead: bool,
     noise: u32,
+    /// Good steps before the silent failures start, and how many steps fail silently.
+    silent: Option<(u32, u32)>,
 }
 
 impl<const SIZE: usize> Default for RamFlash<SIZE> {
@@ -77,6 +83,7 @@ impl<const SIZE: usize> RamFlash<SIZE> {
             steps_before_cut: None,
             dead: false,
             noise: 1,
+            silent: None,
         }
     }
 
@@ -86,6 +93,27 @@ impl<const SIZE: usize> RamFlash<SIZE> {
         self.steps_before_cut = Some(steps);
         // xorshift must not start at zero.
         self.noise = seed | 1;
+    }
+
+    /// Schedules silent failures: `after` more steps work, then the next `steps` steps
+    /// (`u32::MAX`: all of them) report success and leave the flash as it was.
+    pub fn fail_silently(&mut self, after: u32, steps: u32) {
+        self.silent = Some((after, steps));
+    }
+
+    /// Whether the coming step fails silently (and counts it).
+    fn drops_step(&mut self) -> bool {
+        match self.silent {
+            Some((0, 0)) | None => false,
+            Some((0, left)) => {
+                self.silent = Some((0, left.saturating_sub(1)));
+                true
+            }
+            Some((good, left)) => {
+                self.silent = Some((good - 1, left));
+                false
+            }
+        }
     }
 
     /// Power comes back: operations work again, the contents are what the cut left.
@@ -161,6 +189,9 @@ impl<const SIZE: usize> RamFlash<SIZE> {
             return Err(RamFlashError::NotErased);
         }
         let torn = self.begin_step()?;
+        if self.drops_step() {
+            return Ok(());
+        }
         for (i, &v) in value.iter().enumerate() {
             // Programming only clears bits; a torn program clears a random subset of them.
             let applied = if torn { v | self.next_noise() as u8 } else { v };
@@ -175,6 +206,9 @@ impl<const SIZE: usize> RamFlash<SIZE> {
 
     fn erase_page(&mut self, at: usize) -> Result<(), RamFlashError> {
         let torn = self.begin_step()?;
+        if self.drops_step() {
+            return Ok(());
+        }
         for i in at..at + PAGE_SIZE {
             // Erasing only sets bits; a torn erase sets a random subset of them.
             self.bytes[i] |= if torn { self.next_noise() as u8 } else { 0xFF };

@@ -404,3 +404,32 @@ fn flipped_bits_in_a_used_store_never_give_wrong_settings() {
         );
     }
 }
+
+/// A store over flash that reads its writes back, as on the boards.
+fn verified_store(flash: Flash) -> SettingsStore<super::verified::VerifiedFlash<Flash>> {
+    SettingsStore::new(super::verified::VerifiedFlash::new(flash), 0..REGION as u32).unwrap()
+}
+
+#[test]
+fn a_program_dropped_silently_is_retried_and_the_save_holds() {
+    let mut store = verified_store(Flash::new());
+    block_on(store.save_settings(&TestConfig::new(1, 40))).unwrap();
+    // The next program reports success and stores nothing (embassy-stm32 0.6.0's L4 driver
+    // after a PROGERR): the read-back sees it, the store erases the copy and writes again.
+    store.flash().inner().fail_silently(0, 1);
+    block_on(store.save_settings(&TestConfig::new(2, 40))).unwrap();
+    let mut reopened = verified_store(store.into_flash().inner().clone());
+    let loaded = block_on(reopened.load_settings::<TestConfig>());
+    assert_eq!(loaded.outcome, LoadOutcome::Loaded);
+    assert_eq!(loaded.settings, TestConfig::new(2, 40));
+}
+
+#[test]
+fn a_flash_that_stores_nothing_fails_the_save() {
+    let mut store = verified_store(Flash::new());
+    store.flash().inner().fail_silently(0, u32::MAX);
+    assert!(matches!(
+        block_on(store.save_settings(&TestConfig::new(1, 40))),
+        Err(StoreError::Flash(super::verified::VerifyError::Mismatch))
+    ));
+}

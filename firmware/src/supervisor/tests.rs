@@ -196,6 +196,7 @@ impl FakeBridge {
 }
 
 impl PsEndpoint for FakeBridge {
+    fn handle_ps_rx_error(&mut self, _: Instant) {}
     fn handle_ps_rx(&mut self, _: Instant, bytes: &[u8]) {
         self.ps_rx.extend_from_slice(bytes);
     }
@@ -307,6 +308,60 @@ impl IoExchange for FakeIo {
     fn send_io_config(&mut self, config: IoConfig) {
         self.configs.push(config);
     }
+}
+
+/// A save through the boards' store (read-back flash) on a flash whose programs report success
+/// and store nothing, as embassy-stm32 0.6.0's L4 driver reports a failed program.
+fn save_on_silently_failing_flash(
+    settings: &crate::settings::Settings,
+) -> core::result::Result<(), crate::settings::SaveError> {
+    use crate::storage::SettingsStore;
+    use crate::storage::ram_flash::{PAGE_SIZE, RamFlash};
+    use crate::storage::verified::VerifiedFlash;
+    let mut flash = RamFlash::<{ 4 * PAGE_SIZE }>::new();
+    flash.fail_silently(0, u32::MAX);
+    let region = 0..(4 * PAGE_SIZE) as u32;
+    let mut store = SettingsStore::new(VerifiedFlash::new(flash), region)
+        .map_err(crate::settings::SaveError::from)?;
+    block_on(store.save_settings(settings)).map_err(crate::settings::SaveError::from)
+}
+
+#[test]
+fn a_flash_that_fails_silently_makes_config_save_fail() {
+    use crate::bridge::Bridge;
+    use crate::settings::{SaveError, Settings};
+
+    let world: Shared = Rc::default();
+    let clock = FakeClock(world.clone());
+    let mut sup = Supervisor::new(
+        FakePort {
+            world: world.clone(),
+            line: PS,
+        },
+        FakePort {
+            world: world.clone(),
+            line: CNC,
+        },
+        64,
+        FakeIo {
+            world: world.clone(),
+            ..FakeIo::default()
+        },
+        FakeSaver::<Settings, SaveError>::new(&world, save_on_silently_failing_flash),
+    );
+    let mut bridge = Bridge::new(Settings::default(), Instant::ZERO);
+    cnc_rx(&world, 50, b"CONFIG SAVE\r\n");
+    block_on(async {
+        while clock.now() < Instant::from_millis(200) {
+            sup.turn(&mut bridge, &clock).await.unwrap();
+        }
+    });
+    let cnc = String::from_utf8_lossy(&world.borrow().written(CNC)).into_owned();
+    assert!(
+        cnc.contains("ERR STORAGE settings not saved: flash write failed\r\n"),
+        "{cnc}"
+    );
+    assert!(!cnc.contains("OK config=saved"), "{cnc}");
 }
 
 /// Saves take 30 ms; `outcome` decides how each ends.

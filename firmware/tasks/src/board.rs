@@ -1,20 +1,16 @@
 //! What a board provides to the tasks.
 
-use core::future::Future;
-
 use embedded_io_async::{Read, ReadReady, Write};
 use embedded_storage_async::nor_flash::NorFlash;
 use plasma_firmware::inputs::PinLevels;
 use plasma_firmware::io::Outputs;
 use plasma_firmware::runner::ConfigurablePort;
 
-/// The seven discrete inputs, owned by the I/O task.
+/// The seven discrete inputs, owned by the I/O task. Their edges come through the EXTI
+/// lines the board arms with [`crate::edges::arm_inputs`].
 pub trait InputPins {
     /// Reads every pin now (pin levels; the I/O logic applies the polarity).
     fn levels(&self) -> PinLevels;
-
-    /// Completes on the next edge of any input (a bounce included: the caller reads levels).
-    fn any_edge(&mut self) -> impl Future<Output = ()>;
 }
 
 /// The seven discrete outputs, owned by the I/O task.

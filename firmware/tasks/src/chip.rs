@@ -1,7 +1,7 @@
 //! The few STM32L4 registers the tasks touch themselves, the same on the STM32L476RG and the
 //! emulated STM32L475VG (RM0351): the GPIO ports' mode and set/reset registers, for the safe
-//! state before any driver exists and in the fault handlers, and RCC's clock enables and
-//! reset flags. Addresses of the GPIO ports come from the pin table
+//! state before any driver exists and in the fault handlers, RCC's clock enables and reset
+//! flags, and the EXTI lines of the inputs (SYSCFG routing, edge triggers, mask, pending). Addresses of the GPIO ports come from the pin table
 //! (`plasma_firmware::pins::Port::register_block`).
 
 use plasma_firmware::pins::Pin;
@@ -12,6 +12,22 @@ const RCC_AHB2ENR: usize = RCC + 0x4C;
 /// RCC_CSR: the reset flags (bits 24..31) and RMVF (bit 23, write 1 to clear them).
 const RCC_CSR: usize = RCC + 0x94;
 const RCC_CSR_RMVF: u32 = 1 << 23;
+
+/// RCC_APB2ENR: SYSCFGEN is bit 0.
+const RCC_APB2ENR: usize = RCC + 0x60;
+const RCC_APB2ENR_SYSCFGEN: u32 = 1;
+
+/// SYSCFG_EXTICR1..4: four bits per line, the port index.
+const SYSCFG_EXTICR1: usize = 0x4001_0008;
+
+const EXTI: usize = 0x4001_0400;
+/// EXTI_IMR1, RTSR1, FTSR1, PR1: one bit per line (lines 0..15 are the GPIO pins).
+const EXTI_IMR1: usize = EXTI;
+const EXTI_RTSR1: usize = EXTI + 0x08;
+const EXTI_FTSR1: usize = EXTI + 0x0C;
+const EXTI_PR1: usize = EXTI + 0x14;
+/// The GPIO lines of PR1.
+const GPIO_LINES: u32 = 0xFFFF;
 
 const GPIO_MODER: usize = 0x00;
 const GPIO_BSRR: usize = 0x18;
@@ -46,6 +62,34 @@ pub fn drive_as_output(pin: Pin, high: bool) {
         block + GPIO_MODER,
         (moder & !(0b11 << (2 * n))) | (MODER_OUTPUT << (2 * n)),
     );
+}
+
+/// Turns on SYSCFG's clock (it routes the pins to the EXTI lines).
+pub fn enable_syscfg_clock() {
+    write(RCC_APB2ENR, read(RCC_APB2ENR) | RCC_APB2ENR_SYSCFGEN);
+}
+
+/// Routes `pin` to its EXTI line and arms the line for both edges. Read-modify-writes: call
+/// before the EXTI interrupts are unmasked, from one place.
+pub fn arm_edge_line(pin: Pin) {
+    let n = usize::from(pin.number);
+    let exticr = SYSCFG_EXTICR1 + 4 * (n / 4);
+    let shift = 4 * (n % 4);
+    let port = u32::from(pin.port.index());
+    write(exticr, (read(exticr) & !(0xF << shift)) | (port << shift));
+    let line = pin.mask();
+    write(EXTI_RTSR1, read(EXTI_RTSR1) | line);
+    write(EXTI_FTSR1, read(EXTI_FTSR1) | line);
+    // An edge from before the arming is stale: the task reads the levels at start anyway.
+    write(EXTI_PR1, line);
+    write(EXTI_IMR1, read(EXTI_IMR1) | line);
+}
+
+/// The GPIO lines pending in EXTI_PR1, cleared (write 1 to clear, only those seen).
+pub fn take_pending_edges() -> u32 {
+    let pending = read(EXTI_PR1) & GPIO_LINES;
+    write(EXTI_PR1, pending);
+    pending
 }
 
 /// RCC_CSR as it is now.

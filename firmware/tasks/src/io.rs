@@ -1,8 +1,9 @@
 //! The discrete I/O task, on its own interrupt executor above all serial work.
 //!
 //! It owns the input and output pins and a `plasma_firmware::discrete::DiscreteIo`. It wakes
-//! on any input edge (EXTI), on the I/O logic's own deadlines, and on news from the bridge;
-//! each time it reads every input *level* (so a missed or bouncing edge cannot leave START
+//! on any input edge (EXTI, through the always-armed latch of [`crate::edges`]: an edge while
+//! the task is busy wakes its next wait), on the I/O logic's own deadlines, and on news from
+//! the bridge; each time it reads every input *level* (so a bouncing edge cannot leave START
 //! wrong), updates the logic and drives the outputs at once; only then it logs and publishes.
 //!
 //! The exchange with the bridge (thread mode) is by small copies under a critical section:
@@ -25,7 +26,9 @@ use plasma_protocol::time::{Duration, Instant, div_rem_u16};
 
 use crate::board::{InputPins, OutputPins};
 use crate::clock::{embassy_instant, now};
+use crate::edges::EDGES;
 use crate::progress::report;
+use crate::safe_state::drive_outputs;
 
 /// The link's view of the supply, latest wins (bridge → I/O).
 pub static SUPPLY: Signal<CriticalSectionRawMutex, SupplyState> = Signal::new();
@@ -43,13 +46,13 @@ const MAX_WAIT: Duration = Duration::from_millis(50);
 /// The body of the I/O task. Each board runs it on an interrupt executor above every serial
 /// interrupt, so the START path never waits behind serial work.
 pub async fn run(
-    mut pins: impl InputPins,
+    pins: impl InputPins,
     mut outputs: impl OutputPins,
     io_config: IoConfig,
     progress: TaskId,
 ) {
     let mut io = DiscreteIo::new(io_config, now(), pins.levels());
-    outputs.drive(io.table_outputs());
+    drive_outputs(&mut outputs, io.table_outputs());
     debug!(
         "I/O: start gap {} ms, transfer time-out {} ms, ARC_OK debounce {} us, link required: {}",
         io_config.effective_start_gap().as_millis(),
@@ -62,7 +65,7 @@ pub async fn run(
         let latest = now() + MAX_WAIT;
         let deadline = io.poll_at().map_or(latest, |at| at.min(latest));
         let woke = select4(
-            pins.any_edge(),
+            EDGES.wait(),
             Timer::at(embassy_instant(deadline)),
             SUPPLY.wait(),
             CONFIG.wait(),
@@ -86,7 +89,7 @@ pub async fn run(
         // Levels, not edges: whatever woke the task, the pins decide.
         io.on_pins(now, pins.levels());
         io.poll(now);
-        outputs.drive(io.table_outputs());
+        drive_outputs(&mut outputs, io.table_outputs());
         publish(&mut io, now);
         report(progress);
     }

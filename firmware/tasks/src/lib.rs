@@ -24,10 +24,12 @@ pub mod boot;
 pub mod bridge;
 pub mod chip;
 pub mod clock;
+pub mod edges;
 pub mod io;
 pub mod progress;
 pub mod reset;
 pub mod safe_state;
 pub mod settings;
+pub mod uart;
 
 pub use board::Board;

@@ -12,7 +12,7 @@ use plasma_protocol::time::Duration;
 
 use crate::board::Led;
 use crate::clock::now;
-use crate::safe_state::drive_safe_state;
+use crate::safe_state::trip_fail_safe;
 
 /// One slot per task that matters: I/O, bridge (PS and CNC), settings, heartbeat.
 const TASKS: usize = 6;
@@ -36,13 +36,14 @@ pub fn report(task: TaskId) {
 }
 
 /// Whether every task reported in time. When one did not, the outputs go safe at once (not
-/// when the watchdog fires up to a second later) and the stalled task is logged: the caller
-/// must then stop feeding for good.
+/// when the watchdog fires up to a second later) and stay safe (the fail-safe latch refuses
+/// the I/O task's writes from then on), and the stalled task is logged: the caller must then
+/// stop feeding for good.
 pub fn should_feed() -> bool {
     if MONITOR.lock(|m| m.borrow_mut().should_feed(now())) {
         return true;
     }
-    drive_safe_state();
+    trip_fail_safe();
     if let Some(stall) = MONITOR.lock(|m| m.borrow().stalled()) {
         error!(
             "task '{}' silent for {} ms (limit {} ms): watchdog reset follows",

@@ -1,6 +1,7 @@
 //! The settings task: loads the settings at boot and stores `CONFIG SAVE` off the bridge task,
 //! so both serial ports keep being served while flash pages are erased. The flash behind it is
-//! the board's ([`Board::SettingsFlash`]).
+//! the board's ([`Board::SettingsFlash`]), every write and erase of it read back
+//! ([`VerifiedFlash`]: embassy-stm32 0.6.0's L4 driver reports a failed program as done).
 
 use core::future::Future;
 use core::ops::Range;
@@ -11,6 +12,7 @@ use embassy_sync::blocking_mutex::raw::CriticalSectionRawMutex;
 use embassy_sync::signal::Signal;
 use embassy_time::Timer;
 use plasma_firmware::settings::{SaveError, Settings};
+use plasma_firmware::storage::verified::VerifiedFlash;
 use plasma_firmware::storage::{LoadOutcome, LoadedSettings, SettingsStore};
 use plasma_firmware::supervisor::SettingsSaver;
 use plasma_firmware::watchdog::TaskId;
@@ -18,13 +20,13 @@ use plasma_firmware::watchdog::TaskId;
 use crate::Board;
 use crate::progress::report;
 
-/// The store over the board's settings flash.
-pub type Store<B> = SettingsStore<<B as Board>::SettingsFlash>;
+/// The store over the board's settings flash, read back after every write and erase.
+pub type Store<B> = SettingsStore<VerifiedFlash<<B as Board>::SettingsFlash>>;
 
 /// The store over `region` of `flash`, or `None` (logged) if the region does not suit it: a
 /// mismatch between the board's region and the flash's page size, a build mistake.
 pub fn open<B: Board>(flash: B::SettingsFlash, region: Range<u32>) -> Option<Store<B>> {
-    match SettingsStore::new(flash, region) {
+    match SettingsStore::new(VerifiedFlash::new(flash), region) {
         Ok(store) => Some(store),
         Err(e) => {
             error!(

@@ -270,6 +270,15 @@ impl Board {
         Ok(())
     }
 
+    /// Stalls the firmware's thread mode for good (the bridge, settings and heartbeat tasks;
+    /// the I/O task and the watchdog run on): the test images' hook on
+    /// `plasma_firmware::pins::TEST_STALL`, pulled low (see [`super::image`]).
+    pub fn stall_thread_mode(&self) -> Result<()> {
+        self.qtest
+            .set_pin(plasma_firmware::pins::TEST_STALL, false)
+            .map(|_| ())
+    }
+
     /// An output signal now.
     pub fn output(&self, output: Output) -> Result<bool> {
         Ok(output_active(

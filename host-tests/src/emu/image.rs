@@ -1,7 +1,11 @@
-//! The emulated board's firmware image: built once per process with `cargo emu-fw`, wherever
-//! the caller runs from. The alias builds the `plasma-bridge-emu` binary through
-//! firmware/image, with the build machine's paths remapped, so the tests run the very bytes a
-//! build by hand gives.
+//! The emulated board's firmware image: built once per process with
+//! `cargo emu-fw --features test-hooks`, wherever the caller runs from. The alias builds the
+//! `plasma-bridge-emu` binary through firmware/image, with the build machine's paths
+//! remapped, so the tests run the very bytes a build by hand with the same feature gives.
+//!
+//! [`TEST_FEATURES`] adds what only tests use (the emulated board's src/test_hooks.rs: a pin
+//! that stalls thread mode, for the fail-safe test); the Nucleo image and a plain
+//! `cargo emu-fw` never contain it.
 //!
 //! Cargo is asked for the artifact's path (`--message-format=json`), so `CARGO_TARGET_DIR`
 //! and the workspace's settings apply exactly as for a build by hand. `PLASMA_EMU_ELF` names
@@ -18,6 +22,8 @@ use super::error::{Error, Result};
 pub const ELF_ENV: &str = "PLASMA_EMU_ELF";
 /// The emulated board's binary.
 pub const BINARY: &str = "plasma-bridge-emu";
+/// Features of the emulated board that only test images have.
+pub const TEST_FEATURES: &str = "test-hooks";
 /// The MCU target.
 pub const TARGET: &str = "thumbv7em-none-eabihf";
 
@@ -62,13 +68,18 @@ fn ensure_target() {
         .status();
 }
 
-/// Runs `cargo emu-fw` and returns the ELF cargo reports.
+/// Runs `cargo emu-fw --features test-hooks` and returns the ELF cargo reports.
 fn build() -> Result<PathBuf> {
     ensure_target();
     let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
     let mut child = Command::new(&cargo)
         .current_dir(workspace_root())
-        .args(["emu-fw", "--message-format=json-render-diagnostics"])
+        .args([
+            "emu-fw",
+            "--features",
+            TEST_FEATURES,
+            "--message-format=json-render-diagnostics",
+        ])
         .stdin(Stdio::null())
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())

@@ -52,6 +52,10 @@ impl PsEndpoint for Bridge {
         Bridge::poll_ps_transmit(self, now)
     }
 
+    fn ps_transmitted(&mut self, at: Instant) {
+        Bridge::ps_transmitted(self, at);
+    }
+
     fn ps_port_config(&self) -> PortConfig {
         Bridge::ps_port_config(self)
     }
@@ -299,6 +303,10 @@ impl PsEndpoint for BridgeEndpoint {
 
     fn poll_ps_transmit(&mut self, now: Instant) -> Option<&[u8]> {
         self.bridge.poll_ps_transmit(now)
+    }
+
+    fn ps_transmitted(&mut self, at: Instant) {
+        self.bridge.ps_transmitted(at);
     }
 
     fn ps_port_config(&self) -> PortConfig {

@@ -18,6 +18,9 @@ pub trait PsEndpoint {
     fn handle_ps_rx_error(&mut self, now: Instant);
     /// One whole frame to transmit now, if any.
     fn poll_ps_transmit(&mut self, now: Instant) -> Option<&[u8]>;
+    /// The frame from [`PsEndpoint::poll_ps_transmit`] left the wire at `at` (the line
+    /// model's end of its last stop bit): the reply time-out runs from there.
+    fn ps_transmitted(&mut self, at: Instant);
     /// The settings the PS UART must use now.
     fn ps_port_config(&self) -> PortConfig;
     /// Let time pass. Link events the endpoint does not consume itself (a bare [`PsLink`]
@@ -57,6 +60,10 @@ impl PsEndpoint for PsLink {
 
     fn poll_ps_transmit(&mut self, now: Instant) -> Option<&[u8]> {
         self.poll_transmit(now)
+    }
+
+    fn ps_transmitted(&mut self, at: Instant) {
+        self.handle_transmitted(at);
     }
 
     fn ps_port_config(&self) -> PortConfig {

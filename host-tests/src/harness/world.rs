@@ -569,7 +569,10 @@ impl<E: PsEndpoint> World<E> {
             };
             // The link may switch the port while choosing the frame (auto-detection).
             self.apply_master_port();
-            self.send(End::Master, &frame);
+            let end = self.send(End::Master, &frame);
+            // The line model knows when the last stop bit leaves: the reply time-out runs
+            // from there, as on the board (the runner reports the end of its flush).
+            self.endpoint.ps_transmitted(end);
         }
         self.drain_endpoint();
 
@@ -639,7 +642,8 @@ impl<E: PsEndpoint> World<E> {
         }
     }
 
-    fn send(&mut self, from: End, bytes: &[u8]) {
+    /// Puts `bytes` on the line from `from`; returns when its last stop bit has left.
+    fn send(&mut self, from: End, bytes: &[u8]) -> Instant {
         let start = self.now.max(self.line.busy_until(from));
         let port = self.line.port(from);
         let end = self.line.transmit(from, self.now, bytes);
@@ -654,6 +658,7 @@ impl<E: PsEndpoint> World<E> {
             port,
             bytes: bytes.to_vec(),
         });
+        end
     }
 
     fn take_unit_noise(&mut self) {

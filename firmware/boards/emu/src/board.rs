@@ -14,7 +14,7 @@ use plasma_tasks::settings::Store;
 
 use crate::flash::SettingsFlash;
 use crate::gpio::{InputPins, Led, OutputPins};
-use crate::usart::Uart;
+use plasma_tasks::uart::Uart;
 
 /// QEMU's b-l475e-iot01a.
 pub struct Emulated;
@@ -25,8 +25,8 @@ impl Board for Emulated {
     type Led = Led;
     type PsUart = Uart;
     type CncUart = Uart;
-    /// The CNC writes are byte by byte here; pieces of this size keep the Nucleo's rhythm.
-    const CNC_TX_BUFFER: usize = 256;
+    /// The shared driver's transmit ring, as on the Nucleo.
+    const CNC_TX_BUFFER: usize = plasma_tasks::uart::TX_CAPACITY;
     type SettingsFlash = SettingsFlash;
 
     /// The RAM model has no ECC: no read errors.

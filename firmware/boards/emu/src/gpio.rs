@@ -2,18 +2,13 @@
 //! LED, all placed by the one pin table (`plasma_firmware::pins`, the Nucleo's). QEMU's GPIO,
 //! SYSCFG and EXTI models carry an edge driven from its qtest socket to the EXTI interrupt.
 
-use core::future::poll_fn;
-use core::sync::atomic::{AtomicBool, Ordering};
-use core::task::Poll;
-
 use cortex_m::peripheral::NVIC;
-use embassy_sync::waitqueue::AtomicWaker;
 use plasma_firmware::inputs::{InputConfig, PinLevels, Pull};
 use plasma_firmware::io::{self, Input, Outputs};
 use plasma_firmware::pins::{self, Pin, Port};
 use stm32_metapac::gpio::Gpio;
 use stm32_metapac::gpio::vals::{Idr, Moder, Pupdr};
-use stm32_metapac::{EXTI, GPIOA, GPIOB, GPIOC, Interrupt, SYSCFG, interrupt};
+use stm32_metapac::{GPIOA, GPIOB, GPIOC, Interrupt, interrupt};
 
 use crate::probe;
 
@@ -73,31 +68,23 @@ const _: () = {
 /// The seven inputs, owned by the I/O task.
 pub struct InputPins(());
 
-/// An edge on some input since the I/O task last looked.
-static EDGE: AtomicBool = AtomicBool::new(false);
-static EDGE_WAKER: AtomicWaker = AtomicWaker::new();
-
 impl InputPins {
-    /// Inputs with the pull that reads inactive when open, both edges on their EXTI lines,
+    /// Inputs with the pull that reads inactive when open, both edges on their EXTI lines
+    /// (armed for good by `plasma_tasks::edges`),
     /// the EXTI interrupts at the highest priority (as on the Nucleo: they only wake the I/O
     /// task).
     pub fn new(config: &InputConfig) -> Self {
         for input in Input::ALL {
             let Pin { port, number } = pins::input(input).pin;
-            let (port_index, pin, port) = (port.index(), number as usize, gpio(port));
+            let (pin, port) = (number as usize, gpio(port));
             let pull = match config.get(input).polarity.pull() {
                 Pull::Up => Pupdr::PULL_UP,
                 Pull::Down => Pupdr::PULL_DOWN,
             };
             port.pupdr().modify(|w| w.set_pupdr(pin, pull));
             port.moder().modify(|w| w.set_moder(pin, Moder::INPUT));
-            SYSCFG
-                .exticr(pin / 4)
-                .modify(|w| w.set_exti(pin % 4, port_index));
-            EXTI.rtsr(0).modify(|w| w.set_line(pin, true));
-            EXTI.ftsr(0).modify(|w| w.set_line(pin, true));
-            EXTI.imr(0).modify(|w| w.set_line(pin, true));
         }
+        plasma_tasks::edges::arm_inputs();
         let mut nvic = unsafe { cortex_m::Peripherals::steal() }.NVIC;
         for irq in EXTI_IRQS {
             // SAFETY: the handlers below only touch atomics and the EXTI pending register.
@@ -120,31 +107,17 @@ impl plasma_tasks::board::InputPins for InputPins {
                 levels.with(input, high)
             })
     }
-
-    async fn any_edge(&mut self) {
-        poll_fn(|cx| {
-            EDGE_WAKER.register(cx.waker());
-            if EDGE.swap(false, Ordering::AcqRel) {
-                Poll::Ready(())
-            } else {
-                Poll::Pending
-            }
-        })
-        .await
-    }
 }
 
-/// Every input EXTI interrupt: clear what is pending, stamp TORCH_ON for the probe, wake the
-/// I/O task.
+/// Every input EXTI interrupt: the shared body (clear, note the edge for the I/O task), and
+/// TORCH_ON's edge stamped for the probe.
 fn on_exti() {
-    let pending = EXTI.pr(0).read();
-    // Write-1-to-clear, only the lines that were seen.
-    EXTI.pr(0).write_value(pending);
-    if pending.line(TORCH_ON_LINE) {
+    let pending = plasma_tasks::edges::on_interrupt();
+    if pending & (1 << TORCH_ON_LINE) != 0 {
         probe::torch_on_edge();
     }
-    EDGE.store(true, Ordering::Release);
-    EDGE_WAKER.wake();
+    #[cfg(feature = "test-hooks")]
+    crate::test_hooks::on_edges(pending);
 }
 
 #[interrupt]

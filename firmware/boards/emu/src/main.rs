@@ -11,7 +11,8 @@
 //! - [`rcc`]: clocks by register (80 MHz, as on the Nucleo);
 //! - [`time_driver`]: embassy-time on SysTick;
 //! - [`gpio`]: the pins of the one pin table, EXTI inputs and outputs by register;
-//! - [`usart`]: USART1 (power supply, hardware DE) and USART2 (CNC) by register;
+//! - USART1 (power supply, hardware DE) and USART2 (CNC): the shared register-level driver
+//!   (`plasma_tasks::uart`), as on the Nucleo;
 //! - [`flash`]: the settings store on a RAM model of the flash;
 //! - [`watchdog`]: the progress check of the Nucleo, with a software reset for the IWDG;
 //! - [`executor`]: the thread executor with sleep accounting, and [`probe`]: the latency
@@ -43,10 +44,10 @@ mod gpio;
 mod probe;
 #[cfg(target_os = "none")]
 mod rcc;
+#[cfg(all(target_os = "none", feature = "test-hooks"))]
+mod test_hooks;
 #[cfg(target_os = "none")]
 mod time_driver;
-#[cfg(target_os = "none")]
-mod usart;
 #[cfg(target_os = "none")]
 mod watchdog;
 
@@ -58,7 +59,6 @@ mod image {
     use embassy_executor::{InterruptExecutor, Spawner};
     use plasma_firmware::bridge::Bridge;
     use plasma_firmware::inputs::InputConfig;
-    use plasma_firmware::pins::{CNC_UART, PS_UART};
     use plasma_firmware::safe_state::BootReport;
     use plasma_protocol::serial::PortConfig;
     use plasma_protocol::time::Duration;
@@ -70,14 +70,13 @@ mod image {
     use plasma_tasks::safe_state::drive_safe_state;
     use plasma_tasks::settings as shared_settings;
     use static_cell::StaticCell;
-    use stm32_metapac::gpio::vals::Moder;
     use stm32_metapac::{Interrupt, USART1, USART2, interrupt};
 
     use crate::board::{Emulated, bridge_task, heartbeat_task, io_task, settings_task};
     use crate::flash::{SETTINGS_SIZE, SettingsFlash};
-    use crate::gpio::{InputPins, Led, OutputPins, gpio};
-    use crate::usart::{Uart, UartState, on_interrupt};
+    use crate::gpio::{InputPins, Led, OutputPins};
     use crate::{executor, probe, rcc, time_driver, watchdog};
+    use plasma_tasks::uart::{Uart, UartState, on_interrupt};
 
     /// NVIC priorities as on the Nucleo (4 bits, upper nibble): EXTI and SysTick 0, the I/O
     /// executor 1, the USARTs 4. The watchdog's executor stands in for the IWDG, which no
@@ -91,12 +90,16 @@ mod image {
 
     #[interrupt]
     fn USART1() {
-        on_interrupt(USART1, &PS_STATE);
+        if on_interrupt(USART1, &PS_STATE) {
+            time_driver::keep_receiving();
+        }
     }
 
     #[interrupt]
     fn USART2() {
-        on_interrupt(USART2, &CNC_STATE);
+        if on_interrupt(USART2, &CNC_STATE) {
+            time_driver::keep_receiving();
+        }
     }
 
     /// The I/O task's executor, on the UART4 interrupt as on the Nucleo.
@@ -118,16 +121,6 @@ mod image {
     }
 
     static BRIDGE: StaticCell<Bridge> = StaticCell::new();
-
-    /// The UARTs' pins (the pin table's, as wired on the Nucleo) to AF7; QEMU routes the
-    /// USARTs to its sockets whatever the pins say.
-    fn route_uart_pins() {
-        for pin in PS_UART.pins().chain(CNC_UART.pins()) {
-            let (port, n) = (gpio(pin.port), pin.number as usize);
-            port.afr(n / 8).modify(|w| w.set_afr(n % 8, 7));
-            port.moder().modify(|w| w.set_moder(n, Moder::ALTERNATE));
-        }
-    }
 
     /// A UART with fixed, valid settings; `None` only for a baud rate BRR cannot make, a
     /// build mistake: panic = safe state.
@@ -194,16 +187,20 @@ mod image {
         let io_spawner = IO_EXECUTOR.start(Interrupt::UART4);
         io_spawner.spawn(io_task(inputs, outputs, settings.io, io_progress).unwrap());
 
-        route_uart_pins();
+        // The pin table's UART pins, as wired on the Nucleo; QEMU routes the USARTs to its
+        // sockets whatever the pins say.
+        plasma_tasks::uart::route_pins();
         let ps_uart = uart(Uart::new(
             USART1,
             &PS_STATE,
+            rcc::SYSCLK_HZ,
             settings.link.modbus_port(),
             true,
         ));
         let cnc_uart = uart(Uart::new(
             USART2,
             &CNC_STATE,
+            rcc::SYSCLK_HZ,
             PortConfig {
                 baud: 115_200,
                 parity: plasma_protocol::serial::Parity::None,
@@ -236,5 +233,7 @@ mod image {
         WATCHDOG_EXECUTOR
             .start(Interrupt::USART3)
             .spawn(watchdog::watchdog().unwrap());
+        #[cfg(feature = "test-hooks")]
+        spawner.spawn(crate::test_hooks::stall_on_request().unwrap());
     }
 }

@@ -4,7 +4,6 @@
 //! around `.await`: that future would keep the arguments twice (its own and the body's).
 
 use core::future::Future;
-use embassy_stm32::flash::{Async, Flash};
 
 use plasma_firmware::bridge::Bridge;
 use plasma_firmware::io::IoConfig;
@@ -13,9 +12,9 @@ use plasma_tasks::Board;
 use plasma_tasks::io::BoardIo;
 use plasma_tasks::settings::Store;
 
-use crate::cnc_uart::{self, CncUart};
+use crate::cnc_uart::CncUart;
 use crate::pins::{InputPins, Led, OutputPins};
-use crate::ps_uart::PsUart;
+use plasma_tasks::uart::Uart;
 
 /// The Nucleo-L476RG.
 pub struct Nucleo;
@@ -24,10 +23,11 @@ impl Board for Nucleo {
     type InputPins = InputPins;
     type OutputPins = OutputPins;
     type Led = Led;
-    type PsUart = PsUart;
+    type PsUart = Uart;
     type CncUart = CncUart;
-    const CNC_TX_BUFFER: usize = cnc_uart::TX_BUFFER;
-    type SettingsFlash = Flash<'static, Async>;
+    /// The shared driver's transmit ring: the bridge writes CNC output in pieces of this.
+    const CNC_TX_BUFFER: usize = plasma_tasks::uart::TX_CAPACITY;
+    type SettingsFlash = crate::flash::SettingsFlash;
 
     fn flash_errors_seen() -> u32 {
         crate::flash::flash_errors_seen()
@@ -49,7 +49,7 @@ pub fn io_task(
 #[embassy_executor::task]
 pub fn bridge_task(
     bridge: &'static mut Bridge,
-    ps: PsUart,
+    ps: Uart,
     cnc: CncUart,
     io: BoardIo,
     progress: TaskId,

@@ -1,29 +1,16 @@
-//! The CNC UART: USART2, the ST-LINK's virtual COM port, 115200 8N1. Lines in and out are
-//! logged (debug), so a defmt log shows the commands next to what they caused.
+//! The CNC UART: USART2, the ST-LINK's virtual COM port, 115200 8N1, through the shared
+//! driver (`plasma_tasks::uart`). Lines in and out are logged (debug), so a defmt log shows
+//! the commands next to what they caused.
 
 use defmt::debug;
-use embassy_stm32::usart::{self, BufferedUart};
 use embedded_io_async::{ErrorType, Read, ReadReady, Write};
-
-/// Transmit buffer size: output is written in pieces of at most this (see
-/// `plasma_firmware::supervisor`).
-pub const TX_BUFFER: usize = 256;
-/// Receive buffer size: a few command lines.
-pub const RX_BUFFER: usize = 256;
-
-/// 115200 8N1.
-pub fn uart_config() -> usart::Config {
-    let mut config = usart::Config::default();
-    config.baudrate = 115_200;
-    config.rx_pull = embassy_stm32::gpio::Pull::Up;
-    config
-}
+use plasma_tasks::uart::{Uart, UartError};
 
 /// USART2 with logging.
-pub struct CncUart(pub BufferedUart<'static>);
+pub struct CncUart(pub Uart);
 
 impl ErrorType for CncUart {
-    type Error = usart::Error;
+    type Error = UartError;
 }
 
 impl Read for CncUart {

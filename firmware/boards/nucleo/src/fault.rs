@@ -7,14 +7,24 @@ use cortex_m_rt::{ExceptionFrame, exception};
 use defmt::error;
 use embassy_stm32::pac;
 
+use plasma_firmware::safe_state::FaultEntry;
 use plasma_tasks::reset::mark_panic;
 use plasma_tasks::safe_state::drive_safe_state;
 
 use crate::flash::{FLASH_BANK2, FLASH_BASE, settings_region};
 
-/// Safe state, marker, log, reset.
+/// The first entry into [`fail`]; a later one (a fault while it logs) skips the log.
+static ENTRY: FaultEntry = FaultEntry::new();
+
+/// Safe state, marker, log, reset. An NMI or HardFault while the log line is written would
+/// enter again; defmt-rtt panics on re-entry, so a second entry resets at once, unlogged.
 fn fail(reason: impl FnOnce()) -> ! {
     cortex_m::interrupt::disable();
+    if !ENTRY.first() {
+        // The reset leaves every pin high-impedance, held off by its pull-down.
+        mark_panic();
+        cortex_m::peripheral::SCB::sys_reset()
+    }
     drive_safe_state();
     mark_panic();
     reason();

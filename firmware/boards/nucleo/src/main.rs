@@ -11,11 +11,13 @@
 //!   settings from flash ([`flash`]), the reset cause and the settings outcome handed to the
 //!   bridge for the CNC port (`!BOOT`, `ID`);
 //! - the I/O task on an interrupt executor above all serial work ([`io_executor`]): input
-//!   edges (EXTI) to outputs, on the pins of the one pin table ([`pins`]);
+//!   edges (EXTI, lines armed for good: `plasma_tasks::edges`) to outputs, on the pins of the one pin table ([`pins`]);
 //! - the bridge task in thread mode: the power-supply link on USART1 with hardware
-//!   driver-enable ([`ps_uart`]), the CNC session on USART2 ([`cnc_uart`]);
+//!   driver-enable, the CNC session on USART2 ([`cnc_uart`]), both through the shared
+//!   register-level driver (`plasma_tasks::uart`);
 //! - the settings task that stores `CONFIG SAVE` in flash ([`flash`]);
-//! - [`watchdog`]: the IWDG fed only while every task reports progress; the heartbeat LED;
+//! - [`watchdog`]: the IWDG, started before anything that could hang, then fed only while
+//!   every task reports progress; the heartbeat LED;
 //! - [`fault`]: panic, HardFault and NMI leave every output off and reset.
 #![cfg_attr(target_os = "none", no_std)]
 #![cfg_attr(target_os = "none", no_main)]
@@ -38,8 +40,6 @@ mod io_executor;
 #[cfg(target_os = "none")]
 mod pins;
 #[cfg(target_os = "none")]
-mod ps_uart;
-#[cfg(target_os = "none")]
 mod watchdog;
 
 #[cfg(target_os = "none")]
@@ -47,15 +47,12 @@ mod image {
     use defmt::{info, warn};
     use defmt_rtt as _;
     use embassy_executor::Spawner;
-    use embassy_stm32::exti::{self, ExtiInput};
-    use embassy_stm32::interrupt::{self, InterruptExt};
-    use embassy_stm32::usart::{self, BufferedUart};
-    use embassy_stm32::{bind_interrupts, peripherals};
+    use embassy_stm32::interrupt;
+    use embassy_stm32::interrupt::InterruptExt;
+    use embassy_stm32::{bind_interrupts, pac};
     use plasma_firmware::bridge::Bridge;
     use plasma_firmware::inputs::InputConfig;
-    use plasma_firmware::io::Input;
-    use plasma_firmware::link::TX_CAPACITY;
-    use plasma_firmware::pins::{self, CNC_UART, PS_UART, Port};
+    use plasma_protocol::serial::{Parity, PortConfig, StopBits};
     use plasma_protocol::time::Duration;
     use plasma_tasks::boot::boot_text;
     use plasma_tasks::clock::now;
@@ -70,18 +67,12 @@ mod image {
     use crate::cnc_uart::CncUart;
     use crate::io_executor::{SERIAL_PRIORITY, start_io_executor};
     use crate::pins::{InputPins, OutputPins};
-    use crate::ps_uart::{PsUart, uart_config};
-    use crate::{cnc_uart, flash, watchdog};
+    use plasma_tasks::uart::{Uart, UartState, on_interrupt, route_pins};
+
+    use crate::{flash, watchdog};
 
     bind_interrupts!(struct Irqs {
         FLASH => embassy_stm32::flash::InterruptHandler;
-        USART1 => usart::BufferedInterruptHandler<peripherals::USART1>;
-        USART2 => usart::BufferedInterruptHandler<peripherals::USART2>;
-        EXTI0 => exti::InterruptHandler<interrupt::typelevel::EXTI0>;
-        EXTI1 => exti::InterruptHandler<interrupt::typelevel::EXTI1>;
-        EXTI4 => exti::InterruptHandler<interrupt::typelevel::EXTI4>;
-        EXTI9_5 => exti::InterruptHandler<interrupt::typelevel::EXTI9_5>;
-        EXTI15_10 => exti::InterruptHandler<interrupt::typelevel::EXTI15_10>;
     });
 
     /// HSI16 / 2 = 8 MHz PLL input (4..16 MHz allowed), x 20 = 160 MHz VCO (64..344 MHz),
@@ -103,54 +94,33 @@ mod image {
         config
     }
 
-    /// PS UART buffers: transmit holds the longest frame (see `PsUart`).
-    static PS_TX: StaticCell<[u8; TX_CAPACITY]> = StaticCell::new();
-    static PS_RX: StaticCell<[u8; 256]> = StaticCell::new();
-    static CNC_TX: StaticCell<[u8; cnc_uart::TX_BUFFER]> = StaticCell::new();
-    static CNC_RX: StaticCell<[u8; cnc_uart::RX_BUFFER]> = StaticCell::new();
-    static BRIDGE: StaticCell<Bridge> = StaticCell::new();
+    /// The USARTs' kernel clock: PCLK1 and PCLK2 (the reset choice in RCC_CCIPR), both
+    /// SYSCLK (80 MHz, [`clock_config`]; the APB prescalers stay at 1).
+    const USART_CLOCK_HZ: u32 = 80_000_000;
 
-    // The UARTs' pins are typed (each USART accepts only its own), so main takes them by
-    // name; this ties the names to the pin table, which places everything else.
-    const _: () = assert!(
-        PS_UART.tx.is(Port::A, 9)
-            && PS_UART.rx.is(Port::A, 10)
-            && matches!(PS_UART.de, Some(de) if de.is(Port::A, 12))
-            && CNC_UART.tx.is(Port::A, 2)
-            && CNC_UART.rx.is(Port::A, 3)
-            && CNC_UART.de.is_none(),
-        "the UART pins in main.rs differ from plasma_firmware::pins"
-    );
+    static PS_STATE: UartState = UartState::new();
+    static CNC_STATE: UartState = UartState::new();
 
-    /// An EXTI input for `$input` on channel `$channel`: the channel is typed (embassy-stm32
-    /// binds its interrupt at compile time), so a compile-time check ties it to the line the
-    /// pin table gives the input.
-    macro_rules! exti_input {
-        ($p:ident, $config:expr, $input:ident, $channel:ident = $line:literal) => {{
-            const _: () = assert!(
-                pins::input(Input::$input).pin.number == $line,
-                concat!(
-                    "the pin table moved ",
-                    stringify!($input),
-                    " off ",
-                    stringify!($channel)
-                )
-            );
-            ExtiInput::from_input(
-                crate::pins::input($config, Input::$input),
-                $p.$channel,
-                Irqs,
-            )
-        }};
+    // The UARTs by register (`plasma_tasks::uart`: flagged bytes reach the link, flush waits
+    // for the last stop bit); their vectors are these, not embassy-stm32's.
+    #[interrupt]
+    unsafe fn USART1() {
+        on_interrupt(pac::USART1, &PS_STATE);
     }
 
-    /// The UART, or a panic: the settings are fixed ones the USARTs support at 80 MHz, so an
-    /// error is a build mistake (panic = safe state). One UART at a time: a pair of results
-    /// would bring the drop code of a `BufferedUart` into the image for the other one.
-    fn uart<U>(built: Result<U, usart::ConfigError>) -> U {
+    #[interrupt]
+    unsafe fn USART2() {
+        on_interrupt(pac::USART2, &CNC_STATE);
+    }
+
+    static BRIDGE: StaticCell<Bridge> = StaticCell::new();
+
+    /// A UART with fixed, valid settings; `None` only for a baud rate BRR cannot make at
+    /// 80 MHz, a build mistake: panic = safe state.
+    fn uart(built: Option<Uart>) -> Uart {
         match built {
-            Ok(uart) => uart,
-            Err(e) => defmt::panic!("UART set-up: {}", e),
+            Some(uart) => uart,
+            None => defmt::panic!("UART set-up: baud rate out of range"),
         }
     }
 
@@ -159,6 +129,8 @@ mod image {
         // Before clocks, before anything that could fail: START and every other output off.
         drive_safe_state();
         let boot = reset::boot_report();
+        // Before clocks, flash and UARTs, any of which could hang: a stalled boot resets.
+        watchdog::start();
 
         let p = embassy_stm32::init(clock_config());
         // The HAL takes the pins over at the level they already have.
@@ -182,53 +154,51 @@ mod image {
             irq.set_priority(SERIAL_PRIORITY);
         }
 
-        let mut store = flash::open(embassy_stm32::flash::Flash::new(p.FLASH, Irqs));
+        let mut store = flash::open(flash::SettingsFlash::new(embassy_stm32::flash::Flash::new(
+            p.FLASH, Irqs,
+        )));
         let loaded = shared_settings::load::<Nucleo>(store.as_mut()).await;
         let settings = loaded.settings;
         // The pulls belong to the board's input circuit (the pin table's polarity), not to
         // the level the CNC's wiring settings call active (docs/board.md, the CNC's wiring).
         let input_config = InputConfig::default();
 
-        // Inputs in Input::ALL order, each with the pull that reads inactive when open.
-        let c = &input_config;
-        let inputs = InputPins([
-            exti_input!(p, c, TorchOn, EXTI0 = 0),
-            exti_input!(p, c, Hold, EXTI4 = 4),
-            exti_input!(p, c, PierceComplete, EXTI6 = 6),
-            exti_input!(p, c, CornerCurrent, EXTI7 = 7),
-            exti_input!(p, c, Motion, EXTI1 = 1),
-            exti_input!(p, c, NotReady, EXTI8 = 8),
-            exti_input!(p, c, RampdownError, EXTI10 = 10),
-        ]);
+        let inputs = InputPins::new(&input_config);
         let io_progress = register("io", Duration::from_millis(200));
         start_io_executor().spawn(io_task(inputs, outputs, settings.io, io_progress).unwrap());
 
-        let ps_uart = uart(BufferedUart::new_with_de(
-            p.USART1,
-            p.PA10,
-            p.PA9,
-            p.PA12,
-            Irqs,
-            PS_TX.init([0; TX_CAPACITY]),
-            PS_RX.init([0; 256]),
-            uart_config(settings.link.modbus_port()),
+        pac::RCC.apb2enr().modify(|w| w.set_usart1en(true));
+        pac::RCC.apb1enr1().modify(|w| w.set_usart2en(true));
+        route_pins();
+        let ps_uart = uart(Uart::new(
+            pac::USART1,
+            &PS_STATE,
+            USART_CLOCK_HZ,
+            settings.link.modbus_port(),
+            true,
         ));
-        let cnc_uart = uart(BufferedUart::new(
-            p.USART2,
-            p.PA3,
-            p.PA2,
-            CNC_TX.init([0; cnc_uart::TX_BUFFER]),
-            CNC_RX.init([0; cnc_uart::RX_BUFFER]),
-            Irqs,
-            cnc_uart::uart_config(),
+        let cnc_uart = uart(Uart::new(
+            pac::USART2,
+            &CNC_STATE,
+            USART_CLOCK_HZ,
+            PortConfig {
+                baud: 115_200,
+                parity: Parity::None,
+                stop_bits: StopBits::One,
+            },
+            false,
         ));
+        for irq in [interrupt::USART1, interrupt::USART2] {
+            // SAFETY: the handlers above touch only their own UartState.
+            unsafe { irq.enable() };
+        }
 
         let bridge = BRIDGE.init_with(|| Bridge::new(settings, now()));
         bridge.set_boot_report(now(), boot_text(&boot, loaded.outcome));
         spawner.spawn(
             bridge_task(
                 bridge,
-                PsUart(ps_uart),
+                ps_uart,
                 CncUart(cnc_uart),
                 BoardIo,
                 register("bridge", Duration::from_millis(500)),
@@ -239,6 +209,6 @@ mod image {
 
         let led = crate::pins::led();
         spawner.spawn(heartbeat_task(led, register("heartbeat", Duration::from_secs(1))).unwrap());
-        spawner.spawn(watchdog::watchdog(p.IWDG).unwrap());
+        spawner.spawn(watchdog::watchdog().unwrap());
     }
 }

@@ -2,9 +2,9 @@
 //! outputs and the EXTI inputs the I/O task owns, and the heartbeat LED.
 
 use embassy_stm32::Peri;
-use embassy_stm32::exti::ExtiInput;
 use embassy_stm32::gpio::{AnyPin, Level, Output, Pull, Speed};
-use embassy_stm32::mode::Async;
+use embassy_stm32::interrupt;
+use embassy_stm32::interrupt::{InterruptExt, Priority};
 use plasma_firmware::inputs::{self, InputConfig, PinLevels};
 use plasma_firmware::io::{self, Input, Outputs};
 use plasma_firmware::pins::{self, Pin, Wiring};
@@ -14,7 +14,7 @@ use plasma_firmware::safe_state::SAFE_OUTPUTS;
 ///
 /// Sound because every pin handed out here is one the table assigns to exactly one signal
 /// (`plasma_firmware::pins`' tests: no two signals, nor a signal and a UART, share a pin), each
-/// is taken once (by [`OutputPins::new`], [`input`] or [`led`]), and main.rs takes by name
+/// is taken once (by [`OutputPins::new`], [`InputPins::new`] or [`led`]), and main.rs takes by name
 /// only the UARTs' pins, which it checks against the same table at compile time.
 pub fn table_pin(pin: Pin) -> Peri<'static, AnyPin> {
     // SAFETY: see above.
@@ -49,7 +49,25 @@ impl plasma_tasks::board::OutputPins for OutputPins {
 }
 
 /// The seven inputs, in [`Input::ALL`] order, each on its own EXTI line.
-pub struct InputPins(pub [ExtiInput<'static, Async>; 7]);
+pub struct InputPins([embassy_stm32::gpio::Input<'static>; 7]);
+
+impl InputPins {
+    /// Every input with the pull that reads inactive when open, its EXTI line armed for good
+    /// (`plasma_tasks::edges`: embassy-stm32 0.6.0's `ExtiInput` re-arms per wait and loses
+    /// an edge between a level read and the next wait), and the EXTI interrupts on at the
+    /// highest priority: their handlers below only note the edge for the I/O task.
+    pub fn new(config: &InputConfig) -> Self {
+        let pins = Input::ALL.map(|i| input(config, i));
+        plasma_tasks::edges::arm_inputs();
+        for irq in EXTI_IRQS {
+            irq.set_priority(Priority::P0);
+            // SAFETY: the handlers below touch only the EXTI pending register and an atomic
+            // latch; no priority-based critical section exists in this image.
+            unsafe { irq.enable() };
+        }
+        InputPins(pins)
+    }
+}
 
 impl plasma_tasks::board::InputPins for InputPins {
     fn levels(&self) -> PinLevels {
@@ -60,16 +78,57 @@ impl plasma_tasks::board::InputPins for InputPins {
                 levels.with(input, pin.is_high())
             })
     }
-
-    async fn any_edge(&mut self) {
-        let edges = self.0.each_mut().map(|pin| pin.wait_for_any_edge());
-        embassy_futures::select::select_array(edges).await;
-    }
 }
 
-/// `input`'s pin as a GPIO input with the pull that reads inactive on an open wire, ready to
-/// become an `ExtiInput` (main.rs pairs it with its typed EXTI channel).
-pub fn input(config: &InputConfig, input: Input) -> embassy_stm32::gpio::Input<'static> {
+/// The EXTI interrupts of the input lines (0, 1, 4, 5-9, 10-15); lines 2 and 3 have none.
+const EXTI_IRQS: [interrupt::Interrupt; 5] = [
+    interrupt::EXTI0,
+    interrupt::EXTI1,
+    interrupt::EXTI4,
+    interrupt::EXTI9_5,
+    interrupt::EXTI15_10,
+];
+
+// Every input's line must raise one of the interrupts handled here.
+const _: () = {
+    let mut i = 0;
+    while i < Input::ALL.len() {
+        let line = pins::input(Input::ALL[i]).pin.number;
+        assert!(
+            line != 2 && line != 3,
+            "an input's EXTI line has no handler in pins.rs"
+        );
+        i += 1;
+    }
+};
+
+#[interrupt]
+unsafe fn EXTI0() {
+    plasma_tasks::edges::on_interrupt();
+}
+
+#[interrupt]
+unsafe fn EXTI1() {
+    plasma_tasks::edges::on_interrupt();
+}
+
+#[interrupt]
+unsafe fn EXTI4() {
+    plasma_tasks::edges::on_interrupt();
+}
+
+#[interrupt]
+unsafe fn EXTI9_5() {
+    plasma_tasks::edges::on_interrupt();
+}
+
+#[interrupt]
+unsafe fn EXTI15_10() {
+    plasma_tasks::edges::on_interrupt();
+}
+
+/// `input`'s pin as a GPIO input with the pull that reads inactive on an open wire.
+fn input(config: &InputConfig, input: Input) -> embassy_stm32::gpio::Input<'static> {
     let pull = match config.get(input).polarity.pull() {
         inputs::Pull::Up => Pull::Up,
         inputs::Pull::Down => Pull::Down,
