@@ -36,8 +36,8 @@
 
 use crate::io::{Inputs, IoConfig, IoEvent, Outputs, SupplyState};
 use crate::link::{Diagnostics, PowermaxSettings, PsLink, UnitStatus};
-pub use crate::session::SimCommand;
 use crate::session::{Context, Session, SessionStats};
+pub use crate::session::{MAX_REPLY_LEN, OUTPUT_CAPACITY, SimCommand};
 use crate::settings::{Process, SaveError, Settings};
 use plasma_protocol::serial::PortConfig;
 use plasma_protocol::time::Instant;

@@ -31,8 +31,8 @@ use plasma_firmware::bridge::Bridge;
 use plasma_firmware::discrete::DiscreteIo;
 use plasma_firmware::inputs::{InputConfig, PinLevels};
 use plasma_firmware::io::{Input, SafetyMonitor, SupplyState};
-use plasma_firmware::link::transaction::TX_CAPACITY;
-use plasma_firmware::session::{MAX_REPLY_LEN, OUTPUT_CAPACITY};
+use plasma_firmware::link::TX_CAPACITY;
+use plasma_firmware::bridge::{MAX_REPLY_LEN, OUTPUT_CAPACITY};
 use plasma_firmware::settings::{SaveError, Settings};
 use plasma_firmware::storage::{MAX_PAYLOAD, Settings as _};
 use plasma_protocol::cnc::phoenix::{ACK, NAK};
@@ -278,7 +278,7 @@ impl Board {
             .as_deref()
             .and_then(Settings::decode)
             .unwrap_or_default();
-        let inputs = InputConfig::default();
+        let inputs = settings.io.inputs;
         let mut pins = PinLevels::ALL_LOW;
         for (bit, input) in Input::ALL.into_iter().enumerate() {
             pins = pins.with(input, scenario.pins & (1 << bit) != 0);
@@ -291,7 +291,7 @@ impl Board {
         if scenario.boot_report {
             bridge.set_boot_report(now, "power-on");
         }
-        let io = DiscreteIo::new(bridge.io_config(), inputs, now, pins);
+        let io = DiscreteIo::new(bridge.io_config(), now, pins);
         let unit = scenario.unit.map(|index| {
             let unit = pick(&Model::ALL, index).build(&SimOptions::default());
             Unit {
@@ -439,7 +439,20 @@ impl Board {
             self.supply_sent = Some(supply);
         }
         if let Some(config) = self.bridge.take_io_config_change() {
-            self.io.reconfigure(now, config, self.inputs, self.pins);
+            // A new wiring of TORCH_ON is an operator's command the monitor observes: the pin
+            // keeps its level, its meaning may change, and the power-up rule applies again.
+            let torch_on_rewired =
+                config.inputs.get(Input::TorchOn) != self.inputs.get(Input::TorchOn);
+            self.io.reconfigure(now, config, self.pins);
+            self.inputs = config.inputs;
+            if torch_on_rewired {
+                let active = self
+                    .inputs
+                    .get(Input::TorchOn)
+                    .polarity
+                    .is_active(self.pins.is_high(Input::TorchOn));
+                self.monitor.torch_on_redefined(active);
+            }
         }
         if let Some(settings) = self.bridge.take_save_request() {
             let mut payload = [0u8; MAX_PAYLOAD];
