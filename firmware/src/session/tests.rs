@@ -875,7 +875,7 @@ fn config_get_set_and_save_round_trip_through_the_settings_record() {
         "OK protocol=AUTO address=1 parity=EVEN stop_bits=1 timeout_ms=100 retries=2 \
          poll_ms=100 interlock_fault=ON interlock_link=ON arc_ok_debounce_ms=2 \
          transfer_timeout_ms=3000 transfer_timeout_drops_start=ON events=OFF hpr_id=0 \
-         phoenix_format=113"
+         phoenix_format=113 cnc_address=1 cnc_baud=115200 cnc_parity=NONE cnc_stop_bits=1"
     );
     assert_eq!(rig.cmd("CONFIG timeout_ms"), "OK timeout_ms=100");
     assert_err(&rig.cmd("CONFIG timeout_ms 30"), "ERR RANGE *30*60..1000*");

@@ -160,11 +160,15 @@ pub enum ConfigKey {
     Events,
     HprId,
     PhoenixFormat,
+    CncAddress,
+    CncBaud,
+    CncParity,
+    CncStopBits,
 }
 
 impl ConfigKey {
     /// Every key, in the order `CONFIG` lists them.
-    pub const ALL: [ConfigKey; 15] = [
+    pub const ALL: [ConfigKey; 19] = [
         ConfigKey::Protocol,
         ConfigKey::Address,
         ConfigKey::Parity,
@@ -180,6 +184,10 @@ impl ConfigKey {
         ConfigKey::Events,
         ConfigKey::HprId,
         ConfigKey::PhoenixFormat,
+        ConfigKey::CncAddress,
+        ConfigKey::CncBaud,
+        ConfigKey::CncParity,
+        ConfigKey::CncStopBits,
     ];
 
     /// The key as written in commands and replies (lower case, `snake_case`).
@@ -200,6 +208,10 @@ impl ConfigKey {
             ConfigKey::Events => "events",
             ConfigKey::HprId => "hpr_id",
             ConfigKey::PhoenixFormat => "phoenix_format",
+            ConfigKey::CncAddress => "cnc_address",
+            ConfigKey::CncBaud => "cnc_baud",
+            ConfigKey::CncParity => "cnc_parity",
+            ConfigKey::CncStopBits => "cnc_stop_bits",
         }
     }
 
