@@ -788,7 +788,10 @@ mod tests {
     #[test]
     fn the_cnc_port_keys_give_the_port_config() {
         let mut s = Settings::default();
-        assert_eq!(s.cnc_port_config(), crate::settings::CncPort::DEFAULT.framing);
+        assert_eq!(
+            s.cnc_port_config(),
+            crate::settings::CncPort::DEFAULT.framing
+        );
         s.set(ConfigKey::CncBaud, "19200").unwrap();
         s.set(ConfigKey::CncParity, "E").unwrap();
         assert_eq!(s.cnc_port_config(), PortConfig::MODBUS_DEFAULT);

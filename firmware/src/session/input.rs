@@ -38,6 +38,10 @@ impl Session {
         if self.deframer.in_frame() {
             return self.deframe(ctx, byte);
         }
+        // A `:` between lines opens a Modbus ASCII request (no text command starts with one).
+        if self.powermax.in_frame() || (byte == b':' && !self.text_partial) {
+            return self.powermax_byte(ctx, byte);
+        }
         if phoenix::is_frame_start(byte) {
             self.start_frame(ctx);
             return self.deframe(ctx, byte);
@@ -56,6 +60,28 @@ impl Session {
         self.text_discarding = false;
         if self.deframer.format() != ctx.settings.phoenix_format {
             self.deframer = Deframer::new(ctx.settings.phoenix_format);
+        }
+    }
+
+    /// A byte of a Modbus request: its reply goes out at once, ahead of text replies that
+    /// wait for the link (a Powermax master allows 100 ms).
+    fn powermax_byte(&mut self, ctx: &mut Context<'_>, byte: u8) {
+        use super::powermax_port::Step;
+        match self.powermax.push(ctx, byte) {
+            Step::Pending => {}
+            Step::Reply => {
+                let reply = self.powermax.reply();
+                if !self.out.push(reply) {
+                    self.stats.output_dropped = self.stats.output_dropped.saturating_add(1);
+                }
+            }
+            Step::Refused(fault) => {
+                let reply = self.powermax.reply();
+                if !self.out.push(reply) {
+                    self.stats.output_dropped = self.stats.output_dropped.saturating_add(1);
+                }
+                self.settings_refused_event(ctx, fault);
+            }
         }
     }
 

@@ -35,6 +35,7 @@ mod commands;
 mod describe;
 mod events;
 mod input;
+pub mod powermax_port;
 mod replies;
 #[cfg(test)]
 pub(crate) mod tests;
@@ -213,6 +214,8 @@ pub struct Session {
     stats: SessionStats,
     /// When the last CNC byte arrived.
     last_rx: Instant,
+    /// Modbus ASCII requests: the bridge answering as a Powermax.
+    powermax: powermax_port::PowermaxPort,
 }
 
 impl Session {
@@ -234,6 +237,7 @@ impl Session {
             io_config_changed: false,
             stats: SessionStats::default(),
             last_rx: Instant::ZERO,
+            powermax: powermax_port::PowermaxPort::default(),
         }
     }
 
@@ -301,19 +305,31 @@ impl Session {
         self.pump(ctx);
     }
 
-    /// Let time pass: a Phoenix frame idle for [`FRAME_IDLE_TIMEOUT`] is abandoned.
+    /// Let time pass: a Phoenix or Modbus frame idle for [`FRAME_IDLE_TIMEOUT`] is
+    /// abandoned; a group of Modbus writes with nothing after it completes.
     pub fn poll(&mut self, ctx: &mut Context<'_>) {
-        if !self.deframer.in_frame() || ctx.now < self.last_rx + FRAME_IDLE_TIMEOUT {
+        if let Some(fault) = self.powermax.poll(ctx) {
+            self.settings_refused_event(ctx, fault);
+        }
+        if ctx.now < self.last_rx + FRAME_IDLE_TIMEOUT {
             return;
         }
-        self.abandon_frame(ctx);
+        if self.powermax.in_frame() {
+            self.powermax.abandon_frame();
+        }
+        if self.deframer.in_frame() {
+            self.abandon_frame(ctx);
+        }
     }
 
     /// When [`Session::poll`] has something to do.
     pub fn poll_at(&self) -> Option<Instant> {
-        self.deframer
-            .in_frame()
-            .then(|| self.last_rx + FRAME_IDLE_TIMEOUT)
+        let frame = (self.deframer.in_frame() || self.powermax.in_frame())
+            .then(|| self.last_rx + FRAME_IDLE_TIMEOUT);
+        match (frame, self.powermax.poll_at()) {
+            (Some(a), Some(b)) => Some(a.min(b)),
+            (a, b) => a.or(b),
+        }
     }
 
     /// Answer waiting lines while no command is in progress.
