@@ -21,8 +21,8 @@ use std::sync::mpsc::{Receiver, RecvTimeoutError};
 use plasma_firmware::bridge::Bridge;
 use plasma_firmware::settings::Settings;
 use plasma_protocol::cnc::phoenix::{EOT, ETX, SOH, STX};
-use plasma_protocol::serial::PortConfig;
 use plasma_protocol::powermax::FaultCode;
+use plasma_protocol::serial::PortConfig;
 use plasma_protocol::time::{Duration, Instant};
 
 use host_tests::harness::{BridgeEndpoint, CncItem, World, WorldOptions};
