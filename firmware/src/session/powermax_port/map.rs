@@ -138,3 +138,90 @@ impl View<'_> {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::link::Limits;
+    use crate::link::status::HprStatus;
+    use plasma_protocol::hpr::{ErrorCode, TimerCounter};
+    use plasma_protocol::powermax::{Amps, Psi};
+
+    fn view(status: &UnitStatus) -> View<'_> {
+        View {
+            status,
+            forced: Forced {
+                mode: 1,
+                current: 2880,
+                pressure: 0,
+            },
+            refused: Some(FaultCode(111)),
+        }
+    }
+
+    #[test]
+    fn legacy_registers_from_a_powermax_status() {
+        let status = UnitStatus {
+            family: Some(Family::PowermaxLegacy),
+            link_up: true,
+            limits: Some(Limits {
+                modes: None,
+                min_current: Amps::from_raw(20 * 64),
+                max_current: Amps::from_raw(65 * 64),
+                min_pressure: Psi::from_raw(63 * 128),
+                max_pressure: Psi::from_raw(78 * 128),
+            }),
+            arc_seconds: Some(0x0001_0002),
+            ..UnitStatus::default()
+        };
+        let v = view(&status);
+        let read = |a| v.read(a);
+        assert_eq!(
+            [0x2093, 0x2094, 0x2096, 0x2099, 0x209A, 0x209C, 0x209D].map(read),
+            [1, 2880, 0, 1280, 4160, 63 * 128, 78 * 128]
+        );
+        assert_eq!(
+            [0x209E, 0x209F].map(read),
+            [2, 1],
+            "arc time low word first"
+        );
+        assert_eq!(
+            read(0x2098),
+            111,
+            "a refused setting shows while the unit has no fault"
+        );
+        assert!(!served(0x3003, Family::PowermaxLegacy));
+        assert!(served(0x3003, Family::PowermaxSync));
+        assert!(served(0x2095, Family::Hpr), "a gap inside the block");
+        assert!(!served(0x20A0, Family::PowermaxSync));
+    }
+
+    #[test]
+    fn an_hpr_status_reads_as_a_powermax() {
+        let status = UnitStatus {
+            family: Some(Family::Hpr),
+            link_up: true,
+            active_fault: Some(ActiveFault::Hpr(ErrorCode(44))),
+            hpr: HprStatus {
+                timers: Some(TimerCounter {
+                    arc_on_seconds: 70_000,
+                    system_on_minutes: 0,
+                    starts: 0,
+                    start_errors: 0,
+                    rampdown_errors: 0,
+                    write_counter: 0,
+                    memory_block: 0,
+                }),
+                ..HprStatus::default()
+            },
+            ..UnitStatus::default()
+        };
+        let v = view(&status);
+        assert_eq!(
+            v.read(0x2098),
+            44,
+            "the unit's error wins over a refused setting"
+        );
+        assert_eq!((v.read(0x209E), v.read(0x209F)), (4464, 1), "70000 s");
+    }
+}
