@@ -84,6 +84,14 @@ impl Combiner {
         self.forced
     }
 
+    /// Settings came from elsewhere (a text command): the force registers no longer hold
+    /// what the master wrote, unless a group is open.
+    pub fn forget_written(&mut self) {
+        if self.last_write.is_none() {
+            self.forced = None;
+        }
+    }
+
     /// Forget the open group (the link went down: the change is not made).
     pub fn abandon(&mut self) {
         self.last_write = None;

@@ -31,7 +31,7 @@ use plasma_protocol::modbus_ascii::{
     encode_response,
 };
 use plasma_protocol::powermax::device_id::PRODUCT_CODE_OBJECT;
-use plasma_protocol::powermax::{FaultCode, OperatingMode};
+use plasma_protocol::powermax::{FaultCode, OperatingMode, legacy, sync};
 use plasma_protocol::time::Instant;
 
 use super::Context;
@@ -54,8 +54,8 @@ pub struct PowermaxPort {
     decoder: plasma_protocol::modbus_ascii::Decoder,
     combiner: Combiner,
     refused: Option<FaultCode>,
-    /// The settings change in progress on the link, and the process it becomes.
-    applying: Option<(Ticket, Option<Process>)>,
+    /// The settings change in progress on the link, and what the settings keep once it is done.
+    applying: Option<(Ticket, Keep)>,
     reply: [u8; MAX_FRAME_CHARS],
     reply_len: usize,
 }
@@ -71,6 +71,17 @@ impl Default for PowermaxPort {
             reply_len: 0,
         }
     }
+}
+
+/// What a settings change done through the registers leaves in [`Settings::process`]
+/// (`CONFIG SAVE` stores it), as a `SET` or `REMOTE OFF` command would.
+///
+/// [`Settings::process`]: crate::settings::Settings::process
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Keep {
+    Process(Process),
+    Forget,
+    Unchanged,
 }
 
 /// What a byte did.
@@ -144,22 +155,32 @@ impl PowermaxPort {
                     return;
                 }
                 self.applying = None;
-                match result {
-                    Ok(CommandOutput::Settings(_)) => ctx.settings.process = process,
-                    Ok(_) if process.is_none() => ctx.settings.process = None,
-                    Ok(_) => {}
-                    Err(crate::link::CommandFailure::Settings(
-                        SettingsFailure::RejectedByUnit { fault },
-                    )) => self.refused = Some(*fault),
-                    Err(crate::link::CommandFailure::NotAccepted) => {
+                match (result, process) {
+                    (Ok(CommandOutput::Settings(_)), Keep::Process(p)) => {
+                        ctx.settings.process = Some(p);
+                    }
+                    (Ok(_), Keep::Forget) => ctx.settings.process = None,
+                    (Ok(_), _) => {}
+                    (
+                        Err(crate::link::CommandFailure::Settings(
+                            SettingsFailure::RejectedByUnit { fault },
+                        )),
+                        _,
+                    ) => self.refused = Some(*fault),
+                    (Err(crate::link::CommandFailure::NotAccepted), _) => {
                         self.refused = Some(CURRENT_REFUSED);
                     }
-                    Err(_) => {}
+                    (Err(_), _) => {}
                 }
             }
             LinkEvent::LinkDown { .. } => {
                 self.combiner.abandon();
                 self.applying = None;
+            }
+            // Settings applied by a text command (or re-applied): the force registers read
+            // them from now on, not what the Modbus master wrote before.
+            LinkEvent::SettingsApplied { .. } if self.applying.is_none() => {
+                self.combiner.forget_written();
             }
             _ => {}
         }
@@ -295,7 +316,7 @@ impl PowermaxPort {
                 return Err(ExceptionCode::IllegalDataAddress);
             }
             // No mode has another number: a value no setting can have.
-            if matches!(address, 0x2093 | 0x3080) && value > 3 {
+            if matches!(address, legacy::MODE_FORCE | sync::REMOTE_MODE) && value > 3 {
                 return Err(ExceptionCode::IllegalDataValue);
             }
         }
@@ -327,7 +348,7 @@ impl PowermaxPort {
         let status = ctx.link.status();
         let family = status.family.filter(|_| status.link_up)?;
         let (command, process) = match change(forced, family) {
-            Change::Local if family.is_modbus() => (LinkCommand::ExitRemote, None),
+            Change::Local if family.is_modbus() => (LinkCommand::ExitRemote, Keep::Forget),
             Change::Local => {
                 self.refused = None;
                 return None;
@@ -358,12 +379,9 @@ impl PowermaxPort {
                     current,
                     pressure,
                 };
-                (command, Some(process))
+                (command, Keep::Process(process))
             }
-            Change::HprAmps(amps) => (
-                LinkCommand::HprSetNominalAmps { amps },
-                ctx.settings.process,
-            ),
+            Change::HprAmps(amps) => (LinkCommand::HprSetNominalAmps { amps }, Keep::Unchanged),
         };
         match ctx.link.submit(ctx.now, command) {
             Ok(ticket) => {

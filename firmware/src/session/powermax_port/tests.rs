@@ -378,3 +378,12 @@ proptest! {
         }
     }
 }
+
+#[test]
+fn a_text_set_after_modbus_writes_shows_in_the_force_registers() {
+    let mut rig = Rig::sync65(Settings::default());
+    connect(&mut rig, 1, 45, 0);
+    rig.run(300);
+    assert!(rig.cmd("SET AMPS 30").starts_with("OK"));
+    assert_eq!(read(&mut rig, 0x2094), 30 * 64);
+}
