@@ -141,24 +141,25 @@ fn parse_parity(key: ConfigKey, text: &str) -> Result<Parity, SetError<'_>> {
 }
 
 fn parse_stop_bits(key: ConfigKey, text: &str) -> Result<StopBits, SetError<'_>> {
-    text.parse::<u8>()
-        .ok()
-        .filter(|_| text.len() == 1)
-        .and_then(stop_bits_from)
-        .ok_or(SetError::BadWord {
+    match text {
+        "1" => Ok(StopBits::One),
+        "2" => Ok(StopBits::Two),
+        _ => Err(SetError::BadWord {
             key,
             expected: "1|2",
-        })
+        }),
+    }
 }
 
 fn parse_cnc_baud(key: ConfigKey, text: &str) -> Result<u32, SetError<'_>> {
-    CNC_BAUDS
-        .into_iter()
-        .find(|b| text.parse::<u32>().ok() == Some(*b))
-        .ok_or(SetError::BadWord {
-            key,
-            expected: CNC_BAUD_WORDS,
-        })
+    let bad = SetError::BadWord {
+        key,
+        expected: CNC_BAUD_WORDS,
+    };
+    match parse_number(key, text, (0, u32::MAX)) {
+        Ok(baud) if CNC_BAUDS.contains(&baud) => Ok(baud),
+        _ => Err(bad),
+    }
 }
 
 /// The process (mode, current, pressure) the CNC asked for last, re-applied after power-up.
