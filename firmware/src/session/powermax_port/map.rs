@@ -92,7 +92,7 @@ impl View<'_> {
                 .get(usize::from(offset / 2))
                 .copied()
                 .unwrap_or(0);
-                if offset % 2 == 0 {
+                if offset.is_multiple_of(2) {
                     lo(value)
                 } else {
                     hi(value)

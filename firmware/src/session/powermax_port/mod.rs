@@ -118,17 +118,19 @@ impl PowermaxPort {
 
     /// One byte from the CNC (the first of a frame is `:`).
     pub fn push(&mut self, ctx: &mut Context<'_>, byte: u8) -> Step {
-        let (address, pdu) = match self.decoder.push(byte) {
+        // The request is copied out of the decoder, which `request` cannot borrow with `self`.
+        let mut pdu = [0u8; plasma_protocol::modbus_ascii::MAX_PDU_LEN];
+        let (address, len) = match self.decoder.push(byte) {
             Some(Ok(frame)) => {
-                let mut pdu = [0u8; plasma_protocol::modbus_ascii::MAX_PDU_LEN];
-                let len = frame.pdu.len().min(pdu.len());
-                pdu[..len].copy_from_slice(&frame.pdu[..len]);
-                (frame.address, (pdu, len))
+                for (slot, &b) in pdu.iter_mut().zip(frame.pdu) {
+                    *slot = b;
+                }
+                (frame.address, frame.pdu.len())
             }
             // A broken frame (bad LRC, not hex): a Powermax does not answer it.
             _ => return Step::Pending,
         };
-        self.request(ctx, address, &pdu.0[..pdu.1])
+        self.request(ctx, address, pdu.get(..len).unwrap_or_default())
     }
 
     /// When [`PowermaxPort::poll`] has a group to complete.
@@ -239,11 +241,11 @@ impl PowermaxPort {
             Request::WriteMultipleRegisters { start, values } => {
                 let mut buf = [0u16; 3];
                 let n = values.len();
-                let fits = n <= buf.len();
                 for (slot, v) in buf.iter_mut().zip(values.iter()) {
                     *slot = v;
                 }
-                match fits.then(|| self.write(ctx, family, start, &buf[..n])) {
+                // More than the three force registers: an address outside the map.
+                match buf.get(..n).map(|v| self.write(ctx, family, start, v)) {
                     None => exception(function, ExceptionCode::IllegalDataAddress),
                     Some(Err(code)) => exception(function, code),
                     Some(Ok(())) => {
@@ -259,7 +261,8 @@ impl PowermaxPort {
             Request::ReadDeviceIdentification { code, .. } => {
                 match identification(ctx, code, &mut ident) {
                     Some(len) => {
-                        return self.answer_pdu(broadcast, address, &ident[..len], refused);
+                        let pdu = ident.get(..len).unwrap_or_default();
+                        return self.answer_pdu(broadcast, address, pdu, refused);
                     }
                     None => exception(function, ExceptionCode::IllegalFunction),
                 }
