@@ -144,6 +144,13 @@ fn a_current_the_unit_refuses_reads_as_0_11_1_and_is_an_event() {
     rig.run(300);
     assert!(rig.writes().is_empty(), "not sent");
     assert_eq!(read(&mut rig, 0x2098), 111, "0-11-1");
+    // The text protocol shows it as the unit would: FAULT and STATUS.
+    let fault = rig.cmd("FAULT");
+    assert!(
+        fault.starts_with("OK fault=0-11-1 action=none text="),
+        "{fault}"
+    );
+    assert!(rig.cmd("STATUS").contains(" fault=0-11-1 "));
     assert!(
         rig.received
             .iter()
