@@ -277,6 +277,10 @@ impl Session {
         if before.io != ctx.settings.io {
             self.io_config_changed = true;
         }
+        // Setting the Phoenix format overrides the one recognised on the port.
+        if key == ConfigKey::PhoenixFormat {
+            self.recognised = None;
+        }
         let value = ctx.settings.get(key);
         ok_line(|w| {
             w.field(key.name(), value)?;

@@ -1,7 +1,7 @@
 //! From CNC bytes to commands in turn: text lines and Phoenix frames, ACK/NAK, the queue of
 //! lines that wait behind a command in progress.
 
-use plasma_protocol::cnc::phoenix::{self, Deframer};
+use plasma_protocol::cnc::phoenix::{self, Deframer, Format, SOH};
 use plasma_protocol::cnc::reply::write_parse_error;
 use plasma_protocol::cnc::{Command, ErrorCode, LineError, MAX_LINE_LEN, ParseError};
 
@@ -43,24 +43,39 @@ impl Session {
             return self.powermax_byte(ctx, byte);
         }
         if phoenix::is_frame_start(byte) {
-            self.start_frame(ctx);
+            self.start_frame(ctx, byte);
             return self.deframe(ctx, byte);
         }
         self.push_text_byte(ctx, byte);
     }
 
-    /// A frame begins: a text line it interrupts is answered with an `ERR`, and the deframer
-    /// takes the Phoenix format configured now.
-    fn start_frame(&mut self, ctx: &mut Context<'_>) {
+    /// A frame begins on `start` (SOH or STX): a text line it interrupts is answered with an
+    /// `ERR`, and the deframer takes the format recognised on the port, else the configured
+    /// one, else the first one that starts with this byte.
+    fn start_frame(&mut self, ctx: &mut Context<'_>, start: u8) {
         if self.text_partial {
             self.admit(ctx, Item::refused(InputError::Interrupted));
         }
         self.lines.reset();
         self.text_partial = false;
         self.text_discarding = false;
-        if self.deframer.format() != ctx.settings.phoenix_format {
-            self.deframer = Deframer::new(ctx.settings.phoenix_format);
+        let configured = ctx.settings.phoenix_format;
+        if configured != self.configured_format {
+            self.configured_format = configured;
+            self.recognised = None;
         }
+        let starts = |f: &Format| f.start_byte() == Some(start);
+        let format = self
+            .recognised
+            .filter(starts)
+            .or(Some(configured).filter(starts))
+            .or_else(|| candidates(start).first().copied())
+            .unwrap_or(configured);
+        if self.deframer.format() != format {
+            self.deframer = Deframer::new(format);
+        }
+        self.raw_frame.clear();
+        self.deferred = None;
     }
 
     /// A byte of a Modbus request: its reply goes out at once, ahead of text replies that
@@ -120,18 +135,78 @@ impl Session {
     }
 
     fn deframe(&mut self, ctx: &mut Context<'_>, byte: u8) {
-        let item = match self.deframer.push(byte) {
+        if phoenix::is_frame_start(byte) && !self.deframer.in_frame() {
+            self.raw_frame.clear();
+        }
+        // A frame longer than the buffer is refused as overlong by the deframer anyway.
+        let _ = self.raw_frame.push(byte);
+        let outcome = self
+            .deframer
+            .push(byte)
+            .map(|outcome| outcome.map(message_item));
+        let frame_over = !self.deframer.in_frame();
+        let item = match outcome {
+            None if self.deferred.is_some() && frame_over => self.recognise_or_refuse(),
             None => return,
-            Some(outcome) => frame_item(outcome),
+            Some(Ok(item)) => item,
+            // A start byte broke the frame off: it is refused now, and `byte` begins the next.
+            Some(Err(plasma_protocol::Error::Truncated)) => {
+                self.raw_frame.clear();
+                let _ = self.raw_frame.push(byte);
+                self.deferred = None;
+                Item::refused(InputError::Frame(plasma_protocol::Error::Truncated))
+            }
+            Some(Err(error)) => {
+                // The expected format does not fit: decide once the whole frame is in.
+                self.deferred = Some(error);
+                if !frame_over {
+                    return;
+                }
+                self.recognise_or_refuse()
+            }
         };
         self.framed(ctx, item);
     }
 
-    /// A Phoenix frame idle for too long is abandoned (NAK).
+    /// A Phoenix frame idle for too long is abandoned (NAK), unless it is a whole frame of
+    /// another format (one without a check byte, which the deframer was still waiting for).
     pub(super) fn abandon_frame(&mut self, ctx: &mut Context<'_>) {
-        if let Some(outcome) = self.deframer.idle() {
-            let item = frame_item(outcome);
-            self.framed(ctx, item);
+        let item = match self.deframer.idle() {
+            Some(Err(error)) => {
+                self.deferred = Some(error);
+                self.recognise_or_refuse()
+            }
+            Some(Ok(payload)) => message_item(payload),
+            None if self.deferred.is_some() => self.recognise_or_refuse(),
+            None => return,
+        };
+        self.framed(ctx, item);
+    }
+
+    /// The frame failed in the format the deframer expected: the first other format with the
+    /// same start byte that takes the whole frame is recognised (and used from now on);
+    /// otherwise the frame is refused with the first error.
+    fn recognise_or_refuse(&mut self) -> Item {
+        let error = self
+            .deferred
+            .take()
+            .unwrap_or(plasma_protocol::Error::Malformed);
+        let raw = &self.raw_frame;
+        let tried = self.deframer.format();
+        let found = raw.first().and_then(|&start| {
+            candidates(start)
+                .iter()
+                .filter(|&&f| f != tried)
+                .find_map(|&f| whole_frame(f, raw).map(|item| (f, item)))
+        });
+        self.raw_frame.clear();
+        match found {
+            Some((format, item)) => {
+                self.recognised = Some(format);
+                self.deframer = Deframer::new(format);
+                item
+            }
+            None => Item::refused(InputError::Frame(error)),
         }
     }
 
@@ -174,11 +249,40 @@ impl Session {
     }
 }
 
-/// The item for a deframer outcome.
-fn frame_item(outcome: plasma_protocol::Result<&[u8]>) -> Item {
+/// The framed formats that open with `start`, the most complete first (113: SOH, STX, CR LF,
+/// ETX, EOT, check byte).
+fn candidates(start: u8) -> &'static [Format] {
+    const SOH_FORMATS: [u8; 8] = [113, 97, 112, 96, 81, 65, 80, 64];
+    const STX_FORMATS: [u8; 4] = [49, 33, 48, 32];
+    static SOH_LIST: [Format; 8] = formats(SOH_FORMATS);
+    static STX_LIST: [Format; 4] = formats(STX_FORMATS);
+    if start == SOH { &SOH_LIST } else { &STX_LIST }
+}
+
+const fn formats<const N: usize>(values: [u8; N]) -> [Format; N] {
+    let mut out = [Format::PLAIN; N];
+    let mut i = 0;
+    while i < N {
+        if let Ok(format) = Format::from_value(values[i]) {
+            out[i] = format;
+        }
+        i += 1;
+    }
+    out
+}
+
+/// The item for `raw` if it is exactly one whole frame of `format` (idle ends a frame whose
+/// format has no check byte).
+fn whole_frame(format: Format, raw: &[u8]) -> Option<Item> {
+    let mut deframer: Deframer = Deframer::new(format);
+    let (used, outcome) = deframer.feed(raw);
     match outcome {
-        Ok(payload) => message_item(payload),
-        Err(error) => Item::refused(InputError::Frame(error)),
+        Some(Ok(payload)) if used == raw.len() => Some(message_item(payload)),
+        None => match deframer.idle() {
+            Some(Ok(payload)) => Some(message_item(payload)),
+            _ => None,
+        },
+        _ => None,
     }
 }
 

@@ -70,6 +70,9 @@ pub const SIM_QUEUE_CAPACITY: usize = 4;
 /// follow.
 pub const FRAME_IDLE_TIMEOUT: Duration = Duration::from_millis(50);
 
+/// A whole Phoenix frame: the longest message and every framing byte.
+const RAW_FRAME_CAPACITY: usize = plasma_protocol::cnc::phoenix::MAX_MESSAGE_LEN + 8;
+
 /// One reply or event line.
 pub type ReplyLine = String<MAX_REPLY_LEN>;
 
@@ -205,6 +208,15 @@ pub struct Session {
     /// The assembler drops the rest of a refused line up to its terminator.
     text_discarding: bool,
     deframer: Deframer,
+    /// The Phoenix framing recognised on the port (see `input::recognise`), used instead of
+    /// `phoenix_format` until a frame fails with it or the key changes.
+    recognised: Option<plasma_protocol::cnc::phoenix::Format>,
+    /// `phoenix_format` when the session last looked: a change drops what was recognised.
+    configured_format: plasma_protocol::cnc::phoenix::Format,
+    /// The bytes of the Phoenix frame under way, from its start byte.
+    raw_frame: Vec<u8, RAW_FRAME_CAPACITY>,
+    /// The frame failed in the configured format; its verdict waits for the frame's end.
+    deferred: Option<plasma_protocol::Error>,
     queue: Deque<Item, QUEUE_CAPACITY>,
     pending: Option<Pending>,
     out: Output,
@@ -226,6 +238,10 @@ impl Session {
             text_partial: false,
             text_discarding: false,
             deframer: Deframer::new(settings.phoenix_format),
+            recognised: None,
+            configured_format: settings.phoenix_format,
+            raw_frame: Vec::new(),
+            deferred: None,
             queue: Deque::new(),
             pending: None,
             out: Output {

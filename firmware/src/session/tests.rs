@@ -1144,3 +1144,38 @@ fn assert_err(reply: &str, pattern: &str) {
         rest = &rest[at + part.len()..];
     }
 }
+
+#[test]
+fn phoenix_framing_is_recognised_without_setting_phoenix_format() {
+    let mut rig = Rig::sync65(Settings::default());
+    // Default 113; the CNC sends 112 (no CR LF), 97 (no check byte), then 33 (STX only).
+    for format in [112, 97, 97, 33, 33, 113] {
+        let tokens = rig.send_bytes(&framed(format, b"FAULT"), 1);
+        assert_eq!(tokens, [ACK_TOKEN, "OK fault=none"], "format {format}");
+    }
+    // A frame no format takes is still refused.
+    let mut bad = framed(113, b"FAULT");
+    *bad.last_mut().unwrap() ^= 0x01;
+    let tokens = rig.send_bytes(&bad, 1);
+    assert_eq!(tokens[0], NAK_TOKEN, "{tokens:?}");
+    // Once recognised, a format is used at once: no wait for a check byte that never comes.
+    rig.send_bytes(&framed(97, b"FAULT"), 1);
+    let start = rig.now;
+    let tokens = rig.send_bytes(&framed(97, b"FAULT"), 1);
+    assert_eq!(tokens, [ACK_TOKEN, "OK fault=none"]);
+    assert_eq!(rig.now, start, "answered without waiting");
+    // The key stays an override: set, it is the format expected first again.
+    assert_eq!(
+        rig.cmd("CONFIG phoenix_format 113"),
+        "OK phoenix_format=113"
+    );
+    let tokens = rig.send_bytes(&framed(113, b"FAULT"), 1);
+    assert_eq!(tokens, [ACK_TOKEN, "OK fault=none"]);
+    let after = rig.received.len();
+    rig.run(200);
+    assert_eq!(
+        rig.received[after..],
+        [] as [String; 0],
+        "nothing left over"
+    );
+}
