@@ -38,8 +38,10 @@ impl Session {
         if self.deframer.in_frame() {
             return self.deframe(ctx, byte);
         }
-        // A `:` between lines opens a Modbus ASCII request (no text command starts with one).
-        if self.powermax.in_frame() || (byte == b':' && !self.text_partial) {
+        // A `:` between lines opens a Modbus ASCII request (no text command starts with one);
+        // inside a line, even one being discarded, it is text.
+        let between_lines = !self.text_partial && !self.text_discarding;
+        if self.powermax.in_frame() || (byte == b':' && between_lines) {
             return self.powermax_byte(ctx, byte);
         }
         if phoenix::is_frame_start(byte) {

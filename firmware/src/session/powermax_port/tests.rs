@@ -394,3 +394,19 @@ fn a_text_set_after_modbus_writes_shows_in_the_force_registers() {
     assert!(rig.cmd("SET AMPS 30").starts_with("OK"));
     assert_eq!(read(&mut rig, 0x2094), 30 * 64);
 }
+
+#[test]
+fn a_colon_inside_a_refused_line_is_text() {
+    let mut rig = Rig::sync65(Settings::default());
+    // A control byte makes the line assembler drop the rest of the line; the `:` in it must
+    // not open a Modbus request.
+    rig.bridge
+        .handle_cnc_rx(rig.now, b"\x03RAW :0104301A0001B0\r\n");
+    rig.run(100);
+    assert!(
+        rig.received.iter().all(|t| !t.starts_with(':')),
+        "{:?}",
+        rig.received
+    );
+    assert_eq!(read(&mut rig, 0x2098), 0);
+}
