@@ -1,7 +1,7 @@
 //! From CNC bytes to commands in turn: text lines and Phoenix frames, ACK/NAK, the queue of
 //! lines that wait behind a command in progress.
 
-use plasma_protocol::cnc::phoenix::{self, Deframer, Format, SOH};
+use plasma_protocol::cnc::phoenix::{self, Deframer, Format};
 use plasma_protocol::cnc::reply::write_parse_error;
 use plasma_protocol::cnc::{Command, ErrorCode, LineError, MAX_LINE_LEN, ParseError};
 
@@ -71,7 +71,7 @@ impl Session {
             .recognised
             .filter(starts)
             .or(Some(configured).filter(starts))
-            .or_else(|| candidates(start).first().copied())
+            .or_else(|| candidates(start).next())
             .unwrap_or(configured);
         if self.deframer.format() != format {
             self.deframer = Deframer::new(format);
@@ -197,9 +197,8 @@ impl Session {
         let tried = self.deframer.format();
         let found = raw.first().and_then(|&start| {
             candidates(start)
-                .iter()
-                .filter(|&&f| f != tried)
-                .find_map(|&f| whole_frame(f, raw).map(|item| (f, item)))
+                .filter(|&f| f != tried)
+                .find_map(|f| whole_frame(f, raw).map(|item| (f, item)))
         });
         self.raw_frame.clear();
         match found {
@@ -253,24 +252,11 @@ impl Session {
 
 /// The framed formats that open with `start`, the most complete first (113: SOH, STX, CR LF,
 /// ETX, EOT, check byte).
-fn candidates(start: u8) -> &'static [Format] {
-    const SOH_FORMATS: [u8; 8] = [113, 97, 112, 96, 81, 65, 80, 64];
-    const STX_FORMATS: [u8; 4] = [49, 33, 48, 32];
-    static SOH_LIST: [Format; 8] = formats(SOH_FORMATS);
-    static STX_LIST: [Format; 4] = formats(STX_FORMATS);
-    if start == SOH { &SOH_LIST } else { &STX_LIST }
-}
-
-const fn formats<const N: usize>(values: [u8; N]) -> [Format; N] {
-    let mut out = [Format::PLAIN; N];
-    let mut i = 0;
-    while i < N {
-        if let Ok(format) = Format::from_value(values[i]) {
-            out[i] = format;
-        }
-        i += 1;
-    }
-    out
+fn candidates(start: u8) -> impl Iterator<Item = Format> {
+    Format::ALL
+        .into_iter()
+        .rev()
+        .filter(move |f| f.start_byte() == Some(start))
 }
 
 /// The item for `raw` if it is exactly one whole frame of `format` (idle ends a frame whose
