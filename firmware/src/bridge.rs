@@ -142,6 +142,12 @@ impl Bridge {
 
     // --- CNC side -----------------------------------------------------------------------
 
+    /// The UART settings the CNC port must use (`cnc_baud`, `cnc_parity`, `cnc_stop_bits`;
+    /// changed by `CONFIG`, applied by the driver whenever it differs from the port's).
+    pub fn cnc_port_config(&self) -> PortConfig {
+        self.settings.cnc_port_config()
+    }
+
     /// Bytes received from the CNC (any chunking).
     pub fn handle_cnc_rx(&mut self, now: Instant, bytes: &[u8]) {
         self.service(now);

@@ -33,7 +33,7 @@ use crate::io::{IoConfig, MIN_START_GAP};
 mod wiring;
 use crate::link::{LinkConfig, ProtocolChoice};
 use crate::storage::{self, StoreError};
-use plasma_protocol::serial::{Parity, StopBits};
+use plasma_protocol::serial::{Parity, PortConfig, StopBits};
 use plasma_protocol::time::Duration;
 
 /// Accepted `arc_ok_debounce_ms` values.
@@ -44,10 +44,125 @@ pub const TRANSFER_TIMEOUT_MS: (u32, u32) = (100, 10_000);
 pub const START_GAP_MS: (u32, u32) = (50, 1000);
 /// The Phoenix format used until one is configured: SOH, STX, CR LF, ETX, EOT and check byte.
 pub const DEFAULT_PHOENIX_FORMAT: u8 = 113;
-/// Length of the version-1 record (no wiring).
-const RECORD_V1_LEN: usize = 29;
-/// Length of the version-2 record: version 1, then the CNC's wiring.
-pub const RECORD_LEN: usize = RECORD_V1_LEN + wiring::RECORD_LEN;
+/// Length of the version-1 record (no wiring, no CNC port block).
+pub const RECORD_V1_LEN: usize = 29;
+/// Length of the version-2 record: version 1, the CNC's wiring, then the CNC port block.
+pub const RECORD_LEN: usize = RECORD_V1_LEN + wiring::RECORD_LEN + CNC_BLOCK_LEN;
+
+// --- the CNC port: framing and Powermax node address (issue 13) ------------------------------
+
+/// The baud rates `cnc_baud` accepts.
+pub const CNC_BAUDS: [u32; 5] = [9_600, 19_200, 38_400, 57_600, 115_200];
+const CNC_BAUD_WORDS: &str = "9600|19200|38400|57600|115200";
+/// Bytes of the CNC port block in the record: address, baud (LE u32), parity, stop bits.
+const CNC_BLOCK_LEN: usize = 7;
+
+/// The CNC port: its UART framing and the node address the bridge answers at as a Powermax
+/// (Modbus ASCII requests on the CNC port, see `session::powermax_port`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct CncPort {
+    /// Modbus node address the bridge answers at (1-247; 0 is the broadcast address).
+    pub address: u8,
+    /// UART framing (8 data bits always).
+    pub framing: PortConfig,
+}
+
+impl CncPort {
+    /// 115200 8N1 (the board's ST-LINK virtual COM port, the text protocol's default), node 1
+    /// (the node LinuxCNC's pmx485 always addresses).
+    pub const DEFAULT: CncPort = CncPort {
+        address: 1,
+        framing: PortConfig {
+            baud: 115_200,
+            parity: Parity::None,
+            stop_bits: StopBits::One,
+        },
+    };
+
+    fn is_valid(&self) -> bool {
+        (1..=247).contains(&self.address) && CNC_BAUDS.contains(&self.framing.baud)
+    }
+
+    fn encode(&self) -> [u8; CNC_BLOCK_LEN] {
+        let b = self.framing.baud.to_le_bytes();
+        [
+            self.address,
+            b[0],
+            b[1],
+            b[2],
+            b[3],
+            index_of(&PARITIES, &self.framing.parity),
+            stop_bits_number(self.framing.stop_bits),
+        ]
+    }
+
+    fn decode(r: &[u8]) -> Option<CncPort> {
+        let &[address, b0, b1, b2, b3, parity, stop] = r else {
+            return None;
+        };
+        let port = CncPort {
+            address,
+            framing: PortConfig {
+                baud: u32::from_le_bytes([b0, b1, b2, b3]),
+                parity: *PARITIES.get(usize::from(parity))?,
+                stop_bits: stop_bits_from(stop)?,
+            },
+        };
+        port.is_valid().then_some(port)
+    }
+}
+
+fn stop_bits_number(stop_bits: StopBits) -> u8 {
+    match stop_bits {
+        StopBits::One => 1,
+        StopBits::Two => 2,
+    }
+}
+
+fn stop_bits_from(number: u8) -> Option<StopBits> {
+    match number {
+        1 => Some(StopBits::One),
+        2 => Some(StopBits::Two),
+        _ => None,
+    }
+}
+
+fn parse_parity(key: ConfigKey, text: &str) -> Result<Parity, SetError<'_>> {
+    [Parity::None, Parity::Even, Parity::Odd]
+        .into_iter()
+        .find(|p| {
+            let name = parity_name(*p);
+            name.eq_ignore_ascii_case(text)
+                || (text.len() == 1 && name.get(..1).is_some_and(|c| c.eq_ignore_ascii_case(text)))
+        })
+        .ok_or(SetError::BadWord {
+            key,
+            expected: "NONE|EVEN|ODD",
+        })
+}
+
+fn parse_stop_bits(key: ConfigKey, text: &str) -> Result<StopBits, SetError<'_>> {
+    match text {
+        "1" => Ok(StopBits::One),
+        "2" => Ok(StopBits::Two),
+        _ => Err(SetError::BadWord {
+            key,
+            expected: "1|2",
+        }),
+    }
+}
+
+fn parse_cnc_baud(key: ConfigKey, text: &str) -> Result<u32, SetError<'_>> {
+    let bad = SetError::BadWord {
+        key,
+        expected: CNC_BAUD_WORDS,
+    };
+    match parse_number(key, text, (0, u32::MAX)) {
+        Ok(baud) if CNC_BAUDS.contains(&baud) => Ok(baud),
+        _ => Err(bad),
+    }
+}
 
 /// The process (mode, current, pressure) the CNC asked for last, re-applied after power-up.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -75,6 +190,8 @@ pub struct Settings {
     pub phoenix_format: Format,
     /// The last process the unit confirmed (`None` after `REMOTE OFF`).
     pub process: Option<Process>,
+    /// The CNC port's framing and Powermax node address.
+    pub cnc: CncPort,
 }
 
 impl Default for Settings {
@@ -85,6 +202,7 @@ impl Default for Settings {
             events: false,
             phoenix_format: Format::from_value(DEFAULT_PHOENIX_FORMAT).unwrap_or(Format::PLAIN),
             process: None,
+            cnc: CncPort::DEFAULT,
         }
     }
 }
@@ -291,6 +409,7 @@ fn range_of(key: ConfigKey) -> (u32, u32) {
         ConfigKey::TransferTimeoutMs => TRANSFER_TIMEOUT_MS,
         ConfigKey::HprId => (0, u32::from(LinkConfig::MAX_HPR_ID)),
         ConfigKey::PhoenixFormat => (0, 255),
+        ConfigKey::CncAddress => (1, 247),
         _ => (0, 0),
     }
 }
@@ -319,6 +438,12 @@ impl Settings {
             ConfigKey::Events => on_off(self.events),
             ConfigKey::HprId => ConfigValue::Number(u32::from(link.hpr_id)),
             ConfigKey::PhoenixFormat => ConfigValue::Number(u32::from(self.phoenix_format.value())),
+            ConfigKey::CncAddress => ConfigValue::Number(u32::from(self.cnc.address)),
+            ConfigKey::CncBaud => ConfigValue::Number(self.cnc.framing.baud),
+            ConfigKey::CncParity => ConfigValue::Word(parity_name(self.cnc.framing.parity)),
+            ConfigKey::CncStopBits => {
+                ConfigValue::Number(u32::from(stop_bits_number(self.cnc.framing.stop_bits)))
+            }
             // The wiring keys (`wiring::KEYS`); every other key has its arm above.
             other => wiring::get(io, other).unwrap_or(ConfigValue::Number(0)),
         }
@@ -328,8 +453,9 @@ impl Settings {
     pub fn accepted(key: ConfigKey) -> Accepted {
         match key {
             ConfigKey::Protocol => Accepted::Words("AUTO|SYNC|LEGACY|HPR"),
-            ConfigKey::Parity => Accepted::Words("NONE|EVEN|ODD"),
-            ConfigKey::StopBits => Accepted::Words("1|2"),
+            ConfigKey::Parity | ConfigKey::CncParity => Accepted::Words("NONE|EVEN|ODD"),
+            ConfigKey::StopBits | ConfigKey::CncStopBits => Accepted::Words("1|2"),
+            ConfigKey::CncBaud => Accepted::Words(CNC_BAUD_WORDS),
             ConfigKey::InterlockFault
             | ConfigKey::InterlockLink
             | ConfigKey::TransferTimeoutDropsStart
@@ -365,32 +491,8 @@ impl Settings {
                 })?;
             }
             ConfigKey::Address => link.node_address = number(text)? as u8,
-            ConfigKey::Parity => {
-                link.modbus_parity = [Parity::None, Parity::Even, Parity::Odd]
-                    .into_iter()
-                    .find(|p| {
-                        let name = parity_name(*p);
-                        name.eq_ignore_ascii_case(text)
-                            || (text.len() == 1
-                                && name.get(..1).is_some_and(|c| c.eq_ignore_ascii_case(text)))
-                    })
-                    .ok_or(SetError::BadWord {
-                        key,
-                        expected: "NONE|EVEN|ODD",
-                    })?;
-            }
-            ConfigKey::StopBits => {
-                link.modbus_stop_bits = match text {
-                    "1" => StopBits::One,
-                    "2" => StopBits::Two,
-                    _ => {
-                        return Err(SetError::BadWord {
-                            key,
-                            expected: "1|2",
-                        });
-                    }
-                };
-            }
+            ConfigKey::Parity => link.modbus_parity = parse_parity(key, text)?,
+            ConfigKey::StopBits => link.modbus_stop_bits = parse_stop_bits(key, text)?,
             ConfigKey::TimeoutMs => link.response_timeout = millis(text)?,
             ConfigKey::Retries => link.retries = number(text)? as u8,
             ConfigKey::PollMs => link.poll_interval = millis(text)?,
@@ -415,10 +517,19 @@ impl Settings {
                     .filter(|f| f.start_byte().is_some())
                     .ok_or(not_framed)?;
             }
+            ConfigKey::CncAddress => self.cnc.address = number(text)? as u8,
+            ConfigKey::CncBaud => self.cnc.framing.baud = parse_cnc_baud(key, text)?,
+            ConfigKey::CncParity => self.cnc.framing.parity = parse_parity(key, text)?,
+            ConfigKey::CncStopBits => self.cnc.framing.stop_bits = parse_stop_bits(key, text)?,
             // The wiring keys (`wiring::KEYS`); every other key has its arm above.
             other => return wiring::set(io, other, text).unwrap_or(Ok(())),
         }
         Ok(())
+    }
+
+    /// The CNC port's UART framing (`cnc_baud`, `cnc_parity`, `cnc_stop_bits`).
+    pub fn cnc_port_config(&self) -> PortConfig {
+        self.cnc.framing
     }
 
     /// True when every field is one this firmware accepts (what [`decode`] insists on).
@@ -440,6 +551,7 @@ impl Settings {
             && within(self.io.arc_ok_debounce, ARC_OK_DEBOUNCE_MS)
             && within(self.io.transfer_timeout, TRANSFER_TIMEOUT_MS)
             && self.phoenix_format.start_byte().is_some()
+            && self.cnc.is_valid()
             && process_ok
     }
 }
@@ -469,6 +581,7 @@ impl fmt::Display for Accepted {
 // 15-16 start gap ms | 17-18 ARC_OK debounce ms | 19-20 transfer time-out ms | 21 flags
 // 22 Phoenix format | 23 process present | 24 mode | 25-26 amps raw | 27-28 pressure raw
 // 29 active-high inputs (bit per input) | 30-36 input debounce ms | 37 inverted outputs
+// 38 CNC address | 39-42 CNC baud (LE) | 43 CNC parity | 44 CNC stop bits
 
 const FLAG_ARC_OK_REQUIRES_START: u8 = 1 << 0;
 const FLAG_DROP_START_ON_TRANSFER_TIMEOUT: u8 = 1 << 1;
@@ -505,10 +618,7 @@ impl storage::Settings for Settings {
         r[0] = index_of(&PROTOCOLS, &link.protocol);
         r[1] = link.node_address;
         r[2] = index_of(&PARITIES, &link.modbus_parity);
-        r[3] = match link.modbus_stop_bits {
-            StopBits::One => 1,
-            StopBits::Two => 2,
-        };
+        r[3] = stop_bits_number(link.modbus_stop_bits);
         r[4..6].copy_from_slice(&u16_ms(link.response_timeout));
         r[6] = link.retries;
         r[7..9].copy_from_slice(&u16_ms(link.poll_interval));
@@ -528,13 +638,15 @@ impl storage::Settings for Settings {
             | flag(io.link_required, FLAG_LINK_REQUIRED)
             | flag(self.events, FLAG_EVENTS);
         r[22] = self.phoenix_format.value();
-        r[RECORD_V1_LEN..].copy_from_slice(&wiring::encode(io));
         if let Some(process) = self.process {
             r[23] = 1;
             r[24] = index_of(&Mode::ALL, &process.mode);
             r[25..27].copy_from_slice(&process.amps.raw().to_le_bytes());
             r[27..29].copy_from_slice(&process.pressure.raw().to_le_bytes());
         }
+        let (wiring_bytes, cnc) = r[RECORD_V1_LEN..].split_at_mut(wiring::RECORD_LEN);
+        wiring_bytes.copy_from_slice(&wiring::encode(io));
+        cnc.copy_from_slice(&self.cnc.encode());
         match out.get_mut(..RECORD_LEN) {
             Some(slot) => {
                 slot.copy_from_slice(&r);
@@ -546,75 +658,84 @@ impl storage::Settings for Settings {
     }
 
     fn decode(payload: &[u8]) -> Option<Self> {
-        let r: &[u8; RECORD_LEN] = payload.try_into().ok()?;
-        let (inputs, outputs) = wiring::decode(r.last_chunk()?)?;
-        // Offsets are constants inside the fixed-length record.
-        let u16_at = |i: usize| {
-            r.get(i..i + 2)
-                .and_then(|b| b.try_into().ok())
-                .map_or(0, u16::from_le_bytes)
+        let (v1, rest) = payload.split_at_checked(RECORD_V1_LEN)?;
+        let (wiring_bytes, cnc) = rest.split_at_checked(wiring::RECORD_LEN)?;
+        let (inputs, outputs) = wiring::decode(wiring_bytes.try_into().ok()?)?;
+        let mut settings = Settings {
+            cnc: CncPort::decode(cnc)?,
+            ..decode_v1(v1)?
         };
-        let millis = |i: usize| Duration::from_millis(u64::from(u16_at(i)));
-        let flags = r[21];
-        if flags & !FLAGS_KNOWN != 0 {
-            return None;
-        }
-        let link = LinkConfig {
-            protocol: *PROTOCOLS.get(usize::from(r[0]))?,
-            node_address: r[1],
-            modbus_parity: *PARITIES.get(usize::from(r[2]))?,
-            modbus_stop_bits: match r[3] {
-                1 => StopBits::One,
-                2 => StopBits::Two,
-                _ => return None,
-            },
-            response_timeout: millis(4),
-            retries: r[6],
-            poll_interval: millis(7),
-            slow_data_interval: Duration::from_millis(u64::from(u32::from_le_bytes([
-                r[9], r[10], r[11], r[12],
-            ]))),
-            hpr_id: r[13],
-            failures_before_down: r[14],
-        };
-        let io = IoConfig {
-            start_gap: millis(15).max(MIN_START_GAP),
-            arc_ok_debounce: millis(17),
-            arc_ok_requires_start: flags & FLAG_ARC_OK_REQUIRES_START != 0,
-            transfer_timeout: millis(19),
-            drop_start_on_transfer_timeout: flags & FLAG_DROP_START_ON_TRANSFER_TIMEOUT != 0,
-            refuse_start_on_fault: flags & FLAG_REFUSE_START_ON_FAULT != 0,
-            link_required: flags & FLAG_LINK_REQUIRED != 0,
-            inputs,
-            outputs,
-        };
-        let process = match r[23] {
-            0 if r[24..RECORD_V1_LEN].iter().all(|&b| b == 0) => None,
-            1 => Some(Process {
-                mode: *Mode::ALL.get(usize::from(r[24]))?,
-                amps: Amps::from_raw(u16_at(25)),
-                pressure: Pressure::from_raw(u16_at(27)),
-            }),
-            _ => return None,
-        };
-        let settings = Settings {
-            link,
-            io,
-            events: flags & FLAG_EVENTS != 0,
-            phoenix_format: Format::from_value(r[22]).ok()?,
-            process,
-        };
+        settings.io.inputs = inputs;
+        settings.io.outputs = outputs;
         settings.is_valid().then_some(settings)
     }
 
-    /// Version 1 is version 2 without the wiring: it loads with the reference board's.
+    /// Version 1 had neither the wiring nor the CNC port block: both keep their defaults.
     fn migrate(version: u8, payload: &[u8]) -> Option<Self> {
-        let mut record = [0u8; RECORD_LEN];
-        let (v1, wiring) = record.split_at_mut(RECORD_V1_LEN);
-        (version == 1 && payload.len() == v1.len()).then(|| v1.copy_from_slice(payload))?;
-        wiring.copy_from_slice(&wiring::encode(&IoConfig::default()));
-        Self::decode(&record)
+        match version {
+            1 => decode_v1(payload),
+            _ => None,
+        }
     }
+}
+
+/// The version-1 record (also the first part of version 2), the CNC port at its defaults.
+fn decode_v1(payload: &[u8]) -> Option<Settings> {
+    let r: &[u8; RECORD_V1_LEN] = payload.try_into().ok()?;
+    // Offsets are constants inside the fixed-length record.
+    let u16_at = |i: usize| {
+        r.get(i..i + 2)
+            .and_then(|b| b.try_into().ok())
+            .map_or(0, u16::from_le_bytes)
+    };
+    let millis = |i: usize| Duration::from_millis(u64::from(u16_at(i)));
+    let flags = r[21];
+    if flags & !FLAGS_KNOWN != 0 {
+        return None;
+    }
+    let link = LinkConfig {
+        protocol: *PROTOCOLS.get(usize::from(r[0]))?,
+        node_address: r[1],
+        modbus_parity: *PARITIES.get(usize::from(r[2]))?,
+        modbus_stop_bits: stop_bits_from(r[3])?,
+        response_timeout: millis(4),
+        retries: r[6],
+        poll_interval: millis(7),
+        slow_data_interval: Duration::from_millis(u64::from(u32::from_le_bytes([
+            r[9], r[10], r[11], r[12],
+        ]))),
+        hpr_id: r[13],
+        failures_before_down: r[14],
+    };
+    let io = IoConfig {
+        start_gap: millis(15).max(MIN_START_GAP),
+        arc_ok_debounce: millis(17),
+        arc_ok_requires_start: flags & FLAG_ARC_OK_REQUIRES_START != 0,
+        transfer_timeout: millis(19),
+        drop_start_on_transfer_timeout: flags & FLAG_DROP_START_ON_TRANSFER_TIMEOUT != 0,
+        refuse_start_on_fault: flags & FLAG_REFUSE_START_ON_FAULT != 0,
+        link_required: flags & FLAG_LINK_REQUIRED != 0,
+        // Version 1 has no wiring: the reference board's (version 2 overwrites it).
+        ..IoConfig::default()
+    };
+    let process = match r[23] {
+        0 if r[24..].iter().all(|&b| b == 0) => None,
+        1 => Some(Process {
+            mode: *Mode::ALL.get(usize::from(r[24]))?,
+            amps: Amps::from_raw(u16_at(25)),
+            pressure: Pressure::from_raw(u16_at(27)),
+        }),
+        _ => return None,
+    };
+    let settings = Settings {
+        link,
+        io,
+        events: flags & FLAG_EVENTS != 0,
+        phoenix_format: Format::from_value(r[22]).ok()?,
+        process,
+        cnc: CncPort::DEFAULT,
+    };
+    settings.is_valid().then_some(settings)
 }
 
 #[cfg(test)]
@@ -660,6 +781,10 @@ mod tests {
             (ConfigKey::Events, "on"),
             (ConfigKey::HprId, "3"),
             (ConfigKey::PhoenixFormat, "49"),
+            (ConfigKey::CncAddress, "7"),
+            (ConfigKey::CncBaud, "19200"),
+            (ConfigKey::CncParity, "even"),
+            (ConfigKey::CncStopBits, "2"),
         ] {
             s.set(key, value).unwrap();
         }
@@ -674,6 +799,43 @@ mod tests {
         assert_eq!(back.get(ConfigKey::TimeoutMs), ConfigValue::Number(250));
         assert_eq!(back.link.protocol, ProtocolChoice::Hpr);
         assert!(!back.io.link_required);
+    }
+
+    #[test]
+    fn the_cnc_port_keys_give_the_port_config() {
+        let mut s = Settings::default();
+        assert_eq!(
+            s.cnc_port_config(),
+            crate::settings::CncPort::DEFAULT.framing
+        );
+        s.set(ConfigKey::CncBaud, "19200").unwrap();
+        s.set(ConfigKey::CncParity, "E").unwrap();
+        assert_eq!(s.cnc_port_config(), PortConfig::MODBUS_DEFAULT);
+        let err = s.set(ConfigKey::CncBaud, "14400").unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            "cnc_baud: expected 9600|19200|38400|57600|115200"
+        );
+        let err = s.set(ConfigKey::CncAddress, "0").unwrap_err();
+        assert_eq!(err.to_string(), "cnc_address 0 outside 1..247");
+        assert!(s.set(ConfigKey::CncStopBits, "3").is_err());
+        assert_eq!(s.cnc_port_config(), PortConfig::MODBUS_DEFAULT);
+    }
+
+    #[test]
+    fn a_version_1_record_loads_with_the_default_cnc_port() {
+        let mut s = Settings::default();
+        s.set(ConfigKey::HprId, "2").unwrap();
+        s.set(ConfigKey::CncBaud, "19200").unwrap();
+        let mut out = [0u8; storage::MAX_PAYLOAD];
+        let len = s.encode(&mut out);
+        assert_eq!(len, RECORD_LEN);
+        let v1 = &out[..RECORD_V1_LEN];
+        assert_eq!(Settings::decode(v1), None, "a v1 record is not a v2 one");
+        let migrated = Settings::migrate(1, v1).unwrap();
+        assert_eq!(migrated.link.hpr_id, 2);
+        assert_eq!(migrated.cnc, crate::settings::CncPort::DEFAULT);
+        assert_eq!(Settings::migrate(3, v1), None);
     }
 
     #[test]

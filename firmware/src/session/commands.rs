@@ -39,9 +39,9 @@ impl Session {
         let unit = match command {
             Command::Help => return Some(help(self.sim_enabled)),
             Command::Id => return Some(id(ctx)),
-            Command::Status => return Some(status_line(ctx)),
+            Command::Status => return Some(status_line(ctx, self.powermax.refused())),
             Command::Limits => return Some(limits(status, family)),
-            Command::Fault => return Some(fault(status, family)),
+            Command::Fault => return Some(fault(status, family, self.powermax.refused())),
             Command::Events(on) => return Some(events(ctx, on)),
             Command::Config(config) => return self.config(ctx, config),
             Command::Torch(on) => return Some(self.torch(on)),
@@ -276,6 +276,10 @@ impl Session {
         }
         if before.io != ctx.settings.io {
             self.io_config_changed = true;
+        }
+        // Setting the Phoenix format overrides the one recognised on the port.
+        if key == ConfigKey::PhoenixFormat {
+            self.recognised = None;
         }
         let value = ctx.settings.get(key);
         ok_line(|w| {

@@ -17,6 +17,7 @@ use crate::link::{Family, LinkDownReason, LinkEvent, UnitStatus};
 impl Session {
     /// A link event: the reply of the command in progress, and/or an event line.
     pub fn on_link_event(&mut self, ctx: &mut Context<'_>, event: &LinkEvent) {
+        self.powermax.on_link_event(ctx, event);
         if let LinkEvent::CommandDone { ticket, result } = event {
             if let Some(Pending::Link { ticket: t, op }) = self.pending
                 && t == *ticket
@@ -31,6 +32,22 @@ impl Session {
         }
         let status = ctx.link.status();
         self.event(ctx, |l| write_link_event(l, event, status));
+    }
+
+    /// A settings change made through the Powermax registers was refused before it was
+    /// sent: `!SETTINGS failed reason=refused fault=0-11-X` (the fault 0x2098 reads as).
+    pub(super) fn settings_refused_event(
+        &mut self,
+        ctx: &Context<'_>,
+        fault: plasma_protocol::powermax::FaultCode,
+    ) {
+        self.event(ctx, |l| {
+            let mut w = ReplyWriter::event(l, "SETTINGS")?;
+            w.word("failed")?;
+            w.field("reason", "refused")?;
+            w.field("fault", FaultId(crate::link::ActiveFault::Powermax(fault)))?;
+            w.finish().map(|_| ())
+        });
     }
 
     /// A discrete-I/O event: an event line.

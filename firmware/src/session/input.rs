@@ -1,7 +1,7 @@
 //! From CNC bytes to commands in turn: text lines and Phoenix frames, ACK/NAK, the queue of
 //! lines that wait behind a command in progress.
 
-use plasma_protocol::cnc::phoenix::{self, Deframer};
+use plasma_protocol::cnc::phoenix::{self, Deframer, Format};
 use plasma_protocol::cnc::reply::write_parse_error;
 use plasma_protocol::cnc::{Command, ErrorCode, LineError, MAX_LINE_LEN, ParseError};
 
@@ -38,24 +38,67 @@ impl Session {
         if self.deframer.in_frame() {
             return self.deframe(ctx, byte);
         }
+        // A `:` between lines opens a Modbus ASCII request (no text command starts with one);
+        // inside a line, even one being discarded, it is text.
+        let between_lines = !self.text_partial && !self.text_discarding;
+        if self.powermax.in_frame() || (byte == b':' && between_lines) {
+            return self.powermax_byte(ctx, byte);
+        }
         if phoenix::is_frame_start(byte) {
-            self.start_frame(ctx);
+            self.start_frame(ctx, byte);
             return self.deframe(ctx, byte);
         }
         self.push_text_byte(ctx, byte);
     }
 
-    /// A frame begins: a text line it interrupts is answered with an `ERR`, and the deframer
-    /// takes the Phoenix format configured now.
-    fn start_frame(&mut self, ctx: &mut Context<'_>) {
+    /// A frame begins on `start` (SOH or STX): a text line it interrupts is answered with an
+    /// `ERR`, and the deframer takes the format recognised on the port, else the configured
+    /// one, else the first one that starts with this byte.
+    fn start_frame(&mut self, ctx: &mut Context<'_>, start: u8) {
         if self.text_partial {
             self.admit(ctx, Item::refused(InputError::Interrupted));
         }
         self.lines.reset();
         self.text_partial = false;
         self.text_discarding = false;
-        if self.deframer.format() != ctx.settings.phoenix_format {
-            self.deframer = Deframer::new(ctx.settings.phoenix_format);
+        let configured = ctx.settings.phoenix_format;
+        if configured != self.configured_format {
+            self.configured_format = configured;
+            self.recognised = None;
+        }
+        let starts = |f: &Format| f.start_byte() == Some(start);
+        let format = self
+            .recognised
+            .filter(starts)
+            .or(Some(configured).filter(starts))
+            .or_else(|| candidates(start).next())
+            .unwrap_or(configured);
+        if self.deframer.format() != format {
+            self.deframer = Deframer::new(format);
+        }
+        self.raw_frame.clear();
+        self.deferred = None;
+    }
+
+    /// A byte of a Modbus request: its reply goes out at once, ahead of text replies that
+    /// wait for the link (a Powermax master allows 100 ms).
+    fn powermax_byte(&mut self, ctx: &mut Context<'_>, byte: u8) {
+        use super::powermax_port::Step;
+        match self.powermax.push(ctx, byte) {
+            Step::Pending => {}
+            Step::Reply => {
+                let reply = self.powermax.reply();
+                if !self.out.push(reply) {
+                    self.stats.output_dropped = self.stats.output_dropped.saturating_add(1);
+                }
+            }
+            Step::Refused(fault) => {
+                let reply = self.powermax.reply();
+                if !self.out.push(reply) {
+                    self.stats.output_dropped = self.stats.output_dropped.saturating_add(1);
+                }
+                self.settings_refused_event(ctx, fault);
+            }
         }
     }
 
@@ -94,18 +137,77 @@ impl Session {
     }
 
     fn deframe(&mut self, ctx: &mut Context<'_>, byte: u8) {
-        let item = match self.deframer.push(byte) {
+        if phoenix::is_frame_start(byte) && !self.deframer.in_frame() {
+            self.raw_frame.clear();
+        }
+        // A frame longer than the buffer is refused as overlong by the deframer anyway.
+        let _ = self.raw_frame.push(byte);
+        let outcome = self
+            .deframer
+            .push(byte)
+            .map(|outcome| outcome.map(message_item));
+        let frame_over = !self.deframer.in_frame();
+        let item = match outcome {
+            None if self.deferred.is_some() && frame_over => self.recognise_or_refuse(),
             None => return,
-            Some(outcome) => frame_item(outcome),
+            Some(Ok(item)) => item,
+            // A start byte broke the frame off: it is refused now, and `byte` begins the next.
+            Some(Err(plasma_protocol::Error::Truncated)) => {
+                self.raw_frame.clear();
+                let _ = self.raw_frame.push(byte);
+                self.deferred = None;
+                Item::refused(InputError::Frame(plasma_protocol::Error::Truncated))
+            }
+            Some(Err(error)) => {
+                // The expected format does not fit: decide once the whole frame is in.
+                self.deferred = Some(error);
+                if !frame_over {
+                    return;
+                }
+                self.recognise_or_refuse()
+            }
         };
         self.framed(ctx, item);
     }
 
-    /// A Phoenix frame idle for too long is abandoned (NAK).
+    /// A Phoenix frame idle for too long is abandoned (NAK), unless it is a whole frame of
+    /// another format (one without a check byte, which the deframer was still waiting for).
     pub(super) fn abandon_frame(&mut self, ctx: &mut Context<'_>) {
-        if let Some(outcome) = self.deframer.idle() {
-            let item = frame_item(outcome);
-            self.framed(ctx, item);
+        let item = match self.deframer.idle() {
+            Some(Err(error)) => {
+                self.deferred = Some(error);
+                self.recognise_or_refuse()
+            }
+            Some(Ok(payload)) => message_item(payload),
+            None if self.deferred.is_some() => self.recognise_or_refuse(),
+            None => return,
+        };
+        self.framed(ctx, item);
+    }
+
+    /// The frame failed in the format the deframer expected: the first other format with the
+    /// same start byte that takes the whole frame is recognised (and used from now on);
+    /// otherwise the frame is refused with the first error.
+    fn recognise_or_refuse(&mut self) -> Item {
+        let error = self
+            .deferred
+            .take()
+            .unwrap_or(plasma_protocol::Error::Malformed);
+        let raw = &self.raw_frame;
+        let tried = self.deframer.format();
+        let found = raw.first().and_then(|&start| {
+            candidates(start)
+                .filter(|&f| f != tried)
+                .find_map(|f| whole_frame(f, raw).map(|item| (f, item)))
+        });
+        self.raw_frame.clear();
+        match found {
+            Some((format, item)) => {
+                self.recognised = Some(format);
+                self.deframer = Deframer::new(format);
+                item
+            }
+            None => Item::refused(InputError::Frame(error)),
         }
     }
 
@@ -148,11 +250,27 @@ impl Session {
     }
 }
 
-/// The item for a deframer outcome.
-fn frame_item(outcome: plasma_protocol::Result<&[u8]>) -> Item {
+/// The framed formats that open with `start`, the most complete first (113: SOH, STX, CR LF,
+/// ETX, EOT, check byte).
+fn candidates(start: u8) -> impl Iterator<Item = Format> {
+    Format::ALL
+        .into_iter()
+        .rev()
+        .filter(move |f| f.start_byte() == Some(start))
+}
+
+/// The item for `raw` if it is exactly one whole frame of `format` (idle ends a frame whose
+/// format has no check byte).
+fn whole_frame(format: Format, raw: &[u8]) -> Option<Item> {
+    let mut deframer: Deframer = Deframer::new(format);
+    let (used, outcome) = deframer.feed(raw);
     match outcome {
-        Ok(payload) => message_item(payload),
-        Err(error) => Item::refused(InputError::Frame(error)),
+        Some(Ok(payload)) if used == raw.len() => Some(message_item(payload)),
+        None => match deframer.idle() {
+            Some(Ok(payload)) => Some(message_item(payload)),
+            _ => None,
+        },
+        _ => None,
     }
 }
 

@@ -35,6 +35,7 @@ mod commands;
 mod describe;
 mod events;
 mod input;
+pub mod powermax_port;
 mod replies;
 #[cfg(test)]
 pub(crate) mod tests;
@@ -70,6 +71,9 @@ pub const SIM_QUEUE_CAPACITY: usize = 4;
 /// message in one go, and a stray SOH/STX in line noise must not swallow the text lines that
 /// follow.
 pub const FRAME_IDLE_TIMEOUT: Duration = Duration::from_millis(50);
+
+/// A whole Phoenix frame: the longest message and every framing byte.
+const RAW_FRAME_CAPACITY: usize = plasma_protocol::cnc::phoenix::MAX_MESSAGE_LEN + 8;
 
 /// One reply or event line.
 pub type ReplyLine = String<MAX_REPLY_LEN>;
@@ -206,6 +210,15 @@ pub struct Session {
     /// The assembler drops the rest of a refused line up to its terminator.
     text_discarding: bool,
     deframer: Deframer,
+    /// The Phoenix framing recognised on the port (see `input::recognise`), used instead of
+    /// `phoenix_format` until a frame fails with it or the key changes.
+    recognised: Option<plasma_protocol::cnc::phoenix::Format>,
+    /// `phoenix_format` when the session last looked: a change drops what was recognised.
+    configured_format: plasma_protocol::cnc::phoenix::Format,
+    /// The bytes of the Phoenix frame under way, from its start byte.
+    raw_frame: Vec<u8, RAW_FRAME_CAPACITY>,
+    /// The frame failed in the configured format; its verdict waits for the frame's end.
+    deferred: Option<plasma_protocol::Error>,
     queue: Deque<Item, QUEUE_CAPACITY>,
     pending: Option<Pending>,
     out: Output,
@@ -215,6 +228,8 @@ pub struct Session {
     stats: SessionStats,
     /// When the last CNC byte arrived.
     last_rx: Instant,
+    /// Modbus ASCII requests: the bridge answering as a Powermax.
+    powermax: powermax_port::PowermaxPort,
 }
 
 impl Session {
@@ -225,6 +240,10 @@ impl Session {
             text_partial: false,
             text_discarding: false,
             deframer: Deframer::new(settings.phoenix_format),
+            recognised: None,
+            configured_format: settings.phoenix_format,
+            raw_frame: Vec::new(),
+            deferred: None,
             queue: Deque::new(),
             pending: None,
             out: Output {
@@ -236,6 +255,7 @@ impl Session {
             io_config_changed: false,
             stats: SessionStats::default(),
             last_rx: Instant::ZERO,
+            powermax: powermax_port::PowermaxPort::default(),
         }
     }
 
@@ -298,19 +318,31 @@ impl Session {
         self.pump(ctx);
     }
 
-    /// Let time pass: a Phoenix frame idle for [`FRAME_IDLE_TIMEOUT`] is abandoned.
+    /// Let time pass: a Phoenix or Modbus frame idle for [`FRAME_IDLE_TIMEOUT`] is
+    /// abandoned; a group of Modbus writes with nothing after it completes.
     pub fn poll(&mut self, ctx: &mut Context<'_>) {
-        if !self.deframer.in_frame() || ctx.now < self.last_rx + FRAME_IDLE_TIMEOUT {
+        if let Some(fault) = self.powermax.poll(ctx) {
+            self.settings_refused_event(ctx, fault);
+        }
+        if ctx.now < self.last_rx + FRAME_IDLE_TIMEOUT {
             return;
         }
-        self.abandon_frame(ctx);
+        if self.powermax.in_frame() {
+            self.powermax.abandon_frame();
+        }
+        if self.deframer.in_frame() {
+            self.abandon_frame(ctx);
+        }
     }
 
     /// When [`Session::poll`] has something to do.
     pub fn poll_at(&self) -> Option<Instant> {
-        self.deframer
-            .in_frame()
-            .then(|| self.last_rx + FRAME_IDLE_TIMEOUT)
+        let frame = (self.deframer.in_frame() || self.powermax.in_frame())
+            .then(|| self.last_rx + FRAME_IDLE_TIMEOUT);
+        match (frame, self.powermax.poll_at()) {
+            (Some(a), Some(b)) => Some(a.min(b)),
+            (a, b) => a.or(b),
+        }
     }
 
     /// Answer waiting lines while no command is in progress.

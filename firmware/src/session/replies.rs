@@ -16,8 +16,11 @@ use super::events::Uid;
 use super::texts;
 use super::{Context, List, ReplyLine, err_line, line, no_link, ok_line};
 use crate::io::{Inputs, Outputs};
-use crate::link::{CommandFailure, CommandOutput, Family, Limits, Model, PsLink, UnitStatus};
+use crate::link::{
+    ActiveFault, CommandFailure, CommandOutput, Family, Limits, Model, PsLink, UnitStatus,
+};
 use crate::settings::Process;
+use plasma_protocol::powermax::FaultCode;
 
 pub(super) fn help(sim: bool) -> ReplyLine {
     ok_line(|w| {
@@ -52,8 +55,11 @@ pub(super) fn id(ctx: &Context<'_>) -> ReplyLine {
     })
 }
 
-pub(super) fn status_line(ctx: &Context<'_>) -> ReplyLine {
+/// `STATUS`; `refused`: the 0-11-x fault of a setting the unit refused through the Powermax
+/// registers, shown while the unit itself has no fault (as 0x2098 shows it).
+pub(super) fn status_line(ctx: &Context<'_>, refused: Option<FaultCode>) -> ReplyLine {
     let status = ctx.link.status();
+    let active_fault = status.active_fault.or(refused.map(ActiveFault::Powermax));
     let family = status.family;
     let hpr = matches!(family, Some(Family::Hpr | Family::MaxPro200));
     let (inputs, outputs) = ctx.io.unwrap_or((Inputs::NONE, Outputs::OFF));
@@ -83,7 +89,7 @@ pub(super) fn status_line(ctx: &Context<'_>) -> ReplyLine {
             w.field("out_amps", OrDash(status.actual_current))?;
             w.field("out_psi", OrDash(status.actual_pressure))?;
         }
-        match status.active_fault {
+        match active_fault {
             Some(fault) => w.field("fault", FaultId(fault))?,
             None => w.field("fault", "none")?,
         }
@@ -153,11 +159,15 @@ fn powermax_limits(limits: &Limits, family: Family) -> ReplyLine {
     })
 }
 
-pub(super) fn fault(status: &UnitStatus, family: Option<Family>) -> ReplyLine {
+pub(super) fn fault(
+    status: &UnitStatus,
+    family: Option<Family>,
+    refused: Option<FaultCode>,
+) -> ReplyLine {
     if family.is_none() {
         return no_link();
     }
-    match status.active_fault {
+    match status.active_fault.or(refused.map(ActiveFault::Powermax)) {
         None => ok_line(|w| w.field("fault", "none")),
         // `text=` is the last field and runs to the end of the line: the manual's words.
         Some(fault) => line(|l| {

@@ -880,7 +880,8 @@ fn config_get_set_and_save_round_trip_through_the_settings_record() {
          corner_current_active=LOW corner_current_debounce_ms=5 motion_active=LOW \
          motion_debounce_ms=0 not_ready_active=LOW not_ready_debounce_ms=5 \
          rampdown_error_active=LOW rampdown_error_debounce_ms=5 ps_hold_active=HIGH \
-         fault_active=HIGH"
+         fault_active=HIGH cnc_address=1 cnc_baud=115200 cnc_parity=NONE \
+         cnc_stop_bits=1"
     );
     assert_eq!(rig.cmd("CONFIG timeout_ms"), "OK timeout_ms=100");
     assert_err(&rig.cmd("CONFIG timeout_ms 30"), "ERR RANGE *30*60..1000*");
@@ -1148,4 +1149,39 @@ fn assert_err(reply: &str, pattern: &str) {
             .unwrap_or_else(|| panic!("{reply:?} does not match {pattern:?}"));
         rest = &rest[at + part.len()..];
     }
+}
+
+#[test]
+fn phoenix_framing_is_recognised_without_setting_phoenix_format() {
+    let mut rig = Rig::sync65(Settings::default());
+    // Default 113; the CNC sends 112 (no CR LF), 97 (no check byte), then 33 (STX only).
+    for format in [112, 97, 97, 33, 33, 113] {
+        let tokens = rig.send_bytes(&framed(format, b"FAULT"), 1);
+        assert_eq!(tokens, [ACK_TOKEN, "OK fault=none"], "format {format}");
+    }
+    // A frame no format takes is still refused.
+    let mut bad = framed(113, b"FAULT");
+    *bad.last_mut().unwrap() ^= 0x01;
+    let tokens = rig.send_bytes(&bad, 1);
+    assert_eq!(tokens[0], NAK_TOKEN, "{tokens:?}");
+    // Once recognised, a format is used at once: no wait for a check byte that never comes.
+    rig.send_bytes(&framed(97, b"FAULT"), 1);
+    let start = rig.now;
+    let tokens = rig.send_bytes(&framed(97, b"FAULT"), 1);
+    assert_eq!(tokens, [ACK_TOKEN, "OK fault=none"]);
+    assert_eq!(rig.now, start, "answered without waiting");
+    // The key stays an override: set, it is the format expected first again.
+    assert_eq!(
+        rig.cmd("CONFIG phoenix_format 113"),
+        "OK phoenix_format=113"
+    );
+    let tokens = rig.send_bytes(&framed(113, b"FAULT"), 1);
+    assert_eq!(tokens, [ACK_TOKEN, "OK fault=none"]);
+    let after = rig.received.len();
+    rig.run(200);
+    assert_eq!(
+        rig.received[after..],
+        [] as [String; 0],
+        "nothing left over"
+    );
 }

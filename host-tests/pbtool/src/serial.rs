@@ -18,12 +18,9 @@ use std::time::Duration;
 
 use plasma_protocol::serial::{Parity, PortConfig, StopBits};
 
-/// The bridge's CNC port: 115200 8N1, as the board's (its ST-LINK virtual COM port).
-pub const CNC_PORT: PortConfig = PortConfig {
-    baud: 115_200,
-    parity: Parity::None,
-    stop_bits: StopBits::One,
-};
+/// The bridge's CNC port until `CONFIG cnc_baud/cnc_parity/cnc_stop_bits` change it: the
+/// settings' default (115200 8N1, as the board's ST-LINK virtual COM port).
+pub const CNC_PORT: PortConfig = plasma_firmware::settings::CncPort::DEFAULT.framing;
 
 /// How long one write may block (a port that takes no characters at all is gone).
 const WRITE_TIMEOUT: Duration = Duration::from_secs(2);

@@ -22,6 +22,7 @@ use plasma_firmware::bridge::Bridge;
 use plasma_firmware::settings::Settings;
 use plasma_protocol::cnc::phoenix::{EOT, ETX, SOH, STX};
 use plasma_protocol::powermax::FaultCode;
+use plasma_protocol::serial::PortConfig;
 use plasma_protocol::time::{Duration, Instant};
 
 use host_tests::harness::{BridgeEndpoint, CncItem, World, WorldOptions};
@@ -54,6 +55,9 @@ pub struct ConsoleOptions {
     pub seed: u64,
     /// Log the discrete outputs' transitions on stderr.
     pub verbose: bool,
+    /// The CNC port's framing the bridge starts with (`cnc_baud`, `cnc_parity`,
+    /// `cnc_stop_bits`; `CONFIG` may change it while it runs).
+    pub cnc_framing: PortConfig,
 }
 
 /// A `--fault` argument for `model`: Powermax `X-YY-Z` (`0-50-0`) or decimal (`500`); HPR
@@ -99,10 +103,11 @@ impl Console {
             },
             ..WorldOptions::default()
         };
-        let settings = Settings {
+        let mut settings = Settings {
             events: options.events,
             ..Settings::default()
         };
+        settings.cnc.framing = options.cnc_framing;
         let mut world = World::with_bridge(options.model, world_options, settings);
         if let Some(code) = options.fault {
             world.inject_fault(code);
@@ -234,6 +239,11 @@ impl Console {
         }
     }
 
+    /// The framing the bridge wants on its CNC port.
+    pub fn cnc_port_config(&self) -> PortConfig {
+        self.world.bridge().cnc_port_config()
+    }
+
     /// Real time, the CNC on a serial port: `inbox` brings the port's characters (from its
     /// reader thread), `cnc` is its writing handle; the bytes pass as they are. Runs until the
     /// port fails.
@@ -266,6 +276,10 @@ impl Console {
                 if let Err(e) = cnc.write_all(&fresh) {
                     return e;
                 }
+            }
+            // After `CONFIG cnc_baud ...` (its reply already written at the old framing).
+            if let Err(e) = cnc.set_config(self.cnc_port_config()) {
+                return e;
             }
         }
     }

@@ -4,36 +4,44 @@
 //! the fault and the arc time; it reports `status` TRUE only when every reply was exact and
 //! in time. The script (../shared/peers/pmx485-vs.sh, beside the checkout) needs LinuxCNC's
 //! uspace build: ../shared/peers/install.sh installs it (CI runs it).
+//!
+//! Then pmx485 drives the BRIDGE: its CNC port answers as a Powermax (`pbtool sim
+//! --cnc-port` and `pbtool run --ps-port --cnc-port`) for a SYNC, a legacy and an HPR unit
+//! behind it, a fault on the unit reaching pmx485's fault pin, the unit's link lost and seen
+//! as pmx485's `status` FALSE, and the text protocol answering on the same port afterwards.
+//!
+//! One realtime session per machine: every pmx485 run takes [`PMX485`] first.
 
 mod common;
 
 use std::path::PathBuf;
-use std::process::Command;
+use std::process::{Command, Output};
+use std::sync::Mutex;
+use std::time::{Duration, Instant};
 
-use common::{Cable, Pbtool};
+use common::{Cable, CncEnd, Pbtool};
+
+/// pmx485 runs one at a time (LinuxCNC's realtime session is one per machine).
+static PMX485: Mutex<()> = Mutex::new(());
 
 fn peers() -> PathBuf {
     // host-tests/pbtool -> the checkout -> the shared directory beside it.
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/peers")
 }
 
-/// pmx485 against `pbtool unit UNIT_ARGS`; its output, having checked it passed.
-fn pmx485_drives(unit_args: &[&str], expect: &[&str]) -> String {
+/// The script run on `port` with `args`: its status and its output.
+fn pmx485_on(port: &str, args: &[&str]) -> (Output, String) {
     let script = peers().join("pmx485-vs.sh");
     assert!(
         script.exists(),
         "{} is missing: the shared directory must sit beside the checkout",
         script.display()
     );
-    let cable = Cable::new();
-    let mut args = vec!["unit", "--port", &cable.b, "--log"];
-    args.extend_from_slice(unit_args);
-    let unit = Pbtool::spawn(&args);
+    let _one_at_a_time = PMX485.lock().unwrap_or_else(|e| e.into_inner());
     let output = Command::new("bash")
         .arg(&script)
-        .arg(&cable.a)
-        .args(["--mode", "1", "--amps", "45", "--psi", "0", "--wait", "4"])
-        .args(expect)
+        .arg(port)
+        .args(args)
         .output()
         .expect("bash runs the script");
     let text = format!(
@@ -46,12 +54,64 @@ fn pmx485_drives(unit_args: &[&str], expect: &[&str]) -> String {
         Some(2),
         "pmx485 could not be set up (run ../shared/peers/install.sh once):\n{text}"
     );
+    (output, text)
+}
+
+const AS_QTPLASMAC: [&str; 8] = ["--mode", "1", "--amps", "45", "--psi", "0", "--wait", "4"];
+
+/// pmx485 against `pbtool unit UNIT_ARGS`; its output, having checked it passed.
+fn pmx485_drives(unit_args: &[&str], expect: &[&str]) -> String {
+    let cable = Cable::new();
+    let mut args = vec!["unit", "--port", &cable.b, "--log"];
+    args.extend_from_slice(unit_args);
+    let unit = Pbtool::spawn(&args);
+    let mut script_args = AS_QTPLASMAC.to_vec();
+    script_args.extend_from_slice(expect);
+    let (output, text) = pmx485_on(&cable.a, &script_args);
     assert!(
         output.status.success(),
         "pmx485 against pbtool {}:\n{text}\n{}",
         args.join(" "),
         unit.transcript()
     );
+    text
+}
+
+/// Ask `ID` on the bridge's CNC port until its reply satisfies `wanted` (the link comes up
+/// or goes down in real time); the last reply.
+fn wait_for_id(cnc_port: &str, wanted: impl Fn(&str) -> bool) -> String {
+    let mut cnc = CncEnd::open(cnc_port);
+    let deadline = Instant::now() + Duration::from_secs(20);
+    loop {
+        let id = cnc.command("ID").unwrap_or_default();
+        if wanted(&id) || Instant::now() > deadline {
+            return id;
+        }
+        std::thread::sleep(Duration::from_millis(200));
+    }
+}
+
+/// pmx485 against the bridge of `pbtool sim --ps MODEL` on its CNC port at pmx485's 19200
+/// 8E1; the script's output, having checked it passed.
+fn pmx485_drives_the_bridge(sim_args: &[&str], expect: &[&str]) -> String {
+    let cable = Cable::new();
+    let mut args = vec!["sim", "--cnc-port", &cable.b, "--cnc-framing", "19200:8E1"];
+    args.extend_from_slice(sim_args);
+    let sim = Pbtool::spawn(&args);
+    let id = wait_for_id(&cable.a, |id| id.contains(" link=UP "));
+    assert!(id.contains(" link=UP "), "{id}\n{}", sim.transcript());
+    let mut script_args = AS_QTPLASMAC.to_vec();
+    script_args.extend_from_slice(expect);
+    let (output, text) = pmx485_on(&cable.a, &script_args);
+    assert!(
+        output.status.success(),
+        "pmx485 against pbtool {}:\n{text}\n{}",
+        args.join(" "),
+        sim.transcript()
+    );
+    // The text protocol still answers on the same port after the Modbus traffic.
+    let id = wait_for_id(&cable.a, |id| id.starts_with("OK bridge="));
+    assert!(id.contains(" link=UP "), "{id}");
     text
 }
 
@@ -75,4 +135,67 @@ fn linuxcnc_pmx485_drives_a_legacy_and_a_sync_unit() {
         &["--expect-limits", "20:65:58:78", "--expect-arctime", "0"],
     );
     assert!(sync.contains("current       45"), "{sync}");
+}
+
+#[test]
+fn linuxcnc_pmx485_drives_the_bridge_with_a_sync_unit_behind_it() {
+    let text = pmx485_drives_the_bridge(
+        &["--ps", "sync65"],
+        &["--expect-limits", "20:65:58:78", "--expect-arctime", "-"],
+    );
+    assert!(text.contains("status        TRUE"), "{text}");
+}
+
+#[test]
+fn linuxcnc_pmx485_sees_a_legacy_units_fault_through_the_bridge() {
+    let text = pmx485_drives_the_bridge(
+        &["--ps", "pm65", "--fault", "0-50-0"],
+        &[
+            "--expect-limits",
+            "20:65:63:78",
+            "--expect-fault",
+            "500",
+            "--expect-arctime",
+            "-",
+        ],
+    );
+    assert!(text.contains("fault         500"), "{text}");
+}
+
+#[test]
+fn linuxcnc_pmx485_drives_an_hpr_through_the_bridge() {
+    // An HPR260: 5-260 A from its rating, pressure automatic (limits 0), mode normal.
+    pmx485_drives_the_bridge(
+        &["--ps", "hpr260"],
+        &["--expect-limits", "5:260:0:0", "--expect-arctime", "-"],
+    );
+}
+
+#[test]
+fn linuxcnc_pmx485_sees_the_units_link_lost_as_a_communication_error() {
+    let ps = Cable::new();
+    let cnc = Cable::new();
+    let mut unit = Pbtool::spawn(&["unit", "--ps", "pm65", "--port", &ps.b]);
+    let run = Pbtool::spawn(&[
+        "run",
+        "--ps-port",
+        &ps.a,
+        "--cnc-port",
+        &cnc.b,
+        "--cnc-framing",
+        "19200:8E1",
+    ]);
+    let id = wait_for_id(&cnc.a, |id| id.contains(" link=UP "));
+    assert!(id.contains(" link=UP "), "{id}\n{}", run.transcript());
+    unit.send("SILENT");
+    let id = wait_for_id(&cnc.a, |id| id.contains(" link=DOWN "));
+    assert!(id.contains(" link=DOWN "), "{id}\n{}", run.transcript());
+    let mut args = AS_QTPLASMAC.to_vec();
+    args.extend_from_slice(&["--expect-limits", "-", "--expect-arctime", "-"]);
+    let (output, text) = pmx485_on(&cnc.a, &args);
+    assert!(!output.status.success(), "{text}");
+    assert!(text.contains("status        FALSE"), "{text}");
+    // The text protocol still answers, and says why.
+    let id = wait_for_id(&cnc.a, |id| id.starts_with("OK bridge="));
+    assert!(id.contains(" link=DOWN "), "{id}");
 }

@@ -177,11 +177,16 @@ pub enum ConfigKey {
     RampdownErrorDebounceMs,
     PsHoldActive,
     FaultActive,
+    // The CNC port: node address and framing (as a Powermax, and for the text protocol).
+    CncAddress,
+    CncBaud,
+    CncParity,
+    CncStopBits,
 }
 
 impl ConfigKey {
     /// Every key, in the order `CONFIG` lists them.
-    pub const ALL: [ConfigKey; 31] = [
+    pub const ALL: [ConfigKey; 35] = [
         ConfigKey::Protocol,
         ConfigKey::Address,
         ConfigKey::Parity,
@@ -213,6 +218,10 @@ impl ConfigKey {
         ConfigKey::RampdownErrorDebounceMs,
         ConfigKey::PsHoldActive,
         ConfigKey::FaultActive,
+        ConfigKey::CncAddress,
+        ConfigKey::CncBaud,
+        ConfigKey::CncParity,
+        ConfigKey::CncStopBits,
     ];
 
     /// The key as written in commands and replies (lower case, `snake_case`).
@@ -249,6 +258,10 @@ impl ConfigKey {
             ConfigKey::RampdownErrorDebounceMs => "rampdown_error_debounce_ms",
             ConfigKey::PsHoldActive => "ps_hold_active",
             ConfigKey::FaultActive => "fault_active",
+            ConfigKey::CncAddress => "cnc_address",
+            ConfigKey::CncBaud => "cnc_baud",
+            ConfigKey::CncParity => "cnc_parity",
+            ConfigKey::CncStopBits => "cnc_stop_bits",
         }
     }
 

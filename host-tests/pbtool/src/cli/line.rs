@@ -5,18 +5,24 @@ use std::process::ExitCode;
 
 use pbtool::realtime::{Clock, spawn_reader, spawn_stdin};
 use pbtool::run::{LineBridge, Stop, run_cnc_port, run_console};
-use pbtool::serial::{CNC_PORT, Port, SerialError, describe};
+use pbtool::serial::{Port, SerialError, describe};
 use plasma_firmware::settings::Settings;
 use plasma_protocol::serial::PortConfig;
 
 use super::serial_failure;
 
 /// The bridge on `ps_port`; the CNC protocol on `cnc_port` or on stdin/stdout.
-pub fn run_on_ports(ps_port: &str, cnc_port: Option<&str>, events: bool) -> ExitCode {
-    let settings = Settings {
+pub fn run_on_ports(
+    ps_port: &str,
+    cnc_port: Option<&str>,
+    cnc_framing: PortConfig,
+    events: bool,
+) -> ExitCode {
+    let mut settings = Settings {
         events,
         ..Settings::default()
     };
+    settings.cnc.framing = cnc_framing;
     let clock = Clock::start();
     let opened = open(ps_port, cnc_port, settings, clock);
     let (mut bridge, ps_reader, mut cnc) = match opened {
@@ -36,7 +42,7 @@ pub fn run_on_ports(ps_port: &str, cnc_port: Option<&str>, events: bool) -> Exit
                 "pbtool run: the bridge on {ps_port} (from {framing}, following the unit), the \
                  CNC protocol on {} at {}",
                 cnc.name(),
-                describe(CNC_PORT)
+                describe(cnc.config())
             );
             run_cnc_port(&mut bridge, &arrivals, cnc)
         }
@@ -75,7 +81,7 @@ fn open(
     let ps = Port::open(ps_port, PortConfig::MODBUS_DEFAULT)?;
     let ps_reader = ps.try_clone()?;
     let cnc = cnc_port
-        .map(|name| Port::open(name, CNC_PORT))
+        .map(|name| Port::open(name, settings.cnc_port_config()))
         .transpose()?;
     Ok((LineBridge::new(settings, ps, clock)?, ps_reader, cnc))
 }

@@ -30,6 +30,7 @@ pub fn run(args: &RunArgs) -> ExitCode {
         return super::line::run_on_ports(
             ps_port,
             args.sim_args.cnc_port.as_deref(),
+            args.sim_args.cnc_framing,
             args.sim_args.unit.events,
         );
     }

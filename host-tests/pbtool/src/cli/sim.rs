@@ -7,7 +7,9 @@ use clap::Args;
 use pbtool::sim::{Console, ConsoleOptions};
 
 use pbtool::realtime::spawn_reader;
-use pbtool::serial::{CNC_PORT, Port, describe};
+use pbtool::serial::{Port, describe};
+use plasma_firmware::settings::CNC_BAUDS;
+use plasma_protocol::serial::PortConfig;
 
 use super::{UnitArgs, serial_failure, simulated_unit, stdin_lines};
 
@@ -18,10 +20,14 @@ pub struct SimArgs {
     /// Virtual time: no waiting, the same output on every run (scripts and tests).
     #[arg(long, alias = "virtual")]
     pub fast: bool,
-    /// The CNC side on this serial port (115200 8N1) instead of stdin/stdout, in real time:
-    /// CNC software talks to the simulated bridge and unit.
+    /// The CNC side on this serial port instead of stdin/stdout, in real time: CNC software
+    /// talks to the simulated bridge and unit.
     #[arg(long, value_name = "DEV", conflicts_with = "fast")]
     pub cnc_port: Option<String>,
+    /// The CNC port's framing, BAUD:8XY (the bridge's `cnc_baud`, `cnc_parity`,
+    /// `cnc_stop_bits`): 115200:8N1 by default, 19200:8E1 for LinuxCNC's pmx485.
+    #[arg(long, value_name = "FRAMING", default_value = "115200:8N1", value_parser = cnc_framing)]
+    pub cnc_framing: PortConfig,
     /// Log every change of the discrete outputs (START, ARC_OK, READY, FAULT) with its
     /// reason on stderr.
     #[arg(short, long)]
@@ -39,6 +45,7 @@ pub fn sim(args: &SimArgs) -> ExitCode {
         events: args.unit.events,
         seed: args.unit.seed,
         verbose: args.verbose,
+        cnc_framing: args.cnc_framing,
     });
     if let Some(name) = &args.cnc_port {
         return on_cnc_port(&mut console, name, model);
@@ -73,7 +80,8 @@ pub fn sim(args: &SimArgs) -> ExitCode {
 
 /// The simulator with its CNC side on the serial port `name`, until the port fails.
 fn on_cnc_port(console: &mut Console, name: &str, model: plasma_sim::Model) -> ExitCode {
-    let opened = Port::open(name, CNC_PORT).and_then(|port| Ok((port.try_clone()?, port)));
+    let framing = console.cnc_port_config();
+    let opened = Port::open(name, framing).and_then(|port| Ok((port.try_clone()?, port)));
     let (reader, mut port) = match opened {
         Ok(ports) => ports,
         Err(e) => return serial_failure("sim", &e),
@@ -83,8 +91,19 @@ fn on_cnc_port(console: &mut Console, name: &str, model: plasma_sim::Model) -> E
     eprintln!(
         "pbtool sim: the bridge against a simulated {model}; CNC protocol on {name} at {}. \
          Ctrl-C quits.",
-        describe(CNC_PORT)
+        describe(framing)
     );
     let e = console.run_cnc_port(&arrivals, &mut port);
     serial_failure("sim", &e)
+}
+
+/// `--cnc-framing`: `BAUD:8XY` with a baud `cnc_baud` accepts.
+fn cnc_framing(text: &str) -> Result<PortConfig, String> {
+    let bad = || format!("{text}: expected BAUD:8XY, e.g. 19200:8E1 (baud one of {CNC_BAUDS:?})");
+    let (baud, framing) = text.split_once(':').ok_or_else(bad)?;
+    let baud: u32 = baud.parse().map_err(|_| bad())?;
+    if !CNC_BAUDS.contains(&baud) {
+        return Err(bad());
+    }
+    super::sniff::framing(framing, baud).ok_or_else(bad)
 }

@@ -28,7 +28,7 @@ pub struct SniffArgs {
 }
 
 /// Parses `8E1` and the like.
-fn framing(text: &str, baud: u32) -> Option<PortConfig> {
+pub(super) fn framing(text: &str, baud: u32) -> Option<PortConfig> {
     let bytes = text.to_ascii_uppercase().into_bytes();
     let [b'8', parity, stop] = bytes.as_slice() else {
         return None;

@@ -189,5 +189,7 @@ pub fn run_cnc_port(
             sent = raw.len();
             cnc.write_all(&fresh)?;
         }
+        // After `CONFIG cnc_baud ...` (its reply already written at the old framing).
+        cnc.set_config(bridge.bridge().cnc_port_config())?;
     }
 }

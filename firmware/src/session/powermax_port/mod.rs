@@ -1,0 +1,521 @@
+//! The CNC port answering as a Powermax: Modbus ASCII requests (`:` ... CR LF) on the same
+//! port as the text protocol, answered at once from what the bridge holds. Sans-IO.
+//!
+//! - Node: `cnc_address` (CONFIG, default 1). Requests for another node are ignored; a
+//!   broadcast (node 0) is carried out and never answered.
+//! - Functions 03 and 04 read the [register map](map); 06 and 0x10 write the force registers
+//!   (0x2093/0x2094/0x2096, and 0x3080-0x3082 behind a SYNC unit); 0x2B/0x0E identifies the
+//!   unit as the SYNC model behind the bridge, and is exception 01 otherwise (as a legacy
+//!   Powermax answers it), which is how a SYNC-aware CNC picks its register set. Exceptions:
+//!   01 for another function, 02 for an address outside the map (coils included), 03 for a
+//!   quantity or value no setting can have.
+//! - Writes are echoed at once and gathered by the [combiner](group): a complete group
+//!   becomes one link command (SYNC one 0x10 write, legacy the force registers, HPR/MaxPro200
+//!   the current), never a partial one. A value the unit refuses reads as its 0-11-x fault in
+//!   0x2098 / 0x301A until a later change is accepted; zeros in all three return the unit to
+//!   local control.
+//! - The unit's link lost (or not up yet): no reply at all, as a Powermax with its cable cut,
+//!   so a Powermax CNC reports a communication error instead of stale values.
+
+mod group;
+mod map;
+#[cfg(test)]
+mod tests;
+
+#[cfg(test)]
+use group::SETTLE;
+pub use group::{Combiner, Forced};
+
+use plasma_protocol::Error as WireError;
+use plasma_protocol::modbus_ascii::pdu::{DeviceIdentification, MAX_READ_REGISTERS};
+use plasma_protocol::modbus_ascii::{
+    DeviceIdCode, ExceptionCode, FunctionCode, MAX_FRAME_CHARS, Registers, Request, Response,
+    encode_response,
+};
+use plasma_protocol::powermax::device_id::PRODUCT_CODE_OBJECT;
+use plasma_protocol::powermax::{FaultCode, OperatingMode, legacy, sync};
+use plasma_protocol::time::Instant;
+
+use super::Context;
+use super::describe::cnc_mode;
+use crate::link::{
+    CommandOutput, Family, LinkCommand, LinkEvent, Model, Refusal, SettingsFailure, Ticket,
+};
+use crate::settings::Process;
+use group::is_force_register;
+use map::{View, served};
+
+/// 0-11-0, 0-11-1, 0-11-2: the mode, current or pressure the unit does not permit.
+const MODE_REFUSED: FaultCode = FaultCode(110);
+const CURRENT_REFUSED: FaultCode = FaultCode(111);
+const PRESSURE_REFUSED: FaultCode = FaultCode(112);
+
+/// The Powermax side of the CNC port. See the module docs.
+#[derive(Debug)]
+pub struct PowermaxPort {
+    decoder: plasma_protocol::modbus_ascii::Decoder,
+    combiner: Combiner,
+    refused: Option<FaultCode>,
+    /// The settings change in progress on the link, and what the settings keep once it is done.
+    applying: Option<(Ticket, Keep)>,
+    reply: [u8; MAX_FRAME_CHARS],
+    reply_len: usize,
+}
+
+impl Default for PowermaxPort {
+    fn default() -> Self {
+        PowermaxPort {
+            decoder: plasma_protocol::modbus_ascii::Decoder::new(),
+            combiner: Combiner::default(),
+            refused: None,
+            applying: None,
+            reply: [0; MAX_FRAME_CHARS],
+            reply_len: 0,
+        }
+    }
+}
+
+/// What a settings change done through the registers leaves in [`Settings::process`]
+/// (`CONFIG SAVE` stores it), as a `SET` or `REMOTE OFF` command would.
+///
+/// [`Settings::process`]: crate::settings::Settings::process
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Keep {
+    Process(Process),
+    Forget,
+    Unchanged,
+}
+
+/// What a byte did.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Step {
+    /// Nothing to send yet.
+    Pending,
+    /// A reply frame is ready ([`PowermaxPort::reply`]).
+    Reply,
+    /// A settings change was refused before it was sent: the fault it reads as.
+    Refused(FaultCode),
+}
+
+impl PowermaxPort {
+    /// True between a `:` and the end of its frame.
+    pub fn in_frame(&self) -> bool {
+        self.decoder.in_frame()
+    }
+
+    /// Forget a frame that stopped arriving.
+    pub fn abandon_frame(&mut self) {
+        self.decoder.reset();
+    }
+
+    /// The last reply frame.
+    pub fn reply(&self) -> &[u8] {
+        self.reply.get(..self.reply_len).unwrap_or_default()
+    }
+
+    /// The fault a refused setting reads as, until a change is accepted.
+    pub fn refused(&self) -> Option<FaultCode> {
+        self.refused
+    }
+
+    /// One byte from the CNC (the first of a frame is `:`).
+    pub fn push(&mut self, ctx: &mut Context<'_>, byte: u8) -> Step {
+        // The request is copied out of the decoder, which `request` cannot borrow with `self`.
+        let mut pdu = [0u8; plasma_protocol::modbus_ascii::MAX_PDU_LEN];
+        let (address, len) = match self.decoder.push(byte) {
+            Some(Ok(frame)) => {
+                for (slot, &b) in pdu.iter_mut().zip(frame.pdu) {
+                    *slot = b;
+                }
+                (frame.address, frame.pdu.len())
+            }
+            // A broken frame (bad LRC, not hex): a Powermax does not answer it.
+            _ => return Step::Pending,
+        };
+        self.request(ctx, address, pdu.get(..len).unwrap_or_default())
+    }
+
+    /// When [`PowermaxPort::poll`] has a group to complete.
+    pub fn poll_at(&self) -> Option<Instant> {
+        self.combiner.due_at()
+    }
+
+    /// Let time pass: a group of writes with nothing after it completes after [`SETTLE`](group::SETTLE).
+    pub fn poll(&mut self, ctx: &mut Context<'_>) -> Option<FaultCode> {
+        if self.combiner.due_at().is_some_and(|at| ctx.now >= at) {
+            return self.complete_group(ctx);
+        }
+        None
+    }
+
+    /// A link event: the outcome of the change it applies, the link lost.
+    pub fn on_link_event(&mut self, ctx: &mut Context<'_>, event: &LinkEvent) {
+        match event {
+            LinkEvent::CommandDone { ticket, result } => {
+                let Some((mine, process)) = self.applying else {
+                    return;
+                };
+                if mine != *ticket {
+                    return;
+                }
+                self.applying = None;
+                match (result, process) {
+                    (Ok(CommandOutput::Settings(_)), Keep::Process(p)) => {
+                        ctx.settings.process = Some(p);
+                    }
+                    (Ok(_), Keep::Forget) => ctx.settings.process = None,
+                    (Ok(_), _) => {}
+                    (
+                        Err(crate::link::CommandFailure::Settings(
+                            SettingsFailure::RejectedByUnit { fault },
+                        )),
+                        _,
+                    ) => self.refused = Some(*fault),
+                    (Err(crate::link::CommandFailure::NotAccepted), _) => {
+                        self.refused = Some(CURRENT_REFUSED);
+                    }
+                    (Err(_), _) => {}
+                }
+            }
+            LinkEvent::LinkDown { .. } => {
+                self.combiner.abandon();
+                self.applying = None;
+            }
+            // Settings applied by a text command (or re-applied): the force registers read
+            // them from now on, not what the Modbus master wrote before.
+            LinkEvent::SettingsApplied { .. } if self.applying.is_none() => {
+                self.combiner.forget_written();
+            }
+            _ => {}
+        }
+    }
+
+    // --- requests -----------------------------------------------------------------------
+
+    fn request(&mut self, ctx: &mut Context<'_>, address: u8, pdu: &[u8]) -> Step {
+        let broadcast = address == 0;
+        if !broadcast && address != ctx.settings.cnc.address {
+            return Step::Pending;
+        }
+        let status = ctx.link.status();
+        // Link lost or not up yet: silence, as a unit with its cable cut.
+        let Some(family) = status.family.filter(|_| status.link_up) else {
+            return Step::Pending;
+        };
+        let request = match Request::parse(pdu) {
+            Ok(request) => request,
+            Err(error) => {
+                let function = pdu.first().copied().unwrap_or(0);
+                let code = match error {
+                    WireError::Unsupported => ExceptionCode::IllegalFunction,
+                    _ => ExceptionCode::IllegalDataValue,
+                };
+                return self.answer(broadcast, address, &exception(function, code));
+            }
+        };
+        let mut refused = None;
+        let function = request.function() as u8;
+        let mut words = [0u16; MAX_READ_REGISTERS as usize];
+        let mut ident = [0u8; 64];
+        let response = match request {
+            Request::ReadHoldingRegisters { start, quantity }
+            | Request::ReadInputRegisters { start, quantity } => {
+                // A read ends a group of writes: pmx485 reads right after its last write.
+                refused = self.complete_group(ctx);
+                match self.read(ctx, family, start, quantity, &mut words) {
+                    Err(code) => exception(function, code),
+                    Ok(values) if function == FunctionCode::ReadHoldingRegisters as u8 => {
+                        Response::ReadHoldingRegisters { values }
+                    }
+                    Ok(values) => Response::ReadInputRegisters { values },
+                }
+            }
+            Request::WriteSingleRegister {
+                address: reg,
+                value,
+            } => match self.write(ctx, family, reg, &[value]) {
+                Err(code) => exception(function, code),
+                Ok(()) => Response::WriteSingleRegister {
+                    address: reg,
+                    value,
+                },
+            },
+            Request::WriteMultipleRegisters { start, values } => {
+                let mut buf = [0u16; 3];
+                let n = values.len();
+                for (slot, v) in buf.iter_mut().zip(values.iter()) {
+                    *slot = v;
+                }
+                // More than the three force registers: an address outside the map.
+                match buf.get(..n).map(|v| self.write(ctx, family, start, v)) {
+                    None => exception(function, ExceptionCode::IllegalDataAddress),
+                    Some(Err(code)) => exception(function, code),
+                    Some(Ok(())) => {
+                        // One 0x10 request is a whole group.
+                        refused = self.complete_group(ctx);
+                        Response::WriteMultipleRegisters {
+                            start,
+                            quantity: n as u16,
+                        }
+                    }
+                }
+            }
+            Request::ReadDeviceIdentification { code, .. } => {
+                match identification(ctx, code, &mut ident) {
+                    Some(len) => {
+                        let pdu = ident.get(..len).unwrap_or_default();
+                        return self.answer_pdu(broadcast, address, pdu, refused);
+                    }
+                    None => exception(function, ExceptionCode::IllegalFunction),
+                }
+            }
+            Request::ReadCoils { .. } | Request::WriteSingleCoil { .. } => {
+                exception(function, ExceptionCode::IllegalDataAddress)
+            }
+        };
+        let step = self.answer(broadcast, address, &response);
+        match refused {
+            Some(fault) => Step::Refused(fault),
+            None => step,
+        }
+    }
+
+    fn read<'w>(
+        &self,
+        ctx: &Context<'_>,
+        family: Family,
+        start: u16,
+        quantity: u16,
+        words: &'w mut [u16; MAX_READ_REGISTERS as usize],
+    ) -> Result<Registers<'w>, ExceptionCode> {
+        let n = usize::from(quantity);
+        if n == 0 || n > words.len() {
+            return Err(ExceptionCode::IllegalDataValue);
+        }
+        let view = View {
+            status: ctx.link.status(),
+            forced: self.forced(ctx),
+            refused: self.refused,
+        };
+        for (i, slot) in words.iter_mut().take(n).enumerate() {
+            let address = start
+                .checked_add(i as u16)
+                .filter(|&a| served(a, family))
+                .ok_or(ExceptionCode::IllegalDataAddress)?;
+            *slot = view.read(address);
+        }
+        Ok(Registers::Words(words.get(..n).unwrap_or_default()))
+    }
+
+    /// Writes to force registers: checked, then added to the open group.
+    fn write(
+        &mut self,
+        ctx: &Context<'_>,
+        family: Family,
+        start: u16,
+        values: &[u16],
+    ) -> Result<(), ExceptionCode> {
+        for (i, &value) in values.iter().enumerate() {
+            let address = start.wrapping_add(i as u16);
+            if !is_force_register(address) || !served(address, family) {
+                return Err(ExceptionCode::IllegalDataAddress);
+            }
+            // No mode has another number: a value no setting can have.
+            if matches!(address, legacy::MODE_FORCE | sync::REMOTE_MODE) && value > 3 {
+                return Err(ExceptionCode::IllegalDataValue);
+            }
+        }
+        let base = self.forced(ctx);
+        for (i, &value) in values.iter().enumerate() {
+            self.combiner
+                .write(ctx.now, base, start.wrapping_add(i as u16), value);
+        }
+        Ok(())
+    }
+
+    /// The force registers: as written, else the process the link keeps or the unit's.
+    fn forced(&self, ctx: &Context<'_>) -> Forced {
+        self.combiner.forced().unwrap_or_else(|| {
+            let kept = ctx.link.kept().powermax();
+            kept.or(ctx.link.status().settings)
+                .map(|s| Forced {
+                    mode: s.mode.map_or(0, OperatingMode::to_legacy),
+                    current: s.current.raw(),
+                    pressure: s.pressure.raw(),
+                })
+                .unwrap_or_default()
+        })
+    }
+
+    /// The group of writes is complete: one settings change (or none), never a partial one.
+    fn complete_group(&mut self, ctx: &mut Context<'_>) -> Option<FaultCode> {
+        let forced = self.combiner.close()?;
+        let status = ctx.link.status();
+        let family = status.family.filter(|_| status.link_up)?;
+        let (command, process) = match change(forced, family) {
+            Change::Local if family.is_modbus() => (LinkCommand::ExitRemote, Keep::Forget),
+            Change::Local => {
+                self.refused = None;
+                return None;
+            }
+            Change::Refused(fault) => {
+                self.refused = Some(fault);
+                return Some(fault);
+            }
+            Change::Powermax {
+                mode,
+                current,
+                pressure,
+            } => {
+                let process = Process {
+                    mode: cnc_mode(mode, Some(family)),
+                    amps: current,
+                    pressure,
+                };
+                if ctx.link.kept().powermax().is_some_and(|k| {
+                    k.mode == Some(mode) && k.current == current && k.pressure == pressure
+                }) && status.remote
+                {
+                    self.refused = None;
+                    return None;
+                }
+                let command = LinkCommand::ApplySettings {
+                    mode,
+                    current,
+                    pressure,
+                };
+                (command, Keep::Process(process))
+            }
+            Change::HprAmps(amps) => (LinkCommand::HprSetNominalAmps { amps }, Keep::Unchanged),
+        };
+        match ctx.link.submit(ctx.now, command) {
+            Ok(ticket) => {
+                self.refused = None;
+                self.applying = Some((ticket, process));
+                None
+            }
+            Err(refusal) => {
+                let fault = refusal_fault(&refusal);
+                self.refused = fault.or(self.refused);
+                fault
+            }
+        }
+    }
+
+    // --- replies ------------------------------------------------------------------------
+
+    fn answer(&mut self, broadcast: bool, address: u8, response: &Response<'_>) -> Step {
+        if broadcast {
+            return Step::Pending;
+        }
+        match encode_response(address, response, &mut self.reply) {
+            Ok(len) => {
+                self.reply_len = len;
+                Step::Reply
+            }
+            Err(_) => Step::Pending,
+        }
+    }
+
+    fn answer_pdu(
+        &mut self,
+        broadcast: bool,
+        address: u8,
+        pdu: &[u8],
+        refused: Option<FaultCode>,
+    ) -> Step {
+        if broadcast {
+            return Step::Pending;
+        }
+        match plasma_protocol::modbus_ascii::encode(address, pdu, &mut self.reply) {
+            Ok(len) => {
+                self.reply_len = len;
+                refused.map_or(Step::Reply, Step::Refused)
+            }
+            Err(_) => Step::Pending,
+        }
+    }
+}
+
+fn exception(function: u8, code: ExceptionCode) -> Response<'static> {
+    Response::Exception {
+        function: function & 0x7F,
+        code,
+    }
+}
+
+/// The reply PDU to Read Device Identification: the SYNC unit's product code; `None` (so
+/// exception 01, as a legacy Powermax answers) for any other unit.
+fn identification(ctx: &Context<'_>, code: DeviceIdCode, out: &mut [u8]) -> Option<usize> {
+    let status = ctx.link.status();
+    let Some(Model::Powermax(model)) = status.model else {
+        return None;
+    };
+    if status.family != Some(Family::PowermaxSync) {
+        return None;
+    }
+    let objects: [(u8, &[u8]); 1] = [(PRODUCT_CODE_OBJECT, model.product_code().as_bytes())];
+    DeviceIdentification::emit_objects(code, code as u8, false, 0, &objects, out).ok()
+}
+
+/// What a complete group of force-register writes becomes on `family`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Change {
+    /// Back to local control.
+    Local,
+    /// Refused before sending: the fault it reads as.
+    Refused(FaultCode),
+    /// A Powermax: the three settings in one change.
+    Powermax {
+        mode: OperatingMode,
+        current: plasma_protocol::powermax::Amps,
+        pressure: plasma_protocol::powermax::Pressure,
+    },
+    /// An HPR or MaxPro200: the current only (whole amps).
+    HprAmps(u16),
+}
+
+fn change(forced: Forced, family: Family) -> Change {
+    use plasma_protocol::powermax::{Amps, Pressure};
+    if forced.is_local() {
+        return Change::Local;
+    }
+    let Some(mode) = OperatingMode::from_legacy(forced.mode) else {
+        return Change::Refused(MODE_REFUSED);
+    };
+    let current = Amps::from_raw(forced.current);
+    if !current.is_positive() {
+        return Change::Refused(CURRENT_REFUSED);
+    }
+    let pressure = Pressure::from_raw(forced.pressure);
+    if family.is_modbus() {
+        return Change::Powermax {
+            mode,
+            current,
+            pressure,
+        };
+    }
+    // HPR / MaxPro200: the unit has one cutting mode and sets its gas pressures itself.
+    if mode != OperatingMode::Cut {
+        return Change::Refused(MODE_REFUSED);
+    }
+    if pressure != Pressure::Auto {
+        return Change::Refused(PRESSURE_REFUSED);
+    }
+    if !current.is_whole() {
+        return Change::Refused(CURRENT_REFUSED);
+    }
+    Change::HprAmps(forced.current / 64)
+}
+
+/// The 0-11-x fault a refusal reads as (`None`: not a setting the unit refuses).
+fn refusal_fault(refusal: &Refusal) -> Option<FaultCode> {
+    match refusal {
+        Refusal::ModeNotPermitted { .. } => Some(MODE_REFUSED),
+        Refusal::CurrentOutOfRange { .. } | Refusal::HprValueOutOfRange { .. } => {
+            Some(CURRENT_REFUSED)
+        }
+        Refusal::PressureOutOfRange { .. } => Some(PRESSURE_REFUSED),
+        _ => None,
+    }
+}

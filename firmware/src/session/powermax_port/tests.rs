@@ -1,0 +1,412 @@
+//! The CNC port as a Powermax, byte for byte, against the simulated units behind the bridge.
+
+extern crate std;
+
+use std::string::String;
+use std::vec::Vec;
+
+use proptest::prelude::*;
+
+use super::SETTLE;
+use crate::session::tests::{Rig, mb};
+use crate::settings::Settings;
+
+/// Send one Modbus frame; the reply line (without CR LF), or `None` when none came.
+fn ask(rig: &mut Rig, frame: &[u8]) -> Option<String> {
+    let start = rig.received.len();
+    rig.bridge.handle_cnc_rx(rig.now, frame);
+    rig.collect();
+    let replies: Vec<String> = rig.received[start..]
+        .iter()
+        .filter(|t| t.starts_with(':'))
+        .cloned()
+        .collect();
+    assert!(replies.len() <= 1, "{replies:?}");
+    replies.into_iter().next()
+}
+
+fn line(frame: Vec<u8>) -> String {
+    String::from_utf8(frame)
+        .unwrap()
+        .trim_end_matches("\r\n")
+        .into()
+}
+
+fn read(rig: &mut Rig, register: u16) -> u16 {
+    let [hi, lo] = register.to_be_bytes();
+    let reply = ask(rig, &mb(&[0x04, hi, lo, 0x00, 0x01])).expect("a reply");
+    assert_eq!(&reply[..7], ":010402", "{reply}");
+    u16::from_str_radix(&reply[7..11], 16).unwrap()
+}
+
+fn write(rig: &mut Rig, register: u16, value: u16) -> Option<String> {
+    let [hi, lo] = register.to_be_bytes();
+    let [vh, vl] = value.to_be_bytes();
+    ask(rig, &mb(&[0x06, hi, lo, vh, vl]))
+}
+
+/// pmx485's connect sequence: mode, current x 64, pressure x 128, then a read of the limits.
+fn connect(rig: &mut Rig, mode: u16, amps: u16, psi: u16) -> u16 {
+    for (register, value) in [(0x2093, mode), (0x2094, amps * 64), (0x2096, psi * 128)] {
+        let frame = {
+            let [hi, lo] = u16::to_be_bytes(register);
+            let [vh, vl] = value.to_be_bytes();
+            mb(&[0x06, hi, lo, vh, vl])
+        };
+        let echo = ask(rig, &frame).expect("echoed at once");
+        assert_eq!(echo, line(frame), "a write is answered with its exact echo");
+    }
+    read(rig, 0x2099)
+}
+
+#[test]
+fn a_read_is_answered_at_once_byte_for_byte() {
+    let mut rig = Rig::sync65(Settings::default());
+    // 0x2099 current min: 20 A x 64 = 0x0500.
+    let reply = ask(&mut rig, b":01042099000141\r\n");
+    assert_eq!(reply.as_deref(), Some(":0104020500F4"));
+    // Function 03 reads the same registers.
+    let reply = ask(&mut rig, &mb(&[0x03, 0x20, 0x9A, 0x00, 0x01])).unwrap();
+    assert_eq!(reply, line(mb(&[0x03, 0x02, 0x10, 0x40])), "65 A x 64");
+}
+
+#[test]
+fn the_legacy_block_reads_whole_with_its_gaps_as_zero() {
+    let mut rig = Rig::sync65(Settings::default());
+    let reply = ask(&mut rig, &mb(&[0x04, 0x20, 0x93, 0x00, 0x0D])).unwrap();
+    // 13 registers: 2 + 13 * 2 bytes.
+    assert_eq!(&reply[..7], ":01041A");
+    let words: Vec<u16> = (0..13)
+        .map(|i| u16::from_str_radix(&reply[7 + 4 * i..11 + 4 * i], 16).unwrap())
+        .collect();
+    assert_eq!(words[2], 0, "0x2095 is a gap");
+    assert_eq!(words[6], 20 * 64, "0x2099");
+    assert_eq!(words[7], 65 * 64, "0x209A");
+}
+
+#[test]
+fn pmx485s_three_writes_become_one_sync_settings_write() {
+    let mut rig = Rig::sync65(Settings::default());
+    write(&mut rig, 0x2093, 1).unwrap();
+    write(&mut rig, 0x2094, 45 * 64).unwrap();
+    rig.run(50);
+    assert!(
+        rig.writes().is_empty(),
+        "nothing before the group is complete"
+    );
+    assert_eq!(connect(&mut rig, 1, 45, 0), 20 * 64);
+    rig.run(300);
+    assert_eq!(rig.writes(), std::vec![(0x3080, std::vec![1, 2880, 0])]);
+    assert!(rig.bridge.status().remote);
+    assert_eq!(read(&mut rig, 0x2094), 2880);
+    assert_eq!(read(&mut rig, 0x2098), 0);
+    // The process the unit confirmed is the one the settings keep (CONFIG SAVE stores it).
+    assert!(rig.bridge.settings().process.is_some());
+    // The text protocol sees it and still works on the same port.
+    let status = rig.cmd("STATUS");
+    assert!(status.contains(" amps=45 "), "{status}");
+}
+
+#[test]
+fn a_group_with_nothing_after_it_completes_after_the_settle_time() {
+    let mut rig = Rig::sync65(Settings::default());
+    write(&mut rig, 0x3081, 40 * 64).unwrap();
+    rig.run(SETTLE.as_millis() - 10);
+    assert!(rig.writes().is_empty());
+    rig.run(300);
+    // Mode and pressure came from the unit's panel: cut, 76 psi.
+    assert_eq!(
+        rig.writes(),
+        std::vec![(0x3080, std::vec![1, 2560, 76 * 128])]
+    );
+}
+
+#[test]
+fn one_0x10_write_is_a_whole_group() {
+    let mut rig = Rig::sync65(Settings::default());
+    let reply = ask(
+        &mut rig,
+        &mb(&[0x10, 0x30, 0x80, 0x00, 0x03, 0x06, 0, 1, 0x0A, 0x00, 0, 0]),
+    );
+    assert_eq!(reply, Some(line(mb(&[0x10, 0x30, 0x80, 0x00, 0x03]))));
+    rig.run(300);
+    assert_eq!(rig.writes(), std::vec![(0x3080, std::vec![1, 40 * 64, 0])]);
+}
+
+#[test]
+fn a_current_the_unit_refuses_reads_as_0_11_1_and_is_an_event() {
+    let settings = Settings {
+        events: true,
+        ..Settings::default()
+    };
+    let mut rig = Rig::sync65(settings);
+    connect(&mut rig, 1, 100, 0);
+    rig.run(300);
+    assert!(rig.writes().is_empty(), "not sent");
+    assert_eq!(read(&mut rig, 0x2098), 111, "0-11-1");
+    // The text protocol shows it as the unit would: FAULT and STATUS.
+    let fault = rig.cmd("FAULT");
+    assert!(
+        fault.starts_with("OK fault=0-11-1 action=none text="),
+        "{fault}"
+    );
+    assert!(rig.cmd("STATUS").contains(" fault=0-11-1 "));
+    assert!(
+        rig.received
+            .iter()
+            .any(|t| t == "!SETTINGS failed reason=refused fault=0-11-1"),
+        "{:?}",
+        rig.received
+    );
+    // A setting the unit takes clears it.
+    connect(&mut rig, 1, 45, 0);
+    rig.run(300);
+    assert_eq!(read(&mut rig, 0x2098), 0);
+}
+
+#[test]
+fn zeros_in_all_three_return_the_unit_to_local_control() {
+    let mut rig = Rig::sync65(Settings::default());
+    connect(&mut rig, 1, 45, 0);
+    rig.run(300);
+    assert!(rig.bridge.status().remote);
+    // pmx485 on disable: three zeros, then it closes the port.
+    for register in [0x2093, 0x2094, 0x2096] {
+        write(&mut rig, register, 0).unwrap();
+    }
+    rig.run(500);
+    assert_eq!(rig.writes().last(), Some(&(0x3080, std::vec![0, 0, 0])));
+    assert!(!rig.bridge.status().remote);
+    assert_eq!(rig.bridge.settings().process, None);
+}
+
+#[test]
+fn an_hpr_takes_the_current_only_and_refuses_another_mode() {
+    let mut rig = Rig::hpr("hpr260");
+    assert_eq!(read(&mut rig, 0x209A), 260 * 64, "limits from the rating");
+    assert_eq!(read(&mut rig, 0x2099), 5 * 64);
+    assert_eq!(read(&mut rig, 0x209D), 0, "pressure automatic");
+    let before = rig.hpr_commands().len();
+    connect(&mut rig, 1, 45, 0);
+    rig.run(500);
+    let sent = rig.hpr_commands()[before..].to_vec();
+    assert!(sent.contains(&58), "058 set current: {sent:?}");
+    assert_eq!(rig.bridge.status().hpr.nominal_amps, Some(45));
+    connect(&mut rig, 3, 45, 0);
+    rig.run(300);
+    assert_eq!(read(&mut rig, 0x2098), 110, "gouge: 0-11-0");
+    connect(&mut rig, 1, 45, 80);
+    rig.run(300);
+    assert_eq!(read(&mut rig, 0x2098), 112, "a pressure: 0-11-2");
+}
+
+#[test]
+fn an_hpr_error_never_reads_as_no_fault() {
+    let mut rig = Rig::hpr("hpr260");
+    rig.fault(44);
+    rig.run(500);
+    assert_ne!(read(&mut rig, 0x2098), 0);
+}
+
+#[test]
+fn the_link_lost_means_no_reply() {
+    let mut rig = Rig::sync65(Settings::default());
+    assert!(ask(&mut rig, &mb(&[0x04, 0x20, 0x98, 0x00, 0x01])).is_some());
+    rig.unplug(true);
+    rig.run(5000);
+    assert!(!rig.bridge.status().link_up);
+    assert_eq!(ask(&mut rig, &mb(&[0x04, 0x20, 0x98, 0x00, 0x01])), None);
+    assert_eq!(write(&mut rig, 0x2093, 1), None);
+    // The text protocol answers and says why.
+    assert!(rig.cmd("ID").contains(" link=DOWN "));
+}
+
+#[test]
+fn other_nodes_and_broadcasts_get_no_reply() {
+    let mut rig = Rig::sync65(Settings::default());
+    let mut out = [0u8; 64];
+    let n = plasma_protocol::modbus_ascii::encode(2, &[0x04, 0x20, 0x98, 0x00, 0x01], &mut out)
+        .unwrap();
+    assert_eq!(ask(&mut rig, &out[..n]), None, "node 2");
+    let n = plasma_protocol::modbus_ascii::encode(
+        0,
+        &[0x10, 0x30, 0x80, 0x00, 0x03, 0x06, 0, 1, 0x0A, 0x00, 0, 0],
+        &mut out,
+    )
+    .unwrap();
+    assert_eq!(ask(&mut rig, &out[..n]), None, "broadcast");
+    rig.run(300);
+    assert_eq!(rig.writes(), std::vec![(0x3080, std::vec![1, 40 * 64, 0])]);
+    // cnc_address moves the node.
+    assert!(rig.cmd("CONFIG cnc_address 2").starts_with("OK"));
+    let n = plasma_protocol::modbus_ascii::encode(2, &[0x04, 0x20, 0x98, 0x00, 0x01], &mut out)
+        .unwrap();
+    assert!(ask(&mut rig, &out[..n]).is_some());
+}
+
+#[test]
+fn exceptions_as_a_unit_gives_them() {
+    let mut rig = Rig::sync65(Settings::default());
+    let cases: [(&[u8], &[u8]); 6] = [
+        (&[0x08, 0x00, 0x00, 0x00, 0x00], &[0x88, 0x01]),
+        (&[0x04, 0x20, 0x00, 0x00, 0x01], &[0x84, 0x02]),
+        (&[0x04, 0x20, 0x9F, 0x00, 0x02], &[0x84, 0x02]),
+        (&[0x04, 0x20, 0x98, 0x00, 0x00], &[0x84, 0x03]),
+        (&[0x06, 0x20, 0x98, 0x00, 0x01], &[0x86, 0x02]),
+        (&[0x06, 0x20, 0x93, 0x00, 0x07], &[0x86, 0x03]),
+    ];
+    for (request, exception) in cases {
+        assert_eq!(
+            ask(&mut rig, &mb(request)),
+            Some(line(mb(exception))),
+            "{request:02X?}"
+        );
+    }
+    assert_eq!(
+        ask(&mut rig, &mb(&[0x05, 0x08, 0x32, 0xFF, 0x00])),
+        Some(line(mb(&[0x85, 0x02]))),
+        "coils are not served"
+    );
+    rig.run(300);
+    assert!(rig.writes().is_empty());
+}
+
+#[test]
+fn the_sync_map_is_served_only_behind_a_sync_unit() {
+    let mut rig = Rig::sync65(Settings::default());
+    assert_eq!(read(&mut rig, 0x3003), 65 * 64);
+    let mut hpr = Rig::hpr("hpr130");
+    assert_eq!(
+        ask(&mut hpr, &mb(&[0x04, 0x30, 0x03, 0x00, 0x01])),
+        Some(line(mb(&[0x84, 0x02])))
+    );
+}
+
+#[test]
+fn identification_names_a_sync_unit_and_is_exception_01_otherwise() {
+    let mut rig = Rig::sync65(Settings::default());
+    let reply = ask(&mut rig, b":012B0E0401C1\r\n").unwrap();
+    let product = plasma_protocol::powermax::PowerSupplyModel::Powermax65_85_105Sync.product_code();
+    let hex: String = product.bytes().map(|b| std::format!("{b:02X}")).collect();
+    assert!(reply.starts_with(":012B0E04"), "{reply}");
+    assert!(reply.contains(&hex), "{reply}");
+    let mut hpr = Rig::hpr("hpr130");
+    assert_eq!(
+        ask(&mut hpr, b":012B0E0401C1\r\n"),
+        Some(line(mb(&[0xAB, 0x01])))
+    );
+}
+
+#[test]
+fn text_commands_keep_working_between_modbus_requests() {
+    let mut rig = Rig::sync65(Settings::default());
+    read(&mut rig, 0x2098);
+    assert!(rig.cmd("ID").starts_with("OK bridge="));
+    // A request that stops arriving does not swallow the next text line.
+    rig.bridge.handle_cnc_rx(rig.now, b":010420");
+    rig.run(100);
+    assert!(rig.cmd("ID").starts_with("OK bridge="));
+    read(&mut rig, 0x2098);
+}
+
+/// One step of a Modbus master: a write anywhere near the force registers, a read, or a pause.
+#[derive(Debug, Clone)]
+enum MasterStep {
+    Write(u16, u16),
+    WriteMany(u16, Vec<u16>),
+    Read(u16),
+    Pause(u64),
+}
+
+fn master_step() -> impl Strategy<Value = MasterStep> {
+    let register = prop_oneof![
+        Just(0x2093u16),
+        Just(0x2094),
+        Just(0x2096),
+        Just(0x3080),
+        Just(0x3081),
+        Just(0x3082),
+        Just(0x3100),
+        Just(0x0810),
+        0x2090u16..0x20A0,
+    ];
+    let value = prop_oneof![0u16..4, Just(0), 0u16..0x2000, any::<u16>()];
+    prop_oneof![
+        (register.clone(), value.clone()).prop_map(|(r, v)| MasterStep::Write(r, v)),
+        (register.clone(), proptest::collection::vec(value, 1..4))
+            .prop_map(|(r, v)| MasterStep::WriteMany(r, v)),
+        register.prop_map(MasterStep::Read),
+        (0u64..250).prop_map(MasterStep::Pause),
+    ]
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(24))]
+
+    /// Whatever a Modbus master writes, the unit gets only whole settings writes (all three
+    /// registers in one request) and never a START or any other coil.
+    #[test]
+    fn no_sequence_of_modbus_writes_makes_a_partial_settings_write_or_a_start(
+        steps in proptest::collection::vec(master_step(), 1..24)
+    ) {
+        let mut rig = Rig::sync65(Settings::default());
+        for step in steps {
+            let frame = match step {
+                MasterStep::Write(r, v) => {
+                    let ([hi, lo], [vh, vl]) = (r.to_be_bytes(), v.to_be_bytes());
+                    mb(&[0x06, hi, lo, vh, vl])
+                }
+                MasterStep::WriteMany(r, values) => {
+                    let [hi, lo] = r.to_be_bytes();
+                    let mut pdu = std::vec![0x10, hi, lo, 0, values.len() as u8, 2 * values.len() as u8];
+                    for v in values {
+                        pdu.extend_from_slice(&v.to_be_bytes());
+                    }
+                    mb(&pdu)
+                }
+                MasterStep::Read(r) => {
+                    let [hi, lo] = r.to_be_bytes();
+                    mb(&[0x04, hi, lo, 0, 1])
+                }
+                MasterStep::Pause(ms) => {
+                    rig.run(ms);
+                    continue;
+                }
+            };
+            rig.bridge.handle_cnc_rx(rig.now, &frame);
+            rig.collect();
+            rig.run(20);
+        }
+        rig.run(SETTLE.as_millis() + 500);
+        // `writes` lists every 0x10 write and every coil write (START is coil 0x3100).
+        for (address, values) in rig.writes() {
+            prop_assert_eq!(address, 0x3080, "only the settings registers, no coil");
+            prop_assert_eq!(values.len(), 3, "all three at once");
+        }
+    }
+}
+
+#[test]
+fn a_text_set_after_modbus_writes_shows_in_the_force_registers() {
+    let mut rig = Rig::sync65(Settings::default());
+    connect(&mut rig, 1, 45, 0);
+    rig.run(300);
+    assert!(rig.cmd("SET AMPS 30").starts_with("OK"));
+    assert_eq!(read(&mut rig, 0x2094), 30 * 64);
+}
+
+#[test]
+fn a_colon_inside_a_refused_line_is_text() {
+    let mut rig = Rig::sync65(Settings::default());
+    // A control byte makes the line assembler drop the rest of the line; the `:` in it must
+    // not open a Modbus request.
+    rig.bridge
+        .handle_cnc_rx(rig.now, b"\x03RAW :0104301A0001B0\r\n");
+    rig.run(100);
+    assert!(
+        rig.received.iter().all(|t| !t.starts_with(':')),
+        "{:?}",
+        rig.received
+    );
+    assert_eq!(read(&mut rig, 0x2098), 0);
+}
