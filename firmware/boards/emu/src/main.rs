@@ -60,7 +60,6 @@ mod image {
     use plasma_firmware::bridge::Bridge;
     use plasma_firmware::inputs::InputConfig;
     use plasma_firmware::safe_state::BootReport;
-    use plasma_protocol::serial::PortConfig;
     use plasma_protocol::time::Duration;
     use plasma_tasks::boot::boot_text;
     use plasma_tasks::clock::now;
@@ -201,11 +200,9 @@ mod image {
             USART2,
             &CNC_STATE,
             rcc::SYSCLK_HZ,
-            PortConfig {
-                baud: 115_200,
-                parity: plasma_protocol::serial::Parity::None,
-                stop_bits: plasma_protocol::serial::StopBits::One,
-            },
+            // The saved CNC framing (CONFIG cnc_baud/cnc_parity/cnc_stop_bits), applied at
+            // start-up; 115200 8N1 unless saved otherwise.
+            settings.cnc_port_config(),
             false,
         ));
         // SAFETY: the handlers touch only their own UartState.

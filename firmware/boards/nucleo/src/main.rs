@@ -52,7 +52,6 @@ mod image {
     use embassy_stm32::{bind_interrupts, pac};
     use plasma_firmware::bridge::Bridge;
     use plasma_firmware::inputs::InputConfig;
-    use plasma_protocol::serial::{Parity, PortConfig, StopBits};
     use plasma_protocol::time::Duration;
     use plasma_tasks::boot::boot_text;
     use plasma_tasks::clock::now;
@@ -181,11 +180,9 @@ mod image {
             pac::USART2,
             &CNC_STATE,
             USART_CLOCK_HZ,
-            PortConfig {
-                baud: 115_200,
-                parity: Parity::None,
-                stop_bits: StopBits::One,
-            },
+            // The saved CNC framing (CONFIG cnc_baud/cnc_parity/cnc_stop_bits), applied at
+            // start-up; 115200 8N1 unless saved otherwise.
+            settings.cnc_port_config(),
             false,
         ));
         for irq in [interrupt::USART1, interrupt::USART2] {
