@@ -8,12 +8,35 @@
 
 use plasma_firmware::io::Outputs;
 use plasma_firmware::pins;
-use plasma_firmware::safe_state::FailSafe;
+use plasma_firmware::safe_state::{FailSafe, FaultEntry};
 
 use crate::board::OutputPins;
 use crate::chip;
+use crate::reset::mark_panic;
 
 static FAIL_SAFE: FailSafe = FailSafe::new();
+
+/// The first entry into [`fail`]; a later one (a fault while it logs) skips the log.
+static FAULT_ENTRY: FaultEntry = FaultEntry::new();
+
+/// Every board's fault path (panic, HardFault, NMI): the outputs safe first, the marker the
+/// next boot reports (`!BOOT reason=panic`), the board's `log` line, its `drain` (time for the
+/// logger to get the line out), then a reset. An NMI or HardFault while the log line is
+/// written would enter again, and defmt-rtt panics on re-entry: a second entry resets at once,
+/// unlogged (the first already made the outputs safe; the reset leaves every pin
+/// high-impedance, held off by its pull-down).
+pub fn fail(log: impl FnOnce(), drain: impl FnOnce()) -> ! {
+    cortex_m::interrupt::disable();
+    if FAULT_ENTRY.first() {
+        drive_safe_state();
+        mark_panic();
+        log();
+        drain();
+    } else {
+        mark_panic();
+    }
+    cortex_m::peripheral::SCB::sys_reset()
+}
 
 /// Drives every output to its safe level with plain register writes.
 pub fn drive_safe_state() {

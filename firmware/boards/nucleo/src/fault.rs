@@ -7,30 +7,12 @@ use cortex_m_rt::{ExceptionFrame, exception};
 use defmt::error;
 use embassy_stm32::pac;
 
-use plasma_firmware::safe_state::FaultEntry;
-use plasma_tasks::reset::mark_panic;
-use plasma_tasks::safe_state::drive_safe_state;
-
 use crate::flash::{FLASH_BANK2, FLASH_BASE, settings_region};
 
-/// The first entry into [`fail`]; a later one (a fault while it logs) skips the log.
-static ENTRY: FaultEntry = FaultEntry::new();
-
-/// Safe state, marker, log, reset. An NMI or HardFault while the log line is written would
-/// enter again; defmt-rtt panics on re-entry, so a second entry resets at once, unlogged.
+/// The shared fault path (`plasma_tasks::safe_state::fail`), then ~50 ms for a probe to drain
+/// the RTT buffer before the reset; the outputs are already safe.
 fn fail(reason: impl FnOnce()) -> ! {
-    cortex_m::interrupt::disable();
-    if !ENTRY.first() {
-        // The reset leaves every pin high-impedance, held off by its pull-down.
-        mark_panic();
-        cortex_m::peripheral::SCB::sys_reset()
-    }
-    drive_safe_state();
-    mark_panic();
-    reason();
-    // Give a probe ~50 ms to drain the RTT buffer; the outputs are already safe.
-    cortex_m::asm::delay(4_000_000);
-    cortex_m::peripheral::SCB::sys_reset()
+    plasma_tasks::safe_state::fail(reason, || cortex_m::asm::delay(4_000_000))
 }
 
 /// The outcome is the same in every build: safe state, marker (`!BOOT reason=panic`), reset.
