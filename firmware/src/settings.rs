@@ -867,6 +867,10 @@ mod tests {
         assert_eq!(corrupt(29, 0x80), None, "an eighth input active high");
         assert_eq!(corrupt(30, 101), None, "TORCH_ON debounce above 100 ms");
         assert_eq!(corrupt(37, 1), None, "START inverted");
+        assert_eq!(corrupt(38, 0), None, "CNC node address 0 (broadcast)");
+        assert_eq!(corrupt(39, 0x81), None, "CNC baud not one of the five");
+        assert_eq!(corrupt(43, 3), None, "unknown CNC parity");
+        assert_eq!(corrupt(44, 3), None, "three CNC stop bits");
         let with_process = Settings {
             process: Some(Process {
                 mode: Mode::Cut,
