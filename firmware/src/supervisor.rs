@@ -8,7 +8,10 @@
 //! 2. passes every byte already waiting in either port to the bridge (so a reply that came in
 //!    time is not taken for a time-out when the bridge is polled);
 //! 3. polls the bridge, transmits its power-supply frames ([`PsPort`]), polls it again (the
-//!    link's time-outs run while frames are asked for) and writes its CNC output;
+//!    link's time-outs run while frames are asked for) and writes its CNC output; when the
+//!    CNC framing changed (`CONFIG cnc_baud|cnc_parity|cnc_stop_bits`), waits until that
+//!    output has left (the reply to the CONFIG goes out at the old framing) and switches the
+//!    CNC port;
 //! 4. hands the supply state and the I/O settings to the I/O task when they changed, and a
 //!    save request to the settings saver;
 //! 5. waits for the first of: bytes on either port, an I/O event, the end of a save, the
@@ -23,11 +26,13 @@ use core::future::{Future, pending};
 
 use embassy_futures::select::{Either5, select5};
 use embassy_futures::yield_now;
-use embedded_io_async::{Read, ReadReady, Write};
+use embedded_io_async::Read;
 
 use crate::bridge::Bridge;
 use crate::io::{Inputs, IoConfig, IoEvent, Outputs, SupplyState};
-use crate::runner::{Clock, ConfigurablePort, MAX_WAIT, PortError, PsEndpoint, PsPort};
+use crate::runner::{
+    Clock, ConfigurablePort, MAX_WAIT, PortError, PsEndpoint, PsPort, UnsupportedConfig,
+};
 use crate::settings::{SaveError, Settings};
 use plasma_protocol::serial::PortConfig;
 use plasma_protocol::time::Instant;
@@ -43,6 +48,8 @@ pub trait BridgeEndpoint: PsEndpoint {
     fn handle_cnc_rx(&mut self, now: Instant, bytes: &[u8]);
     /// Bytes to write to the CNC.
     fn poll_cnc_output(&mut self) -> Option<&[u8]>;
+    /// The framing the CNC port must use.
+    fn cnc_port_config(&self) -> PortConfig;
     /// Let time pass.
     fn poll(&mut self, now: Instant);
     /// What the I/O task must know about the supply.
@@ -89,6 +96,9 @@ impl BridgeEndpoint for Bridge {
     }
     fn poll_cnc_output(&mut self) -> Option<&[u8]> {
         Bridge::poll_cnc_output(self)
+    }
+    fn cnc_port_config(&self) -> PortConfig {
+        Bridge::cnc_port_config(self)
     }
     fn poll(&mut self, now: Instant) {
         Bridge::poll(self, now);
@@ -147,6 +157,9 @@ pub enum TurnError<PsError, CncError> {
     CncWrite(CncError),
     /// The CNC port reported end of input.
     CncClosed,
+    /// The CNC port cannot run the framing the settings ask for (it keeps its old one; not
+    /// retried until the settings ask for another).
+    CncUnsupported(PortConfig),
 }
 
 /// Bytes taken from the CNC port per read.
@@ -159,6 +172,8 @@ pub struct Supervisor<P, C, I, V> {
     ps: PsPort<P>,
     cnc: C,
     cnc_piece: usize,
+    /// The CNC framing last set (or refused); `None`: unknown, the first turn sets it.
+    cnc_framing: Option<PortConfig>,
     io: I,
     saver: V,
     sent_supply: Option<SupplyState>,
@@ -177,7 +192,7 @@ type TurnResult<T, P, C> = core::result::Result<
 impl<P, C, I, V> Supervisor<P, C, I, V>
 where
     P: ConfigurablePort,
-    C: Read + ReadReady + Write,
+    C: ConfigurablePort,
     I: IoExchange,
 {
     /// A supervisor over the PS port, the CNC port (whose transmit buffer holds
@@ -187,12 +202,25 @@ where
             ps: PsPort::new(ps),
             cnc,
             cnc_piece: cnc_tx_buffer.max(1),
+            cnc_framing: None,
             io,
             saver,
             sent_supply: None,
             sent_io_config: None,
             saving: false,
         }
+    }
+
+    /// The CNC port already runs at `framing` (the board opened it at the bridge's): the first
+    /// turn leaves it as it is instead of setting it again.
+    pub fn with_cnc_framing(mut self, framing: PortConfig) -> Self {
+        self.cnc_framing = Some(framing);
+        self
+    }
+
+    /// The CNC framing last set (or refused).
+    pub fn cnc_framing(&self) -> Option<PortConfig> {
+        self.cnc_framing
     }
 
     /// The power-supply port (line settings, counters).
@@ -246,6 +274,7 @@ where
                     .map_err(TurnError::CncWrite)?;
             }
         }
+        self.follow_cnc_framing(bridge).await?;
 
         self.exchange_out(bridge);
         if !self.saving
@@ -256,6 +285,22 @@ where
         }
 
         self.wait(bridge, clock).await
+    }
+
+    /// Switches the CNC port to the bridge's framing once the output written so far has left:
+    /// the reply to `CONFIG cnc_baud ...` reaches the CNC at the framing it was asked in.
+    async fn follow_cnc_framing<B: BridgeEndpoint>(&mut self, bridge: &B) -> TurnResult<(), P, C> {
+        let wanted = bridge.cnc_port_config();
+        if self.cnc_framing == Some(wanted) {
+            return Ok(());
+        }
+        self.cnc.flush().await.map_err(TurnError::CncWrite)?;
+        // Noted before it is tried: a framing the port refuses is reported once, not every turn
+        // (the settings only take framings both boards' UARTs run).
+        self.cnc_framing = Some(wanted);
+        self.cnc
+            .set_port_config(wanted)
+            .map_err(|UnsupportedConfig| TurnError::CncUnsupported(wanted))
     }
 
     fn exchange_in<B: BridgeEndpoint>(&mut self, bridge: &mut B) {

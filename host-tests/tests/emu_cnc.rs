@@ -1,6 +1,7 @@
 //! End to end on the emulated board: the CNC's view. A session that sets a process, a fault
 //! the unit raises reaching the CNC as an event (and holding START off), and a unit that stops
 //! answering taking the link down and back, with START kept off while the rules forbid it.
+//! The CNC port's framing following CONFIG at once, with the port answering Modbus after.
 
 mod common;
 
@@ -10,7 +11,9 @@ use common::emu::{
     EDGE, LINK_EVENT, command, event, events_mark, expect_held, expect_output, press_again,
     ready_board, set, value,
 };
+use host_tests::emu::Board;
 use plasma_firmware::io::{Input, Output};
+use plasma_protocol::serial::{Parity, PortConfig, StopBits};
 use plasma_sim::Model;
 use plasma_sim::powermax::Powermax;
 
@@ -172,4 +175,60 @@ fn a_unit_that_stops_answering_takes_the_link_down_and_back() {
     expect_output(&board, Output::Start, true, EDGE);
     set(&board, Input::TorchOn, false);
     expect_output(&board, Output::Start, false, EDGE);
+}
+
+/// Waits until the board's CNC UART runs `wanted` (it switches once the CONFIG reply has
+/// left); panics with what it runs otherwise.
+fn expect_cnc_framing(board: &Board, wanted: PortConfig) {
+    let deadline = std::time::Instant::now() + EDGE;
+    loop {
+        let now = board.cnc_framing(wanted.baud).unwrap();
+        if now == Some(wanted) {
+            return;
+        }
+        assert!(
+            std::time::Instant::now() < deadline,
+            "the CNC UART runs {now:?}, not {wanted:?}\n{}",
+            board.log().tail(10)
+        );
+        std::thread::sleep(Duration::from_millis(5));
+    }
+}
+
+#[test]
+fn the_cnc_framing_follows_config_at_once_and_the_port_answers_modbus_after() {
+    let mut board = ready_board(Model::Sync65);
+    let mut framing = PortConfig {
+        baud: 115_200,
+        parity: Parity::None,
+        stop_bits: StopBits::One,
+    };
+    expect_cnc_framing(&board, framing);
+    let mark = board.log().len();
+    // Each reply comes at the old framing; the UART switches after it (pmx485's 19200 8E1).
+    assert_eq!(
+        command(&mut board, "CONFIG cnc_baud 19200"),
+        "OK cnc_baud=19200"
+    );
+    framing.baud = 19_200;
+    expect_cnc_framing(&board, framing);
+    assert_eq!(
+        command(&mut board, "CONFIG cnc_parity EVEN"),
+        "OK cnc_parity=EVEN"
+    );
+    framing.parity = Parity::Even;
+    expect_cnc_framing(&board, framing);
+    board
+        .log()
+        .wait_for(mark, EDGE, |l| l.text == "CNC UART: 19200 baud 8E1")
+        .unwrap_or_else(|e| panic!("{e}\n{}", board.log().tail(10)));
+    // pmx485's first read, the minimum current (0x2099, function 04): 20 A x 64.
+    assert_eq!(command(&mut board, ":01042099000141"), ":0104020500F4");
+    assert_eq!(
+        command(&mut board, "CONFIG cnc_stop_bits 2"),
+        "OK cnc_stop_bits=2"
+    );
+    framing.stop_bits = StopBits::Two;
+    expect_cnc_framing(&board, framing);
+    board.assert_safe();
 }

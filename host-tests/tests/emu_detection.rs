@@ -6,13 +6,11 @@
 mod common;
 
 use common::emu::{EDGE, LINK, boot, command, expect_output, value};
+use host_tests::emu::usart::KERNEL_CLOCK_HZ as USART_CLOCK_HZ;
 use host_tests::emu::{Board, BoardOptions};
 use plasma_firmware::io::Output;
 use plasma_protocol::serial::PortConfig;
 use plasma_sim::Model;
-
-/// USART1's kernel clock (PCLK2) on the emulated board.
-const USART_CLOCK_HZ: u32 = 80_000_000;
 
 /// Boots against `model`, waits for the link, and returns the board with the settled STATUS
 /// and ID replies.

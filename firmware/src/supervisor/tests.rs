@@ -10,11 +10,18 @@ use core::future::poll_fn;
 use core::task::Poll;
 
 use embassy_futures::block_on;
-use embedded_io_async::{ErrorKind, ErrorType};
+use embedded_io_async::{ErrorKind, ErrorType, ReadReady, Write};
 
 use super::*;
 use crate::runner::UnsupportedConfig;
-use plasma_protocol::serial::PortConfig;
+use plasma_protocol::serial::{Parity, PortConfig, StopBits};
+
+/// The framing the fake CNC port is opened at.
+const CNC_OPENED_AT: PortConfig = PortConfig {
+    baud: 19_200,
+    parity: Parity::None,
+    stop_bits: StopBits::One,
+};
 
 const PS: usize = 0;
 const CNC: usize = 1;
@@ -23,6 +30,7 @@ const CNC: usize = 1;
 enum Seen {
     Write(u64, Vec<u8>),
     Flush(u64),
+    Config(u64, PortConfig),
 }
 
 #[derive(Default)]
@@ -58,7 +66,7 @@ impl World {
             .iter()
             .flat_map(|s| match s {
                 Seen::Write(_, b) => b.clone(),
-                Seen::Flush(_) => Vec::new(),
+                Seen::Flush(_) | Seen::Config(..) => Vec::new(),
             })
             .collect()
     }
@@ -153,13 +161,24 @@ impl Write for FakePort {
 }
 
 impl ConfigurablePort for FakePort {
-    fn set_port_config(&mut self, _: PortConfig) -> core::result::Result<(), UnsupportedConfig> {
+    fn set_port_config(
+        &mut self,
+        config: PortConfig,
+    ) -> core::result::Result<(), UnsupportedConfig> {
+        let mut w = self.world.borrow_mut();
+        let now = w.now_us;
+        // A port without odd parity.
+        if config.parity == Parity::Odd {
+            return Err(UnsupportedConfig);
+        }
+        w.lines[self.line].seen.push(Seen::Config(now, config));
         Ok(())
     }
 }
 
 /// A bridge that echoes CNC lines, answers `SAVE` with a save request and `BIG` with 300
-/// bytes, and sends one PS frame when told to.
+/// bytes, sends one PS frame when told to, and answers `FRAMING <baud> <N|E|O>` by asking for
+/// that CNC framing.
 struct FakeBridge {
     world: Shared,
     line: Vec<u8>,
@@ -174,6 +193,7 @@ struct FakeBridge {
     events: Vec<(Instant, IoEvent, u64)>,
     save_request: Option<u32>,
     next_settings: u32,
+    cnc_framing: PortConfig,
 }
 
 impl FakeBridge {
@@ -191,6 +211,7 @@ impl FakeBridge {
             events: Vec::new(),
             save_request: None,
             next_settings: 1,
+            cnc_framing: CNC_OPENED_AT,
         }
     }
 }
@@ -233,6 +254,20 @@ impl BridgeEndpoint for FakeBridge {
                 }
                 b"BIG" => self.output.push_back(vec![b'x'; 300]),
                 b"PING" => self.ps_frame_due = true,
+                [b'F', b'R', b'A', b'M', b'I', b'N', b'G', b' ', rest @ ..] => {
+                    let text = String::from_utf8_lossy(rest);
+                    let (baud, parity) = text.split_once(' ').unwrap_or((&text, "N"));
+                    self.cnc_framing = PortConfig {
+                        baud: baud.parse().unwrap_or(0),
+                        parity: match parity {
+                            "E" => Parity::Even,
+                            "O" => Parity::Odd,
+                            _ => Parity::None,
+                        },
+                        stop_bits: StopBits::One,
+                    };
+                    self.output.push_back(b"OK framing\r\n".to_vec());
+                }
                 _ => {
                     let mut reply = line.clone();
                     reply.extend_from_slice(b"\r\n");
@@ -244,6 +279,9 @@ impl BridgeEndpoint for FakeBridge {
     fn poll_cnc_output(&mut self) -> Option<&[u8]> {
         self.current = self.output.pop_front()?;
         Some(&self.current)
+    }
+    fn cnc_port_config(&self) -> PortConfig {
+        self.cnc_framing
     }
     fn poll(&mut self, _: Instant) {}
     fn supply_state(&self) -> SupplyState {
@@ -429,7 +467,8 @@ fn setup(cnc_buffer: usize) -> (Shared, FakeClock, Sup, FakeBridge) {
             ..FakeIo::default()
         },
         FakeSaver::new(&world, every_third_fails),
-    );
+    )
+    .with_cnc_framing(CNC_OPENED_AT);
     let bridge = FakeBridge::new(&world);
     (world.clone(), FakeClock(world), sup, bridge)
 }
@@ -486,8 +525,95 @@ fn long_output_goes_out_in_pieces_each_after_the_last_has_left() {
                 last_was_flush = false;
             }
             Seen::Flush(_) => last_was_flush = true,
+            Seen::Config(..) => panic!("no framing change was asked for: {seen:?}"),
         }
     }
+}
+
+fn cnc_configs(world: &Shared) -> Vec<Seen> {
+    world.borrow().lines[CNC]
+        .seen
+        .iter()
+        .filter(|s| matches!(s, Seen::Config(..)))
+        .cloned()
+        .collect()
+}
+
+#[test]
+fn a_new_cnc_framing_applies_once_the_reply_has_left() {
+    let (world, clock, mut sup, mut bridge) = setup(256);
+    cnc_rx(&world, 60, b"FRAMING 9600 E\r");
+    cnc_rx(&world, 80, b"HELLO\r");
+    run_until(&mut sup, &mut bridge, &clock, 200);
+    let wanted = PortConfig {
+        baud: 9_600,
+        parity: Parity::Even,
+        stop_bits: StopBits::One,
+    };
+    let w = world.borrow();
+    // Nothing set before: the port was opened at the bridge's framing.
+    assert_eq!(
+        w.lines[CNC].seen,
+        [
+            Seen::Flush(60_000),
+            Seen::Write(60_000, b"OK framing\r\n".to_vec()),
+            Seen::Flush(60_000),
+            Seen::Config(60_000, wanted),
+            Seen::Flush(80_000),
+            Seen::Write(80_000, b"HELLO\r\n".to_vec()),
+        ]
+    );
+    assert_eq!(sup.cnc_framing(), Some(wanted));
+}
+
+#[test]
+fn a_cnc_port_of_unknown_framing_gets_the_bridges_in_the_first_turn() {
+    let world: Shared = Rc::default();
+    let clock = FakeClock(world.clone());
+    let mut sup: Sup = Supervisor::new(
+        FakePort {
+            world: world.clone(),
+            line: PS,
+        },
+        FakePort {
+            world: world.clone(),
+            line: CNC,
+        },
+        64,
+        FakeIo {
+            world: world.clone(),
+            ..FakeIo::default()
+        },
+        FakeSaver::new(&world, every_third_fails),
+    );
+    let mut bridge = FakeBridge::new(&world);
+    run_until(&mut sup, &mut bridge, &clock, 300);
+    assert_eq!(cnc_configs(&world), [Seen::Config(0, CNC_OPENED_AT)]);
+}
+
+#[test]
+fn a_framing_the_cnc_port_refuses_is_reported_once_and_the_port_runs_on() {
+    let (world, clock, mut sup, mut bridge) = setup(256);
+    cnc_rx(&world, 10, b"FRAMING 19200 O\r");
+    cnc_rx(&world, 30, b"HELLO\r");
+    let mut errors = Vec::new();
+    block_on(async {
+        while clock.now() < Instant::from_millis(300) {
+            if let Err(e) = sup.turn(&mut bridge, &clock).await {
+                errors.push((clock.now(), e));
+            }
+        }
+    });
+    let refused = PortConfig {
+        parity: Parity::Odd,
+        ..CNC_OPENED_AT
+    };
+    assert_eq!(
+        errors,
+        [(Instant::from_millis(10), TurnError::CncUnsupported(refused))]
+    );
+    assert_eq!(cnc_configs(&world), []);
+    assert_eq!(world.borrow().written(CNC), b"OK framing\r\nHELLO\r\n");
 }
 
 #[test]

@@ -1,6 +1,5 @@
 //! What a board provides to the tasks.
 
-use embedded_io_async::{Read, ReadReady, Write};
 use embedded_storage_async::nor_flash::NorFlash;
 use plasma_firmware::inputs::PinLevels;
 use plasma_firmware::io::Outputs;
@@ -36,8 +35,8 @@ pub trait Board: 'static {
     type Led: Led;
     /// The power-supply UART, whose line settings the link changes while detecting.
     type PsUart: ConfigurablePort<Error: defmt::Format>;
-    /// The CNC UART.
-    type CncUart: Read<Error: defmt::Format> + ReadReady + Write;
+    /// The CNC UART, whose framing follows `CONFIG cnc_baud|cnc_parity|cnc_stop_bits`.
+    type CncUart: ConfigurablePort<Error: defmt::Format>;
     /// The CNC UART's transmit buffer: the bridge writes output in pieces of at most this.
     const CNC_TX_BUFFER: usize;
     /// The flash the settings are stored in.

@@ -4,7 +4,7 @@
 use defmt::{debug, info, warn};
 use plasma_firmware::bridge::Bridge;
 use plasma_firmware::link::UnitStatus;
-use plasma_firmware::supervisor::Supervisor;
+use plasma_firmware::supervisor::{Supervisor, TurnError};
 use plasma_firmware::watchdog::TaskId;
 use plasma_protocol::serial::PortConfig;
 
@@ -25,11 +25,15 @@ pub async fn run<B: Board>(
     progress: TaskId,
 ) {
     let clock = EmbassyClock;
-    let mut supervisor = Supervisor::new(ps, cnc, B::CNC_TX_BUFFER, io, BoardSaver);
+    // The board opened the CNC UART at the framing of the settings the bridge was built from.
+    let mut cnc_framing = bridge.cnc_port_config();
+    let mut supervisor =
+        Supervisor::new(ps, cnc, B::CNC_TX_BUFFER, io, BoardSaver).with_cnc_framing(cnc_framing);
     let mut applied: Option<PortConfig> = None;
     let mut status = Seen::default();
     loop {
-        if let Err(e) = supervisor.turn(bridge, &clock).await {
+        let turn = supervisor.turn(bridge, &clock).await;
+        if let Err(e) = &turn {
             warn!("serial: {}", e);
         }
         let now_applied = supervisor.ps().applied_config();
@@ -37,6 +41,19 @@ pub async fn run<B: Board>(
             applied = now_applied;
             if let Some(config) = now_applied {
                 debug!("PS UART: {} baud {=str}", config.baud, describe(config));
+            }
+        }
+        if let Some(now_framing) = supervisor.cnc_framing()
+            && now_framing != cnc_framing
+        {
+            cnc_framing = now_framing;
+            // A refused framing was logged as the turn's error; the UART kept its old one.
+            if !matches!(turn, Err(TurnError::CncUnsupported(_))) {
+                info!(
+                    "CNC UART: {} baud {=str}",
+                    cnc_framing.baud,
+                    describe(cnc_framing)
+                );
             }
         }
         status.log_changes(bridge.status());

@@ -126,8 +126,33 @@ pub struct Uart {
 
 /// BRR for `baud` from the USART's kernel clock (oversampling by 16), if it can make it.
 fn brr(kernel_clock_hz: u32, baud: u32) -> Option<u16> {
-    let div = kernel_clock_hz.checked_div(baud)?;
-    u16::try_from(div).ok().filter(|&d| d >= 16)
+    if !runs_baud(kernel_clock_hz, baud) {
+        return None;
+    }
+    u16::try_from(kernel_clock_hz / baud).ok()
+}
+
+/// Whether a USART clocked at `kernel_clock_hz` runs `baud` (oversampling by 16: BRR from 16
+/// to 0xFFFF).
+pub const fn runs_baud(kernel_clock_hz: u32, baud: u32) -> bool {
+    if baud == 0 {
+        return false;
+    }
+    let div = kernel_clock_hz / baud;
+    div >= 16 && div <= 0xFFFF
+}
+
+/// Whether a USART clocked at `kernel_clock_hz` runs every one of `bauds`; for the boards'
+/// compile-time checks against the baud rates the settings accept.
+pub const fn runs_every_baud(kernel_clock_hz: u32, bauds: &[u32]) -> bool {
+    let mut i = 0;
+    while i < bauds.len() {
+        if !runs_baud(kernel_clock_hz, bauds[i]) {
+            return false;
+        }
+        i += 1;
+    }
+    true
 }
 
 impl Uart {

@@ -23,6 +23,8 @@ use super::qemu::{Qemu, QemuOptions};
 use super::qtest::Qtest;
 use super::safety::{self, Observed};
 use super::sim_port::{Framing, SimPort, SimPortOptions};
+use super::usart::{KERNEL_CLOCK_HZ, Usart};
+use plasma_protocol::serial::PortConfig;
 use plasma_sim::{Model, SimOptions};
 
 /// Boards that may run at once in one process (QEMU needs a core while the guest is busy;
@@ -249,6 +251,13 @@ impl Board {
     /// The CNC port.
     pub fn cnc(&mut self) -> &mut CncPort {
         &mut self.cnc
+    }
+
+    /// The framing the firmware runs its CNC UART (USART2) at, read from the registers now;
+    /// a baud rate within 2 % of `nominal_baud` reads as `nominal_baud` (BRR rounds). `None`
+    /// while the USART is off.
+    pub fn cnc_framing(&self, nominal_baud: u32) -> Result<Option<PortConfig>> {
+        Usart::CNC.framing(&self.qtest, Some(KERNEL_CLOCK_HZ), nominal_baud)
     }
 
     /// The firmware's log.

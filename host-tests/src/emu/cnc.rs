@@ -1,9 +1,10 @@
 //! The CNC's side of the emulated board's CNC serial port (USART2): send command lines, read
-//! reply lines, collect `!` event lines (docs/cnc-protocol.md).
+//! reply lines, collect `!` event lines (docs/cnc-protocol.md). Or, once [`CncPort::tap`]ped,
+//! the board's bytes as they come, for a relay to real CNC software (`pbtool emu --cnc-port`).
 
 use std::io::{Read, Write};
 use std::os::unix::net::UnixStream;
-use std::sync::mpsc::{self, Receiver, RecvTimeoutError};
+use std::sync::mpsc::{self, Receiver, RecvTimeoutError, Sender};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
@@ -54,10 +55,14 @@ impl LineSplitter {
     }
 }
 
+/// Where the reader thread puts the board's raw bytes once the port is tapped.
+type Tap = Arc<Mutex<Option<Sender<Vec<u8>>>>>;
+
 /// The CNC end of the board's CNC port.
 pub struct CncPort {
     writer: UnixStream,
     incoming: Receiver<Received>,
+    tap: Tap,
     /// Every item received, in order (what the tests have read and what they have not).
     transcript: Arc<Mutex<Vec<(Instant, String)>>>,
     events: Vec<Received>,
@@ -70,6 +75,8 @@ impl CncPort {
         let (tx, incoming) = mpsc::channel();
         let transcript = Arc::new(Mutex::new(Vec::new()));
         let log = Arc::clone(&transcript);
+        let tap: Tap = Arc::default();
+        let tapped = Arc::clone(&tap);
         std::thread::Builder::new()
             .name("cnc-reader".to_string())
             .spawn(move || {
@@ -79,6 +86,9 @@ impl CncPort {
                     if n == 0 {
                         break;
                     }
+                    if relayed(&tapped, &buf[..n]) {
+                        continue;
+                    }
                     let at = Instant::now();
                     for text in splitter.push(&buf[..n]) {
                         lock(&log).push((at, format!("< {text}")));
@@ -87,14 +97,27 @@ impl CncPort {
                         }
                     }
                 }
+                // The board's port closed: so does the tap's receiver.
+                lock(&tapped).take();
             })
             .map_err(|e| Error::io("CNC reader thread", e))?;
         Ok(CncPort {
             writer: stream,
             incoming,
+            tap,
             transcript,
             events: Vec::new(),
         })
+    }
+
+    /// From now on every chunk the board writes goes to the returned receiver as it arrives,
+    /// and no longer to [`CncPort::reply`], the events or the transcript (a relay to CNC
+    /// software runs for hours: nothing accumulates). The receiver closes when the board's
+    /// port does.
+    pub fn tap(&mut self) -> Receiver<Vec<u8>> {
+        let (tx, rx) = mpsc::channel();
+        *lock(&self.tap) = Some(tx);
+        rx
     }
 
     /// Sends `line` with CR LF.
@@ -233,6 +256,20 @@ impl Drop for CncPort {
     }
 }
 
+/// Hands `bytes` to the tap, if there is one; false when there is none (or its receiver has
+/// gone: the port goes back to lines).
+fn relayed(tap: &Tap, bytes: &[u8]) -> bool {
+    let mut tap = lock(tap);
+    let Some(relay) = tap.as_ref() else {
+        return false;
+    };
+    if relay.send(bytes.to_vec()).is_ok() {
+        return true;
+    }
+    *tap = None;
+    false
+}
+
 fn lock<T>(mutex: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
     mutex.lock().unwrap_or_else(|e| e.into_inner())
 }
@@ -251,6 +288,30 @@ mod tests {
             s.push(b"\r\n\x06\x15ERR X\n"),
             ["!LINK UP", "<ACK>", "<NAK>", "ERR X"]
         );
+    }
+
+    #[test]
+    fn a_tapped_port_hands_over_raw_bytes_and_keeps_no_lines() {
+        let (ours, mut theirs) = UnixStream::pair().unwrap();
+        let mut cnc = CncPort::new(ours).unwrap();
+        theirs.write_all(b"OK before\r\n").unwrap();
+        assert_eq!(cnc.reply(Duration::from_secs(5)).unwrap(), "OK before");
+        let raw = cnc.tap();
+        theirs.write_all(b":010600011234B4\r\n\x06").unwrap();
+        let mut got = Vec::new();
+        while got.len() < 18 {
+            got.extend(raw.recv_timeout(Duration::from_secs(5)).unwrap());
+        }
+        assert_eq!(got, b":010600011234B4\r\n\x06");
+        assert!(cnc.next(Duration::from_millis(50)).is_err());
+        let transcript = cnc.transcript(Instant::now());
+        assert!(!transcript.contains("0106"), "{transcript}");
+        cnc.send_bytes(b"ID\r\n").unwrap();
+        let mut echo = [0u8; 4];
+        theirs.read_exact(&mut echo).unwrap();
+        assert_eq!(&echo, b"ID\r\n");
+        drop(theirs);
+        assert!(raw.recv_timeout(Duration::from_secs(5)).is_err());
     }
 
     #[test]

@@ -10,6 +10,7 @@
 //! - [`sim_port`]: a simulated unit ([`plasma_sim`]) on the PS socket, with the baud-accurate
 //!   [`Line`](plasma_sim::line::Line) in between, in real time.
 //! - [`cnc`]: the CNC's end of the CNC port: commands, replies, `!` events.
+//! - [`usart`]: the USARTs' registers, and the framing the firmware set in them.
 //! - [`log`]: the firmware's defmt log, decoded against the ELF.
 //! - [`image`]: builds the image (`cargo emu-fw`) once per process.
 //! - [`board`]: all of it as one [`Board`], with the safety rules of [`safety`] checked on
@@ -43,6 +44,7 @@ pub mod qmp;
 pub mod qtest;
 pub mod safety;
 pub mod sim_port;
+pub mod usart;
 
 pub use board::{Board, BoardOptions, Wiring};
 pub use error::{Error, Result};

@@ -21,7 +21,7 @@ use std::sync::mpsc::{self, Receiver, Sender, TryRecvError};
 use std::sync::{Arc, Mutex};
 use std::thread::JoinHandle;
 
-use plasma_protocol::serial::{Parity, PortConfig, StopBits};
+use plasma_protocol::serial::PortConfig;
 use plasma_protocol::time::{Duration, Instant};
 
 use plasma_firmware::io::Output;
@@ -29,6 +29,7 @@ use plasma_firmware::io::Output;
 use super::error::{Error, Result};
 use super::pins::{output_active, output_pin};
 use super::qtest::{Edge, Qtest};
+use super::usart::Usart;
 use crate::harness::{Direction, TraceFrame, WireTrace};
 use plasma_sim::line::{End, Line, Wiring};
 use plasma_sim::{Model, SimOptions, SimulatedUnit};
@@ -47,16 +48,6 @@ const PIECES_OF_A_FRAME: Duration = Duration::from_millis(50);
 /// How long a write to the socket may block (QEMU stops reading while the guest does not).
 const WRITE_TIMEOUT: std::time::Duration = std::time::Duration::from_secs(2);
 
-/// USART1's registers (the PS port).
-pub mod usart1 {
-    /// Control register 1.
-    pub const CR1: u64 = 0x4001_3800;
-    /// Control register 2.
-    pub const CR2: u64 = 0x4001_3804;
-    /// Baud rate register.
-    pub const BRR: u64 = 0x4001_380C;
-}
-
 /// Where the line's master end (the firmware's UART) takes its framing from.
 #[derive(Clone)]
 pub enum Framing {
@@ -70,73 +61,6 @@ pub enum Framing {
         /// USART1's kernel clock, to turn BRR into a baud rate; `None` takes the unit's baud.
         clock_hz: Option<u32>,
     },
-}
-
-/// The port settings USART1's registers describe: `None` while the USART is disabled or set
-/// to anything but 8 data bits. A baud rate within 2 % of `nominal_baud` (the unit's; BRR
-/// rounds, and a UART tolerates that much) is taken as `nominal_baud`; without the clock the
-/// baud rate is taken as `nominal_baud`.
-pub fn port_from_registers(
-    cr1: u32,
-    cr2: u32,
-    brr: u32,
-    clock_hz: Option<u32>,
-    nominal_baud: u32,
-) -> Option<PortConfig> {
-    const UE: u32 = 1 << 0;
-    const PS: u32 = 1 << 9;
-    const PCE: u32 = 1 << 10;
-    const M0: u32 = 1 << 12;
-    const M1: u32 = 1 << 28;
-    const OVER8: u32 = 1 << 15;
-    if cr1 & UE == 0 {
-        return None;
-    }
-    // Word length counts the parity bit: 8 data bits are M=00 without parity, M=01 with.
-    let word_bits = match (cr1 & M1 != 0, cr1 & M0 != 0) {
-        (false, false) => 8,
-        (false, true) => 9,
-        (true, false) => 7,
-        (true, true) => return None,
-    };
-    let parity = match (cr1 & PCE != 0, cr1 & PS != 0) {
-        (false, _) => Parity::None,
-        (true, false) => Parity::Even,
-        (true, true) => Parity::Odd,
-    };
-    let data_bits = word_bits - u32::from(parity != Parity::None);
-    if data_bits != 8 {
-        return None;
-    }
-    let stop_bits = match (cr2 >> 12) & 0b11 {
-        0b00 => StopBits::One,
-        0b10 => StopBits::Two,
-        // 0.5 and 1.5 stop bits: nothing the bridge uses; read as one.
-        _ => StopBits::One,
-    };
-    let baud = match clock_hz {
-        Some(clock) if brr != 0 => {
-            // OVER8: BRR[3:0] holds USARTDIV[3:0] shifted right by one.
-            let div = if cr1 & OVER8 != 0 {
-                (brr & !0xF) | ((brr & 0x7) << 1)
-            } else {
-                brr
-            };
-            let over = if cr1 & OVER8 != 0 { 2 } else { 1 };
-            let baud = over * clock / div;
-            if baud.abs_diff(nominal_baud).saturating_mul(50) <= nominal_baud {
-                nominal_baud
-            } else {
-                baud
-            }
-        }
-        _ => nominal_baud,
-    };
-    Some(PortConfig {
-        baud,
-        parity,
-        stop_bits,
-    })
 }
 
 /// How to run the simulated unit.
@@ -451,15 +375,10 @@ impl Station {
         let Framing::Registers { qtest, clock_hz } = &self.framing else {
             return None;
         };
-        let read = || -> Result<(u32, u32, u32)> {
-            Ok((
-                qtest.readl(usart1::CR1)?,
-                qtest.readl(usart1::CR2)?,
-                qtest.readl(usart1::BRR)?,
-            ))
-        };
-        let (cr1, cr2, brr) = read().ok()?;
-        port_from_registers(cr1, cr2, brr, *clock_hz, self.unit.port().baud)
+        Usart::PS
+            .framing(qtest, *clock_hz, self.unit.port().baud)
+            .ok()
+            .flatten()
     }
 
     /// Everything due now: the unit hears, runs and answers; its characters go to the socket.
@@ -556,34 +475,6 @@ mod tests {
             got.push(byte[0]);
         }
         (got, began.elapsed())
-    }
-
-    #[test]
-    fn registers_give_the_framing() {
-        const UE: u32 = 1;
-        const PCE: u32 = 1 << 10;
-        const PS: u32 = 1 << 9;
-        const M0: u32 = 1 << 12;
-        let even = port_from_registers(UE | PCE | M0, 0, 0, None, 19_200).unwrap();
-        assert_eq!(even, PortConfig::MODBUS_DEFAULT);
-        let odd_two = port_from_registers(UE | PCE | PS | M0, 0b10 << 12, 0, None, 19_200);
-        assert_eq!(
-            odd_two,
-            Some(PortConfig {
-                baud: 19_200,
-                parity: Parity::Odd,
-                stop_bits: StopBits::Two
-            })
-        );
-        // 8N1 at 80 MHz: BRR = 80e6 / 19200 = 4166, 19203 baud: the unit's 19200 within 2 %.
-        let hpr = port_from_registers(UE, 0, 4166, Some(80_000_000), 19_200).unwrap();
-        assert_eq!(hpr, PortConfig::HPR);
-        // Against a 9600-baud unit it is a mismatch.
-        let fast = port_from_registers(UE, 0, 4166, Some(80_000_000), 9600).unwrap();
-        assert_eq!(fast.baud, 19_203);
-        // Disabled, or 7 data bits with parity: no 8-bit framing to model.
-        assert_eq!(port_from_registers(PCE | M0, 0, 0, None, 19_200), None);
-        assert_eq!(port_from_registers(UE | PCE, 0, 0, None, 19_200), None);
     }
 
     #[test]

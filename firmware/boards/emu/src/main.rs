@@ -200,8 +200,8 @@ mod image {
             USART2,
             &CNC_STATE,
             rcc::SYSCLK_HZ,
-            // The saved CNC framing (CONFIG cnc_baud/cnc_parity/cnc_stop_bits), applied at
-            // start-up; 115200 8N1 unless saved otherwise.
+            // The saved CNC framing (115200 8N1 unless saved otherwise); CONFIG
+            // cnc_baud/cnc_parity/cnc_stop_bits switch it while the board runs.
             settings.cnc_port_config(),
             false,
         ));

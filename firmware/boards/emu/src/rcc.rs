@@ -10,6 +10,12 @@ use stm32_metapac::{FLASH, RCC};
 /// SYSCLK = HCLK = PCLK1 = PCLK2 after [`init`].
 pub const SYSCLK_HZ: u32 = 80_000_000;
 
+// The USARTs run on SYSCLK: every baud rate `CONFIG cnc_baud` accepts runs on USART2.
+const _: () = assert!(plasma_tasks::uart::runs_every_baud(
+    SYSCLK_HZ,
+    &plasma_firmware::settings::CNC_BAUDS
+));
+
 /// HSI16 / 2 = 8 MHz PLL input, × 20 = 160 MHz VCO, / 2 = 80 MHz; GPIO A-C, SYSCFG (EXTI
 /// routing), USART1 and USART2 clocked.
 pub fn init() {

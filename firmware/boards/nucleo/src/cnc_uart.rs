@@ -1,9 +1,11 @@
-//! The CNC UART: USART2, the ST-LINK's virtual COM port, 115200 8N1, through the shared
-//! driver (`plasma_tasks::uart`). Lines in and out are logged (debug), so a defmt log shows
+//! The CNC UART: USART2, the ST-LINK's virtual COM port, at the CNC framing of the settings
+//! (115200 8N1 by default), through the shared driver (`plasma_tasks::uart`). Lines in and out are logged (debug), so a defmt log shows
 //! the commands next to what they caused.
 
 use defmt::debug;
 use embedded_io_async::{ErrorType, Read, ReadReady, Write};
+use plasma_firmware::runner::{ConfigurablePort, UnsupportedConfig};
+use plasma_protocol::serial::PortConfig;
 use plasma_tasks::uart::{Uart, UartError};
 
 /// USART2 with logging.
@@ -36,5 +38,11 @@ impl Write for CncUart {
 
     async fn flush(&mut self) -> Result<(), Self::Error> {
         self.0.flush().await
+    }
+}
+
+impl ConfigurablePort for CncUart {
+    fn set_port_config(&mut self, config: PortConfig) -> Result<(), UnsupportedConfig> {
+        self.0.set_port_config(config)
     }
 }

@@ -96,6 +96,11 @@ mod image {
     /// The USARTs' kernel clock: PCLK1 and PCLK2 (the reset choice in RCC_CCIPR), both
     /// SYSCLK (80 MHz, [`clock_config`]; the APB prescalers stay at 1).
     const USART_CLOCK_HZ: u32 = 80_000_000;
+    // Every baud rate `CONFIG cnc_baud` accepts runs on USART2.
+    const _: () = assert!(plasma_tasks::uart::runs_every_baud(
+        USART_CLOCK_HZ,
+        &plasma_firmware::settings::CNC_BAUDS
+    ));
 
     static PS_STATE: UartState = UartState::new();
     static CNC_STATE: UartState = UartState::new();
@@ -180,8 +185,8 @@ mod image {
             pac::USART2,
             &CNC_STATE,
             USART_CLOCK_HZ,
-            // The saved CNC framing (CONFIG cnc_baud/cnc_parity/cnc_stop_bits), applied at
-            // start-up; 115200 8N1 unless saved otherwise.
+            // The saved CNC framing (115200 8N1 unless saved otherwise); CONFIG
+            // cnc_baud/cnc_parity/cnc_stop_bits switch it while the board runs.
             settings.cnc_port_config(),
             false,
         ));
