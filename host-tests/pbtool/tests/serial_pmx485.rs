@@ -9,6 +9,7 @@
 //! --cnc-port` and `pbtool run --ps-port --cnc-port`) for a SYNC, a legacy and an HPR unit
 //! behind it, a fault on the unit reaching pmx485's fault pin, the unit's link lost and seen
 //! as pmx485's `status` FALSE, and the text protocol answering on the same port afterwards.
+//! And the firmware itself: the emulated board's CNC UART on a pty (`pbtool emu --cnc-port`).
 //!
 //! One realtime session per machine: every pmx485 run takes [`PMX485`] first.
 
@@ -198,4 +199,61 @@ fn linuxcnc_pmx485_sees_the_units_link_lost_as_a_communication_error() {
     // The text protocol still answers, and says why.
     let id = wait_for_id(&cnc.a, |id| id.starts_with("OK bridge="));
     assert!(id.contains(" link=DOWN "), "{id}");
+}
+
+#[test]
+fn linuxcnc_pmx485_drives_the_emulated_board() {
+    let cable = Cable::new();
+    let args = [
+        "emu",
+        "--ps",
+        "sync65",
+        "--fault",
+        "0-50-0",
+        "--cnc-port",
+        &cable.b,
+        "--cnc-framing",
+        "19200:8E1",
+    ];
+    let emu = Pbtool::spawn(&args);
+    // The board boots at 115200 8N1; pbtool sets it to 19200 8E1 with CONFIG, then relays.
+    let id = wait_for_id(&cable.a, |id| id.contains(" link=UP "));
+    assert!(id.contains(" link=UP "), "{id}\n{}", emu.transcript());
+    let mut script_args = AS_QTPLASMAC.to_vec();
+    script_args.extend_from_slice(&[
+        "--expect-limits",
+        "20:65:58:78",
+        "--expect-fault",
+        "500",
+        "--expect-arctime",
+        "-",
+    ]);
+    let (output, text) = pmx485_on(&cable.a, &script_args);
+    assert!(
+        output.status.success(),
+        "pmx485 against pbtool {}:\n{text}\n{}",
+        args.join(" "),
+        emu.transcript()
+    );
+    assert!(text.contains("current       45"), "{text}");
+
+    // The text protocol answers on the same port after the Modbus traffic, and the board's
+    // UART follows CONFIG at once: the reply comes at 19200, then the CNC's 19200 8E1 line
+    // no longer reaches it.
+    let mut cnc = CncEnd::open(&cable.a);
+    let id = cnc.command("ID").unwrap_or_default();
+    assert!(id.starts_with("OK bridge="), "{id}\n{}", emu.transcript());
+    assert_eq!(
+        cnc.command("CONFIG cnc_baud 9600").as_deref(),
+        Some("OK cnc_baud=9600"),
+        "{}",
+        emu.transcript()
+    );
+    assert_eq!(cnc.command_within("ID", Duration::from_secs(2)), None);
+    assert!(
+        emu.stderr()
+            .contains("the board's CNC UART now runs 9600 8E1, the CNC's line 19200 8E1"),
+        "{}",
+        emu.transcript()
+    );
 }

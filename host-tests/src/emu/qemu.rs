@@ -132,6 +132,30 @@ pub fn parse_version(line: &str) -> Option<(u32, u32)> {
     Some((major, minor))
 }
 
+/// QEMU is killed when the thread that starts it ends, however it ends: a `pbtool emu
+/// --cnc-port` stopped with SIGKILL (or SIGTERM) never leaves a QEMU running. [`Qemu`] is
+/// dropped by that thread in every use (a test, pbtool's main thread); this is the backstop
+/// for the deaths that run no destructor. QEMU 10's `-run-with` has no `exit-with-parent` in
+/// Debian's build.
+#[cfg(target_os = "linux")]
+fn die_with_this_thread(command: &mut Command) {
+    use std::os::unix::process::CommandExt;
+    // SAFETY: between fork and exec only `prctl`, which is async-signal-safe, runs in the
+    // child; nothing is allocated and no lock is taken.
+    unsafe {
+        command.pre_exec(|| {
+            if libc::prctl(libc::PR_SET_PDEATHSIG, libc::SIGKILL) == -1 {
+                return Err(std::io::Error::last_os_error());
+            }
+            Ok(())
+        });
+    }
+}
+
+/// Elsewhere QEMU outlives a killed harness; [`Qemu`]'s drop still kills it.
+#[cfg(not(target_os = "linux"))]
+fn die_with_this_thread(_: &mut Command) {}
+
 /// How to run QEMU.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct QemuOptions {
@@ -272,15 +296,16 @@ impl Qemu {
             .map_err(|e| Error::io(format!("creating {}", stderr_path.display()), e))?;
         let log = fs::File::create(&log_path)
             .map_err(|e| Error::io(format!("creating {}", log_path.display()), e))?;
-        let child = Command::new(qemu_binary())
+        let mut command = Command::new(qemu_binary());
+        command
             .args(command_line(options, dir.path()))
             .stdin(Stdio::null())
             .stdout(log)
-            .stderr(stderr)
-            .spawn()
-            .map_err(|e| {
-                Error::Qemu(format!("cannot start qemu-system-arm: {e}; {INSTALL_HINT}"))
-            })?;
+            .stderr(stderr);
+        die_with_this_thread(&mut command);
+        let child = command.spawn().map_err(|e| {
+            Error::Qemu(format!("cannot start qemu-system-arm: {e}; {INSTALL_HINT}"))
+        })?;
         let mut starting = Starting {
             child: Some(child),
             stderr_path: stderr_path.clone(),

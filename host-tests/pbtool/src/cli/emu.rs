@@ -4,10 +4,14 @@ use std::io::{self, IsTerminal};
 use std::process::ExitCode;
 
 use clap::Args;
+use pbtool::emu::cnc_port::{self, CncPortOptions, RelayError};
 use pbtool::emu::console::EmuConsoleOptions;
 use pbtool::emu::measure::{MeasureOptions, measure};
 
-use super::{UnitArgs, simulated_unit, stdin_lines};
+use plasma_protocol::serial::PortConfig;
+
+use super::sim::cnc_framing;
+use super::{UnitArgs, serial_failure, simulated_unit, stdin_lines};
 
 #[derive(Args)]
 pub struct EmuArgs {
@@ -25,6 +29,14 @@ pub struct EmuArgs {
     /// With --measure: idle windows of 10 s of guest time to report.
     #[arg(long, default_value_t = 1, requires = "measure")]
     pub idle_windows: usize,
+    /// The board's CNC port on this serial device instead of stdin/stdout (a pty, an adapter):
+    /// CNC software talks to the firmware itself.
+    #[arg(long, value_name = "DEV", conflicts_with = "measure")]
+    pub cnc_port: Option<String>,
+    /// With --cnc-port: the CNC's framing, BAUD:8XY; the board is set to it at start
+    /// (`CONFIG cnc_baud`, `cnc_parity`, `cnc_stop_bits`). 19200:8E1 for LinuxCNC's pmx485.
+    #[arg(long, value_name = "FRAMING", default_value = "115200:8N1", value_parser = cnc_framing, requires = "cnc_port")]
+    pub cnc_framing: PortConfig,
 }
 
 /// The firmware on the emulated board: the CNC console, or the measurements.
@@ -46,6 +58,22 @@ pub fn emu(args: &EmuArgs) -> ExitCode {
             }
             Err(e) => {
                 eprintln!("pbtool emu --measure: {e}");
+                ExitCode::FAILURE
+            }
+        };
+    }
+    if let Some(device) = &args.cnc_port {
+        let options = CncPortOptions {
+            model,
+            fault,
+            log: args.log,
+            seed: args.unit.seed,
+            framing: args.cnc_framing,
+        };
+        return match cnc_port::run(&options, device, &mut io::stderr()) {
+            RelayError::Serial(e) => serial_failure("emu", &e),
+            RelayError::Board(e) => {
+                eprintln!("pbtool emu: {e}");
                 ExitCode::FAILURE
             }
         };

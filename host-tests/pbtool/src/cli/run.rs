@@ -5,6 +5,8 @@ use std::process::ExitCode;
 
 use clap::Args;
 use host_tests::emu::qemu::ensure_qemu;
+use pbtool::serial::describe;
+use plasma_protocol::serial::PortConfig;
 use plasma_sim::Model;
 
 use super::emu::{EmuArgs, emu};
@@ -34,20 +36,29 @@ pub fn run(args: &RunArgs) -> ExitCode {
             args.sim_args.unit.events,
         );
     }
-    // A CNC port without a PS port: the simulator's CNC side on it.
-    if !args.sim && args.sim_args.cnc_port.is_none() {
-        if let Some(probe) = attached_probe() {
+    // A CNC port without a PS port: the emulated board's CNC port on it (or the simulator's).
+    let cnc_port = args.sim_args.cnc_port.as_deref();
+    if !args.sim {
+        if cnc_port.is_none()
+            && let Some(probe) = attached_probe()
+        {
             eprintln!("pbtool run: debug probe found ({probe}); flashing the board image");
             return flash_board();
         }
         let unit = Model::from_name(&args.sim_args.unit.model)
             .map_or("unit".to_string(), |m| m.to_string());
+        let on_port = cnc_port.map_or(String::new(), |dev| {
+            format!(
+                " --cnc-port {dev} --cnc-framing {}",
+                framing_arg(args.sim_args.cnc_framing)
+            )
+        });
         if !args.sim_args.fast {
             match ensure_qemu() {
                 Ok(_) => {
                     eprintln!(
                         "pbtool run: no debug probe found; running the firmware on the emulated \
-                         board against a simulated {unit} (pbtool emu --ps {})",
+                         board against a simulated {unit} (pbtool emu --ps {}{on_port})",
                         args.sim_args.unit.model
                     );
                     return emu(&EmuArgs {
@@ -56,6 +67,8 @@ pub fn run(args: &RunArgs) -> ExitCode {
                         measure: false,
                         toggles: 0,
                         idle_windows: 0,
+                        cnc_port: args.sim_args.cnc_port.clone(),
+                        cnc_framing: args.sim_args.cnc_framing,
                     });
                 }
                 Err(e) => eprintln!("pbtool run: no emulated board ({e})"),
@@ -63,7 +76,7 @@ pub fn run(args: &RunArgs) -> ExitCode {
         }
         eprintln!(
             "pbtool run: no debug probe found; running the bridge against a simulated {unit} \
-             (pbtool sim --ps {})",
+             (pbtool sim --ps {}{on_port})",
             args.sim_args.unit.model,
         );
     }
@@ -109,6 +122,34 @@ fn flash_board() -> ExitCode {
         Err(e) => {
             eprintln!("pbtool run: cannot start cargo: {e}");
             ExitCode::FAILURE
+        }
+    }
+}
+
+/// `framing` as `--cnc-framing` takes it (`19200:8E1`).
+fn framing_arg(framing: PortConfig) -> String {
+    describe(framing).replacen(' ', ":", 1)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use plasma_protocol::serial::{Parity, StopBits};
+
+    #[test]
+    fn the_hint_spells_the_framing_as_cnc_framing_reads_it() {
+        for parity in [Parity::None, Parity::Even, Parity::Odd] {
+            for stop_bits in [StopBits::One, StopBits::Two] {
+                let framing = PortConfig {
+                    baud: 19_200,
+                    parity,
+                    stop_bits,
+                };
+                assert_eq!(
+                    super::super::sim::cnc_framing(&framing_arg(framing)),
+                    Ok(framing)
+                );
+            }
         }
     }
 }

@@ -98,7 +98,7 @@ fn on_cnc_port(console: &mut Console, name: &str, model: plasma_sim::Model) -> E
 }
 
 /// `--cnc-framing`: `BAUD:8XY` with a baud `cnc_baud` accepts.
-fn cnc_framing(text: &str) -> Result<PortConfig, String> {
+pub(super) fn cnc_framing(text: &str) -> Result<PortConfig, String> {
     let bad = || format!("{text}: expected BAUD:8XY, e.g. 19200:8E1 (baud one of {CNC_BAUDS:?})");
     let (baud, framing) = text.split_once(':').ok_or_else(bad)?;
     let baud: u32 = baud.parse().map_err(|_| bad())?;

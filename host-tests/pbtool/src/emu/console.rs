@@ -16,9 +16,9 @@ use host_tests::emu::{Board, BoardOptions, Error, Result};
 use plasma_sim::{Model, SimOptions};
 
 /// The longest wait for the link (and the unit's limits) before the first command.
-const SETTLE_TIMEOUT: Duration = Duration::from_secs(10);
+pub(crate) const SETTLE_TIMEOUT: Duration = Duration::from_secs(10);
 /// The longest wait for one reply.
-const REPLY_TIMEOUT: Duration = Duration::from_secs(10);
+pub(crate) const REPLY_TIMEOUT: Duration = Duration::from_secs(10);
 /// How long `TORCH ON|OFF` waits for START to follow before it answers anyway.
 const TORCH_SETTLE: Duration = Duration::from_millis(200);
 /// How long the console keeps printing after the last reply at the end of input.
@@ -192,7 +192,7 @@ pub fn run(
 
 /// Waits until the link is up and the unit's limits (or an HPR's state) are read; false when
 /// that did not happen within [`SETTLE_TIMEOUT`].
-fn settle(board: &mut Board) -> Result<bool> {
+pub(crate) fn settle(board: &mut Board) -> Result<bool> {
     let began = Instant::now();
     while began.elapsed() < SETTLE_TIMEOUT {
         let status = board.command("STATUS", REPLY_TIMEOUT)?;

@@ -296,10 +296,15 @@ impl CncEnd {
     /// Sends `line` with CR LF and returns the next reply line (`OK`/`ERR`; event lines are
     /// skipped); `None` when none came within [`LONG`].
     pub fn command(&mut self, line: &str) -> Option<String> {
+        self.command_within(line, LONG)
+    }
+
+    /// As [`CncEnd::command`], waiting at most `timeout`.
+    pub fn command_within(&mut self, line: &str, timeout: Duration) -> Option<String> {
         self.port
             .write_all(format!("{line}\r\n").as_bytes())
             .expect("written");
-        let deadline = Instant::now() + LONG;
+        let deadline = Instant::now() + timeout;
         while Instant::now() < deadline {
             while let Some(end) = self.pending.iter().position(|&b| b == b'\n') {
                 let line: Vec<u8> = self.pending.drain(..=end).collect();
