@@ -9,7 +9,8 @@
 //! --cnc-port` and `pbtool run --ps-port --cnc-port`) for a SYNC, a legacy and an HPR unit
 //! behind it, a fault on the unit reaching pmx485's fault pin, the unit's link lost and seen
 //! as pmx485's `status` FALSE, and the text protocol answering on the same port afterwards.
-//! And the firmware itself: the emulated board's CNC UART on a pty (`pbtool emu --cnc-port`).
+//! And the firmware itself: the emulated board's CNC UART on a pty (`pbtool emu --cnc-port`),
+//! with a SYNC unit (and a fault) and a MaxPro200 behind it.
 //!
 //! One realtime session per machine: every pmx485 run takes [`PMX485`] first.
 
@@ -201,39 +202,58 @@ fn linuxcnc_pmx485_sees_the_units_link_lost_as_a_communication_error() {
     assert!(id.contains(" link=DOWN "), "{id}");
 }
 
-#[test]
-fn linuxcnc_pmx485_drives_the_emulated_board() {
-    let cable = Cable::new();
-    let args = [
-        "emu",
-        "--ps",
-        "sync65",
-        "--fault",
-        "0-50-0",
-        "--cnc-port",
-        &cable.b,
-        "--cnc-framing",
-        "19200:8E1",
-    ];
+/// pmx485 against the firmware on the emulated board (`pbtool emu --ps UNIT --cnc-port`, the
+/// board set to pmx485's 19200 8E1 by pbtool); the pbtool process (still running) and the
+/// script's output, having checked it passed.
+fn pmx485_drives_the_emulated_board(
+    cable: &Cable,
+    unit: &[&str],
+    expect: &[&str],
+) -> (Pbtool, String) {
+    let mut args = vec!["emu", "--cnc-port", &cable.b, "--cnc-framing", "19200:8E1"];
+    args.extend_from_slice(unit);
     let emu = Pbtool::spawn(&args);
     // The board boots at 115200 8N1; pbtool sets it to 19200 8E1 with CONFIG, then relays.
     let id = wait_for_id(&cable.a, |id| id.contains(" link=UP "));
     assert!(id.contains(" link=UP "), "{id}\n{}", emu.transcript());
     let mut script_args = AS_QTPLASMAC.to_vec();
-    script_args.extend_from_slice(&[
-        "--expect-limits",
-        "20:65:58:78",
-        "--expect-fault",
-        "500",
-        "--expect-arctime",
-        "-",
-    ]);
+    script_args.extend_from_slice(expect);
     let (output, text) = pmx485_on(&cable.a, &script_args);
     assert!(
         output.status.success(),
         "pmx485 against pbtool {}:\n{text}\n{}",
         args.join(" "),
         emu.transcript()
+    );
+    (emu, text)
+}
+
+#[test]
+fn linuxcnc_pmx485_drives_a_maxpro200_through_the_emulated_board() {
+    // 5-200 A from the unit; mode normal and pressure automatic, as for an HPR.
+    let cable = Cable::new();
+    let (_emu, text) = pmx485_drives_the_emulated_board(
+        &cable,
+        &["--ps", "maxpro200"],
+        &["--expect-limits", "5:200:0:0", "--expect-arctime", "-"],
+    );
+    assert!(text.contains("current       45"), "{text}");
+}
+
+#[test]
+fn linuxcnc_pmx485_drives_the_emulated_board() {
+    let cable = Cable::new();
+    let (emu, text) = pmx485_drives_the_emulated_board(
+        &cable,
+        &["--ps", "sync65", "--fault", "0-50-0"],
+        &[
+            "--expect-limits",
+            "20:65:58:78",
+            "--expect-fault",
+            "500",
+            "--expect-arctime",
+            "-",
+        ],
     );
     assert!(text.contains("current       45"), "{text}");
 
