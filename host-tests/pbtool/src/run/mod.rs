@@ -20,10 +20,27 @@ use host_tests::harness::{BridgeEndpoint, PsEndpoint};
 use plasma_firmware::bridge::Bridge;
 use plasma_firmware::io::{Inputs, Interlocks, SupplyState};
 use plasma_firmware::settings::Settings;
-use plasma_protocol::time::Instant;
+use plasma_protocol::serial::PortConfig;
+use plasma_protocol::time::{Duration, Instant};
 
 use crate::realtime::{Arrival, Clock, wait};
 use crate::serial::{Port, Rx, SerialError};
+
+/// When the last stop bit of `len` characters at `config`, handed to the OS at `handed_over`,
+/// leaves the PC's UART: the reply time-out runs from there, as on the board (whose UART says
+/// so, TC). A PC's driver sends from its buffer after `write` returns, so it is the frame's wire
+/// time after the hand-over, and not before the write returned (`written`: a full buffer
+/// blocks it). Computed rather than waited for: `tcdrain` has no time-out and a stuck adapter
+/// would hang the bridge in it.
+fn end_of_transmission(
+    handed_over: Instant,
+    written: Instant,
+    config: PortConfig,
+    len: usize,
+) -> Instant {
+    let wire_ns = config.char_time_ns().saturating_mul(len as u64);
+    (handed_over + Duration::from_micros(wire_ns.div_ceil(1_000))).max(written)
+}
 
 /// The bridge with its PS port, in real time.
 pub struct LineBridge {
@@ -98,8 +115,12 @@ impl LineBridge {
     pub fn service(&mut self, now: Instant) -> Result<(), SerialError> {
         self.endpoint.poll(now, &mut Vec::new());
         while let Some(frame) = self.endpoint.poll_ps_transmit(now).map(<[u8]>::to_vec) {
-            self.ps.set_config(self.endpoint.ps_port_config())?;
+            let config = self.endpoint.ps_port_config();
+            self.ps.set_config(config)?;
+            let handed_over = self.clock.now();
             self.ps.write_all(&frame)?;
+            let end = end_of_transmission(handed_over, self.clock.now(), config, frame.len());
+            self.endpoint.ps_transmitted(end);
         }
         self.endpoint.poll(now, &mut Vec::new());
         if let Some(config) = self.endpoint.take_io_config_change() {
@@ -191,5 +212,24 @@ pub fn run_cnc_port(
         }
         // After `CONFIG cnc_baud ...` (its reply already written at the old framing).
         cnc.set_config(bridge.bridge().cnc_port_config())?;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_time_out_starts_when_the_frame_has_left_the_wire() {
+        // `:01030000000AF2\r\n` (17 characters) at 19200 8E1: 11 bits each, 9.74 ms.
+        let at = Instant::from_millis(100);
+        let end = end_of_transmission(at, at, PortConfig::MODBUS_DEFAULT, 17);
+        assert_eq!(end, Instant::from_micros(100_000 + 9_740));
+        // A write that blocked longer than that (the driver's buffer was full).
+        let late = Instant::from_millis(150);
+        assert_eq!(
+            end_of_transmission(at, late, PortConfig::MODBUS_DEFAULT, 17),
+            late
+        );
     }
 }
