@@ -14,6 +14,7 @@ use plasma_tasks::settings::Store;
 
 use crate::flash::SettingsFlash;
 use crate::gpio::{InputPins, Led, OutputPins};
+use crate::probe::ProbedCnc;
 use plasma_tasks::uart::Uart;
 
 /// QEMU's b-l475e-iot01a.
@@ -24,7 +25,7 @@ impl Board for Emulated {
     type OutputPins = OutputPins;
     type Led = Led;
     type PsUart = Uart;
-    type CncUart = Uart;
+    type CncUart = ProbedCnc;
     /// The shared driver's transmit ring, as on the Nucleo.
     const CNC_TX_BUFFER: usize = plasma_tasks::uart::TX_CAPACITY;
     type SettingsFlash = SettingsFlash;
@@ -51,7 +52,7 @@ pub fn io_task(
 pub fn bridge_task(
     bridge: &'static mut Bridge,
     ps: Uart,
-    cnc: Uart,
+    cnc: ProbedCnc,
     io: BoardIo,
     progress: TaskId,
 ) -> impl Future<Output = ()> {

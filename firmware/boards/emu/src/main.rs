@@ -217,7 +217,7 @@ mod image {
             bridge_task(
                 bridge,
                 ps_uart,
-                cnc_uart,
+                probe::ProbedCnc(cnc_uart),
                 BoardIo,
                 register("bridge", Duration::from_millis(500)),
             )

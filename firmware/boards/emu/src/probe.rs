@@ -6,6 +6,9 @@
 //!   WFI), so a debounce wait does not count. Under `-icount shift=0` QEMU runs one
 //!   instruction per virtual nanosecond: busy nanoseconds are instructions.
 //! - Idle: every 10 s of guest time, the share of time in WFI and the wake-ups.
+//! - CNC line → reply: from the read that takes a line's last byte (LF) off the CNC UART's
+//!   ring to the write that hands the next reply's LF to it ([`ProbedCnc`]). QEMU transmits in
+//!   no time, so this is the firmware's share of a Modbus master's wait; pmx485 allows 100 ms.
 //!
 //! Lines start with `emu-probe:`; `pbtool emu --measure` reads them.
 
@@ -13,6 +16,10 @@ use core::cell::Cell;
 
 use critical_section::Mutex;
 use defmt::info;
+use embedded_io_async::{ErrorType, Read, ReadReady, Write};
+use plasma_firmware::runner::{ConfigurablePort, UnsupportedConfig};
+use plasma_protocol::serial::PortConfig;
+use plasma_tasks::uart::{Uart, UartError};
 
 use crate::executor::{SleepStats, sleep_stats};
 use crate::time_driver::{cycles_to_ns, now_cycles};
@@ -42,6 +49,63 @@ pub fn start_changed(level: bool) {
     });
 }
 
+/// A CNC line read and not yet answered: (when, cycles asleep so far).
+static CNC_LINE: Mutex<Cell<Option<(u64, u64)>>> = Mutex::new(Cell::new(None));
+/// A finished CNC measurement not yet logged: (busy, elapsed) cycles.
+static CNC_RESULT: Mutex<Cell<Option<(u64, u64)>>> = Mutex::new(Cell::new(None));
+
+/// The emulated board's CNC UART, stamping each line that comes in and the reply that goes
+/// out.
+pub struct ProbedCnc(pub Uart);
+
+impl ErrorType for ProbedCnc {
+    type Error = UartError;
+}
+
+impl Read for ProbedCnc {
+    async fn read(&mut self, buf: &mut [u8]) -> Result<usize, UartError> {
+        let n = self.0.read(buf).await?;
+        if buf.get(..n).is_some_and(|read| read.contains(&b'\n')) {
+            let (now, asleep) = (now_cycles(), sleep_stats().asleep);
+            critical_section::with(|cs| CNC_LINE.borrow(cs).set(Some((now, asleep))));
+        }
+        Ok(n)
+    }
+}
+
+impl ReadReady for ProbedCnc {
+    fn read_ready(&mut self) -> Result<bool, UartError> {
+        self.0.read_ready()
+    }
+}
+
+impl Write for ProbedCnc {
+    async fn write(&mut self, buf: &[u8]) -> Result<usize, UartError> {
+        let n = self.0.write(buf).await?;
+        if buf.get(..n).is_some_and(|written| written.contains(&b'\n')) {
+            let (now, asleep) = (now_cycles(), sleep_stats().asleep);
+            critical_section::with(|cs| {
+                if let Some((line, asleep_at_line)) = CNC_LINE.borrow(cs).take() {
+                    let elapsed = now - line;
+                    let busy = elapsed.saturating_sub(asleep - asleep_at_line);
+                    CNC_RESULT.borrow(cs).set(Some((busy, elapsed)));
+                }
+            });
+        }
+        Ok(n)
+    }
+
+    async fn flush(&mut self) -> Result<(), UartError> {
+        self.0.flush().await
+    }
+}
+
+impl ConfigurablePort for ProbedCnc {
+    fn set_port_config(&mut self, config: PortConfig) -> Result<(), UnsupportedConfig> {
+        self.0.set_port_config(config)
+    }
+}
+
 /// Guest time between idle reports.
 const IDLE_WINDOW_CYCLES: u64 = 10 * crate::rcc::SYSCLK_HZ as u64;
 
@@ -50,6 +114,13 @@ static WINDOW: Mutex<Cell<Option<(u64, SleepStats)>>> = Mutex::new(Cell::new(Non
 
 /// Thread mode, after every executor poll: logs what was measured.
 pub fn report() {
+    if let Some((busy, elapsed)) = critical_section::with(|cs| CNC_RESULT.borrow(cs).take()) {
+        info!(
+            "emu-probe: CNC line to reply: {=u64} ns busy, {=u64} ns elapsed",
+            cycles_to_ns(busy),
+            cycles_to_ns(elapsed)
+        );
+    }
     if let Some((busy, elapsed, level)) = critical_section::with(|cs| RESULT.borrow(cs).take()) {
         info!(
             "emu-probe: TORCH_ON edge to START {=str}: {=u64} ns busy, {=u64} ns elapsed",
