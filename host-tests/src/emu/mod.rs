@@ -46,3 +46,4 @@ pub mod sim_port;
 
 pub use board::{Board, BoardOptions, Wiring};
 pub use error::{Error, Result};
+pub use pins::TestHook;
