@@ -18,7 +18,7 @@ use common::emu::{
 };
 use host_tests::emu::log::LogLine;
 use host_tests::emu::safety::{GAP_TOLERANCE, START_GAP};
-use host_tests::emu::{BoardOptions, TestHook, Wiring};
+use host_tests::emu::{Board, BoardOptions, TestHook, Wiring};
 use plasma_firmware::io::{Input, IoEvent, Output};
 use plasma_firmware::safe_state::ResetCause;
 use plasma_sim::Model;
@@ -155,11 +155,11 @@ fn wiring_changes_on_the_running_board_never_fire_and_never_touch_start() {
 
 #[test]
 fn once_a_task_stalls_the_outputs_stay_safe_until_the_reset() {
-    let board = ready_board(Model::Sync65);
+    let mut board = ready_board(Model::Sync65);
     set(&board, Input::TorchOn, true);
     expect_output(&board, Output::Start, true, EDGE);
     let mark = board.log().len();
-    board.stall_thread_mode().unwrap();
+    board.fail_on_purpose(TestHook::Stall).unwrap();
     // The bridge task stops reporting: the watchdog makes the outputs safe at once...
     board
         .log()
@@ -175,6 +175,23 @@ fn once_a_task_stalls_the_outputs_stay_safe_until_the_reset() {
     expect_held(&board, Output::Start, false, Duration::from_millis(100));
     set(&board, Input::TorchOn, true);
     expect_held(&board, Output::Start, false, Duration::from_millis(200));
+    // Then the watchdog resets the MCU, and the next boot says why.
+    let on_at_reset = board
+        .reboot_after_reset(LINK_EVENT)
+        .unwrap_or_else(|e| panic!("no reset after the stall: {e}"));
+    assert_eq!(on_at_reset, [], "outputs on when the MCU reset");
+    assert_eq!(
+        reported_reset_cause(&mut board),
+        ResetCause::IndependentWatchdog.as_str()
+    );
+}
+
+/// The reset cause the boot report gives on the CNC port. Settings are lost with the emulated
+/// board's RAM at a reset (defaults: events off), so the report is `ID`'s `reset=<cause>,...`.
+fn reported_reset_cause(board: &mut Board) -> String {
+    let id = command(board, "ID");
+    let reset = value(&id, "reset").unwrap_or_else(|| panic!("no reset= in {id}"));
+    reset.split(',').next().unwrap_or_default().to_string()
 }
 
 /// Fails on purpose with `hook` while the torch cuts, with TORCH_ON held through the reset,
@@ -205,15 +222,8 @@ fn a_fault_while_cutting(hook: TestHook, fault_logged: impl Fn(&LogLine) -> bool
         .wait_for(mark, EDGE, |l| l.level == "ERROR" && fault_logged(l))
         .unwrap_or_else(|e| panic!("the fault path's log line: {e}"));
 
-    // The next boot says why on the CNC port (settings are lost with the emulated board's
-    // RAM: defaults, events off, so the report is ID's).
-    let id = command(&mut board, "ID");
-    let reset = value(&id, "reset").unwrap_or_else(|| panic!("no reset= in {id}"));
-    assert_eq!(
-        reset.split(',').next(),
-        Some(ResetCause::Panic.as_str()),
-        "{id}"
-    );
+    // The next boot says why on the CNC port.
+    assert_eq!(reported_reset_cause(&mut board), ResetCause::Panic.as_str());
 
     // The firmware found TORCH_ON active as it started: held through the reset. The link
     // comes back, and that TORCH_ON does not fire the torch.

@@ -281,15 +281,6 @@ impl Board {
         Ok(())
     }
 
-    /// Stalls the firmware's thread mode for good (the bridge, settings and heartbeat tasks;
-    /// the I/O task and the watchdog run on): the test images' hook on
-    /// `plasma_firmware::pins::TEST_STALL`, pulled low (see [`super::image`]).
-    pub fn stall_thread_mode(&self) -> Result<()> {
-        self.qtest
-            .set_pin(plasma_firmware::pins::TEST_STALL, false)
-            .map(|_| ())
-    }
-
     /// Makes the firmware fail on purpose: the test images' `hook`, its pin pulled low. The
     /// reset that follows (the fault path's, the watchdog's) is held, QEMU stopped, until
     /// [`Board::reboot_after_reset`].
@@ -521,6 +512,14 @@ impl Board {
                 ms(d.at),
                 d.input.as_str(),
                 if d.active { "active" } else { "inactive" }
+            ));
+        }
+        for r in &self.resets {
+            text.push_str(&format!(
+                "{:>10.3} ms the MCU reset (after {} output edges), START {}\n",
+                ms(r.at),
+                r.mark,
+                if r.start_on { "on" } else { "off" }
             ));
         }
         for e in self.qtest.edges() {
