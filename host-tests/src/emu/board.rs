@@ -453,7 +453,7 @@ impl Board {
                 (r.mark, reset)
             }))
             .collect();
-        between.sort_by_key(|&(mark, o)| (mark, observed_at(o)));
+        between.sort_by_key(|&(mark, o)| (mark, o.at()));
         let mut inputs = between.into_iter().peekable();
         for (index, edge) in edges.iter().enumerate() {
             while let Some((_, o)) = inputs.next_if(|&(mark, _)| mark <= index) {
@@ -576,15 +576,6 @@ fn wait_cnc_port_ready(qtest: &Qtest) -> Result<()> {
         std::thread::sleep(POLL);
     }
     Ok(())
-}
-
-/// When the harness made or saw `observed`.
-fn observed_at(observed: Observed) -> Instant {
-    match observed {
-        Observed::TorchOn { at, .. } | Observed::Start { at, .. } | Observed::Reset { at, .. } => {
-            at
-        }
-    }
 }
 
 fn lock<T>(mutex: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {

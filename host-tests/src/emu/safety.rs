@@ -49,6 +49,17 @@ pub enum Observed {
     },
 }
 
+impl Observed {
+    /// When the harness made or saw it (host clock).
+    pub fn at(self) -> Instant {
+        match self {
+            Observed::TorchOn { at, .. }
+            | Observed::Start { at, .. }
+            | Observed::Reset { at, .. } => at,
+        }
+    }
+}
+
 /// Checks `observed` (from power-up: `torch_at_power_up` is TORCH_ON's state before the first
 /// instruction, `start_at_power_up` START's before the first instruction and right after
 /// it); returns each broken rule as a sentence, with its time from `epoch`.
