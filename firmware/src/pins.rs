@@ -162,6 +162,18 @@ pub const HEARTBEAT_LED: Wiring = Wiring::new(Port::A, 5, Polarity::ActiveHigh);
 /// which the QEMU harness turns on to test the fail-safe). Active low, as the button.
 pub const TEST_STALL: Pin = Pin::new(Port::C, 13);
 
+/// Test images only, as [`TEST_STALL`]: pulled low, the firmware panics (the fault path's
+/// end-to-end test). PC11 and [`TEST_HARD_FAULT`]'s PC12 are free on both boards (ST morpho
+/// CN7-2 and CN7-3 on the Nucleo), on EXTI lines no input uses, and off the port the QEMU
+/// harness intercepts (GPIOB: its inputs reach no EXTI there). Active low.
+pub const TEST_PANIC: Pin = Pin::new(Port::C, 11);
+
+/// Test images only, as [`TEST_PANIC`]: pulled low, the firmware takes a HardFault.
+pub const TEST_HARD_FAULT: Pin = Pin::new(Port::C, 12);
+
+/// The test hooks' pins, for the checks that tie them to the rest of the table.
+pub const TEST_HOOKS: [Pin; 3] = [TEST_STALL, TEST_PANIC, TEST_HARD_FAULT];
+
 /// A UART's pins (alternate function 7 on both).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub struct UartPins {
@@ -268,7 +280,7 @@ mod tests {
         let mut pins: Vec<Pin> = Input::ALL.into_iter().map(|i| input(i).pin).collect();
         pins.extend(Output::ALL.into_iter().map(|o| output(o).pin));
         pins.push(HEARTBEAT_LED.pin);
-        pins.push(TEST_STALL);
+        pins.extend(TEST_HOOKS);
         pins.extend(PS_UART.pins().chain(CNC_UART.pins()));
         pins
     }
@@ -285,14 +297,16 @@ mod tests {
 
     #[test]
     fn no_two_inputs_share_an_exti_line() {
-        // PA5 and PB5 share EXTI5: SYSCFG routes one port per line.
+        // PA5 and PB5 share EXTI5: SYSCFG routes one port per line. The test hooks' pins are
+        // edge-triggered inputs too.
         let mut lines: Vec<u8> = Input::ALL
             .into_iter()
             .map(|i| input(i).pin.number)
+            .chain(TEST_HOOKS.map(|p| p.number))
             .collect();
         lines.sort();
         lines.dedup();
-        assert_eq!(lines.len(), Input::ALL.len());
+        assert_eq!(lines.len(), Input::ALL.len() + TEST_HOOKS.len());
     }
 
     #[test]

@@ -3,6 +3,10 @@
 //! ARC_OK mirrors MOTION. The times of the 50 ms rule are the firmware's own (its log of every
 //! output change); the harness's view, read through qtest, is checked too, with a tolerance.
 //! Every board also checks the safety rules on what it observed when dropped.
+//!
+//! The fault path (`plasma_tasks::safe_state::fail`) is driven through the test images' hooks:
+//! a panic and a HardFault while the torch cuts make every output safe, reset the board, and
+//! the next boot reports why; a TORCH_ON held through the reset does not fire the torch.
 
 mod common;
 
@@ -10,11 +14,13 @@ use std::time::Duration;
 
 use common::emu::{
     EDGE, HOLD, LINK_EVENT, boot, command, expect_held, expect_output, press_again, ready,
-    ready_board, set, wait_logged,
+    ready_board, set, value, wait_logged,
 };
+use host_tests::emu::log::LogLine;
 use host_tests::emu::safety::{GAP_TOLERANCE, START_GAP};
-use host_tests::emu::{BoardOptions, Wiring};
-use plasma_firmware::io::{Input, Output};
+use host_tests::emu::{Board, BoardOptions, TestHook, Wiring};
+use plasma_firmware::io::{Input, IoEvent, Output};
+use plasma_firmware::safe_state::ResetCause;
 use plasma_sim::Model;
 
 #[test]
@@ -149,11 +155,11 @@ fn wiring_changes_on_the_running_board_never_fire_and_never_touch_start() {
 
 #[test]
 fn once_a_task_stalls_the_outputs_stay_safe_until_the_reset() {
-    let board = ready_board(Model::Sync65);
+    let mut board = ready_board(Model::Sync65);
     set(&board, Input::TorchOn, true);
     expect_output(&board, Output::Start, true, EDGE);
     let mark = board.log().len();
-    board.stall_thread_mode().unwrap();
+    board.fail_on_purpose(TestHook::Stall).unwrap();
     // The bridge task stops reporting: the watchdog makes the outputs safe at once...
     board
         .log()
@@ -169,4 +175,87 @@ fn once_a_task_stalls_the_outputs_stay_safe_until_the_reset() {
     expect_held(&board, Output::Start, false, Duration::from_millis(100));
     set(&board, Input::TorchOn, true);
     expect_held(&board, Output::Start, false, Duration::from_millis(200));
+    // Then the watchdog resets the MCU, and the next boot says why.
+    let on_at_reset = board
+        .reboot_after_reset(LINK_EVENT)
+        .unwrap_or_else(|e| panic!("no reset after the stall: {e}"));
+    assert_eq!(on_at_reset, [], "outputs on when the MCU reset");
+    assert_eq!(
+        reported_reset_cause(&mut board),
+        ResetCause::IndependentWatchdog.as_str()
+    );
+}
+
+/// The reset cause the boot report gives on the CNC port. Settings are lost with the emulated
+/// board's RAM at a reset (defaults: events off), so the report is `ID`'s `reset=<cause>,...`.
+fn reported_reset_cause(board: &mut Board) -> String {
+    let id = command(board, "ID");
+    let reset = value(&id, "reset").unwrap_or_else(|| panic!("no reset= in {id}"));
+    reset.split(',').next().unwrap_or_default().to_string()
+}
+
+/// Fails on purpose with `hook` while the torch cuts, with TORCH_ON held through the reset,
+/// and checks the fault path end to end: every output safe when the MCU resets, the reset and
+/// the boot that follows by themselves, the boot report on the CNC port, `fault_logged` in
+/// the firmware's log, and no START until TORCH_ON is pressed again.
+fn a_fault_while_cutting(hook: TestHook, fault_logged: impl Fn(&LogLine) -> bool) {
+    let mut board = ready_board(Model::Sync65);
+    // FAULT inverted: its pin is high while no fault is active, so the safe state's write on
+    // the other port (GPIOC) shows too.
+    assert_eq!(
+        command(&mut board, "CONFIG fault_active LOW"),
+        "OK fault_active=LOW"
+    );
+    set(&board, Input::TorchOn, true);
+    expect_output(&board, Output::Start, true, EDGE);
+    expect_output(&board, Output::ArcOk, true, EDGE);
+    expect_output(&board, Output::Fault, true, EDGE);
+    let mark = board.log().len();
+
+    board.fail_on_purpose(hook).unwrap();
+    let on_at_reset = board
+        .reboot_after_reset(LINK_EVENT)
+        .unwrap_or_else(|e| panic!("no reset after the {hook:?}: {e}"));
+    assert_eq!(on_at_reset, [], "outputs on when the MCU reset");
+    board
+        .log()
+        .wait_for(mark, EDGE, |l| l.level == "ERROR" && fault_logged(l))
+        .unwrap_or_else(|e| panic!("the fault path's log line: {e}"));
+
+    // The next boot says why on the CNC port.
+    assert_eq!(reported_reset_cause(&mut board), ResetCause::Panic.as_str());
+
+    // The firmware found TORCH_ON active as it started: held through the reset. The link
+    // comes back, and that TORCH_ON does not fire the torch.
+    let held = format!("{:?}", IoEvent::StuckTorchOnAtPowerUp);
+    board
+        .log()
+        .wait_for(mark, LINK_EVENT, |l| l.text.ends_with(&held))
+        .unwrap_or_else(|e| panic!("TORCH_ON not seen held at the boot: {e}"));
+    let board = ready(board);
+    expect_held(&board, Output::Start, false, Duration::from_millis(300));
+    press_again(&board);
+    expect_output(&board, Output::Start, true, EDGE);
+    set(&board, Input::TorchOn, false);
+    expect_output(&board, Output::Start, false, EDGE);
+    board.assert_safe();
+}
+
+#[test]
+fn a_panic_makes_the_outputs_safe_resets_and_is_reported_at_the_next_boot() {
+    a_fault_while_cutting(TestHook::Panic, |l| {
+        // The emulated image always logs the message and where it was raised.
+        l.text.starts_with("panic: ") && l.text.contains("test_hooks.rs")
+    });
+}
+
+#[test]
+fn a_hard_fault_makes_the_outputs_safe_resets_and_is_reported_at_the_next_boot() {
+    a_fault_while_cutting(TestHook::HardFault, |l| {
+        // The faulting instruction's address: in the image's flash.
+        l.text
+            .strip_prefix("hard fault at pc 0x")
+            .and_then(|pc| u32::from_str_radix(pc, 16).ok())
+            .is_some_and(|pc| (0x0800_0000..0x0810_0000).contains(&pc))
+    });
 }

@@ -31,7 +31,13 @@ fn take_panic_marker() -> u32 {
 
 /// Why the MCU reset, from RCC_CSR and the panic marker; clears both for the next boot.
 pub fn boot_report() -> BootReport {
-    let report = BootReport::read(chip::reset_flags(), take_panic_marker());
+    boot_report_from(chip::reset_flags())
+}
+
+/// As [`boot_report`], with `csr` standing in for RCC_CSR: for a board whose RCC does not
+/// record the cause (the emulated board: QEMU's RCC shows power-on after every reset).
+pub fn boot_report_from(csr: u32) -> BootReport {
+    let report = BootReport::read(csr, take_panic_marker());
     chip::clear_reset_flags();
     report
 }

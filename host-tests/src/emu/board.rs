@@ -18,7 +18,7 @@ use super::cnc::CncPort;
 use super::error::{Error, Result};
 use super::image::firmware_elf;
 use super::log::FirmwareLog;
-use super::pins::{WATCHED_PORT, input_level, input_pin, output_active, output_pin};
+use super::pins::{TestHook, WATCHED_PORT, input_level, input_pin, output_active, output_pin};
 use super::qemu::{Qemu, QemuOptions};
 use super::qtest::Qtest;
 use super::safety::{self, Observed};
@@ -123,6 +123,15 @@ struct Driven {
     active: bool,
 }
 
+/// A reset of the MCU the harness held and let boot ([`Board::reboot_after_reset`]), with the
+/// number of output edges QEMU had sent before.
+#[derive(Debug, Clone, Copy)]
+struct HeldReset {
+    mark: usize,
+    at: Instant,
+    start_on: bool,
+}
+
 /// The emulated board with its simulated unit. See the [module docs](self).
 pub struct Board {
     // Dropped first: killing QEMU closes every socket, which ends the threads below.
@@ -132,6 +141,7 @@ pub struct Board {
     cnc: CncPort,
     log: FirmwareLog,
     driven: Mutex<Vec<Driven>>,
+    resets: Vec<HeldReset>,
     options: BoardOptions,
     elf: PathBuf,
     start_at_power_up: bool,
@@ -215,6 +225,7 @@ impl Board {
             cnc,
             log,
             driven: Mutex::new(driven),
+            resets: Vec::new(),
             options,
             elf,
             start_at_power_up,
@@ -279,13 +290,43 @@ impl Board {
         Ok(())
     }
 
-    /// Stalls the firmware's thread mode for good (the bridge, settings and heartbeat tasks;
-    /// the I/O task and the watchdog run on): the test images' hook on
-    /// `plasma_firmware::pins::TEST_STALL`, pulled low (see [`super::image`]).
-    pub fn stall_thread_mode(&self) -> Result<()> {
-        self.qtest
-            .set_pin(plasma_firmware::pins::TEST_STALL, false)
-            .map(|_| ())
+    /// Makes the firmware fail on purpose: the test images' `hook`, its pin pulled low. The
+    /// reset that follows (the fault path's, the watchdog's) is held, QEMU stopped, until
+    /// [`Board::reboot_after_reset`].
+    pub fn fail_on_purpose(&mut self, hook: TestHook) -> Result<()> {
+        self.qemu.qmp().hold_guest_resets(true)?;
+        self.qtest.set_pin(hook.pin(), false).map(drop)
+    }
+
+    /// Waits up to `timeout` for the reset held since [`Board::fail_on_purpose`], then boots
+    /// the board again as a reset does on the real one: QEMU's reset forgets the levels
+    /// driven on its pins, so the inputs get theirs back before the first instruction (a
+    /// TORCH_ON held through the reset is still held), while the hook's pin is let go.
+    /// Returns the outputs that were on when the MCU reset (by the pin table: the levels the
+    /// firmware left, before QEMU's reset clears them) once the firmware has enabled its CNC
+    /// port again. The safety rules treat the reset as a power-up.
+    pub fn reboot_after_reset(&mut self, timeout: Duration) -> Result<Vec<Output>> {
+        self.qemu.qmp().wait_status("shutdown", timeout)?;
+        let mut on_at_reset = Vec::new();
+        for output in Output::ALL {
+            if self.output(output)? {
+                on_at_reset.push(output);
+            }
+        }
+        self.resets.push(HeldReset {
+            mark: self.qtest.edges().len(),
+            at: Instant::now(),
+            start_on: on_at_reset.contains(&Output::Start),
+        });
+        self.qemu.qmp().reset_stopped(timeout)?;
+        for pin in Input::ALL.map(input_pin) {
+            if let Some(high) = self.qtest.driven_level(pin) {
+                self.qtest.set_pin(pin, high)?;
+            }
+        }
+        self.qemu.resume()?;
+        wait_cnc_port_ready(&self.qtest)?;
+        Ok(on_at_reset)
     }
 
     /// An output signal now.
@@ -401,17 +442,31 @@ impl Board {
             .find(|d| d.input == Input::TorchOn)
             .is_some_and(|d| d.active);
         let mut observed = Vec::new();
-        let mut inputs = driven
+        // TORCH_ON changes and resets, each before the edges QEMU sent after it.
+        let mut between: Vec<(usize, Observed)> = driven
             .iter()
             .filter(|d| d.input == Input::TorchOn)
             .skip(1)
-            .peekable();
-        for (index, edge) in edges.iter().enumerate() {
-            while let Some(d) = inputs.next_if(|d| d.mark <= index) {
-                observed.push(Observed::TorchOn {
+            .map(|d| {
+                let torch = Observed::TorchOn {
                     at: d.at,
                     active: d.active,
-                });
+                };
+                (d.mark, torch)
+            })
+            .chain(self.resets.iter().map(|r| {
+                let reset = Observed::Reset {
+                    at: r.at,
+                    start_on: r.start_on,
+                };
+                (r.mark, reset)
+            }))
+            .collect();
+        between.sort_by_key(|&(mark, o)| (mark, o.at()));
+        let mut inputs = between.into_iter().peekable();
+        for (index, edge) in edges.iter().enumerate() {
+            while let Some((_, o)) = inputs.next_if(|&(mark, _)| mark <= index) {
+                observed.push(o);
             }
             if edge.pin == start {
                 observed.push(Observed::Start {
@@ -420,10 +475,7 @@ impl Board {
                 });
             }
         }
-        observed.extend(inputs.map(|d| Observed::TorchOn {
-            at: d.at,
-            active: d.active,
-        }));
+        observed.extend(inputs.map(|(_, o)| o));
         safety::check(
             self.epoch,
             torch_at_power_up,
@@ -469,6 +521,14 @@ impl Board {
                 ms(d.at),
                 d.input.as_str(),
                 if d.active { "active" } else { "inactive" }
+            ));
+        }
+        for r in &self.resets {
+            text.push_str(&format!(
+                "{:>10.3} ms the MCU reset (after {} output edges), START {}\n",
+                ms(r.at),
+                r.mark,
+                if r.start_on { "on" } else { "off" }
             ));
         }
         for e in self.qtest.edges() {

@@ -3,9 +3,10 @@
 //! `plasma-bridge-emu` binary through firmware/image, with the build machine's paths
 //! remapped, so the tests run the very bytes a build by hand with the same feature gives.
 //!
-//! [`TEST_FEATURES`] adds what only tests use (the emulated board's src/test_hooks.rs: a pin
-//! that stalls thread mode, for the fail-safe test); the Nucleo image and a plain
-//! `cargo emu-fw` never contain it.
+//! [`TEST_FEATURES`] adds what only tests use (the emulated board's src/test_hooks.rs: pins
+//! that stall thread mode, panic or take a HardFault, for the fail-safe and fault-path tests,
+//! see [`TestHook`](super::TestHook)); the Nucleo image and a plain `cargo emu-fw` never
+//! contain it.
 //!
 //! Cargo is asked for the artifact's path (`--message-format=json`), so `CARGO_TARGET_DIR`
 //! and the workspace's settings apply exactly as for a build by hand. `PLASMA_EMU_ELF` names

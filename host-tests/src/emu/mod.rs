@@ -48,3 +48,4 @@ pub mod usart;
 
 pub use board::{Board, BoardOptions, Wiring};
 pub use error::{Error, Result};
+pub use pins::TestHook;

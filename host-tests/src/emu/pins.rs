@@ -3,8 +3,8 @@
 //! adds only what is QEMU's: the ports' QOM paths and the data registers the harness reads.
 
 use plasma_firmware::io::{Input, Output};
+use plasma_firmware::pins::{self, input, output};
 pub use plasma_firmware::pins::{Pin, Port};
-use plasma_firmware::pins::{input, output};
 
 /// What the harness needs of a GPIO port under QEMU.
 pub trait QemuPort {
@@ -66,6 +66,32 @@ pub fn watched_port_inputs() -> impl Iterator<Item = Input> {
         .filter(|&i| input_pin(i).port == WATCHED_PORT)
 }
 
+/// A failure the test images make on request (the emulated board's `test-hooks`, see
+/// [`super::image`]): each has its pin in the firmware's pin table, pulled low to ask.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum TestHook {
+    /// Thread mode spins for good: the watchdog's case.
+    Stall,
+    /// A panic in a task.
+    Panic,
+    /// A HardFault (an undefined instruction) in a task.
+    HardFault,
+}
+
+impl TestHook {
+    /// Every hook.
+    pub const ALL: [TestHook; 3] = [TestHook::Stall, TestHook::Panic, TestHook::HardFault];
+
+    /// The pin that asks for it.
+    pub const fn pin(self) -> Pin {
+        match self {
+            TestHook::Stall => pins::TEST_STALL,
+            TestHook::Panic => pins::TEST_PANIC,
+            TestHook::HardFault => pins::TEST_HARD_FAULT,
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -91,5 +117,13 @@ mod tests {
         assert_eq!(output_pin(Output::Start).port, WATCHED_PORT);
         assert_eq!(output_pin(Output::ArcOk).port, WATCHED_PORT);
         assert!(watched_port_inputs().all(|i| i == Input::RampdownError));
+    }
+
+    #[test]
+    fn every_test_hook_has_its_own_pin_off_the_watched_port() {
+        // Intercepting the watched port detaches its pins from EXTI: a hook there never fires.
+        let hook_pins = TestHook::ALL.map(TestHook::pin);
+        assert_eq!(hook_pins, pins::TEST_HOOKS);
+        assert!(hook_pins.iter().all(|p| p.port != WATCHED_PORT));
     }
 }

@@ -334,6 +334,11 @@ impl Qemu {
         self.qmp.cont()
     }
 
+    /// The QMP session (run state, resets).
+    pub fn qmp(&mut self) -> &mut Qmp {
+        &mut self.qmp
+    }
+
     /// The semihosting log file (defmt frames).
     pub fn log_path(&self) -> &Path {
         &self.log_path

@@ -39,7 +39,15 @@ impl Qmp {
 
     /// Runs a command without arguments; returns its `return` value.
     pub fn execute(&mut self, command: &str) -> Result<Value> {
-        let request = serde_json::json!({ "execute": command });
+        self.execute_with(command, None)
+    }
+
+    /// Runs a command with `arguments` (an object), if any; returns its `return` value.
+    pub fn execute_with(&mut self, command: &str, arguments: Option<Value>) -> Result<Value> {
+        let request = match arguments {
+            Some(arguments) => serde_json::json!({ "execute": command, "arguments": arguments }),
+            None => serde_json::json!({ "execute": command }),
+        };
         self.writer
             .write_all(format!("{request}\n").as_bytes())
             .map_err(|e| Error::Exited(format!("QMP {command}: {e}")))?;
@@ -58,6 +66,60 @@ impl Qmp {
     /// Starts (or resumes) the guest CPU.
     pub fn cont(&mut self) -> Result<()> {
         self.execute("cont").map(drop)
+    }
+
+    /// The VM's run state (`query-status`): `running`, `paused`, `prelaunch`, `shutdown`...
+    pub fn status(&mut self) -> Result<String> {
+        let status = self.execute("query-status")?;
+        status
+            .get("status")
+            .and_then(Value::as_str)
+            .map(str::to_string)
+            .ok_or_else(|| Error::Protocol(format!("QMP query-status returned {status}")))
+    }
+
+    /// What QEMU does when the guest resets itself: with `hold`, it stops the VM instead
+    /// (`set-action reboot=shutdown shutdown=pause`, run state `shutdown`) until
+    /// [`Qmp::reset_stopped`]; without, it resets and runs on (QEMU's default).
+    pub fn hold_guest_resets(&mut self, hold: bool) -> Result<()> {
+        let (reboot, shutdown) = if hold {
+            ("shutdown", "pause")
+        } else {
+            ("reset", "poweroff")
+        };
+        self.execute_with(
+            "set-action",
+            Some(serde_json::json!({ "reboot": reboot, "shutdown": shutdown })),
+        )
+        .map(drop)
+    }
+
+    /// Resets the stopped VM and leaves it stopped (run state `prelaunch`, as under `-S`), to
+    /// be started with [`Qmp::cont`]; held guest resets are no longer held. `system_reset`
+    /// only asks for the reset (a held reboot action would turn it into another stop), so
+    /// this waits for the run state that follows it.
+    pub fn reset_stopped(&mut self, timeout: Duration) -> Result<()> {
+        self.hold_guest_resets(false)?;
+        self.execute("system_reset")?;
+        self.wait_status("prelaunch", timeout)
+    }
+
+    /// Waits until the run state is `status`.
+    pub fn wait_status(&mut self, status: &str, timeout: Duration) -> Result<()> {
+        let began = std::time::Instant::now();
+        loop {
+            let now = self.status()?;
+            if now == status {
+                return Ok(());
+            }
+            if began.elapsed() > timeout {
+                return Err(Error::Timeout(format!(
+                    "QEMU's run state still {now} after {} ms (waiting for {status})",
+                    timeout.as_millis()
+                )));
+            }
+            std::thread::sleep(Duration::from_millis(2));
+        }
     }
 
     fn read_message(&mut self) -> Result<Value> {

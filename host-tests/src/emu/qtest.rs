@@ -8,6 +8,7 @@
 //! two: replies go to the command waiting for them, edges to [`Qtest::edges`] and the
 //! subscribers.
 
+use std::collections::HashMap;
 use std::io::{BufRead, BufReader, Write};
 use std::os::unix::net::UnixStream;
 use std::sync::mpsc::{self, Receiver, RecvTimeoutError, Sender};
@@ -88,6 +89,8 @@ struct Shared {
     edges: Vec<Edge>,
     subscribers: Vec<Sender<Edge>>,
     intercepted: Option<Port>,
+    /// The level last driven on each input pin.
+    driven: HashMap<Pin, bool>,
 }
 
 /// A qtest session. Cheap to share (`&Qtest` from several threads): commands are serialised.
@@ -108,6 +111,7 @@ impl Qtest {
             edges: Vec::new(),
             subscribers: Vec::new(),
             intercepted: None,
+            driven: HashMap::new(),
         }));
         let (replies_tx, replies_rx) = mpsc::channel();
         let for_reader = Arc::clone(&shared);
@@ -154,8 +158,15 @@ impl Qtest {
     /// Drives a GPIO input pin to `high`; returns the number of edges that came before the
     /// change (see [`Qtest::command_marked`]).
     pub fn set_pin(&self, pin: Pin, high: bool) -> Result<usize> {
-        self.command_marked(&set_irq_in_command(pin, high))
-            .map(|(_, mark)| mark)
+        let (_, mark) = self.command_marked(&set_irq_in_command(pin, high))?;
+        lock(&self.shared).driven.insert(pin, high);
+        Ok(mark)
+    }
+
+    /// The level last driven on `pin` by [`Qtest::set_pin`], if any. A reset of the machine
+    /// makes QEMU's GPIO forget it (every pin reads its pull again), not this.
+    pub fn driven_level(&self, pin: Pin) -> Option<bool> {
+        lock(&self.shared).driven.get(&pin).copied()
     }
 
     /// Reads a 32-bit register.

@@ -8,9 +8,11 @@
 //! scheduled late for the falling edge on a loaded host, which shortens the gap seen; a rule
 //! not kept at all shows gaps of a few ms). The exact check uses the firmware's own log of
 //! its output changes (tests/emu_io.rs). Rules:
-//! - START is off when the board starts;
+//! - START is off when the board starts, and when it resets itself (the fault path and the
+//!   watchdog make the outputs safe first);
 //! - START never rises while TORCH_ON is inactive;
-//! - a TORCH_ON active at power-up never raises START until it has been seen inactive;
+//! - a TORCH_ON active at power-up, or held through a reset, never raises START until it has
+//!   been seen inactive;
 //! - START rises at least 50 ms after its previous fall.
 
 use std::time::{Duration, Instant};
@@ -37,6 +39,25 @@ pub enum Observed {
         /// The new state.
         on: bool,
     },
+    /// The firmware reset the MCU; the board booted again.
+    Reset {
+        /// When the harness saw the reset (host clock).
+        at: Instant,
+        /// START's state when the MCU reset (the reset itself releases the pin, and the
+        /// pull-down holds it off).
+        start_on: bool,
+    },
+}
+
+impl Observed {
+    /// When the harness made or saw it (host clock).
+    pub fn at(self) -> Instant {
+        match self {
+            Observed::TorchOn { at, .. }
+            | Observed::Start { at, .. }
+            | Observed::Reset { at, .. } => at,
+        }
+    }
 }
 
 /// Checks `observed` (from power-up: `torch_at_power_up` is TORCH_ON's state before the first
@@ -75,7 +96,7 @@ pub fn check(
                     }
                     if stuck {
                         broken.push(format!(
-                            "{:.1} ms: START rose from a TORCH_ON held since power-up",
+                            "{:.1} ms: START rose from a TORCH_ON held since power-up or a reset",
                             ms(at)
                         ));
                     }
@@ -94,6 +115,17 @@ pub fn check(
                     last_fall = Some(at);
                 }
                 start = on;
+            }
+            Observed::Reset { at, start_on } => {
+                if start_on {
+                    broken.push(format!(
+                        "{:.1} ms: START on when the MCU reset (not made safe first)",
+                        ms(at)
+                    ));
+                    last_fall = Some(at);
+                }
+                start = false;
+                stuck = torch;
             }
         }
     }
@@ -159,7 +191,7 @@ mod tests {
         }];
         assert_eq!(
             check(t0, true, false, &stuck),
-            ["5.0 ms: START rose from a TORCH_ON held since power-up"]
+            ["5.0 ms: START rose from a TORCH_ON held since power-up or a reset"]
         );
         let released = [
             Observed::TorchOn {
@@ -206,6 +238,66 @@ mod tests {
             check(t0, false, false, &quick),
             ["40.0 ms: START rose 20.0 ms after it fell (at least 50 ms)"]
         );
+    }
+
+    #[test]
+    fn a_reset_is_a_power_up() {
+        let t0 = Instant::now();
+        let torch_held = |start_on| {
+            [
+                Observed::TorchOn {
+                    at: at(t0, 10),
+                    active: true,
+                },
+                Observed::Start {
+                    at: at(t0, 11),
+                    on: true,
+                },
+                Observed::Reset {
+                    at: at(t0, 20),
+                    start_on,
+                },
+                Observed::Start {
+                    at: at(t0, 500),
+                    on: true,
+                },
+            ]
+        };
+        assert_eq!(
+            check(t0, false, false, &torch_held(false)),
+            ["500.0 ms: START rose from a TORCH_ON held since power-up or a reset"]
+        );
+        assert_eq!(
+            check(t0, false, false, &torch_held(true)),
+            [
+                "20.0 ms: START on when the MCU reset (not made safe first)",
+                "500.0 ms: START rose from a TORCH_ON held since power-up or a reset"
+            ]
+        );
+        // Released and pressed again after the reset: a new press.
+        let pressed_again = [
+            Observed::TorchOn {
+                at: at(t0, 10),
+                active: true,
+            },
+            Observed::Reset {
+                at: at(t0, 20),
+                start_on: false,
+            },
+            Observed::TorchOn {
+                at: at(t0, 400),
+                active: false,
+            },
+            Observed::TorchOn {
+                at: at(t0, 450),
+                active: true,
+            },
+            Observed::Start {
+                at: at(t0, 451),
+                on: true,
+            },
+        ];
+        assert!(check(t0, false, false, &pressed_again).is_empty());
     }
 
     #[test]

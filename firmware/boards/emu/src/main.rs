@@ -18,6 +18,7 @@
 //! - [`executor`]: the thread executor with sleep accounting, and [`probe`]: the latency
 //!   and idle measurements;
 //! - [`fault`]: panic and HardFault leave every output off and reset;
+//! - [`reset_flags`]: the reset flags the boot report reads, which QEMU's RCC does not keep;
 //! - logs: defmt over semihosting (`defmt-semihosting`), for QEMU's
 //!   `-semihosting-config enable=on,target=native`.
 #![cfg_attr(target_os = "none", no_std)]
@@ -44,6 +45,8 @@ mod gpio;
 mod probe;
 #[cfg(target_os = "none")]
 mod rcc;
+#[cfg(target_os = "none")]
+mod reset_flags;
 #[cfg(all(target_os = "none", feature = "test-hooks"))]
 mod test_hooks;
 #[cfg(target_os = "none")]
@@ -74,7 +77,7 @@ mod image {
     use crate::board::{Emulated, bridge_task, heartbeat_task, io_task, settings_task};
     use crate::flash::{SETTINGS_SIZE, SettingsFlash};
     use crate::gpio::{InputPins, Led, OutputPins};
-    use crate::{executor, probe, rcc, time_driver, watchdog};
+    use crate::{executor, probe, rcc, reset_flags, time_driver, watchdog};
     use plasma_tasks::uart::{Uart, UartState, on_interrupt};
 
     /// NVIC priorities as on the Nucleo (4 bits, upper nibble): EXTI and SysTick 0, the I/O
@@ -134,7 +137,8 @@ mod image {
     fn main() -> ! {
         // Before clocks, before anything that could fail: START and every other output off.
         drive_safe_state();
-        let boot = reset::boot_report();
+        // QEMU's RCC_CSR says power-on after every reset: the board's own record instead.
+        let boot = reset::boot_report_from(reset_flags::take());
         rcc::init();
         let mut core = cortex_m::Peripherals::take()
             .unwrap_or_else(|| defmt::panic!("core peripherals taken"));
@@ -231,6 +235,6 @@ mod image {
             .start(Interrupt::USART3)
             .spawn(watchdog::watchdog().unwrap());
         #[cfg(feature = "test-hooks")]
-        spawner.spawn(crate::test_hooks::stall_on_request().unwrap());
+        spawner.spawn(crate::test_hooks::fail_on_request().unwrap());
     }
 }

@@ -15,6 +15,7 @@
 use defmt::warn;
 use embassy_time::{Duration, Instant, Timer};
 
+use plasma_firmware::safe_state::ResetFlags;
 use plasma_tasks::progress::should_feed;
 
 /// The IWDG time-out of the Nucleo image.
@@ -39,5 +40,7 @@ pub async fn watchdog() {
         }
     }
     Timer::after(TIMEOUT).await;
+    // The next boot reports what the IWDG's reset would: `watchdog`.
+    crate::reset_flags::arm(ResetFlags::INDEPENDENT_WATCHDOG);
     cortex_m::peripheral::SCB::sys_reset()
 }
