@@ -26,6 +26,9 @@ pub struct EmuArgs {
     /// With --measure: TORCH_ON cycles.
     #[arg(long, default_value_t = 20, requires = "measure")]
     pub toggles: usize,
+    /// With --measure: pmx485 cycles (six reads each, after its three writes) on the CNC port.
+    #[arg(long, default_value_t = 10, requires = "measure")]
+    pub modbus_cycles: usize,
     /// With --measure: idle windows of 10 s of guest time to report.
     #[arg(long, default_value_t = 1, requires = "measure")]
     pub idle_windows: usize,
@@ -49,6 +52,7 @@ pub fn emu(args: &EmuArgs) -> ExitCode {
         let options = MeasureOptions {
             model,
             toggles: args.toggles,
+            modbus_cycles: args.modbus_cycles,
             idle_windows: args.idle_windows,
         };
         return match measure(&options, |note| eprintln!("pbtool emu: {note}")) {

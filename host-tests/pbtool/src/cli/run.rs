@@ -66,6 +66,7 @@ pub fn run(args: &RunArgs) -> ExitCode {
                         log: args.sim_args.verbose,
                         measure: false,
                         toggles: 0,
+                        modbus_cycles: 0,
                         idle_windows: 0,
                         cnc_port: args.sim_args.cnc_port.clone(),
                         cnc_framing: args.sim_args.cnc_framing,

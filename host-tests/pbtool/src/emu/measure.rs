@@ -1,13 +1,16 @@
 //! The emulated board's measurements (`emu-probe:` log lines of its board layer, see
 //! firmware/boards/emu/src/probe.rs), and `pbtool emu --measure`: QEMU with
 //! instruction counting (`-icount shift=0`: one guest nanosecond per instruction), TORCH_ON
-//! toggled with the link up and the unit ready, the figures summarised.
+//! toggled with the link up and the unit ready, pmx485's Modbus requests on the CNC port, the
+//! figures summarised.
 
 use std::time::Duration;
 
 use plasma_firmware::io::{Input, Output};
 
 use host_tests::emu::{Board, BoardOptions, Error, Result};
+use plasma_protocol::modbus_ascii::{self, Request};
+use plasma_protocol::powermax::legacy;
 use plasma_sim::Model;
 
 /// One `emu-probe:` line.
@@ -21,6 +24,13 @@ pub enum Probe {
         /// GPIO write: under `-icount shift=0`, instructions.
         busy_ns: u64,
         /// Guest nanoseconds from the edge to the write, asleep or not.
+        elapsed_ns: u64,
+    },
+    /// A CNC line answered: from the read of its LF to the write of the reply's.
+    CncReply {
+        /// Guest nanoseconds the core was busy in between: instructions.
+        busy_ns: u64,
+        /// Guest nanoseconds in between, asleep or not.
         elapsed_ns: u64,
     },
     /// One idle window.
@@ -61,6 +71,15 @@ pub fn parse_probe(text: &str) -> Option<Probe> {
             elapsed_ns,
         });
     }
+    if let Some(rest) = rest.strip_prefix("CNC line to reply: ") {
+        let &[busy_ns, elapsed_ns] = numbers(rest).as_slice() else {
+            return None;
+        };
+        return Some(Probe::CncReply {
+            busy_ns,
+            elapsed_ns,
+        });
+    }
     if let Some(rest) = rest.strip_prefix("idle ") {
         let &[asleep_ns, elapsed_ns, wake_ups, polls] = numbers(rest).as_slice() else {
             return None;
@@ -94,6 +113,9 @@ pub struct MeasureOptions {
     pub model: Model,
     /// TORCH_ON cycles (each gives a START-on and a START-off figure).
     pub toggles: usize,
+    /// pmx485 cycles on the CNC port (each: its six reads, see [`PMX485_CYCLE`]), after its
+    /// three connect writes.
+    pub modbus_cycles: usize,
     /// Idle windows (10 s of guest time each) to report after the toggles (the window in which
     /// the toggles end is skipped).
     pub idle_windows: usize,
@@ -106,6 +128,8 @@ pub struct Measurements {
     pub to_start_on: Vec<u64>,
     /// Instructions from a TORCH_ON release to START off.
     pub to_start_off: Vec<u64>,
+    /// Modbus requests on the CNC port answered: (busy, elapsed) guest ns.
+    pub modbus_replies: Vec<(u64, u64)>,
     /// Idle windows: (asleep ns, elapsed ns, wake-ups, polls).
     pub idle: Vec<(u64, u64, u32, u32)>,
 }
@@ -126,6 +150,22 @@ impl Measurements {
                 )),
                 None => text.push_str(&format!("{what:<29}: no samples\n")),
             }
+        }
+        let elapsed: Vec<u64> = self.modbus_replies.iter().map(|r| r.1).collect();
+        let busy: Vec<u64> = self.modbus_replies.iter().map(|r| r.0).collect();
+        match (min_median_max(&elapsed), min_median_max(&busy)) {
+            (Some((min, median, max)), Some((_, busy_median, busy_max))) => {
+                let us = |ns: u64| ns as f64 / 1e3;
+                text.push_str(&format!(
+                    "CNC Modbus request -> reply  : {} samples, guest time min {:.1} / median \
+                     {:.1} / max {:.1} us, instructions median {busy_median} / max {busy_max}\n",
+                    elapsed.len(),
+                    us(min),
+                    us(median),
+                    us(max)
+                ));
+            }
+            _ => text.push_str("CNC Modbus request -> reply  : no samples\n"),
         }
         for &(asleep, elapsed, wake_ups, polls) in &self.idle {
             let seconds = elapsed as f64 / 1e9;
@@ -179,9 +219,13 @@ pub fn measure(options: &MeasureOptions, mut progress: impl FnMut(&str)) -> Resu
             std::thread::sleep(PAUSE);
         }
     }
+    result.modbus_replies = modbus_replies(&mut board, options.modbus_cycles)?;
     progress(&format!(
-        "{} TORCH_ON cycles measured; waiting for {} idle window(s) of 10 s guest time",
-        options.toggles, options.idle_windows
+        "{} TORCH_ON cycles and {} Modbus requests measured; waiting for {} idle window(s) of \
+         10 s guest time",
+        options.toggles,
+        result.modbus_replies.len(),
+        options.idle_windows
     ));
     let mut mark = board.log().len();
     // The first window ending after the toggles holds some of them: not idle, skipped.
@@ -210,6 +254,76 @@ pub fn measure(options: &MeasureOptions, mut progress: impl FnMut(&str)) -> Resu
         return Err(Error::Protocol("no TORCH_ON figure was logged".to_string()));
     }
     Ok(result)
+}
+
+/// pmx485's connect writes (mode 1, 45 A, pressure automatic), as QtPlasmaC sends them.
+pub const PMX485_CONNECT: [(u16, u16); 3] = [
+    (legacy::MODE_FORCE, 1),
+    (legacy::CURRENT_FORCE, 45 * 64),
+    (legacy::PRESSURE_FORCE, 0),
+];
+
+/// The registers pmx485 reads every cycle (function 04, one each): the settings back, the
+/// fault, the arc time.
+pub const PMX485_CYCLE: [u16; 6] = [
+    legacy::MODE_FORCE,
+    legacy::CURRENT_FORCE,
+    legacy::PRESSURE_FORCE,
+    legacy::FAULT_CODE,
+    legacy::ARC_TIME_LOW,
+    legacy::ARC_TIME_HIGH,
+];
+
+/// pmx485's node (hard-coded in it; the bridge's default `cnc_address`).
+const PMX485_NODE: u8 = 1;
+
+/// `request` as a frame for the CNC port, without its CR LF (the console adds it).
+fn modbus_line(request: &Request<'_>) -> Result<String> {
+    let mut out = [0u8; modbus_ascii::MAX_FRAME_CHARS];
+    let n = modbus_ascii::encode_request(PMX485_NODE, request, &mut out)
+        .map_err(|e| Error::Protocol(format!("encoding {request:?}: {e:?}")))?;
+    Ok(String::from_utf8_lossy(&out[..n]).trim_end().to_string())
+}
+
+/// Sends pmx485's writes, then `cycles` of its reads, one at a time as pmx485 does; the
+/// probe's figure for each request.
+fn modbus_replies(board: &mut Board, cycles: usize) -> Result<Vec<(u64, u64)>> {
+    let mut lines = Vec::new();
+    for (address, value) in PMX485_CONNECT {
+        lines.push(modbus_line(&Request::WriteSingleRegister {
+            address,
+            value,
+        })?);
+    }
+    for _ in 0..cycles {
+        for start in PMX485_CYCLE {
+            lines.push(modbus_line(&Request::ReadInputRegisters {
+                start,
+                quantity: 1,
+            })?);
+        }
+    }
+    let mut figures = Vec::new();
+    for line in lines {
+        let mark = board.log().len();
+        let reply = board.command(&line, STEP_TIMEOUT)?;
+        if !reply.starts_with(':') {
+            return Err(Error::Protocol(format!(
+                "{line} was answered with {reply:?}"
+            )));
+        }
+        let logged = board.log().wait_for(mark, STEP_TIMEOUT, |l| {
+            matches!(parse_probe(&l.text), Some(Probe::CncReply { .. }))
+        })?;
+        if let Some(Probe::CncReply {
+            busy_ns,
+            elapsed_ns,
+        }) = parse_probe(&logged.text)
+        {
+            figures.push((busy_ns, elapsed_ns));
+        }
+    }
+    Ok(figures)
 }
 
 #[cfg(test)]
@@ -245,12 +359,34 @@ mod tests {
                 polls: 1500
             })
         );
+        assert_eq!(
+            parse_probe("emu-probe: CNC line to reply: 21000 ns busy, 35000 ns elapsed"),
+            Some(Probe::CncReply {
+                busy_ns: 21_000,
+                elapsed_ns: 35_000
+            })
+        );
         assert_eq!(parse_probe("link up: Powermax65"), None);
         assert_eq!(
             parse_probe("emu-probe: TORCH_ON edge to START maybe: 1 ns busy"),
             None
         );
         assert_eq!(parse_probe("emu-probe: idle 1 ns asleep"), None);
+    }
+
+    #[test]
+    fn pmx485s_requests_are_the_frames_it_sends() {
+        // From LinuxCNC's pmx485: node 1, function 06 / 04, CR LF added by the console.
+        let write = Request::WriteSingleRegister {
+            address: legacy::CURRENT_FORCE,
+            value: 45 * 64,
+        };
+        assert_eq!(modbus_line(&write).unwrap(), ":010620940B40FA");
+        let read = Request::ReadInputRegisters {
+            start: legacy::CURRENT_MIN,
+            quantity: 1,
+        };
+        assert_eq!(modbus_line(&read).unwrap(), ":01042099000141");
     }
 
     #[test]
@@ -262,11 +398,19 @@ mod tests {
         let report = Measurements {
             to_start_on: vec![800, 900, 1000],
             to_start_off: vec![],
+            modbus_replies: vec![(20_000, 30_000), (25_000, 40_500)],
             idle: vec![(9_900_000_000, 10_000_000_000, 1000, 2000)],
         }
         .report();
         assert!(report.contains("3 samples, instructions min 800 / median 900 / max 1000"));
         assert!(report.contains("START off: no samples"));
+        assert!(
+            report.contains(
+                "2 samples, guest time min 30.0 / median 35.2 / max 40.5 us, instructions median \
+                 22500 / max 25000"
+            ),
+            "{report}"
+        );
         assert!(
             report.contains("99.00 % asleep, 100000000 instructions executed, 100.0 wake-ups/s")
         );
