@@ -202,15 +202,23 @@ fn linuxcnc_pmx485_sees_the_units_link_lost_as_a_communication_error() {
     assert!(id.contains(" link=DOWN "), "{id}");
 }
 
-/// pmx485 against the firmware on the emulated board (`pbtool emu --ps UNIT --cnc-port`, the
-/// board set to pmx485's 19200 8E1 by pbtool); the pbtool process (still running) and the
-/// script's output, having checked it passed.
+/// pmx485 against the firmware on the emulated board (`pbtool COMMAND --ps UNIT --cnc-port`,
+/// COMMAND `emu`, or `run` with no board attached; the board set to pmx485's 19200 8E1 by
+/// pbtool); the pbtool process (still running) and the script's output, having checked it
+/// passed.
 fn pmx485_drives_the_emulated_board(
     cable: &Cable,
+    command: &str,
     unit: &[&str],
     expect: &[&str],
 ) -> (Pbtool, String) {
-    let mut args = vec!["emu", "--cnc-port", &cable.b, "--cnc-framing", "19200:8E1"];
+    let mut args = vec![
+        command,
+        "--cnc-port",
+        &cable.b,
+        "--cnc-framing",
+        "19200:8E1",
+    ];
     args.extend_from_slice(unit);
     let emu = Pbtool::spawn(&args);
     // The board boots at 115200 8N1; pbtool sets it to 19200 8E1 with CONFIG, then relays.
@@ -230,14 +238,22 @@ fn pmx485_drives_the_emulated_board(
 
 #[test]
 fn linuxcnc_pmx485_drives_a_maxpro200_through_the_emulated_board() {
+    // `pbtool run --cnc-port` without a board: the emulated board's CNC port on the device.
     // 5-200 A from the unit; mode normal and pressure automatic, as for an HPR.
     let cable = Cable::new();
-    let (_emu, text) = pmx485_drives_the_emulated_board(
+    let (run, text) = pmx485_drives_the_emulated_board(
         &cable,
+        "run",
         &["--ps", "maxpro200"],
         &["--expect-limits", "5:200:0:0", "--expect-arctime", "-"],
     );
     assert!(text.contains("current       45"), "{text}");
+    assert!(
+        run.stderr()
+            .contains("running the firmware on the emulated board against a simulated maxpro200"),
+        "{}",
+        run.transcript()
+    );
 }
 
 #[test]
@@ -245,6 +261,7 @@ fn linuxcnc_pmx485_drives_the_emulated_board() {
     let cable = Cable::new();
     let (emu, text) = pmx485_drives_the_emulated_board(
         &cable,
+        "emu",
         &["--ps", "sync65", "--fault", "0-50-0"],
         &[
             "--expect-limits",
