@@ -9,6 +9,8 @@
 //! - CNC line → reply: from the read that takes a line's last byte (LF) off the CNC UART's
 //!   ring to the write that hands the next reply's LF to it ([`ProbedCnc`]). QEMU transmits in
 //!   no time, so this is the firmware's share of a Modbus master's wait; pmx485 allows 100 ms.
+//!   Summed over each idle window and logged with it: a CNC master that never pauses (pmx485
+//!   asks about 50 times a second, for hours) costs one line per window, not one per request.
 //!
 //! Lines start with `emu-probe:`; `pbtool emu --measure` reads them.
 
@@ -51,8 +53,48 @@ pub fn start_changed(level: bool) {
 
 /// A CNC line read and not yet answered: (when, cycles asleep so far).
 static CNC_LINE: Mutex<Cell<Option<(u64, u64)>>> = Mutex::new(Cell::new(None));
-/// A finished CNC measurement not yet logged: (busy, elapsed) cycles.
-static CNC_RESULT: Mutex<Cell<Option<(u64, u64)>>> = Mutex::new(Cell::new(None));
+/// The CNC lines answered in this window.
+static CNC_WINDOW: Mutex<Cell<CncFigures>> = Mutex::new(Cell::new(CncFigures::NONE));
+
+/// Minimum, maximum and sum of one figure, in cycles.
+#[derive(Clone, Copy)]
+struct Spread {
+    min: u64,
+    max: u64,
+    sum: u64,
+}
+
+impl Spread {
+    const NONE: Spread = Spread {
+        min: u64::MAX,
+        max: 0,
+        sum: 0,
+    };
+
+    fn add(self, cycles: u64) -> Spread {
+        Spread {
+            min: self.min.min(cycles),
+            max: self.max.max(cycles),
+            sum: self.sum.saturating_add(cycles),
+        }
+    }
+}
+
+/// CNC lines answered: how many, and how long each took.
+#[derive(Clone, Copy)]
+struct CncFigures {
+    lines: u32,
+    busy: Spread,
+    elapsed: Spread,
+}
+
+impl CncFigures {
+    const NONE: CncFigures = CncFigures {
+        lines: 0,
+        busy: Spread::NONE,
+        elapsed: Spread::NONE,
+    };
+}
 
 /// The emulated board's CNC UART, stamping each line that comes in and the reply that goes
 /// out.
@@ -88,7 +130,13 @@ impl Write for ProbedCnc {
                 if let Some((line, asleep_at_line)) = CNC_LINE.borrow(cs).take() {
                     let elapsed = now - line;
                     let busy = elapsed.saturating_sub(asleep - asleep_at_line);
-                    CNC_RESULT.borrow(cs).set(Some((busy, elapsed)));
+                    let window = CNC_WINDOW.borrow(cs);
+                    let figures = window.get();
+                    window.set(CncFigures {
+                        lines: figures.lines.saturating_add(1),
+                        busy: figures.busy.add(busy),
+                        elapsed: figures.elapsed.add(elapsed),
+                    });
                 }
             });
         }
@@ -114,13 +162,6 @@ static WINDOW: Mutex<Cell<Option<(u64, SleepStats)>>> = Mutex::new(Cell::new(Non
 
 /// Thread mode, after every executor poll: logs what was measured.
 pub fn report() {
-    if let Some((busy, elapsed)) = critical_section::with(|cs| CNC_RESULT.borrow(cs).take()) {
-        info!(
-            "emu-probe: CNC line to reply: {=u64} ns busy, {=u64} ns elapsed",
-            cycles_to_ns(busy),
-            cycles_to_ns(elapsed)
-        );
-    }
     if let Some((busy, elapsed, level)) = critical_section::with(|cs| RESULT.borrow(cs).take()) {
         info!(
             "emu-probe: TORCH_ON edge to START {=str}: {=u64} ns busy, {=u64} ns elapsed",
@@ -137,6 +178,19 @@ pub fn report() {
     };
     if now - start < IDLE_WINDOW_CYCLES {
         return;
+    }
+    let cnc = critical_section::with(|cs| CNC_WINDOW.borrow(cs).replace(CncFigures::NONE));
+    if cnc.lines > 0 {
+        info!(
+            "emu-probe: CNC line to reply: {=u32} lines, busy min {=u64} max {=u64} sum {=u64} ns, elapsed min {=u64} max {=u64} sum {=u64} ns",
+            cnc.lines,
+            cycles_to_ns(cnc.busy.min),
+            cycles_to_ns(cnc.busy.max),
+            cycles_to_ns(cnc.busy.sum),
+            cycles_to_ns(cnc.elapsed.min),
+            cycles_to_ns(cnc.elapsed.max),
+            cycles_to_ns(cnc.elapsed.sum)
+        );
     }
     info!(
         "emu-probe: idle {=u64} ns asleep of {=u64} ns, {=u32} wake-ups, {=u32} polls",

@@ -8,6 +8,7 @@ use std::time::Duration;
 
 use plasma_firmware::io::{Input, Output};
 
+use host_tests::emu::log::LogLine;
 use host_tests::emu::{Board, BoardOptions, Error, Result};
 use plasma_protocol::modbus_ascii::{self, Request};
 use plasma_protocol::powermax::legacy;
@@ -26,13 +27,9 @@ pub enum Probe {
         /// Guest nanoseconds from the edge to the write, asleep or not.
         elapsed_ns: u64,
     },
-    /// A CNC line answered: from the read of its LF to the write of the reply's.
-    CncReply {
-        /// Guest nanoseconds the core was busy in between: instructions.
-        busy_ns: u64,
-        /// Guest nanoseconds in between, asleep or not.
-        elapsed_ns: u64,
-    },
+    /// CNC lines answered in one idle window: from the read of a line's LF to the write of
+    /// its reply's.
+    CncReplies(CncFigures),
     /// One idle window.
     Idle {
         /// Guest nanoseconds asleep (WFI).
@@ -72,13 +69,31 @@ pub fn parse_probe(text: &str) -> Option<Probe> {
         });
     }
     if let Some(rest) = rest.strip_prefix("CNC line to reply: ") {
-        let &[busy_ns, elapsed_ns] = numbers(rest).as_slice() else {
+        let &[
+            lines,
+            busy_min,
+            busy_max,
+            busy_sum,
+            elapsed_min,
+            elapsed_max,
+            elapsed_sum,
+        ] = numbers(rest).as_slice()
+        else {
             return None;
         };
-        return Some(Probe::CncReply {
-            busy_ns,
-            elapsed_ns,
-        });
+        return Some(Probe::CncReplies(CncFigures {
+            lines,
+            busy: Spread {
+                min: busy_min,
+                max: busy_max,
+                sum: busy_sum,
+            },
+            elapsed: Spread {
+                min: elapsed_min,
+                max: elapsed_max,
+                sum: elapsed_sum,
+            },
+        }));
     }
     if let Some(rest) = rest.strip_prefix("idle ") {
         let &[asleep_ns, elapsed_ns, wake_ups, polls] = numbers(rest).as_slice() else {
@@ -92,6 +107,44 @@ pub fn parse_probe(text: &str) -> Option<Probe> {
         });
     }
     None
+}
+
+/// Minimum, maximum and sum of one figure over several samples, in guest ns.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Spread {
+    /// The smallest.
+    pub min: u64,
+    /// The largest.
+    pub max: u64,
+    /// All of them added.
+    pub sum: u64,
+}
+
+/// CNC lines answered (the board sums them per idle window).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct CncFigures {
+    /// How many.
+    pub lines: u64,
+    /// Guest ns the core was busy in each: instructions.
+    pub busy: Spread,
+    /// Guest ns each took, asleep or not.
+    pub elapsed: Spread,
+}
+
+impl CncFigures {
+    /// The figures of `self` and `other` together.
+    pub fn merge(self, other: CncFigures) -> CncFigures {
+        let spread = |a: Spread, b: Spread| Spread {
+            min: a.min.min(b.min),
+            max: a.max.max(b.max),
+            sum: a.sum + b.sum,
+        };
+        CncFigures {
+            lines: self.lines + other.lines,
+            busy: spread(self.busy, other.busy),
+            elapsed: spread(self.elapsed, other.elapsed),
+        }
+    }
 }
 
 /// Minimum, median and maximum of `values` (`None` when empty).
@@ -128,8 +181,8 @@ pub struct Measurements {
     pub to_start_on: Vec<u64>,
     /// Instructions from a TORCH_ON release to START off.
     pub to_start_off: Vec<u64>,
-    /// Modbus requests on the CNC port answered: (busy, elapsed) guest ns.
-    pub modbus_replies: Vec<(u64, u64)>,
+    /// pmx485's Modbus requests on the CNC port, answered.
+    pub modbus: Option<CncFigures>,
     /// Idle windows: (asleep ns, elapsed ns, wake-ups, polls).
     pub idle: Vec<(u64, u64, u32, u32)>,
 }
@@ -151,18 +204,18 @@ impl Measurements {
                 None => text.push_str(&format!("{what:<29}: no samples\n")),
             }
         }
-        let elapsed: Vec<u64> = self.modbus_replies.iter().map(|r| r.1).collect();
-        let busy: Vec<u64> = self.modbus_replies.iter().map(|r| r.0).collect();
-        match (min_median_max(&elapsed), min_median_max(&busy)) {
-            (Some((min, median, max)), Some((_, busy_median, busy_max))) => {
+        match self.modbus {
+            Some(cnc) if cnc.lines > 0 => {
                 let us = |ns: u64| ns as f64 / 1e3;
                 text.push_str(&format!(
-                    "CNC Modbus request -> reply  : {} samples, guest time min {:.1} / median \
-                     {:.1} / max {:.1} us, instructions median {busy_median} / max {busy_max}\n",
-                    elapsed.len(),
-                    us(min),
-                    us(median),
-                    us(max)
+                    "CNC Modbus request -> reply  : {} samples, guest time min {:.1} / mean {:.1} \
+                     / max {:.1} us, instructions mean {} / max {}\n",
+                    cnc.lines,
+                    us(cnc.elapsed.min),
+                    us(cnc.elapsed.sum / cnc.lines),
+                    us(cnc.elapsed.max),
+                    cnc.busy.sum / cnc.lines,
+                    cnc.busy.max
                 ));
             }
             _ => text.push_str("CNC Modbus request -> reply  : no samples\n"),
@@ -219,33 +272,37 @@ pub fn measure(options: &MeasureOptions, mut progress: impl FnMut(&str)) -> Resu
             std::thread::sleep(PAUSE);
         }
     }
-    result.modbus_replies = modbus_replies(&mut board, options.modbus_cycles)?;
     progress(&format!(
-        "{} TORCH_ON cycles and {} Modbus requests measured; waiting for {} idle window(s) of \
-         10 s guest time",
-        options.toggles,
-        result.modbus_replies.len(),
-        options.idle_windows
+        "{} TORCH_ON cycles measured; the Modbus requests and {} idle window(s) of 10 s guest \
+         time follow",
+        options.toggles, options.idle_windows
     ));
-    let mut mark = board.log().len();
-    // The first window ending after the toggles holds some of them: not idle, skipped.
-    for window in 0..=options.idle_windows {
-        let line = board.log().wait_for(mark, Duration::from_secs(60), |l| {
-            matches!(parse_probe(&l.text), Some(Probe::Idle { .. }))
-        })?;
-        mark = board
-            .log()
-            .lines()
-            .iter()
-            .position(|l| l == &line)
-            .map_or(board.log().len(), |i| i + 1);
-        if window > 0
-            && let Some(Probe::Idle {
-                asleep_ns,
-                elapsed_ns,
-                wake_ups,
-                polls,
-            }) = parse_probe(&line.text)
+    // The window in which the toggles end holds some of them: not idle, skipped.
+    let (mut mark, _) = next_window(&board, board.log().len())?;
+    if options.modbus_cycles > 0 {
+        let sent = send_pmx485_requests(&mut board, options.modbus_cycles)?;
+        // The board sums the figures per window: the windows they fall in (not idle either).
+        let mut figures: Option<CncFigures> = None;
+        while figures.map_or(0, |f| f.lines) < sent {
+            let (end, _) = next_window(&board, mark)?;
+            for line in board.log().since(mark).iter().take(end - mark) {
+                if let Some(Probe::CncReplies(window)) = parse_probe(&line.text) {
+                    figures = Some(figures.map_or(window, |f| f.merge(window)));
+                }
+            }
+            mark = end;
+        }
+        result.modbus = figures;
+    }
+    for _ in 0..options.idle_windows {
+        let (end, line) = next_window(&board, mark)?;
+        mark = end;
+        if let Some(Probe::Idle {
+            asleep_ns,
+            elapsed_ns,
+            wake_ups,
+            polls,
+        }) = parse_probe(&line.text)
         {
             result.idle.push((asleep_ns, elapsed_ns, wake_ups, polls));
         }
@@ -285,9 +342,9 @@ fn modbus_line(request: &Request<'_>) -> Result<String> {
     Ok(String::from_utf8_lossy(&out[..n]).trim_end().to_string())
 }
 
-/// Sends pmx485's writes, then `cycles` of its reads, one at a time as pmx485 does; the
-/// probe's figure for each request.
-fn modbus_replies(board: &mut Board, cycles: usize) -> Result<Vec<(u64, u64)>> {
+/// Sends pmx485's writes, then `cycles` of its reads, one at a time as pmx485 does; how many
+/// it sent (every one answered with a Modbus reply).
+fn send_pmx485_requests(board: &mut Board, cycles: usize) -> Result<u64> {
     let mut lines = Vec::new();
     for (address, value) in PMX485_CONNECT {
         lines.push(modbus_line(&Request::WriteSingleRegister {
@@ -303,27 +360,30 @@ fn modbus_replies(board: &mut Board, cycles: usize) -> Result<Vec<(u64, u64)>> {
             })?);
         }
     }
-    let mut figures = Vec::new();
-    for line in lines {
-        let mark = board.log().len();
-        let reply = board.command(&line, STEP_TIMEOUT)?;
+    for line in &lines {
+        let reply = board.command(line, STEP_TIMEOUT)?;
         if !reply.starts_with(':') {
             return Err(Error::Protocol(format!(
                 "{line} was answered with {reply:?}"
             )));
         }
-        let logged = board.log().wait_for(mark, STEP_TIMEOUT, |l| {
-            matches!(parse_probe(&l.text), Some(Probe::CncReply { .. }))
-        })?;
-        if let Some(Probe::CncReply {
-            busy_ns,
-            elapsed_ns,
-        }) = parse_probe(&logged.text)
-        {
-            figures.push((busy_ns, elapsed_ns));
-        }
     }
-    Ok(figures)
+    Ok(lines.len() as u64)
+}
+
+/// Waits for the next idle report after log line `mark`; the index after it, and the line.
+fn next_window(board: &Board, mark: usize) -> Result<(usize, LogLine)> {
+    let line = board.log().wait_for(mark, Duration::from_secs(60), |l| {
+        matches!(parse_probe(&l.text), Some(Probe::Idle { .. }))
+    })?;
+    let end = board
+        .log()
+        .lines()
+        .iter()
+        .skip(mark)
+        .position(|l| l == &line)
+        .map_or(board.log().len(), |i| mark + i + 1);
+    Ok((end, line))
 }
 
 #[cfg(test)]
@@ -360,11 +420,23 @@ mod tests {
             })
         );
         assert_eq!(
-            parse_probe("emu-probe: CNC line to reply: 21000 ns busy, 35000 ns elapsed"),
-            Some(Probe::CncReply {
-                busy_ns: 21_000,
-                elapsed_ns: 35_000
-            })
+            parse_probe(
+                "emu-probe: CNC line to reply: 3 lines, busy min 5000 max 6000 sum 16500 ns, \
+                 elapsed min 5200 max 6300 sum 17100 ns"
+            ),
+            Some(Probe::CncReplies(CncFigures {
+                lines: 3,
+                busy: Spread {
+                    min: 5000,
+                    max: 6000,
+                    sum: 16_500
+                },
+                elapsed: Spread {
+                    min: 5200,
+                    max: 6300,
+                    sum: 17_100
+                },
+            }))
         );
         assert_eq!(parse_probe("link up: Powermax65"), None);
         assert_eq!(
@@ -398,7 +470,34 @@ mod tests {
         let report = Measurements {
             to_start_on: vec![800, 900, 1000],
             to_start_off: vec![],
-            modbus_replies: vec![(20_000, 30_000), (25_000, 40_500)],
+            modbus: Some(
+                CncFigures {
+                    lines: 1,
+                    busy: Spread {
+                        min: 20_000,
+                        max: 20_000,
+                        sum: 20_000,
+                    },
+                    elapsed: Spread {
+                        min: 30_000,
+                        max: 30_000,
+                        sum: 30_000,
+                    },
+                }
+                .merge(CncFigures {
+                    lines: 1,
+                    busy: Spread {
+                        min: 25_000,
+                        max: 25_000,
+                        sum: 25_000,
+                    },
+                    elapsed: Spread {
+                        min: 40_500,
+                        max: 40_500,
+                        sum: 40_500,
+                    },
+                }),
+            ),
             idle: vec![(9_900_000_000, 10_000_000_000, 1000, 2000)],
         }
         .report();
@@ -406,7 +505,7 @@ mod tests {
         assert!(report.contains("START off: no samples"));
         assert!(
             report.contains(
-                "2 samples, guest time min 30.0 / median 35.2 / max 40.5 us, instructions median \
+                "2 samples, guest time min 30.0 / mean 35.2 / max 40.5 us, instructions mean \
                  22500 / max 25000"
             ),
             "{report}"
