@@ -4,17 +4,24 @@
 //!
 //! The input is a power-up (stored settings, input pins, optionally a simulated unit of
 //! `plasma-sim` wired to the power-supply port) and a sequence of steps: CNC bytes or command lines,
-//! power-supply bytes (raw, or framed with a valid checksum so that they reach the link's
-//! logic), a character the UART flagged, time passing, input edges, and things done to the
-//! unit (faults, power, line noise).
+//! Modbus ASCII requests from the CNC with a valid LRC (the CNC port answers as a Powermax;
+//! [`cnc_master`]: any node, functions, registers from the protocol's tables, pmx485's
+//! sequence), power-supply bytes (raw, or framed with a valid checksum so that they reach the
+//! link's logic), a character the UART flagged, time passing, input edges, and things done to
+//! the unit (faults, power, line noise).
 //!
 //! Checked on every step:
 //! - the independent [`SafetyMonitor`], fed only the input edges at the pins and the START
-//!   output, stays clean;
+//!   output, stays clean (so no Modbus request from the CNC ever gives a START);
 //! - every frame the bridge transmits to the power supply decodes (Modbus ASCII or HPR) and
-//!   is on the allow-list, judged by the protocol's own tables: a Modbus write reaches only
-//!   registers or coils `powermax::registers` documents as writable, an HPR command is
-//!   [`Class::Normal`] in `hpr::command` (not factory-only, not dangerous, not unknown);
+//!   is on the allow-list, judged by the protocol's own tables for the family of the unit on
+//!   the line; while the link speaks to a SYNC unit, settings go as one whole 0x10 write
+//!   ([`supply_rules`]);
+//! - every CNC output line that starts with `:` is a Modbus ASCII response, never to node 0;
+//!   a request the board knows arrived whole between lines is answered exactly when it is
+//!   for the bridge's `cnc_address` and the link is up, and the answer is a response to it
+//!   from that address (`modbus_ascii::validate_reply`), or an exception for a PDU that does
+//!   not parse;
 //! - buffers stay bounded: a frame fits the link's transmit buffer, a piece of CNC output
 //!   fits the session's output buffer, no line is longer than `MAX_REPLY_LEN`, and the
 //!   output drains;
@@ -24,25 +31,31 @@
 //! - nothing panics.
 #![no_main]
 
+#[path = "bridge/cnc_master.rs"]
+mod cnc_master;
+#[path = "bridge/supply_rules.rs"]
+mod supply_rules;
+
 use libfuzzer_sys::arbitrary::{self, Arbitrary};
 use libfuzzer_sys::fuzz_target;
 
 use plasma_firmware::bridge::Bridge;
+use plasma_firmware::bridge::{MAX_REPLY_LEN, OUTPUT_CAPACITY};
 use plasma_firmware::discrete::DiscreteIo;
 use plasma_firmware::inputs::{InputConfig, PinLevels};
 use plasma_firmware::io::{Input, SafetyMonitor, SupplyState};
-use plasma_firmware::link::TX_CAPACITY;
-use plasma_firmware::bridge::{MAX_REPLY_LEN, OUTPUT_CAPACITY};
 use plasma_firmware::settings::{SaveError, Settings};
 use plasma_firmware::storage::{MAX_PAYLOAD, Settings as _};
-use plasma_protocol::cnc::phoenix::{ACK, NAK};
+use plasma_protocol::cnc::phoenix::{self, ACK, NAK};
 use plasma_protocol::cnc::{ConfigKey, Gas, Mode};
-use plasma_protocol::hpr::{self, Class};
-use plasma_protocol::modbus_ascii::{self, Request};
-use plasma_protocol::powermax::registers;
+use plasma_protocol::hpr;
+use plasma_protocol::modbus_ascii::{self, Request, Response};
 use plasma_protocol::serial::PortConfig;
 use plasma_protocol::time::{Duration, Instant};
 use plasma_sim::{Model, SimOptions, SimulatedUnit};
+
+use cnc_master::{MasterRequest, Node, Pmx485};
+use supply_rules::Judge;
 
 /// Frames the board writes per turn at most (`runner::MAX_FRAMES_PER_TURN`).
 const FRAMES_PER_TURN: usize = 4;
@@ -57,6 +70,9 @@ const MAX_WAIT: Duration = Duration::from_millis(100);
 const MAX_REPEATS_AT_ONE_INSTANT: u32 = 2;
 /// Pieces of CNC output one drain may take before it counts as never draining.
 const MAX_OUTPUT_PIECES: usize = 1024;
+/// A request or Phoenix frame that stops arriving is dropped after this long
+/// (docs/cnc-protocol.md sections 7 and 9; the session's `FRAME_IDLE_TIMEOUT`).
+const FRAME_IDLE: Duration = Duration::from_millis(50);
 
 /// Command words for [`Step::CncLine`]: a seed for the search, not a specification (the
 /// parser is the one source; a word missing here only costs coverage).
@@ -105,6 +121,10 @@ enum Step {
     CncBytes(Vec<u8>),
     /// A command line from the CNC (CR LF appended).
     CncLine(Verb, Vec<Arg>),
+    /// A Modbus ASCII request from the CNC with a correct LRC.
+    CncModbus(MasterRequest),
+    /// LinuxCNC's pmx485: three force-register writes, then reads.
+    Pmx485(Pmx485),
     /// Bytes from the power supply's port, as received.
     PsBytes(Vec<u8>),
     /// A Modbus ASCII frame with a correct LRC, as received.
@@ -197,44 +217,41 @@ fn hpr_frame(id: u16, data: &[u8]) -> Vec<u8> {
     }
 }
 
-/// Panics unless `frame` is one whole frame the bridge may send: a Modbus ASCII request
-/// whose writes reach only documented writable registers and coils, or an HPR command of
-/// class Normal.
-fn check_allowed(frame: &[u8]) {
-    assert!(frame.len() <= TX_CAPACITY, "frame over the transmit buffer");
-    match frame.first() {
-        Some(b':') => {
-            let mut buf = [0u8; modbus_ascii::MAX_FRAME_BYTES];
-            let decoded = modbus_ascii::decode(frame, &mut buf)
-                .unwrap_or_else(|e| panic!("sent a Modbus frame that does not decode: {e:?}"));
-            let request = decoded
-                .request()
-                .unwrap_or_else(|e| panic!("sent a Modbus PDU that does not parse: {e:?}"));
-            let allowed = match request {
-                Request::ReadCoils { .. }
-                | Request::ReadHoldingRegisters { .. }
-                | Request::ReadInputRegisters { .. }
-                | Request::ReadDeviceIdentification { .. } => true,
-                Request::WriteSingleCoil { address, .. } => registers::coil_writable(address),
-                Request::WriteSingleRegister { address, .. } => {
-                    registers::registers_writable(address, 1)
-                }
-                Request::WriteMultipleRegisters { start, values } => u16::try_from(values.len())
-                    .is_ok_and(|n| registers::registers_writable(start, n)),
-            };
-            assert!(allowed, "sent a write off the allow-list: {request:?}");
+/// Every `:` line to the CNC is a Modbus ASCII response, and none goes to node 0 (a broadcast
+/// is never answered).
+fn check_modbus_line(line: &[u8]) {
+    let text = String::from_utf8_lossy(line);
+    let mut buf = [0u8; modbus_ascii::MAX_FRAME_BYTES];
+    let frame = modbus_ascii::decode(line, &mut buf)
+        .unwrap_or_else(|e| panic!("CNC line {text:?} is no Modbus frame: {e:?}"));
+    assert_ne!(frame.address, 0, "{text:?} answers a broadcast");
+    if let Err(e) = Response::parse(frame.pdu) {
+        panic!("CNC line {text:?} is no Modbus response: {e:?}");
+    }
+}
+
+/// `reply` answers `pdu` sent to `address`: a response to the request, or an exception for
+/// its function when the PDU does not parse.
+fn check_reply(reply: &[u8], address: u8, pdu: &[u8]) {
+    let text = String::from_utf8_lossy(reply);
+    let mut buf = [0u8; modbus_ascii::MAX_FRAME_BYTES];
+    let frame = modbus_ascii::decode(reply, &mut buf)
+        .unwrap_or_else(|e| panic!("{text:?} is no Modbus frame: {e:?}"));
+    match Request::parse(pdu) {
+        Ok(request) => {
+            if let Err(e) = modbus_ascii::validate_reply(&request, address, &frame) {
+                panic!("{text:?} does not answer {request:?} to node {address}: {e:?}");
+            }
         }
-        Some(&hpr::frame::START) => {
-            let parsed = hpr::Frame::parse(frame)
-                .unwrap_or_else(|e| panic!("sent an HPR frame that does not parse: {e:?}"));
-            assert_eq!(
-                hpr::classify(parsed.id),
-                Some(Class::Normal),
-                "sent HPR command {:03} off the allow-list",
-                parsed.id
+        Err(_) => {
+            let function = pdu.first().map_or(0, |f| f & 0x7F);
+            assert_eq!(frame.address, address, "{text:?} from another node");
+            assert!(
+                matches!(Response::parse(frame.pdu),
+                    Ok(Response::Exception { function: f, .. }) if f == function),
+                "{text:?} is no exception to the PDU {pdu:02X?}"
             );
         }
-        _ => panic!("sent something that is no frame: {frame:?}"),
     }
 }
 
@@ -243,6 +260,7 @@ fn check_allowed(frame: &[u8]) {
 /// every character arrives flagged. (The scenario tests run the baud-accurate line; here it
 /// would cost most of the time, and the steps damage the traffic themselves.)
 struct Unit {
+    model: Model,
     unit: Box<dyn SimulatedUnit>,
     start_given: bool,
     noisy_until: Instant,
@@ -264,8 +282,17 @@ struct Board {
     monitor: SafetyMonitor,
     supply_sent: Option<SupplyState>,
     next_save: Result<(), SaveError>,
-    /// Characters of the CNC output line under way (ACK and NAK come between lines).
-    cnc_line_len: usize,
+    /// The CNC output line under way (ACK and NAK come between lines).
+    cnc_line: Vec<u8>,
+    /// CNC output lines that start with `:` since the last request step.
+    modbus_replies: Vec<Vec<u8>>,
+    /// The CNC port's input is known to stand between lines, no frame under way.
+    cnc_between_lines: bool,
+    /// The last CNC input bytes, to spot a `RAW` command across steps.
+    cnc_tail: Vec<u8>,
+    raw_possible: bool,
+    /// Steps injected bytes on the power-supply port.
+    impersonated: bool,
     unit: Option<Unit>,
     repeats: u32,
 }
@@ -293,9 +320,10 @@ impl Board {
         }
         let io = DiscreteIo::new(bridge.io_config(), now, pins);
         let unit = scenario.unit.map(|index| {
-            let unit = pick(&Model::ALL, index).build(&SimOptions::default());
+            let model = pick(&Model::ALL, index);
             Unit {
-                unit,
+                model,
+                unit: model.build(&SimOptions::default()),
                 start_given: false,
                 noisy_until: now,
             }
@@ -309,7 +337,12 @@ impl Board {
             monitor: SafetyMonitor::new(torch_on),
             supply_sent: None,
             next_save: Ok(()),
-            cnc_line_len: 0,
+            cnc_line: Vec::new(),
+            modbus_replies: Vec::new(),
+            cnc_between_lines: true,
+            cnc_tail: Vec::new(),
+            raw_possible: false,
+            impersonated: false,
             unit,
             repeats: 0,
         };
@@ -414,8 +447,8 @@ impl Board {
             let Some(frame) = self.bridge.poll_ps_transmit(now) else {
                 break;
             };
-            check_allowed(frame);
             let frame = frame.to_vec();
+            self.judge().check(&frame);
             // The port takes the settings the bridge reports after handing out the frame.
             let port = self.bridge.ps_port_config();
             if let Some(unit) = &mut self.unit {
@@ -524,12 +557,19 @@ impl Board {
             assert!(piece.len() <= OUTPUT_CAPACITY, "CNC output over its buffer");
             for &byte in piece {
                 match byte {
-                    b'\n' => self.cnc_line_len = 0,
-                    ACK | NAK if self.cnc_line_len == 0 => {}
+                    b'\n' => {
+                        let mut line = core::mem::take(&mut self.cnc_line);
+                        if line.first() == Some(&b':') {
+                            line.push(byte);
+                            check_modbus_line(&line);
+                            self.modbus_replies.push(line);
+                        }
+                    }
+                    ACK | NAK if self.cnc_line.is_empty() => {}
                     _ => {
-                        self.cnc_line_len += 1;
+                        self.cnc_line.push(byte);
                         assert!(
-                            self.cnc_line_len < MAX_REPLY_LEN,
+                            self.cnc_line.len() < MAX_REPLY_LEN,
                             "a CNC line over {MAX_REPLY_LEN} bytes"
                         );
                     }
@@ -541,7 +581,11 @@ impl Board {
 
     fn step(&mut self, step: &Step) {
         match step {
-            Step::CncBytes(bytes) => self.cnc_rx(bytes),
+            Step::CncBytes(bytes) => {
+                self.note_cnc_text(bytes);
+                self.cnc_between_lines &= bytes.is_empty();
+                self.cnc_rx(bytes);
+            }
             Step::CncLine(verb, args) => {
                 let mut line = Vec::new();
                 verb.write(&mut line);
@@ -549,11 +593,45 @@ impl Board {
                     arg.write(&mut line);
                 }
                 line.extend_from_slice(b"\r\n");
+                self.note_cnc_text(&line);
+                // A line of text ends between lines, unless SOH or STX opened a Phoenix frame.
+                self.cnc_between_lines &= !line.iter().any(|&b| phoenix::is_frame_start(b));
                 self.cnc_rx(&line);
             }
-            Step::PsBytes(bytes) => self.ps_rx(bytes),
-            Step::PsModbus { address, pdu } => self.ps_rx(&modbus_frame(*address, pdu)),
-            Step::PsHpr { id, data } => self.ps_rx(&hpr_frame(*id, data)),
+            Step::CncModbus(request) => {
+                self.settle_cnc_input(request.resync);
+                let pdu = request.pdu.bytes(self.bridge.status());
+                if let Some(pdu) = pdu {
+                    self.cnc_request(request.node, &pdu);
+                }
+            }
+            Step::Pmx485(pmx) => {
+                self.settle_cnc_input(pmx.resync);
+                for exchange in pmx.exchanges() {
+                    if exchange.gap_ms > 0 {
+                        self.wait(Duration::from_millis(u64::from(exchange.gap_ms)));
+                    }
+                    if let Some(active) = exchange.torch_on {
+                        self.drive_input(Input::TorchOn, active);
+                        self.turn();
+                    }
+                    if let Some(pdu) = exchange.pdu.bytes(self.bridge.status()) {
+                        self.cnc_request(Node::Bridge, &pdu);
+                    }
+                }
+            }
+            Step::PsBytes(bytes) => {
+                self.impersonated |= !bytes.is_empty();
+                self.ps_rx(bytes);
+            }
+            Step::PsModbus { address, pdu } => {
+                self.impersonated = true;
+                self.ps_rx(&modbus_frame(*address, pdu));
+            }
+            Step::PsHpr { id, data } => {
+                self.impersonated = true;
+                self.ps_rx(&hpr_frame(*id, data));
+            }
             Step::PsFlagged => {
                 self.bridge.handle_ps_rx_error(self.now);
                 self.turn();
@@ -578,6 +656,88 @@ impl Board {
                     .noisy_until
                     .max(now + Duration::from_micros(u64::from(*us)));
             }),
+        }
+    }
+
+    /// What the board knows when a frame leaves for the power supply.
+    fn judge(&self) -> Judge {
+        Judge {
+            unit: self.unit.as_ref().map(|u| u.model.family()),
+            link: self.bridge.status().family,
+            impersonated: self.impersonated,
+            raw_possible: self.raw_possible,
+        }
+    }
+
+    /// Watches the CNC's text for a `RAW` command (any case, across steps): it may write
+    /// one settings register on purpose.
+    fn note_cnc_text(&mut self, bytes: &[u8]) {
+        self.cnc_tail
+            .extend(bytes.iter().map(u8::to_ascii_uppercase));
+        if self.cnc_tail.windows(3).any(|w| w == b"RAW") {
+            self.raw_possible = true;
+        }
+        let keep_from = self.cnc_tail.len().saturating_sub(2);
+        self.cnc_tail.drain(..keep_from);
+    }
+
+    /// Before a request, when the port's input is unknown and `resync`: let a frame under way
+    /// lapse and end the line, so the request arrives between lines.
+    fn settle_cnc_input(&mut self, resync: bool) {
+        if self.cnc_between_lines || !resync {
+            return;
+        }
+        self.wait(FRAME_IDLE);
+        self.cnc_rx(b"\r\n");
+        self.cnc_between_lines = true;
+    }
+
+    /// The CNC port answers as a Powermax only while the link is up with a unit it knows.
+    fn link_serves(&self) -> bool {
+        let status = self.bridge.status();
+        status.link_up && status.family.is_some()
+    }
+
+    /// `pdu` from the CNC to `node` with a correct LRC, and the answer checked: when the
+    /// request arrived between lines, exactly one reply if it is for the bridge and the link
+    /// is up (before and after; either way if it changed), none otherwise.
+    fn cnc_request(&mut self, node: Node, pdu: &[u8]) {
+        let cnc_address = self.bridge.settings().cnc.address;
+        let address = node.address(cnc_address);
+        let frame = modbus_frame(address, pdu);
+        if frame.is_empty() {
+            return;
+        }
+        let between_lines = self.cnc_between_lines;
+        let served_before = self.link_serves();
+        self.modbus_replies.clear();
+        self.cnc_rx(&frame);
+        let replies = core::mem::take(&mut self.modbus_replies);
+        assert!(replies.len() <= 1, "one request, replies {replies:?}");
+        // A queued `CONFIG cnc_address` may have run meanwhile: then either node was right.
+        if !between_lines || self.bridge.settings().cnc.address != cnc_address {
+            return;
+        }
+        let served_after = self.link_serves();
+        let for_bridge = address != 0 && address == cnc_address;
+        let request = String::from_utf8_lossy(&frame);
+        match replies.first() {
+            Some(reply) => {
+                let reply = String::from_utf8_lossy(reply);
+                assert!(
+                    for_bridge,
+                    "{request:?} to node {address} answered {reply:?} (the bridge is node {cnc_address})"
+                );
+                assert!(
+                    served_before || served_after,
+                    "{request:?} answered {reply:?} while the link is down"
+                );
+                check_reply(reply.as_bytes(), address, pdu);
+            }
+            None => assert!(
+                !(for_bridge && served_before && served_after),
+                "{request:?} not answered with the link up"
+            ),
         }
     }
 

@@ -93,7 +93,8 @@ pub enum Step {
     Pending,
     /// A reply frame is ready ([`PowermaxPort::reply`]).
     Reply,
-    /// A settings change was refused before it was sent: the fault it reads as.
+    /// A settings change was refused before it was sent: the fault it reads as. The reply
+    /// ([`PowermaxPort::reply`]) is empty when the request was a broadcast.
     Refused(FaultCode),
 }
 
@@ -405,6 +406,9 @@ impl PowermaxPort {
     // --- replies ------------------------------------------------------------------------
 
     fn answer(&mut self, broadcast: bool, address: u8, response: &Response<'_>) -> Step {
+        // No reply now leaves none behind: a `Step::Refused` after a broadcast must not send
+        // the previous request's reply again.
+        self.reply_len = 0;
         if broadcast {
             return Step::Pending;
         }
@@ -424,6 +428,7 @@ impl PowermaxPort {
         pdu: &[u8],
         refused: Option<FaultCode>,
     ) -> Step {
+        self.reply_len = 0;
         if broadcast {
             return Step::Pending;
         }

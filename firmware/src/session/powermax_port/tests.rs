@@ -245,6 +245,20 @@ fn other_nodes_and_broadcasts_get_no_reply() {
 }
 
 #[test]
+fn a_broadcast_that_ends_a_refused_group_gets_no_reply() {
+    let mut rig = Rig::sync65(Settings::default());
+    // A reply went out before; then a group the unit refuses (100 A on a 65 A unit), ended
+    // by a broadcast read: silence, not the earlier reply sent again.
+    read(&mut rig, 0x2098);
+    write(&mut rig, 0x2094, 100 * 64).unwrap();
+    let mut out = [0u8; 64];
+    let n = plasma_protocol::modbus_ascii::encode(0, &[0x04, 0x20, 0x98, 0x00, 0x01], &mut out)
+        .unwrap();
+    assert_eq!(ask(&mut rig, &out[..n]), None);
+    assert_eq!(read(&mut rig, 0x2098), 111, "refused all the same: 0-11-1");
+}
+
+#[test]
 fn exceptions_as_a_unit_gives_them() {
     let mut rig = Rig::sync65(Settings::default());
     let cases: [(&[u8], &[u8]); 6] = [
