@@ -35,6 +35,12 @@ impl Clock {
         Instant::from_micros(micros)
     }
 
+    /// The host instant `when` on this clock (zero if before the start).
+    pub fn at(&self, when: std::time::Instant) -> Instant {
+        let since = when.saturating_duration_since(self.epoch);
+        Instant::from_micros(u64::try_from(since.as_micros()).unwrap_or(u64::MAX))
+    }
+
     /// Seconds since the start, for logs.
     pub fn seconds(&self, at: Instant) -> f64 {
         at.as_micros() as f64 / 1e6
@@ -51,6 +57,9 @@ pub enum Arrival {
         port: usize,
         /// What came.
         rx: Vec<Rx>,
+        /// When the reader had it (before it waited its turn in the inbox): a tap with two
+        /// ports orders the two directions by it.
+        read_at: std::time::Instant,
     },
     /// A line from stdin (with its terminator).
     Line(Vec<u8>),
@@ -73,6 +82,7 @@ pub fn spawn_reader(mut port: Port, index: usize, inbox: Sender<Arrival>) {
                     let arrival = Arrival::Serial {
                         port: index,
                         rx: std::mem::take(&mut rx),
+                        read_at: std::time::Instant::now(),
                     };
                     if inbox.send(arrival).is_err() {
                         return;

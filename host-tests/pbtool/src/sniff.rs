@@ -22,6 +22,10 @@ const FRAME_TIMEOUT: Duration = Duration::from_secs(1);
 /// A pause inside a frame longer than this is flagged (USB adapters deliver in chunks a few
 /// milliseconds apart; more is the sender's pause).
 const GAP_FLAG: Duration = Duration::from_millis(50);
+/// With two ports (a 4-wire line), how long a frame waits before it is reported, so that a
+/// frame the other port's reader had earlier, but handed over later, still comes first: the
+/// two directions are read by two threads (and, on a real line, two USB adapters).
+const REORDER: Duration = Duration::from_millis(30);
 
 /// How a sniff ended.
 #[derive(Debug)]
@@ -48,6 +52,9 @@ pub struct Sniffer {
     count: usize,
     json: bool,
     clock: Clock,
+    /// Frames not reported yet: (when framed, port, frame); reported in the order of their
+    /// first character once [`REORDER`] has passed (at once with one port).
+    held: Vec<(Instant, usize, Piece)>,
 }
 
 impl Sniffer {
@@ -61,7 +68,31 @@ impl Sniffer {
             count: 0,
             json,
             clock,
+            held: Vec::new(),
         }
+    }
+
+    fn reorder(&self) -> Duration {
+        if self.names.len() > 1 {
+            REORDER
+        } else {
+            Duration::ZERO
+        }
+    }
+
+    /// Reports the held frames that have waited long enough (all of them with `all`), in the
+    /// order of their first character.
+    fn release(&mut self, now: Instant, all: bool, out: &mut dyn Write) -> io::Result<()> {
+        let reorder = self.reorder();
+        let (mut due, kept): (Vec<_>, Vec<_>) = std::mem::take(&mut self.held)
+            .into_iter()
+            .partition(|(framed, _, _)| all || now >= *framed + reorder);
+        self.held = kept;
+        due.sort_by_key(|(_, _, piece)| piece.at);
+        for (_, port, piece) in due {
+            self.report(port, &piece, out)?;
+        }
+        Ok(())
     }
 
     /// Reports what passes until a port fails.
@@ -72,21 +103,33 @@ impl Sniffer {
                 .iter()
                 .filter_map(Framer::pending_since)
                 .map(|t| t + FRAME_TIMEOUT)
+                .chain(
+                    self.held
+                        .iter()
+                        .map(|(framed, _, _)| *framed + self.reorder()),
+                )
                 .min();
             let arrival = wait(inbox, &self.clock, wake);
             let now = self.clock.now();
             let mut pieces = Vec::new();
             match arrival {
-                Some(Arrival::Serial { port, rx }) => {
+                Some(Arrival::Serial { port, rx, read_at }) => {
+                    let read_at = self.clock.at(read_at);
                     if let Some(framer) = self.framers.get_mut(port) {
                         for item in rx {
-                            for piece in framer.push_one(now, item) {
+                            for piece in framer.push_one(read_at, item) {
                                 pieces.push((port, piece));
                             }
                         }
                     }
                 }
-                Some(Arrival::Failed(e)) => return Stop::Port(e),
+                Some(Arrival::Failed(e)) => {
+                    // What was framed before the port failed is still reported.
+                    return match self.release(now, true, out) {
+                        Ok(()) => Stop::Port(e),
+                        Err(e) => Stop::Output(e),
+                    };
+                }
                 _ => {}
             }
             for (port, framer) in self.framers.iter_mut().enumerate() {
@@ -97,10 +140,10 @@ impl Sniffer {
                     pieces.extend(framer.flush().map(|p| (port, p)));
                 }
             }
-            for (port, piece) in pieces {
-                if let Err(e) = self.report(port, &piece, out) {
-                    return Stop::Output(e);
-                }
+            self.held
+                .extend(pieces.into_iter().map(|(port, piece)| (now, port, piece)));
+            if let Err(e) = self.release(now, false, out) {
+                return Stop::Output(e);
             }
         }
     }
@@ -198,5 +241,55 @@ impl Sniffer {
             }
             None => {}
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::serial::Rx;
+    use std::sync::mpsc;
+
+    fn serial(port: usize, text: &str, read_at: std::time::Instant) -> Arrival {
+        Arrival::Serial {
+            port,
+            rx: text.bytes().map(Rx::Byte).collect(),
+            read_at,
+        }
+    }
+
+    #[test]
+    fn a_reply_handed_over_after_the_next_request_is_still_paired_with_its_own() {
+        // A 4-wire tap: the reply's reader had it 2 ms before the next request was read, but
+        // its thread ran late and handed it over after.
+        let clock = Clock::start();
+        let t0 = std::time::Instant::now();
+        let ms = std::time::Duration::from_millis;
+        let (inbox, arrivals) = mpsc::channel();
+        inbox.send(serial(0, ":012B0E0401C1\r\n", t0)).unwrap();
+        inbox
+            .send(serial(0, ":01043010000BB0\r\n", t0 + ms(5)))
+            .unwrap();
+        inbox
+            .send(serial(
+                1,
+                ":012B0E0481000101010630383133333504\r\n",
+                t0 + ms(3),
+            ))
+            .unwrap();
+        inbox
+            .send(Arrival::Failed(SerialError::Missing("tap".to_string())))
+            .unwrap();
+        let mut sniffer = Sniffer::new(vec!["req".to_string(), "rep".to_string()], false, clock);
+        let mut out = Vec::new();
+        assert!(matches!(sniffer.run(&arrivals, &mut out), Stop::Port(_)));
+        let text = String::from_utf8(out).unwrap();
+        let order: Vec<&str> = text.lines().filter(|l| l.starts_with('#')).collect();
+        assert_eq!(order.len(), 3, "{text}");
+        assert!(order[0].contains("req  :012B0E0401C1"), "{text}");
+        assert!(order[1].contains("rep  :012B0E0481"), "{text}");
+        assert!(order[2].contains("req  :01043010000BB0"), "{text}");
+        assert!(text.contains("reply to #1 after 3.0 ms"), "{text}");
+        assert!(!text.contains("got no reply"), "{text}");
     }
 }

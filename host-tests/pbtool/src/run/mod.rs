@@ -188,7 +188,7 @@ pub fn run_cnc_port(
         let arrival = wait(inbox, &bridge.clock, bridge.wake());
         let now = bridge.now();
         match arrival {
-            Some(Arrival::Serial { port: 0, rx }) => bridge.ps_rx(now, &rx),
+            Some(Arrival::Serial { port: 0, rx, .. }) => bridge.ps_rx(now, &rx),
             Some(Arrival::Serial { rx, .. }) => {
                 let bytes: Vec<u8> = rx
                     .iter()
