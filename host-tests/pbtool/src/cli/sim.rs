@@ -21,7 +21,8 @@ pub struct SimArgs {
     #[arg(long, alias = "virtual")]
     pub fast: bool,
     /// The CNC side on this serial port instead of stdin/stdout, in real time: CNC software
-    /// talks to the simulated bridge and unit.
+    /// talks to the simulated bridge and unit (`run` without `--ps-port`: to the firmware on
+    /// the emulated board when QEMU is there, as `emu --cnc-port`).
     #[arg(long, value_name = "DEV", conflicts_with = "fast")]
     pub cnc_port: Option<String>,
     /// The CNC port's framing, BAUD:8XY (the bridge's `cnc_baud`, `cnc_parity`,
