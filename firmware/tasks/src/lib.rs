@@ -4,9 +4,9 @@
 //!
 //! What a board provides is the [`Board`] trait: the input and output pins, the heartbeat
 //! LED, the power-supply and CNC UARTs, the settings flash and its read errors. The tasks are
-//! generic over it; `#[embassy_executor::task]` functions cannot be, so each board declares
-//! thin task wrappers with its concrete types around [`io::run`], [`bridge::run`],
-//! [`settings::run`] and [`progress::heartbeat`]. A board also brings, outside the trait: its
+//! generic over it; `#[embassy_executor::task]` functions cannot be, so each board expands
+//! [`board_tasks!`] with its board type, which declares the thin task wrappers around
+//! [`io::run`], [`bridge::run`], [`settings::run`] and [`progress::heartbeat`] ([`tasks`]). A board also brings, outside the trait: its
 //! executors and interrupt priorities, its watchdog (fed while [`progress::should_feed`]
 //! says so), its fault handlers (which call [`safe_state::drive_safe_state`] and
 //! [`reset::mark_panic`]), and the defmt global logger it links.
@@ -30,6 +30,7 @@ pub mod progress;
 pub mod reset;
 pub mod safe_state;
 pub mod settings;
+pub mod tasks;
 pub mod uart;
 
 pub use board::Board;

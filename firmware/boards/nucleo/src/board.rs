@@ -1,16 +1,7 @@
 //! What the shared tasks take from this board ([`plasma_tasks::Board`]), and the tasks
-//! themselves: `#[embassy_executor::task]` functions cannot be generic, so each is a thin
-//! wrapper with this board's types that returns the shared body's future. Not an `async fn`
-//! around `.await`: that future would keep the arguments twice (its own and the body's).
+//! themselves, declared with this board's types by [`plasma_tasks::board_tasks!`].
 
-use core::future::Future;
-
-use plasma_firmware::bridge::Bridge;
-use plasma_firmware::io::IoConfig;
-use plasma_firmware::watchdog::TaskId;
 use plasma_tasks::Board;
-use plasma_tasks::io::BoardIo;
-use plasma_tasks::settings::Store;
 
 use crate::cnc_uart::CncUart;
 use crate::pins::{InputPins, Led, OutputPins};
@@ -34,37 +25,5 @@ impl Board for Nucleo {
     }
 }
 
-/// The I/O task ([`plasma_tasks::io::run`]).
-#[embassy_executor::task]
-pub fn io_task(
-    inputs: InputPins,
-    outputs: OutputPins,
-    config: IoConfig,
-    progress: TaskId,
-) -> impl Future<Output = ()> {
-    plasma_tasks::io::run(inputs, outputs, config, progress)
-}
-
-/// The bridge task ([`plasma_tasks::bridge::run`]).
-#[embassy_executor::task]
-pub fn bridge_task(
-    bridge: &'static mut Bridge,
-    ps: Uart,
-    cnc: CncUart,
-    io: BoardIo,
-    progress: TaskId,
-) -> impl Future<Output = ()> {
-    plasma_tasks::bridge::run::<Nucleo>(bridge, ps, cnc, io, progress)
-}
-
-/// The settings task ([`plasma_tasks::settings::run`]).
-#[embassy_executor::task]
-pub fn settings_task(store: Option<Store<Nucleo>>, progress: TaskId) -> impl Future<Output = ()> {
-    plasma_tasks::settings::run::<Nucleo>(store, progress)
-}
-
-/// The heartbeat task ([`plasma_tasks::progress::heartbeat`]).
-#[embassy_executor::task]
-pub fn heartbeat_task(led: Led, progress: TaskId) -> impl Future<Output = ()> {
-    plasma_tasks::progress::heartbeat(led, progress)
-}
+// io_task, bridge_task, settings_task, heartbeat_task.
+plasma_tasks::board_tasks!(Nucleo);
