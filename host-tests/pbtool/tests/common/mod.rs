@@ -131,10 +131,13 @@ fn relay(
         while !stop.load(Ordering::SeqCst) {
             match from.read(&mut buf) {
                 Ok(n) if n > 0 && !cut.load(Ordering::SeqCst) => {
-                    let _ = to.write_all(&buf[..n]);
+                    // The taps first: on a wire a tap hears a character no later than the
+                    // receiver, which may answer at once (a reply must not reach a 4-wire
+                    // sniffer after the request it provoked).
                     for tap in &mut taps {
                         let _ = tap.write_all(&buf[..n]);
                     }
+                    let _ = to.write_all(&buf[..n]);
                 }
                 Ok(_) => {}
                 Err(e) if e.kind() == std::io::ErrorKind::TimedOut => {}
