@@ -283,7 +283,11 @@ pub fn measure(options: &MeasureOptions, mut progress: impl FnMut(&str)) -> Resu
         let sent = send_pmx485_requests(&mut board, options.modbus_cycles)?;
         // The board sums the figures per window: the windows they fall in (not idle either).
         let mut figures: Option<CncFigures> = None;
-        while figures.map_or(0, |f| f.lines) < sent {
+        // Sent within a second or two: two windows at most (three, to be generous).
+        for _ in 0..3 {
+            if figures.map_or(0, |f| f.lines) >= sent {
+                break;
+            }
             let (end, _) = next_window(&board, mark)?;
             for line in board.log().since(mark).iter().take(end - mark) {
                 if let Some(Probe::CncReplies(window)) = parse_probe(&line.text) {
@@ -291,6 +295,12 @@ pub fn measure(options: &MeasureOptions, mut progress: impl FnMut(&str)) -> Resu
                 }
             }
             mark = end;
+        }
+        let reported = figures.map_or(0, |f| f.lines);
+        if reported != sent {
+            return Err(Error::Protocol(format!(
+                "the board reported {reported} answered CNC lines for the {sent} requests sent"
+            )));
         }
         result.modbus = figures;
     }
