@@ -79,6 +79,20 @@ pub enum Rx {
     Error,
 }
 
+impl Rx {
+    /// `received` as the bridge's CNC session takes it: a flagged character becomes `?`, one
+    /// it cannot read, in its place.
+    pub fn cnc_bytes(received: &[Rx]) -> Vec<u8> {
+        received
+            .iter()
+            .map(|r| match r {
+                Rx::Byte(b) => *b,
+                Rx::Error => b'?',
+            })
+            .collect()
+    }
+}
+
 #[cfg(unix)]
 type Native = serialport::TTYPort;
 #[cfg(windows)]

@@ -255,17 +255,7 @@ impl Console {
             let due = clock.now().saturating_since(self.world.now());
             self.world.run_for(due);
             match arrival {
-                Some(Arrival::Serial { rx, .. }) => {
-                    let bytes: Vec<u8> = rx
-                        .iter()
-                        .map(|r| match r {
-                            Rx::Byte(b) => *b,
-                            // The session sees a garbled character as one it cannot read.
-                            Rx::Error => b'?',
-                        })
-                        .collect();
-                    self.world.cnc_send(&bytes);
-                }
+                Some(Arrival::Serial { rx, .. }) => self.world.cnc_send(&Rx::cnc_bytes(&rx)),
                 Some(Arrival::Failed(e)) => return e,
                 _ => {}
             }

@@ -189,17 +189,7 @@ pub fn run_cnc_port(
         let now = bridge.now();
         match arrival {
             Some(Arrival::Serial { port: 0, rx, .. }) => bridge.ps_rx(now, &rx),
-            Some(Arrival::Serial { rx, .. }) => {
-                let bytes: Vec<u8> = rx
-                    .iter()
-                    .map(|r| match r {
-                        Rx::Byte(b) => *b,
-                        // The session sees a garbled character as one it cannot read.
-                        Rx::Error => b'?',
-                    })
-                    .collect();
-                bridge.cnc_rx(now, &bytes);
-            }
+            Some(Arrival::Serial { rx, .. }) => bridge.cnc_rx(now, &Rx::cnc_bytes(&rx)),
             Some(Arrival::Failed(e)) => return Err(e.into()),
             Some(Arrival::Line(_) | Arrival::EndOfInput) | None => {}
         }
