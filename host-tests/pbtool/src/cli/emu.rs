@@ -4,6 +4,7 @@ use std::io::{self, IsTerminal};
 use std::process::ExitCode;
 
 use clap::Args;
+use pbtool::emu::EmuUnit;
 use pbtool::emu::cnc_port::{self, CncPortOptions, RelayError};
 use pbtool::emu::console::EmuConsoleOptions;
 use pbtool::emu::measure::{MeasureOptions, measure};
@@ -48,6 +49,11 @@ pub fn emu(args: &EmuArgs) -> ExitCode {
         Ok(unit) => unit,
         Err(status) => return status,
     };
+    let unit = EmuUnit {
+        model,
+        fault,
+        seed: args.unit.seed,
+    };
     if args.measure {
         let options = MeasureOptions {
             model,
@@ -68,10 +74,8 @@ pub fn emu(args: &EmuArgs) -> ExitCode {
     }
     if let Some(device) = &args.cnc_port {
         let options = CncPortOptions {
-            model,
-            fault,
+            unit,
             log: args.log,
-            seed: args.unit.seed,
             framing: args.cnc_framing,
         };
         return match cnc_port::run(&options, device, &mut io::stderr()) {
@@ -90,11 +94,9 @@ pub fn emu(args: &EmuArgs) -> ExitCode {
         );
     }
     let options = EmuConsoleOptions {
-        model,
-        fault,
+        unit,
         events: args.unit.events,
         log: args.log,
-        seed: args.unit.seed,
     };
     let mut out = io::stdout().lock();
     match pbtool::emu::console::run(&options, stdin_lines(), &mut out, &mut io::stderr()) {

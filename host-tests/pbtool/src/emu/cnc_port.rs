@@ -20,12 +20,12 @@ use std::io::Write;
 use std::sync::mpsc::{self, Receiver, RecvTimeoutError, Sender};
 use std::time::{Duration, Instant};
 
-use host_tests::emu::{Board, BoardOptions};
+use host_tests::emu::Board;
 use plasma_firmware::settings::Settings;
 use plasma_protocol::cnc::ConfigKey;
 use plasma_protocol::serial::PortConfig;
-use plasma_sim::{Model, SimOptions};
 
+use super::EmuUnit;
 use super::console::{REPLY_TIMEOUT, SETTLE_TIMEOUT, settle};
 use crate::realtime::{Arrival, spawn_reader};
 use crate::serial::{Port, Rx, SerialError, describe};
@@ -42,13 +42,9 @@ const TICK: Duration = Duration::from_millis(100);
 #[derive(Debug, Clone, PartialEq)]
 pub struct CncPortOptions {
     /// The simulated unit.
-    pub model: Model,
-    /// A fault the unit has from the start.
-    pub fault: Option<u16>,
+    pub unit: EmuUnit,
     /// The firmware's log on stderr.
     pub log: bool,
-    /// Seed of the simulator.
-    pub seed: u64,
     /// The CNC's framing: the device is opened at it and the board is set to it.
     pub framing: PortConfig,
 }
@@ -113,14 +109,7 @@ fn relay(
     // The device first: a missing port is reported before QEMU starts.
     let mut port = Port::open(device, options.framing)?;
     let reader = port.try_clone()?;
-    let mut board = Board::boot(BoardOptions {
-        fault_at_power_up: options.fault,
-        sim: SimOptions {
-            seed: options.seed,
-            ..SimOptions::default()
-        },
-        ..BoardOptions::new(options.model)
-    })?;
+    let mut board = options.unit.boot()?;
     if !settle(&mut board)? {
         note(
             err,
@@ -136,7 +125,7 @@ fn relay(
         &format!(
             "the firmware on the emulated board against a simulated {}; its CNC port on {device} \
              at {}. Ctrl-C quits.",
-            options.model,
+            options.unit.model,
             describe(options.framing)
         ),
     );
@@ -150,10 +139,8 @@ fn relay(
     let mut matched_at = Instant::now();
     loop {
         if options.log {
-            for line in board.log().since(printed) {
-                let _ = writeln!(err, "[fw] {line}");
-                printed += 1;
-            }
+            // A closed stderr only loses the log.
+            let _ = super::print_log(&board, &mut printed, err);
         }
         let arrival = match inbox.recv_timeout(TICK) {
             Ok(arrival) => arrival,

@@ -12,8 +12,9 @@ use std::time::{Duration, Instant};
 
 use plasma_firmware::io::{Input, Output};
 
-use host_tests::emu::{Board, BoardOptions, Error, Result};
-use plasma_sim::{Model, SimOptions};
+use host_tests::emu::{Board, Error, Result};
+
+use super::EmuUnit;
 
 /// The longest wait for the link (and the unit's limits) before the first command.
 pub(crate) const SETTLE_TIMEOUT: Duration = Duration::from_secs(10);
@@ -30,15 +31,11 @@ const TICK: Duration = Duration::from_millis(10);
 #[derive(Debug, Clone, PartialEq)]
 pub struct EmuConsoleOptions {
     /// The simulated unit.
-    pub model: Model,
-    /// A fault the unit has from the start.
-    pub fault: Option<u16>,
+    pub unit: EmuUnit,
     /// Event lines on from the start.
     pub events: bool,
     /// The firmware's log on stderr.
     pub log: bool,
-    /// Seed of the simulator.
-    pub seed: u64,
 }
 
 /// What a console input line asks for.
@@ -82,21 +79,11 @@ pub fn run(
     err: &mut dyn Write,
 ) -> Result<()> {
     let io = |e: io::Error| Error::io("writing the console", e);
-    let mut board = Board::boot(BoardOptions {
-        fault_at_power_up: options.fault,
-        sim: SimOptions {
-            seed: options.seed,
-            ..SimOptions::default()
-        },
-        ..BoardOptions::new(options.model)
-    })?;
+    let mut board = options.unit.boot()?;
     let mut log_printed = 0;
     let mut print_log = |board: &Board, err: &mut dyn Write| -> Result<()> {
         if options.log {
-            for line in board.log().since(log_printed) {
-                writeln!(err, "[fw] {line}").map_err(io)?;
-                log_printed += 1;
-            }
+            super::print_log(board, &mut log_printed, err).map_err(io)?;
         }
         Ok(())
     };
