@@ -1,25 +1,11 @@
 //! `pbtool emu` (`cargo emu`) and `pbtool run` without a probe: the firmware on the emulated
 //! board with the CNC port on stdin/stdout, as a person (or a script) uses it.
 
-use std::io::Write;
-use std::process::{Command, Output, Stdio};
+mod common;
 
-fn pbtool(args: &[&str], input: &str) -> Output {
-    let mut child = Command::new(env!("CARGO_BIN_EXE_pbtool"))
-        .args(args)
-        .stdin(Stdio::piped())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("pbtool starts");
-    child
-        .stdin
-        .take()
-        .expect("piped")
-        .write_all(input.as_bytes())
-        .expect("input written");
-    child.wait_with_output().expect("pbtool ends")
-}
+use std::process::Output;
+
+use common::pbtool_with_input as pbtool;
 
 fn lines(output: &Output) -> Vec<String> {
     String::from_utf8_lossy(&output.stdout)

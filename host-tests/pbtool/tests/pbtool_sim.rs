@@ -1,7 +1,8 @@
 //! `pbtool sim`: the binary, fed through a pipe as a script or a person would.
 
-use std::io::Write;
-use std::process::{Command, Output, Stdio};
+mod common;
+
+use std::process::Output;
 
 use plasma_sim::Model;
 
@@ -12,21 +13,9 @@ fn sim(args: &[&str], input: &str) -> Output {
 
 /// Run `pbtool SUBCOMMAND ARGS` with `input` on stdin.
 fn pbtool(subcommand: &str, args: &[&str], input: &str) -> Output {
-    let mut child = Command::new(env!("CARGO_BIN_EXE_pbtool"))
-        .arg(subcommand)
-        .args(args)
-        .stdin(Stdio::piped())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("pbtool runs");
-    child
-        .stdin
-        .take()
-        .unwrap()
-        .write_all(input.as_bytes())
-        .unwrap();
-    child.wait_with_output().unwrap()
+    let mut all = vec![subcommand];
+    all.extend_from_slice(args);
+    common::pbtool_with_input(&all, input)
 }
 
 fn stdout_lines(output: &Output) -> Vec<String> {

@@ -1,9 +1,9 @@
-//! What the serial-line tests share: a null-modem cable of ptys that the test can cut, tap
-//! and unplug, and pbtool processes driven line by line.
+//! What pbtool's tests share: a null-modem cable of ptys that the test can cut, tap and
+//! unplug, pbtool processes driven line by line, and pbtool run once on a piped input.
 #![allow(dead_code)] // each test file uses a part
 
 use std::io::{BufRead, BufReader, Read, Write};
-use std::process::{Child, ChildStdin, Command, ExitStatus, Stdio};
+use std::process::{Child, ChildStdin, Command, ExitStatus, Output, Stdio};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{Receiver, RecvTimeoutError, channel};
 use std::sync::{Arc, Mutex};
@@ -146,6 +146,24 @@ fn relay(
             }
         }
     })
+}
+
+/// Runs `pbtool ARGS` with `input` on stdin until it exits.
+pub fn pbtool_with_input(args: &[&str], input: &str) -> Output {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_pbtool"))
+        .args(args)
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("pbtool starts");
+    child
+        .stdin
+        .take()
+        .expect("piped")
+        .write_all(input.as_bytes())
+        .expect("input written");
+    child.wait_with_output().expect("pbtool ends")
 }
 
 /// A pbtool process: stdin written line by line, stdout read line by line.
