@@ -93,15 +93,27 @@ fn wait_for_id(cnc_port: &str, wanted: impl Fn(&str) -> bool) -> String {
     }
 }
 
-/// pmx485 against the bridge of `pbtool sim --ps MODEL` on its CNC port at pmx485's 19200
-/// 8E1; the script's output, having checked it passed.
-fn pmx485_drives_the_bridge(sim_args: &[&str], expect: &[&str]) -> String {
-    let cable = Cable::new();
-    let mut args = vec!["sim", "--cnc-port", &cable.b, "--cnc-framing", "19200:8E1"];
-    args.extend_from_slice(sim_args);
-    let sim = Pbtool::spawn(&args);
+/// pmx485 against `pbtool COMMAND --cnc-port DEV --cnc-framing 19200:8E1 UNIT` (pmx485's
+/// framing; `emu`, and `run` with no board attached, set the emulated board to it with
+/// CONFIG), once its link is up; the pbtool process (still running) and the script's output,
+/// having checked it passed.
+fn pmx485_drives_pbtool(
+    cable: &Cable,
+    command: &str,
+    unit: &[&str],
+    expect: &[&str],
+) -> (Pbtool, String) {
+    let mut args = vec![
+        command,
+        "--cnc-port",
+        &cable.b,
+        "--cnc-framing",
+        "19200:8E1",
+    ];
+    args.extend_from_slice(unit);
+    let pbtool = Pbtool::spawn(&args);
     let id = wait_for_id(&cable.a, |id| id.contains(" link=UP "));
-    assert!(id.contains(" link=UP "), "{id}\n{}", sim.transcript());
+    assert!(id.contains(" link=UP "), "{id}\n{}", pbtool.transcript());
     let mut script_args = AS_QTPLASMAC.to_vec();
     script_args.extend_from_slice(expect);
     let (output, text) = pmx485_on(&cable.a, &script_args);
@@ -109,8 +121,16 @@ fn pmx485_drives_the_bridge(sim_args: &[&str], expect: &[&str]) -> String {
         output.status.success(),
         "pmx485 against pbtool {}:\n{text}\n{}",
         args.join(" "),
-        sim.transcript()
+        pbtool.transcript()
     );
+    (pbtool, text)
+}
+
+/// pmx485 against the bridge of `pbtool sim --ps MODEL` on its CNC port; the script's output,
+/// having checked it passed and that the text protocol answers afterwards.
+fn pmx485_drives_the_bridge(sim_args: &[&str], expect: &[&str]) -> String {
+    let cable = Cable::new();
+    let (_sim, text) = pmx485_drives_pbtool(&cable, "sim", sim_args, expect);
     // The text protocol still answers on the same port after the Modbus traffic.
     let id = wait_for_id(&cable.a, |id| id.starts_with("OK bridge="));
     assert!(id.contains(" link=UP "), "{id}");
@@ -202,46 +222,12 @@ fn linuxcnc_pmx485_sees_the_units_link_lost_as_a_communication_error() {
     assert!(id.contains(" link=DOWN "), "{id}");
 }
 
-/// pmx485 against the firmware on the emulated board (`pbtool COMMAND --ps UNIT --cnc-port`,
-/// COMMAND `emu`, or `run` with no board attached; the board set to pmx485's 19200 8E1 by
-/// pbtool); the pbtool process (still running) and the script's output, having checked it
-/// passed.
-fn pmx485_drives_the_emulated_board(
-    cable: &Cable,
-    command: &str,
-    unit: &[&str],
-    expect: &[&str],
-) -> (Pbtool, String) {
-    let mut args = vec![
-        command,
-        "--cnc-port",
-        &cable.b,
-        "--cnc-framing",
-        "19200:8E1",
-    ];
-    args.extend_from_slice(unit);
-    let emu = Pbtool::spawn(&args);
-    // The board boots at 115200 8N1; pbtool sets it to 19200 8E1 with CONFIG, then relays.
-    let id = wait_for_id(&cable.a, |id| id.contains(" link=UP "));
-    assert!(id.contains(" link=UP "), "{id}\n{}", emu.transcript());
-    let mut script_args = AS_QTPLASMAC.to_vec();
-    script_args.extend_from_slice(expect);
-    let (output, text) = pmx485_on(&cable.a, &script_args);
-    assert!(
-        output.status.success(),
-        "pmx485 against pbtool {}:\n{text}\n{}",
-        args.join(" "),
-        emu.transcript()
-    );
-    (emu, text)
-}
-
 #[test]
 fn linuxcnc_pmx485_drives_a_maxpro200_through_the_emulated_board() {
     // `pbtool run --cnc-port` without a board: the emulated board's CNC port on the device.
     // 5-200 A from the unit; mode normal and pressure automatic, as for an HPR.
     let cable = Cable::new();
-    let (run, text) = pmx485_drives_the_emulated_board(
+    let (run, text) = pmx485_drives_pbtool(
         &cable,
         "run",
         &["--ps", "maxpro200"],
@@ -259,7 +245,7 @@ fn linuxcnc_pmx485_drives_a_maxpro200_through_the_emulated_board() {
 #[test]
 fn linuxcnc_pmx485_drives_the_emulated_board() {
     let cable = Cable::new();
-    let (emu, text) = pmx485_drives_the_emulated_board(
+    let (emu, text) = pmx485_drives_pbtool(
         &cable,
         "emu",
         &["--ps", "sync65", "--fault", "0-50-0"],
