@@ -348,6 +348,29 @@ impl IoExchange for FakeIo {
     }
 }
 
+/// A supervisor over the two fake ports (the CNC one's transmit buffer `cnc_buffer` bytes,
+/// its framing unknown), the fake I/O task and `saver`.
+fn supervisor<S, E>(
+    world: &Shared,
+    cnc_buffer: usize,
+    saver: FakeSaver<S, E>,
+) -> Supervisor<FakePort, FakePort, FakeIo, FakeSaver<S, E>> {
+    let port = |line| FakePort {
+        world: world.clone(),
+        line,
+    };
+    Supervisor::new(
+        port(PS),
+        port(CNC),
+        cnc_buffer,
+        FakeIo {
+            world: world.clone(),
+            ..FakeIo::default()
+        },
+        saver,
+    )
+}
+
 /// A save through the boards' store (read-back flash) on a flash whose programs report success
 /// and store nothing, as embassy-stm32 0.6.0's L4 driver reports a failed program.
 fn save_on_silently_failing_flash(
@@ -371,20 +394,9 @@ fn a_flash_that_fails_silently_makes_config_save_fail() {
 
     let world: Shared = Rc::default();
     let clock = FakeClock(world.clone());
-    let mut sup = Supervisor::new(
-        FakePort {
-            world: world.clone(),
-            line: PS,
-        },
-        FakePort {
-            world: world.clone(),
-            line: CNC,
-        },
+    let mut sup = supervisor(
+        &world,
         64,
-        FakeIo {
-            world: world.clone(),
-            ..FakeIo::default()
-        },
         FakeSaver::<Settings, SaveError>::new(&world, save_on_silently_failing_flash),
     );
     let mut bridge = Bridge::new(Settings::default(), Instant::ZERO);
@@ -452,20 +464,9 @@ type Sup = Supervisor<FakePort, FakePort, FakeIo, FakeSaver<u32, ()>>;
 
 fn setup(cnc_buffer: usize) -> (Shared, FakeClock, Sup, FakeBridge) {
     let world: Shared = Rc::default();
-    let sup = Supervisor::new(
-        FakePort {
-            world: world.clone(),
-            line: PS,
-        },
-        FakePort {
-            world: world.clone(),
-            line: CNC,
-        },
+    let sup = supervisor(
+        &world,
         cnc_buffer,
-        FakeIo {
-            world: world.clone(),
-            ..FakeIo::default()
-        },
         FakeSaver::new(&world, every_third_fails),
     )
     .with_cnc_framing(CNC_OPENED_AT);
@@ -570,22 +571,7 @@ fn a_new_cnc_framing_applies_once_the_reply_has_left() {
 fn a_cnc_port_of_unknown_framing_gets_the_bridges_in_the_first_turn() {
     let world: Shared = Rc::default();
     let clock = FakeClock(world.clone());
-    let mut sup: Sup = Supervisor::new(
-        FakePort {
-            world: world.clone(),
-            line: PS,
-        },
-        FakePort {
-            world: world.clone(),
-            line: CNC,
-        },
-        64,
-        FakeIo {
-            world: world.clone(),
-            ..FakeIo::default()
-        },
-        FakeSaver::new(&world, every_third_fails),
-    );
+    let mut sup: Sup = supervisor(&world, 64, FakeSaver::new(&world, every_third_fails));
     let mut bridge = FakeBridge::new(&world);
     run_until(&mut sup, &mut bridge, &clock, 300);
     assert_eq!(cnc_configs(&world), [Seen::Config(0, CNC_OPENED_AT)]);
@@ -689,20 +675,9 @@ fn drives_the_real_bridge_end_to_end() {
 
     let world: Shared = Rc::default();
     let clock = FakeClock(world.clone());
-    let mut sup = Supervisor::new(
-        FakePort {
-            world: world.clone(),
-            line: PS,
-        },
-        FakePort {
-            world: world.clone(),
-            line: CNC,
-        },
+    let mut sup = supervisor(
+        &world,
         64,
-        FakeIo {
-            world: world.clone(),
-            ..FakeIo::default()
-        },
         FakeSaver::<Settings, SaveError>::new(&world, |_| Ok(())),
     );
     let mut bridge = Bridge::new(Settings::default(), Instant::ZERO);
