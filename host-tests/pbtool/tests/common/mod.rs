@@ -148,15 +148,20 @@ fn relay(
     })
 }
 
-/// Runs `pbtool ARGS` with `input` on stdin until it exits.
-pub fn pbtool_with_input(args: &[&str], input: &str) -> Output {
-    let mut child = Command::new(env!("CARGO_BIN_EXE_pbtool"))
+/// `pbtool ARGS` started with its standard streams piped.
+fn spawn_piped(args: &[&str]) -> Child {
+    Command::new(env!("CARGO_BIN_EXE_pbtool"))
         .args(args)
         .stdin(Stdio::piped())
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .spawn()
-        .expect("pbtool starts");
+        .expect("pbtool starts")
+}
+
+/// Runs `pbtool ARGS` with `input` on stdin until it exits.
+pub fn pbtool_with_input(args: &[&str], input: &str) -> Output {
+    let mut child = spawn_piped(args);
     child
         .stdin
         .take()
@@ -179,13 +184,7 @@ pub struct Pbtool {
 impl Pbtool {
     /// Starts `pbtool ARGS`.
     pub fn spawn(args: &[&str]) -> Pbtool {
-        let mut child = Command::new(env!("CARGO_BIN_EXE_pbtool"))
-            .args(args)
-            .stdin(Stdio::piped())
-            .stdout(Stdio::piped())
-            .stderr(Stdio::piped())
-            .spawn()
-            .expect("pbtool starts");
+        let mut child = spawn_piped(args);
         let stdout = child.stdout.take().expect("piped");
         let mut stderr_pipe = child.stderr.take().expect("piped");
         let (tx, lines) = channel();
