@@ -234,12 +234,7 @@ fn linuxcnc_pmx485_drives_a_maxpro200_through_the_emulated_board() {
         &["--expect-limits", "5:200:0:0", "--expect-arctime", "-"],
     );
     assert!(text.contains("current       45"), "{text}");
-    assert!(
-        run.stderr()
-            .contains("running the firmware on the emulated board against a simulated maxpro200"),
-        "{}",
-        run.transcript()
-    );
+    run.expect_stderr("running the firmware on the emulated board against a simulated maxpro200");
 }
 
 #[test]
@@ -273,10 +268,5 @@ fn linuxcnc_pmx485_drives_the_emulated_board() {
         emu.transcript()
     );
     assert_eq!(cnc.command_within("ID", Duration::from_secs(2)), None);
-    assert!(
-        emu.stderr()
-            .contains("the board's CNC UART now runs 9600 8E1, the CNC's line 19200 8E1"),
-        "{}",
-        emu.transcript()
-    );
+    emu.expect_stderr("the board's CNC UART now runs 9600 8E1, the CNC's line 19200 8E1");
 }

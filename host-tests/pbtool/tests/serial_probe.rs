@@ -24,9 +24,9 @@ fn probe_with(unit_args: &[&str], probe_args: &[&str]) -> (Value, String) {
     let line = probe.expect("the JSON report", |l| l.starts_with('{'));
     assert!(probe.wait().success(), "{}", probe.transcript());
     let report: Value = serde_json::from_str(&line).expect("one JSON object");
-    // The log is written as frames pass; the last reply is out.
-    std::thread::sleep(std::time::Duration::from_millis(200));
-    (report, unit.stderr())
+    // The unit logs each request before it answers, and the probe has had every answer: the
+    // log is complete once the unit has ended and its stderr has been read to the end.
+    (report, unit.kill())
 }
 
 fn reply_text(report: &Value, what: &str) -> String {

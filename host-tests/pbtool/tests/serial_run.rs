@@ -57,7 +57,7 @@ fn session(family: &Family) {
     run.close_stdin();
     let exit = run.wait();
     assert!(exit.success(), "{exit}\n{}", run.transcript());
-    assert!(unit.stderr().contains("fault cleared"), "{}", unit.stderr());
+    unit.expect_stderr("fault cleared");
 }
 
 #[test]
@@ -143,12 +143,8 @@ fn with_no_unit_on_the_line_the_console_says_so_and_goes_on() {
     run.send("ID");
     let id = run.expect_prefix("OK bridge=");
     assert!(!id.contains(" link=UP "), "{id}");
-    assert!(
-        run.stderr()
-            .contains("no power supply answered on the PS port within 15 s"),
-        "{}",
-        run.transcript()
-    );
+    // The console's message goes to stderr, read by another thread than stdout's reply.
+    run.expect_stderr("no power supply answered on the PS port within 15 s");
     run.close_stdin();
     assert!(run.wait().success(), "{}", run.transcript());
 }

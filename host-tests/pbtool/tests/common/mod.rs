@@ -178,6 +178,7 @@ pub struct Pbtool {
     lines: Receiver<String>,
     seen: Arc<Mutex<Vec<String>>>,
     stderr: Arc<Mutex<String>>,
+    readers: Vec<JoinHandle<()>>,
     name: String,
 }
 
@@ -190,7 +191,7 @@ impl Pbtool {
         let (tx, lines) = channel();
         let seen = Arc::new(Mutex::new(Vec::new()));
         let seen_by_reader = seen.clone();
-        std::thread::spawn(move || {
+        let stdout_reader = std::thread::spawn(move || {
             for line in BufReader::new(stdout).lines() {
                 let Ok(line) = line else { return };
                 seen_by_reader.lock().unwrap().push(line.clone());
@@ -201,7 +202,7 @@ impl Pbtool {
         });
         let stderr = Arc::new(Mutex::new(String::new()));
         let stderr_by_reader = stderr.clone();
-        std::thread::spawn(move || {
+        let stderr_reader = std::thread::spawn(move || {
             let mut buf = [0u8; 1024];
             while let Ok(n) = stderr_pipe.read(&mut buf) {
                 if n == 0 {
@@ -219,6 +220,7 @@ impl Pbtool {
             lines,
             seen,
             stderr,
+            readers: vec![stdout_reader, stderr_reader],
             name: format!("pbtool {}", args.join(" ")),
         }
     }
@@ -270,19 +272,58 @@ impl Pbtool {
         self.stderr.lock().unwrap().clone()
     }
 
-    /// Waits for it to exit (panics after [`LONG`]); its stdin stays as it is.
-    pub fn wait(&mut self) -> ExitStatus {
+    /// Waits until its stderr contains `text` (it may come after a stdout line that was
+    /// written later: the two pipes are read by two threads); panics with everything seen when
+    /// it has not come within [`LONG`]. Returns stderr so far.
+    pub fn expect_stderr(&self, text: &str) -> String {
         let deadline = Instant::now() + LONG;
         loop {
+            let stderr = self.stderr();
+            if stderr.contains(text) {
+                return stderr;
+            }
+            if Instant::now() > deadline {
+                panic!(
+                    "{}: stderr never said {text:?}\n{}",
+                    self.name,
+                    self.transcript()
+                );
+            }
+            std::thread::sleep(Duration::from_millis(20));
+        }
+    }
+
+    /// Waits for it to exit (panics after [`LONG`]); its stdin stays as it is. Returns once
+    /// everything it wrote to stdout and stderr has been read.
+    pub fn wait(&mut self) -> ExitStatus {
+        let deadline = Instant::now() + LONG;
+        let status = loop {
             if let Some(status) = self.child.try_wait().expect("waitable") {
-                // Let the readers take the last output.
-                std::thread::sleep(Duration::from_millis(50));
-                return status;
+                break status;
             }
             if Instant::now() > deadline {
                 panic!("{} did not exit\n{}", self.name, self.transcript());
             }
             std::thread::sleep(Duration::from_millis(20));
+        };
+        self.drain_readers(deadline);
+        status
+    }
+
+    /// Ends it (SIGKILL) and returns everything it wrote to stderr.
+    pub fn kill(mut self) -> String {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+        self.drain_readers(Instant::now() + LONG);
+        self.stderr()
+    }
+
+    /// Waits until both readers have met the end of their pipe. A process it started that
+    /// still holds a pipe (QEMU under `pbtool emu`) keeps a reader going: after `deadline` the
+    /// output read so far is what there is.
+    fn drain_readers(&mut self, deadline: Instant) {
+        while self.readers.iter().any(|r| !r.is_finished()) && Instant::now() < deadline {
+            std::thread::sleep(Duration::from_millis(10));
         }
     }
 }
