@@ -2,8 +2,9 @@
 //! `pbtool unit` over a pty cable: a legacy Powermax65 and a SYNC unit through its legacy
 //! registers. pmx485 writes mode, current and pressure, reads the limits, the settings back,
 //! the fault and the arc time; it reports `status` TRUE only when every reply was exact and
-//! in time. The script (../shared/peers/pmx485-vs.sh, beside the checkout) needs LinuxCNC's
-//! uspace build: ../shared/peers/install.sh installs it (CI runs it).
+//! in time. The repository's `.ci/pmx485-check` runs it in a HAL session; LinuxCNC's uspace
+//! build is installed by `.ci/install-linuxcnc` (CI runs it; these tests run it once when
+//! LinuxCNC is missing, as the emulated board's tests install QEMU).
 //!
 //! Then pmx485 drives the BRIDGE: its CNC port answers as a Powermax (`pbtool sim
 //! --cnc-port` and `pbtool run --ps-port --cnc-port`) for a SYNC, a legacy and an HPR unit
@@ -12,40 +13,61 @@
 //! And the firmware itself: the emulated board's CNC UART on a pty (`pbtool emu --cnc-port`),
 //! with a SYNC unit (and a fault) and a MaxPro200 behind it.
 //!
-//! One realtime session per machine: every pmx485 run takes [`PMX485`] first.
+//! One HAL session per machine: `.ci/pmx485-check` queues its runs on a lock.
 
 mod common;
 
 use std::path::PathBuf;
-use std::process::{Command, Output};
-use std::sync::Mutex;
+use std::process::{Command, Output, Stdio};
+use std::sync::OnceLock;
 use std::time::{Duration, Instant};
 
 use common::{Cable, CncEnd, Pbtool};
 
-/// pmx485 runs one at a time (LinuxCNC's realtime session is one per machine).
-static PMX485: Mutex<()> = Mutex::new(());
-
-fn peers() -> PathBuf {
-    // host-tests/pbtool -> the checkout -> the shared directory beside it.
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/peers")
+/// The repository's `.ci` directory (host-tests/pbtool -> the workspace).
+fn ci_script(name: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../.ci")
+        .join(name)
 }
 
-/// The script run on `port` with `args`: its status and its output.
+/// Installs LinuxCNC with `.ci/install-linuxcnc` once per test process (it returns at once
+/// when LinuxCNC is there); panics with what to install when that fails.
+fn ensure_linuxcnc() {
+    static INSTALLED: OnceLock<Result<(), String>> = OnceLock::new();
+    let installed = INSTALLED.get_or_init(|| {
+        let script = ci_script("install-linuxcnc");
+        let output = Command::new("bash")
+            .arg(&script)
+            .stdin(Stdio::null())
+            .output()
+            .map_err(|e| format!("cannot run {}: {e}", script.display()))?;
+        if output.status.success() {
+            return Ok(());
+        }
+        Err(format!(
+            "{}{}",
+            String::from_utf8_lossy(&output.stdout),
+            String::from_utf8_lossy(&output.stderr)
+        ))
+    });
+    if let Err(why) = installed {
+        panic!(
+            "these tests run LinuxCNC's pmx485, which is not installed, and              .ci/install-linuxcnc could not install it:\n{why}"
+        );
+    }
+}
+
+/// `.ci/pmx485-check` run on `port` with `args`: its status and its output.
 fn pmx485_on(port: &str, args: &[&str]) -> (Output, String) {
-    let script = peers().join("pmx485-vs.sh");
-    assert!(
-        script.exists(),
-        "{} is missing: the shared directory must sit beside the checkout",
-        script.display()
-    );
-    let _one_at_a_time = PMX485.lock().unwrap_or_else(|e| e.into_inner());
+    ensure_linuxcnc();
     let output = Command::new("bash")
-        .arg(&script)
+        .arg(ci_script("pmx485-check"))
         .arg(port)
         .args(args)
+        .stdin(Stdio::null())
         .output()
-        .expect("bash runs the script");
+        .expect("bash runs .ci/pmx485-check");
     let text = format!(
         "{}{}",
         String::from_utf8_lossy(&output.stdout),
@@ -54,7 +76,7 @@ fn pmx485_on(port: &str, args: &[&str]) -> (Output, String) {
     assert_ne!(
         output.status.code(),
         Some(2),
-        "pmx485 could not be set up (run ../shared/peers/install.sh once):\n{text}"
+        "pmx485 could not be set up:\n{text}"
     );
     (output, text)
 }
@@ -161,10 +183,7 @@ fn linuxcnc_pmx485_drives_a_legacy_and_a_sync_unit() {
 
 #[test]
 fn linuxcnc_pmx485_drives_the_bridge_with_a_sync_unit_behind_it() {
-    let text = pmx485_drives_the_bridge(
-        &["--ps", "sync65"],
-        &["--expect-limits", "20:65:58:78", "--expect-arctime", "-"],
-    );
+    let text = pmx485_drives_the_bridge(&["--ps", "sync65"], &["--expect-limits", "20:65:58:78"]);
     assert!(text.contains("status        TRUE"), "{text}");
 }
 
@@ -172,14 +191,7 @@ fn linuxcnc_pmx485_drives_the_bridge_with_a_sync_unit_behind_it() {
 fn linuxcnc_pmx485_sees_a_legacy_units_fault_through_the_bridge() {
     let text = pmx485_drives_the_bridge(
         &["--ps", "pm65", "--fault", "0-50-0"],
-        &[
-            "--expect-limits",
-            "20:65:63:78",
-            "--expect-fault",
-            "500",
-            "--expect-arctime",
-            "-",
-        ],
+        &["--expect-limits", "20:65:63:78", "--expect-fault", "500"],
     );
     assert!(text.contains("fault         500"), "{text}");
 }
@@ -187,10 +199,7 @@ fn linuxcnc_pmx485_sees_a_legacy_units_fault_through_the_bridge() {
 #[test]
 fn linuxcnc_pmx485_drives_an_hpr_through_the_bridge() {
     // An HPR260: 5-260 A from its rating, pressure automatic (limits 0), mode normal.
-    pmx485_drives_the_bridge(
-        &["--ps", "hpr260"],
-        &["--expect-limits", "5:260:0:0", "--expect-arctime", "-"],
-    );
+    pmx485_drives_the_bridge(&["--ps", "hpr260"], &["--expect-limits", "5:260:0:0"]);
 }
 
 #[test]
@@ -212,9 +221,7 @@ fn linuxcnc_pmx485_sees_the_units_link_lost_as_a_communication_error() {
     unit.send("SILENT");
     let id = wait_for_id(&cnc.a, |id| id.contains(" link=DOWN "));
     assert!(id.contains(" link=DOWN "), "{id}\n{}", run.transcript());
-    let mut args = AS_QTPLASMAC.to_vec();
-    args.extend_from_slice(&["--expect-limits", "-", "--expect-arctime", "-"]);
-    let (output, text) = pmx485_on(&cnc.a, &args);
+    let (output, text) = pmx485_on(&cnc.a, &AS_QTPLASMAC);
     assert!(!output.status.success(), "{text}");
     assert!(text.contains("status        FALSE"), "{text}");
     // The text protocol still answers, and says why.
@@ -231,7 +238,7 @@ fn linuxcnc_pmx485_drives_a_maxpro200_through_the_emulated_board() {
         &cable,
         "run",
         &["--ps", "maxpro200"],
-        &["--expect-limits", "5:200:0:0", "--expect-arctime", "-"],
+        &["--expect-limits", "5:200:0:0"],
     );
     assert!(text.contains("current       45"), "{text}");
     run.expect_stderr("running the firmware on the emulated board against a simulated maxpro200");
@@ -244,14 +251,7 @@ fn linuxcnc_pmx485_drives_the_emulated_board() {
         &cable,
         "emu",
         &["--ps", "sync65", "--fault", "0-50-0"],
-        &[
-            "--expect-limits",
-            "20:65:58:78",
-            "--expect-fault",
-            "500",
-            "--expect-arctime",
-            "-",
-        ],
+        &["--expect-limits", "20:65:58:78", "--expect-fault", "500"],
     );
     assert!(text.contains("current       45"), "{text}");
 
