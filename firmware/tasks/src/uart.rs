@@ -15,7 +15,7 @@
 //!   is empty *and* TC says the last stop bit has left, so the driver-enable has dropped and
 //!   the settings may change.
 //!
-//! What QEMU's model needs as well (../shared/EMULATION.md): 32-bit access to RDR/TDR (the
+//! What QEMU's model needs as well (docs/developers.md, "QEMU's board model"): 32-bit access to RDR/TDR (the
 //! register crate's only width), never a 1 in ICR bit 7, and no reliance on the IDLE flag:
 //! bytes are handed on as they arrive and the link's parser finds the end of a frame.
 //!

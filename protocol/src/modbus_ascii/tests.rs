@@ -1,4 +1,4 @@
-//! Every Modbus example frame of the two Powermax manuals in `shared/seeds/`, decoded field by
+//! Every Modbus example frame of the two Powermax serial-protocol manuals, decoded field by
 //! field and rebuilt byte for byte from typed values.
 //!
 //! - SYNC: 000_dd931256418ae627.txt, Powermax45/65/85/105 SYNC Serial Communication

@@ -2,7 +2,7 @@
 //!
 //! QEMU models the RCC with its ready bits and feeds SYSCLK to the Cortex-M clock (so SysTick
 //! runs at 80 MHz), but not FLASH or PWR: the wait states are written for a real chip and not
-//! read back, which is what makes embassy-stm32's `init` hang there (../shared/EMULATION.md).
+//! read back, which is what makes embassy-stm32's `init` hang there (docs/developers.md).
 
 use stm32_metapac::rcc::vals::{Pllm, Plln, Pllr, Pllsrc, Sw};
 use stm32_metapac::{FLASH, RCC};

@@ -6,7 +6,7 @@
 //!
 //! The time is the sum of the finished periods *plus the counter*, never a count of
 //! interrupts: a count loses time whenever the guest runs late, and an emulated guest runs
-//! late whenever the host is busy (../shared/EMULATION.md). A period is shortened by
+//! late whenever the host is busy (docs/developers.md). A period is shortened by
 //! restarting the counter (a write to SYST_CVR, which reloads it one cycle later without an
 //! interrupt, on the Cortex-M as in QEMU's model); only the cycles between reading the
 //! counter and that write are lost, a few per restart.
