@@ -5,8 +5,10 @@
 //!   harness of host-tests, in real or virtual time) with the CNC protocol on stdin/stdout.
 //! - [`emu`]: `pbtool emu`, the firmware image on the emulated board (the QEMU harness of
 //!   host-tests) with its CNC port on stdin/stdout, and `--measure`.
+//! - [`config`]: `pbtool config`, the board's CNC-port framing set from the PC, both ends in step.
 #![warn(missing_docs)]
 
+pub mod config;
 pub mod decode;
 pub mod emu;
 pub mod framer;

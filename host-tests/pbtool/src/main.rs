@@ -7,6 +7,7 @@
 //! simulated unit, with the CNC port on stdin/stdout (see `pbtool::emu::console`);
 //! `pbtool emu --measure` reports the image's latency and idle figures.
 //! `pbtool run` runs the bridge where it can: the board, the emulated board or the simulator.
+//! `pbtool config --port DEV --cnc-framing 19200:8E1 --save` sets the board's CNC framing.
 
 use std::process::ExitCode;
 
@@ -79,6 +80,15 @@ enum Command {
     /// log, timers). Exit status 0 when a unit answered, 1 when none did within --seconds, 2
     /// on a port error.
     Probe(cli::probe::ProbeArgs),
+    /// Set the framing of the bridge's CNC port, both ends in step, and save it.
+    ///
+    /// Finds the board on the port whatever framing it runs (`ID` at each in turn, the one
+    /// asked for first), then changes baud, parity and stop bits one at a time with `CONFIG`,
+    /// the PC following each reply, checks with `ID` and, with `--save`, stores it. E.g.
+    /// `pbtool config --port /dev/ttyACM0 --cnc-framing 19200:8E1 --save` for LinuxCNC's
+    /// pmx485. Exit status 0 when done, 1 when no board answered or it refused, 2 on a port
+    /// error.
+    Config(cli::config::ConfigArgs),
 }
 
 fn main() -> ExitCode {
@@ -91,5 +101,6 @@ fn main() -> ExitCode {
         Command::Unit(args) => cli::unit::unit(&args),
         Command::Sniff(args) => cli::sniff::sniff(&args),
         Command::Probe(args) => cli::probe::probe_command(&args),
+        Command::Config(args) => cli::config::config(&args),
     }
 }

@@ -1,0 +1,83 @@
+//! `pbtool config` on a pty cable against the bridge of `pbtool sim --cnc-port`: it finds the
+//! board, switches the CNC port's framing one setting at a time with both ends following, and
+//! saves it; with nothing on the line it says where to look. (A pty carries every framing, so
+//! the board's own `CONFIG` reply is what tells its framing here.)
+
+mod common;
+
+use common::{Cable, CncEnd, Pbtool, pbtool_with_input};
+
+fn text(bytes: &[u8]) -> String {
+    String::from_utf8_lossy(bytes).into_owned()
+}
+
+/// `pbtool sim --cnc-port` on the cable's b end, once it has opened the port.
+fn bridge_on(cable: &Cable) -> Pbtool {
+    let sim = Pbtool::spawn(&["sim", "--ps", "sync65", "--cnc-port", &cable.b]);
+    sim.expect_stderr("CNC protocol on");
+    sim
+}
+
+#[test]
+fn config_switches_the_cnc_port_to_pmx485s_framing_in_order_and_saves_it() {
+    let cable = Cable::new();
+    let sim = bridge_on(&cable);
+    let out = pbtool_with_input(
+        &[
+            "config",
+            "--port",
+            &cable.a,
+            "--cnc-framing",
+            "19200:8E1",
+            "--save",
+        ],
+        "",
+    );
+    let (stdout, stderr) = (text(&out.stdout), text(&out.stderr));
+    assert!(out.status.success(), "{stdout}{stderr}{}", sim.transcript());
+    assert!(
+        stdout.contains("runs 19200 8E1 (was 115200 8N1); saved"),
+        "{stdout}"
+    );
+    let baud = stderr.find("CONFIG cnc_baud 19200: both ends now 19200 8N1");
+    let parity = stderr.find("CONFIG cnc_parity EVEN: both ends now 19200 8E1");
+    assert!(
+        baud.is_some() && parity.is_some() && baud < parity,
+        "{stderr}"
+    );
+
+    let config = CncEnd::open(&cable.a).command("CONFIG").unwrap_or_default();
+    assert!(
+        config.contains("cnc_baud=19200 cnc_parity=EVEN cnc_stop_bits=1"),
+        "{config}"
+    );
+
+    // Run again: nothing to change.
+    let again = pbtool_with_input(
+        &["config", "--port", &cable.a, "--cnc-framing", "19200:8E1"],
+        "",
+    );
+    assert!(again.status.success(), "{}", text(&again.stderr));
+    assert!(
+        text(&again.stdout).contains("runs 19200 8E1 (already); not saved"),
+        "{}",
+        text(&again.stdout)
+    );
+}
+
+#[test]
+fn config_with_no_bridge_on_the_line_tries_every_framing_and_says_where_to_look() {
+    let cable = Cable::new();
+    let out = pbtool_with_input(
+        &["config", "--port", &cable.a, "--cnc-framing", "19200:8E1"],
+        "",
+    );
+    let stderr = text(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert!(stderr.contains("no answer at 19200 8E1"), "{stderr}");
+    assert!(stderr.contains("no answer at 9600 8O2"), "{stderr}");
+    assert!(
+        stderr.contains("no bridge answered ID at any framing"),
+        "{stderr}"
+    );
+}
