@@ -39,11 +39,19 @@ pub fn run(args: &RunArgs) -> ExitCode {
     // A CNC port without a PS port: the emulated board's CNC port on it (or the simulator's).
     let cnc_port = args.sim_args.cnc_port.as_deref();
     if !args.sim {
-        if cnc_port.is_none()
-            && let Some(probe) = attached_probe()
-        {
-            eprintln!("pbtool run: debug probe found ({probe}); flashing the board image");
-            return flash_board();
+        let mut no_board = "no debug probe found";
+        if cnc_port.is_none() {
+            match find_probe() {
+                Probe::Attached(probe) => {
+                    eprintln!("pbtool run: debug probe found ({probe}); flashing the board image");
+                    return flash_board();
+                }
+                Probe::NotInstalled => {
+                    eprintln!("pbtool run: {PROBE_RS_MISSING}");
+                    no_board = "no board";
+                }
+                Probe::NoneAttached => {}
+            }
         }
         let unit = Model::from_name(&args.sim_args.unit.model)
             .map_or("unit".to_string(), |m| m.to_string());
@@ -57,7 +65,7 @@ pub fn run(args: &RunArgs) -> ExitCode {
             match ensure_qemu() {
                 Ok(_) => {
                     eprintln!(
-                        "pbtool run: no debug probe found; running the firmware on the emulated \
+                        "pbtool run: {no_board}; running the firmware on the emulated \
                          board against a simulated {unit} (pbtool emu --ps {}{on_port})",
                         args.sim_args.unit.model
                     );
@@ -76,7 +84,7 @@ pub fn run(args: &RunArgs) -> ExitCode {
             }
         }
         eprintln!(
-            "pbtool run: no debug probe found; running the bridge against a simulated {unit} \
+            "pbtool run: {no_board}; running the bridge against a simulated {unit} \
              (pbtool sim --ps {}{on_port})",
             args.sim_args.unit.model,
         );
@@ -84,18 +92,35 @@ pub fn run(args: &RunArgs) -> ExitCode {
     sim(&args.sim_args)
 }
 
-/// The first probe `probe-rs list` reports, if probe-rs is installed and one is attached.
-fn attached_probe() -> Option<String> {
-    let output = std::process::Command::new("probe-rs")
-        .arg("list")
-        .output()
-        .ok()?;
+/// What `pbtool run` says when probe-rs cannot be run, before it falls back.
+const PROBE_RS_MISSING: &str = "probe-rs is not installed, so no board can be flashed \
+    (install it with `cargo install probe-rs-tools --locked`, or the installer on \
+    https://probe.rs; on Linux also its udev rules)";
+
+/// Whether a debug probe is there to flash the board.
+enum Probe {
+    /// `probe-rs list` reported this one (the first).
+    Attached(String),
+    /// probe-rs ran and reported none.
+    NoneAttached,
+    /// probe-rs could not be started.
+    NotInstalled,
+}
+
+/// Asks `probe-rs list` for the attached probes.
+fn find_probe() -> Probe {
+    let output = match std::process::Command::new("probe-rs").arg("list").output() {
+        Ok(output) => output,
+        Err(_) => return Probe::NotInstalled,
+    };
     let text = String::from_utf8_lossy(&output.stdout);
     // Probes are listed as `[0]: STLink V2-1 -- 0483:374b:... (ST-LINK)`.
     text.lines()
         .map(str::trim)
         .find(|line| line.starts_with('[') && line.contains("]:"))
-        .map(str::to_string)
+        .map_or(Probe::NoneAttached, |line| {
+            Probe::Attached(line.to_string())
+        })
 }
 
 /// `cargo flash` from the workspace root: release build, flash and run with probe-rs.
