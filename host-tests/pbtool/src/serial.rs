@@ -36,6 +36,8 @@ pub enum SerialError {
     Permission(String),
     /// It went away while in use.
     Gone(String, io::Error),
+    /// It is a file or a device other than a serial port (`/dev/null`, a typo'd path).
+    NotSerial(String),
     /// Anything else the OS said.
     Other(String, String),
 }
@@ -61,6 +63,11 @@ impl fmt::Display for SerialError {
             SerialError::Gone(port, e) => write!(
                 f,
                 "serial port {port} went away ({e}): adapter unplugged or the line closed"
+            ),
+            SerialError::NotSerial(port) => write!(
+                f,
+                "{port} is not a serial port (a file or another kind of device): give the \
+                 adapter's port (Linux: ls /dev/serial/by-id /dev/ttyUSB* /dev/ttyACM*)"
             ),
             SerialError::Other(port, e) => write!(f, "serial port {port}: {e}"),
         }
@@ -312,8 +319,27 @@ fn open_error(name: &str, e: &serialport::Error) -> SerialError {
         }
         serialport::ErrorKind::NoDevice => SerialError::Missing(name),
         _ if cfg!(unix) && !std::path::Path::new(&name).exists() => SerialError::Missing(name),
+        _ if is_not_a_terminal(&name) => SerialError::NotSerial(name),
         _ => SerialError::Other(name, e.to_string()),
     }
+}
+
+/// Whether `name` opens but is not a terminal device (the OS's "Not a typewriter").
+#[cfg(unix)]
+fn is_not_a_terminal(name: &str) -> bool {
+    use std::os::unix::fs::OpenOptionsExt;
+    use std::os::unix::io::AsRawFd;
+    let opened = std::fs::OpenOptions::new()
+        .read(true)
+        .custom_flags(libc::O_NONBLOCK | libc::O_NOCTTY)
+        .open(name);
+    // SAFETY: isatty only inspects a descriptor the file owns.
+    opened.is_ok_and(|file| unsafe { libc::isatty(file.as_raw_fd()) } == 0)
+}
+
+#[cfg(not(unix))]
+fn is_not_a_terminal(_name: &str) -> bool {
+    false
 }
 
 /// Text for a `PortConfig`: `19200 8E1`.

@@ -10,8 +10,9 @@
 use std::io::Write;
 use std::sync::mpsc::Receiver;
 
+use plasma_protocol::powermax::FaultCode;
 use plasma_protocol::time::Instant;
-use plasma_sim::{Model, SimOptions, SimulatedUnit};
+use plasma_sim::{Family, Model, SimOptions, SimulatedUnit};
 
 use crate::decode::{FrameStream, lines};
 use crate::framer::{Framer, Piece};
@@ -170,7 +171,12 @@ impl UnitServer {
         let said = match control {
             Control::Fault(code) => {
                 self.unit.inject_fault(now, code);
-                format!("fault {code} raised")
+                // As the unit's display and the manuals show it: 0-50-0, HPR error 44.
+                if self.unit.model().family() == Family::Hpr {
+                    format!("error {code} raised")
+                } else {
+                    format!("fault {} raised", FaultCode(code))
+                }
             }
             Control::Clear => {
                 self.unit.clear_fault(now);

@@ -25,7 +25,7 @@ pub struct ServeArgs {
     fault: Option<String>,
     /// Powermax: the Modbus node address (1-247; default: learnt from the first request).
     /// HPR: the id switch (0-3, default 0).
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", value_parser = unit_address)]
     address: Option<u8>,
     /// Each frame (time, direction, decoded) on stderr.
     #[arg(long)]
@@ -77,5 +77,30 @@ pub fn unit(args: &ServeArgs) -> ExitCode {
     match server.run(&arrivals, &mut io::stderr()) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => serial_failure("unit", &e),
+    }
+}
+
+/// `--address`: a number a unit of some family can have; which family is checked with the model.
+fn unit_address(text: &str) -> Result<u8, String> {
+    text.parse::<u8>()
+        .ok()
+        .filter(|n| *n <= 247)
+        .ok_or_else(|| "a Powermax's node address is 1-247, an HPR's id 0-3".to_string())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::unit_address;
+
+    #[test]
+    fn an_address_no_unit_can_have_says_which_ones_can() {
+        assert_eq!(unit_address("247"), Ok(247));
+        assert_eq!(unit_address("0"), Ok(0));
+        for bad in ["248", "300", "-1", "x"] {
+            assert_eq!(
+                unit_address(bad),
+                Err("a Powermax's node address is 1-247, an HPR's id 0-3".to_string())
+            );
+        }
     }
 }
