@@ -72,13 +72,15 @@ enum Command {
     /// missing replies, bad checksums, parity errors, pauses inside frames and noise are
     /// flagged. Runs until stopped (Ctrl-C) or a port goes away (exit status 2).
     Sniff(cli::sniff::SniffArgs),
-    /// Find the unit on a serial port and report everything it tells; never writes to it.
+    /// Find the unit on a serial port and report everything it tells; only reads, changes
+    /// nothing.
     ///
     /// Tries every framing with Modbus (SYNC, legacy Powermax) and HPR, then reads the model
     /// and identification, limits, settings, actual outputs, the active fault (text, whether
     /// action is required), counters, cartridge data and logs (HPR: state, PS info, error
-    /// log, timers). Exit status 0 when a unit answered, 1 when none did within --seconds, 2
-    /// on a port error.
+    /// log, timers). It sends read requests only. Each framing tried is shown on stderr. Exit
+    /// status 0 when a unit answered, 1 when none did within --seconds (with what to check),
+    /// 2 on a port error.
     Probe(cli::probe::ProbeArgs),
     /// Set the framing of the bridge's CNC port, both ends in step, and save it.
     ///

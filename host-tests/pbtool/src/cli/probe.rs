@@ -33,7 +33,9 @@ pub fn probe_command(args: &ProbeArgs) -> ExitCode {
         Ok(port) => port,
         Err(e) => return serial_failure("probe", &e),
     };
-    let found = match probe(port, Duration::from_secs(args.seconds), args.address) {
+    let mut progress = |step: &str| eprintln!("pbtool probe: {step}");
+    let seconds = Duration::from_secs(args.seconds);
+    let found = match probe(port, seconds, args.address, &mut progress) {
         Ok(found) => found,
         Err(e) => return serial_failure("probe", &e),
     };

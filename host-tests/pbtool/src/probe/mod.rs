@@ -1,5 +1,5 @@
-//! `pbtool probe`: finds the unit on a port and reads everything it will tell, without ever
-//! writing to it.
+//! `pbtool probe`: finds the unit on a port and reads everything it will tell. It only reads:
+//! it sends read requests and nothing that changes the unit.
 //!
 //! Detection asks as the bridge's link does, in every framing (8E1, 8O1, 8N1, then two stop
 //! bits): Modbus Read Device Identification tells a SYNC from a legacy Powermax, a legacy unit
@@ -21,7 +21,7 @@ use plasma_sim::Family;
 
 use crate::decode::{FrameReport, Kind, decode_frames};
 use crate::framer::Framer;
-use crate::serial::{Port, SerialError};
+use crate::serial::{Port, SerialError, describe};
 use reads::Read;
 
 /// How long a unit has to answer one request: the manuals' time-outs are 100 ms and less;
@@ -126,14 +126,29 @@ fn is_exception(report: &FrameReport) -> bool {
 }
 
 /// Finds the unit on `port` (trying for up to `patience`; a Powermax at Modbus node `node`)
-/// and reads it.
-pub fn probe(port: Port, patience: Duration, node: u8) -> Result<Probe, SerialError> {
+/// and reads it, telling `progress` each framing it tries.
+pub fn probe(
+    port: Port,
+    patience: Duration,
+    node: u8,
+    progress: &mut dyn FnMut(&str),
+) -> Result<Probe, SerialError> {
     let name = port.name().to_string();
     let mut master = Master { port };
     let began = Instant::now();
     let mut found = None;
+    let mut round = 0;
     while found.is_none() && began.elapsed() < patience {
-        found = detect(&mut master, node)?;
+        round += 1;
+        found = detect(&mut master, node, &mut |step| {
+            progress(&format!("round {round}: {step}"));
+        })?;
+    }
+    if let Some(found) = &found {
+        progress(&format!(
+            "a unit answered at {}; reading it",
+            describe(found.framing)
+        ));
     }
     let mut readings = Vec::new();
     if let Some(found) = &found {
@@ -156,13 +171,19 @@ pub fn probe(port: Port, patience: Duration, node: u8) -> Result<Probe, SerialEr
 }
 
 /// One round over every framing.
-fn detect(master: &mut Master, node: u8) -> Result<Option<Found>, SerialError> {
+fn detect(
+    master: &mut Master,
+    node: u8,
+    progress: &mut dyn FnMut(&str),
+) -> Result<Option<Found>, SerialError> {
     for framing in FRAMINGS {
+        progress(&format!("Modbus at {}, node {node}", describe(framing)));
         master.port.set_config(framing)?;
         if let Some(found) = detect_modbus(master, framing, node)? {
             return Ok(Some(found));
         }
     }
+    progress(&format!("HPR HELLO at {}", describe(PortConfig::HPR)));
     master.port.set_config(PortConfig::HPR)?;
     let hello = reads::hpr_request(plasma_protocol::hpr::command::id::HELLO);
     Ok(master

@@ -56,11 +56,21 @@ fn values(report: &FrameReport) -> Vec<String> {
     out
 }
 
+/// What to check when no unit answered, most likely first.
+pub const NO_UNIT_HINTS: &str = concat!(
+    "  check the wiring: + to +, - to -; 4-wire: the unit's TX pair to the adapter's RX pair\n",
+    "  check the adapter's 2W/4W switch: it must match the wiring\n",
+    "  check the termination: 120 ohm at both ends of a long line, none in the middle\n",
+    "  check the signal ground between the adapter and the unit\n",
+    "  check the unit: powered, its serial option fitted, its address (a Powermax at another\n",
+    "    node: --address N; an HPR answers at the id its switches set)\n",
+);
+
 /// The text report.
 pub fn to_text(probe: &Probe) -> String {
     let mut text = String::new();
     let Some(found) = &probe.found else {
-        return format!("no unit answered on {}\n", probe.port);
+        return format!("no unit answered on {}\n{NO_UNIT_HINTS}", probe.port);
     };
     text += &format!(
         "{} unit on {} at {}\n",
