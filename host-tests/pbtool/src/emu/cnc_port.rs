@@ -5,7 +5,8 @@
 //! plays the wire:
 //! - at start the board is told the CNC's framing (`--cnc-framing`) the way a user tells it,
 //!   with `CONFIG cnc_baud`, `cnc_parity` and `cnc_stop_bits` on its CNC port, and the relay
-//!   waits until USART2's registers show it;
+//!   waits until USART2's registers show it; what the CNC sent meanwhile is dropped (the
+//!   board was not listening yet), and the relay starts in a pause of the CNC's line;
 //! - a chunk passes only if USART2's registers say the board runs the CNC's framing: when it
 //!   arrives, for the CNC's characters (the board's receiver must match); for the board's,
 //!   when it arrives or at a look at most [`SENT_BEFORE_A_SWITCH`] earlier. QEMU transmits
@@ -35,6 +36,10 @@ const SWITCH_TIMEOUT: Duration = Duration::from_secs(2);
 /// How long after a look that saw the framings match the board's bytes still pass: the rest
 /// of what it wrote before it switched (pmx485 gives up on a reply after 100 ms anyway).
 const SENT_BEFORE_A_SWITCH: Duration = Duration::from_millis(100);
+/// A pause on the CNC's line this long is taken for one between two requests.
+const QUIET_GAP: Duration = Duration::from_millis(40);
+/// How long stale input is dropped at most, for a CNC that never pauses.
+const STALE_BOUND: Duration = Duration::from_secs(2);
 /// The longest pause between two looks at the firmware's log.
 const TICK: Duration = Duration::from_millis(100);
 
@@ -130,6 +135,13 @@ fn relay(
         ),
     );
 
+    let stale = drop_stale_input(&mut port)?;
+    if stale > 0 {
+        note(
+            err,
+            &format!("dropped {stale} characters the CNC sent while the board was booting"),
+        );
+    }
     let (relay_tx, inbox) = mpsc::channel();
     forward_device(reader, relay_tx.clone());
     forward_board(board.cnc().tap(), relay_tx);
@@ -182,6 +194,27 @@ fn relay(
             board.cnc().send_bytes(&bytes)?;
         } else {
             port.write_all(&bytes)?;
+        }
+    }
+}
+
+/// Drops what the CNC sent while the board booted, and starts between two of its requests;
+/// the number of characters dropped.
+///
+/// A master that polled all along (pmx485) would otherwise have its old requests answered
+/// late, take each reply for the next request's and fall behind (it catches up only when it
+/// reopens its port). A board powered up now would not have heard them either. What the
+/// port's queue and any cable or relay before it still hold arrives at once: the CNC's
+/// characters are dropped until the line has been quiet for [`QUIET_GAP`] (pmx485 waits
+/// 100 ms for each reply), or for at most [`STALE_BOUND`].
+fn drop_stale_input(port: &mut Port) -> Result<usize, SerialError> {
+    let began = Instant::now();
+    let mut dropped = Vec::new();
+    loop {
+        let before = dropped.len();
+        port.read(QUIET_GAP, &mut dropped)?;
+        if dropped.len() == before || began.elapsed() > STALE_BOUND {
+            return Ok(dropped.len());
         }
     }
 }
