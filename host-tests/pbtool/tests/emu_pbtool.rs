@@ -18,13 +18,18 @@ fn lines(output: &Output) -> Vec<String> {
 fn emu_gives_the_cnc_console_of_the_emulated_board() {
     let output = pbtool(
         &["emu", "--ps", "sync65", "--events", "--log"],
-        "ID\nTORCH ON\nSTATUS\nTORCH OFF\nSTATUS\n",
+        "ID\nTORCH ON\nSTATUS\nTORCH OFF\nSTATUS\nHELP\n",
     );
     let stderr = String::from_utf8_lossy(&output.stderr);
     assert!(output.status.success(), "{stderr}");
     let lines = lines(&output);
     let replies: Vec<&String> = lines.iter().filter(|l| !l.starts_with('!')).collect();
-    assert_eq!(replies.len(), 5, "{lines:#?}\n{stderr}");
+    assert_eq!(replies.len(), 6, "{lines:#?}\n{stderr}");
+    // --events: on before the link came up, as its help says.
+    assert!(
+        lines.iter().any(|l| l.starts_with("!LINK UP ")),
+        "{lines:#?}"
+    );
     assert!(
         replies[0].starts_with("OK bridge=plasma-bridge version=0.1.0 reset=power-on"),
         "{lines:#?}"
@@ -34,6 +39,12 @@ fn emu_gives_the_cnc_console_of_the_emulated_board() {
     assert!(replies[2].starts_with("OK link=UP "), "{lines:#?}");
     assert_eq!(replies[3], "OK torch=OFF");
     assert!(replies[4].starts_with("OK link=UP "), "{lines:#?}");
+    // The board is no simulator, and TORCH worked: pbtool says whose TORCH it is.
+    assert!(replies[5].ends_with(" simulator=NO"), "{lines:#?}");
+    assert!(
+        stderr.contains("TORCH ON|OFF also work here: pbtool, not the board"),
+        "{stderr}"
+    );
     // (STATUS shows the bridge's last view of the outputs, which a loaded host may deliver
     // a little after the pin changed: the firmware's log says what START did.)
     // --log: the firmware's own log on stderr, decoded.
@@ -54,7 +65,7 @@ fn emu_gives_the_cnc_console_of_the_emulated_board() {
 fn run_without_a_probe_boots_the_emulated_board() {
     let output = pbtool(&["run", "--ps", "pm85"], "ID\n");
     let stderr = String::from_utf8_lossy(&output.stderr);
-    if !stderr.contains("no debug probe found") {
+    if stderr.contains("flashing the board image") {
         return; // A board is attached: `run` flashes it.
     }
     assert!(output.status.success(), "{stderr}");

@@ -27,6 +27,11 @@ const LINGER: Duration = Duration::from_millis(200);
 /// The longest pause between two looks at the CNC port, stdin and the log.
 const TICK: Duration = Duration::from_millis(10);
 
+/// Why TORCH works here although the board's HELP says `simulator=NO`.
+pub const TORCH_NOTE: &str = "pbtool emu: TORCH ON|OFF also work here: pbtool, not the board, \
+    takes them and drives the board's TORCH_ON input pin as the CNC's output would \
+    (the board's HELP lists TORCH as simulator_only, and the board is no simulator)";
+
 /// How `pbtool emu` runs.
 #[derive(Debug, Clone, PartialEq)]
 pub struct EmuConsoleOptions {
@@ -87,6 +92,10 @@ pub fn run(
         }
         Ok(())
     };
+    // Events on before the link comes up, so that `!LINK UP` is among them.
+    if options.events {
+        board.command("EVENTS ON", REPLY_TIMEOUT)?;
+    }
     if !settle(&mut board)? {
         writeln!(
             err,
@@ -95,8 +104,9 @@ pub fn run(
         )
         .map_err(io)?;
     }
-    if options.events {
-        board.command("EVENTS ON", REPLY_TIMEOUT)?;
+    // The events that came while waiting for the link, in order.
+    for event in board.cnc().events() {
+        writeln!(out, "{}", event.text).map_err(io)?;
     }
     print_log(&board, err)?;
 
@@ -147,9 +157,13 @@ pub fn run(
                     let _ = board.wait_output(Output::Start, on, TORCH_SETTLE);
                     writeln!(out, "OK torch={}", if on { "ON" } else { "OFF" }).map_err(io)?;
                 }
-                ConsoleLine::Cnc(_) => {
+                ConsoleLine::Cnc(command) => {
                     board.cnc().send_bytes(&line)?;
                     waiting = Some(Instant::now());
+                    if command.eq_ignore_ascii_case("HELP") {
+                        // The board is no simulator and says so; TORCH is this console's.
+                        writeln!(err, "{TORCH_NOTE}").map_err(io)?;
+                    }
                 }
             }
         }
