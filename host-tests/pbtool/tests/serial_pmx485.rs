@@ -106,9 +106,12 @@ fn pmx485_drives(unit_args: &[&str], expect: &[&str]) -> String {
 /// or goes down in real time); the last reply.
 fn wait_for_id(cnc_port: &str, wanted: impl Fn(&str) -> bool) -> String {
     let mut cnc = CncEnd::open(cnc_port);
-    let deadline = Instant::now() + Duration::from_secs(20);
+    let deadline = Instant::now() + Duration::from_secs(60);
     loop {
-        let id = cnc.command("ID").unwrap_or_default();
+        // Asked again when unanswered: an emulated board drops what came while it booted.
+        let id = cnc
+            .command_within("ID", Duration::from_secs(2))
+            .unwrap_or_default();
         if wanted(&id) || Instant::now() > deadline {
             return id;
         }
