@@ -8,14 +8,13 @@
 //! - [`session`]: the CNC text protocol and Phoenix serial messaging.
 //! - [`settings`]: what survives a power cycle, and the `CONFIG` keys.
 //! - [`link`]: the power-supply link (Modbus ASCII and HPR).
-//! - [`io`]: torch-safe discrete I/O (START interlocks, ARC_OK, READY, FAULT) and the
-//!   independent [`io::SafetyMonitor`] used by every scenario test.
+//! - [`io`]: all of the torch-safe discrete I/O: the CNC's wiring (input polarity and
+//!   debounce, output levels), the START interlocks, ARC_OK, READY, FAULT, the board's
+//!   [`io::DiscreteIo`] and the independent [`io::SafetyMonitor`] used by every scenario test.
 //! - [`safe_state`], [`watchdog`], [`storage`]: the board's reset/panic policy, task-progress
 //!   watchdog feeding and power-cut-safe settings storage, as logic.
 //! - [`pins`]: the board's pin map, the one table every board layer and the QEMU harness
 //!   read.
-//! - [`inputs`], [`output_levels`], [`discrete`]: the CNC's wiring (input polarity and
-//!   debounce, output levels) around [`io::Interlocks`], as the board's I/O task runs them.
 //! - [`runner`], [`supervisor`]: the async loops around the link and the bridge, over any
 //!   `embedded-io-async` UART and clock (the board and host tests run the same code).
 #![cfg_attr(not(test), no_std)]
@@ -66,12 +65,8 @@ macro_rules! log_texts {
 }
 
 pub mod bridge;
-pub mod discrete;
-pub mod edges;
-pub mod inputs;
 pub mod io;
 pub mod link;
-pub mod output_levels;
 pub mod pins;
 pub mod runner;
 pub mod safe_state;

@@ -14,7 +14,7 @@
 
 use core::fmt;
 
-use crate::inputs::Polarity;
+use crate::io::Polarity;
 use crate::io::{Input, Output};
 use crate::safe_state::SAFE_OUTPUTS;
 
@@ -274,7 +274,7 @@ pub const OUTPUT_PORTS: u32 = {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::inputs::InputConfig;
+    use crate::io::InputConfig;
 
     fn every_pin() -> Vec<Pin> {
         let mut pins: Vec<Pin> = Input::ALL.into_iter().map(|i| input(i).pin).collect();

@@ -430,9 +430,7 @@ mod tests {
 
     #[test]
     fn a_tripped_fail_safe_refuses_every_later_write() {
-        use crate::discrete::DiscreteIo;
-        use crate::inputs::PinLevels;
-        use crate::io::{Input, IoConfig, Outputs, SupplyState};
+        use crate::io::{DiscreteIo, Input, IoConfig, Outputs, PinLevels, SupplyState};
         use plasma_protocol::time::Instant;
 
         // The I/O task's loop in miniature: the logic decides, the gate writes the "pins".

@@ -942,7 +942,7 @@ mod tests {
         assert_eq!(Settings::decode(v1), None, "not a version-2 record");
         let migrated = Settings::migrate(1, v1).unwrap();
         assert_eq!(migrated.link, s.link);
-        assert_eq!(migrated.io.inputs, crate::inputs::InputConfig::default());
+        assert_eq!(migrated.io.inputs, crate::io::InputConfig::default());
         assert_eq!(
             migrated.get(ConfigKey::TorchOnActive),
             ConfigValue::Word("LOW")

@@ -41,9 +41,7 @@ use libfuzzer_sys::fuzz_target;
 
 use plasma_firmware::bridge::Bridge;
 use plasma_firmware::bridge::{MAX_REPLY_LEN, OUTPUT_CAPACITY};
-use plasma_firmware::discrete::DiscreteIo;
-use plasma_firmware::inputs::{InputConfig, PinLevels};
-use plasma_firmware::io::{Input, SafetyMonitor, SupplyState};
+use plasma_firmware::io::{DiscreteIo, Input, InputConfig, PinLevels, SafetyMonitor, SupplyState};
 use plasma_firmware::settings::{SaveError, Settings};
 use plasma_firmware::storage::{MAX_PAYLOAD, Settings as _};
 use plasma_protocol::cnc::phoenix::{self, ACK, NAK};

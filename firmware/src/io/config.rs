@@ -1,7 +1,7 @@
 //! Settings of the discrete I/O logic.
 
-use crate::inputs::InputConfig;
-use crate::output_levels::OutputConfig;
+use super::input_config::InputConfig;
+use super::output_levels::OutputConfig;
 use plasma_protocol::time::Duration;
 
 /// The Powermax manuals' minimum delay between Start signals ("to give sufficient time for
@@ -9,7 +9,7 @@ use plasma_protocol::time::Duration;
 pub const MIN_START_GAP: Duration = Duration::from_millis(50);
 
 /// Settings of the discrete I/O: the CNC's wiring ([`inputs`](Self::inputs),
-/// [`outputs`](Self::outputs)), read by [`DiscreteIo`](crate::discrete::DiscreteIo), and the
+/// [`outputs`](Self::outputs)), read by [`DiscreteIo`](super::DiscreteIo), and the
 /// rules of [`Interlocks`](super::Interlocks). [`IoConfig::default`] is the safe choice.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]

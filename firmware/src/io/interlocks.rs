@@ -72,7 +72,7 @@ impl Interlocks {
             inputs: initial_inputs,
             supply: SupplyState::default(),
             blackout_until: None,
-            motion: Debouncer::new(config.arc_ok_debounce, now, initial_inputs.motion),
+            motion: Debouncer::new(now, initial_inputs.motion),
             phase: StartPhase::Idle,
             last_start_fall: now,
             outputs: Outputs::OFF,
@@ -124,7 +124,7 @@ impl Interlocks {
     pub fn poll_at(&self) -> Option<Instant> {
         let mut next: Option<Instant> = None;
         let mut consider = |t: Instant| next = Some(next.map_or(t, |n| n.min(t)));
-        if let Some(t) = self.motion.settles_at() {
+        if let Some(t) = self.motion.settles_at(self.config.arc_ok_debounce) {
             consider(t);
         }
         match self.phase {
@@ -175,7 +175,6 @@ impl Interlocks {
     pub fn set_config(&mut self, now: Instant, config: IoConfig) {
         let now = self.advance(now);
         self.config = config;
-        self.motion.set_hold(config.arc_ok_debounce);
         self.step(now);
     }
 
@@ -245,7 +244,7 @@ impl Interlocks {
 
     /// Recompute every output at `now` (`now` already advanced).
     fn step(&mut self, now: Instant) {
-        let motion_changed = match self.motion.poll(now) {
+        let motion_changed = match self.motion.poll(now, self.config.arc_ok_debounce) {
             Some(true) => {
                 self.push_event(IoEvent::ArcOn);
                 true
@@ -458,3 +457,6 @@ impl Interlocks {
         let _ = self.events.push_back(event);
     }
 }
+
+#[cfg(test)]
+mod tests;

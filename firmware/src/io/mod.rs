@@ -1,4 +1,13 @@
-//! The torch-safe discrete I/O between the CNC and the power supply.
+//! The torch-safe discrete I/O between the CNC and the power supply, all of it:
+//!
+//! - the CNC's wiring, as settings: [`InputConfig`] (each input's active level and debounce)
+//!   and [`OutputConfig`] (the outputs a table may invert), parts of [`IoConfig`];
+//! - the input filter: from [`PinLevels`] to logical inputs (polarity, debounce), on the one
+//!   debouncer that ARC_OK's MOTION filter uses too;
+//! - [`Interlocks`]: the rules from the logical inputs and the supply's state to the outputs;
+//! - [`DiscreteIo`]: filter and interlocks, as the board's I/O task runs them;
+//! - [`EdgeLatch`]: input edges from the interrupt to that task, without a gap;
+//! - [`SafetyMonitor`]: an independent check of the safety rules, for tests.
 //!
 //! [`Interlocks`] is a sans-IO state machine: the board (or a simulator) feeds it input
 //! edges ([`Interlocks::on_input`]), the link's view of the supply ([`Interlocks::on_supply`])
@@ -12,11 +21,11 @@
 //! - **Power-up**: a TORCH_ON already active in the initial inputs is ignored until it has
 //!   been seen inactive (on the supply that would be fault 0-51-0 / error 050).
 //! - **Gap between starts**: START's rising edge comes at least
-//!   [`IoConfig::start_gap`] (never less than 50 ms) after its previous falling edge; reset
+//!   [`IoConfig::start_gap`] (never less than [`MIN_START_GAP`]) after its previous falling edge; reset
 //!   counts as a falling edge. A TORCH_ON that arrives inside the gap is *delayed*, not
 //!   refused: START follows when the gap ends if TORCH_ON is still active and every interlock
 //!   still allows it ([`IoEvent::StartDelayed`]). This is a relay-timing rule, so the torch
-//!   fires at most 50 ms later than asked for while the CNC still asks for it.
+//!   fires at most one gap later than asked for while the CNC still asks for it.
 //! - **Interlocks** ([`Interlock`]): link down, quick-restart blackout, fault that requires
 //!   action (the first and last can be switched off in [`IoConfig`]), transfer time-out.
 //!   A TORCH_ON refused by one, or a START dropped by one, *latches*: START stays off until
@@ -73,16 +82,23 @@
 
 mod config;
 mod debounce;
+mod discrete;
+mod edges;
+mod input_config;
+mod input_filter;
 mod interlocks;
 mod monitor;
+mod output_levels;
 mod reason;
 mod signals;
 
-#[cfg(test)]
-mod tests;
-
 pub use config::{IoConfig, MIN_START_GAP};
+pub use discrete::DiscreteIo;
+pub use edges::EdgeLatch;
+pub use input_config::{InputConfig, InputSetting, MAX_DEBOUNCE, Polarity, Pull};
+pub use input_filter::PinLevels;
 pub use interlocks::Interlocks;
 pub use monitor::{SafetyMonitor, Violation, ViolationKind};
+pub use output_levels::{NotInvertible, OutputConfig};
 pub use reason::{Interlock, IoEvent, Reason, Transition};
 pub use signals::{Input, Inputs, Output, Outputs, SupplyState};

@@ -190,3 +190,34 @@ impl fmt::Display for IoEvent {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn us(v: u64) -> Instant {
+        Instant::from_micros(v)
+    }
+
+    #[test]
+    fn every_reason_and_transition_has_text() {
+        let t = Transition {
+            output: Output::Start,
+            level: false,
+            reason: Reason::Interlock(Interlock::RestartBlackout),
+            at: us(2_100_250),
+        };
+        assert_eq!(
+            t.to_string(),
+            "2100.250 ms START off: quick-restart blackout"
+        );
+        assert_eq!(
+            IoEvent::StartRefused {
+                reason: Interlock::LinkDown
+            }
+            .to_string(),
+            "start refused: link to power supply down"
+        );
+        assert_eq!(Reason::TorchOff.as_str(), "torch-on released by CNC");
+    }
+}

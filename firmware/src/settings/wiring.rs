@@ -1,6 +1,6 @@
 //! The CNC's wiring as `CONFIG` keys and as part of the stored record: every input's active
 //! level and debounce, and the outputs a table may invert (see
-//! [`output_levels`](crate::output_levels) for why only PS_HOLD and FAULT).
+//! [`OutputConfig`](crate::io::OutputConfig) for why only PS_HOLD and FAULT).
 //!
 //! Levels are the level at the bridge's pin: `LOW` is the reference board's default for the
 //! inputs (the opto-coupler conducts when the signal is on) and `HIGH` for the outputs.
@@ -9,9 +9,7 @@ use plasma_protocol::cnc::ConfigKey;
 use plasma_protocol::time::Duration;
 
 use super::{Accepted, ConfigValue, SetError, parse_number};
-use crate::inputs::{InputConfig, MAX_DEBOUNCE, Polarity};
-use crate::io::{Input, IoConfig, Output};
-use crate::output_levels::OutputConfig;
+use crate::io::{Input, InputConfig, IoConfig, MAX_DEBOUNCE, Output, OutputConfig, Polarity};
 
 /// What a wiring key sets.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

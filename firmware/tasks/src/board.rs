@@ -1,8 +1,7 @@
 //! What a board provides to the tasks.
 
 use embedded_storage_async::nor_flash::NorFlash;
-use plasma_firmware::inputs::PinLevels;
-use plasma_firmware::io::Outputs;
+use plasma_firmware::io::{Outputs, PinLevels};
 use plasma_firmware::runner::ConfigurablePort;
 
 /// The seven discrete inputs, owned by the I/O task. Their edges come through the EXTI

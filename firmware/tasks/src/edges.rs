@@ -1,11 +1,10 @@
 //! The input edges, by register, the same on both chips: every input's EXTI line armed for
 //! both edges once at start and never masked again; the boards' EXTI interrupts call
 //! [`on_interrupt`], which clears what is pending and notes the edge in [`EDGES`]
-//! (`plasma_firmware::edges::EdgeLatch`: why the lines stay armed). The I/O task waits on
+//! (`plasma_firmware::io::EdgeLatch`: why the lines stay armed). The I/O task waits on
 //! [`EDGES`] and reads the levels.
 
-use plasma_firmware::edges::EdgeLatch;
-use plasma_firmware::io::Input;
+use plasma_firmware::io::{EdgeLatch, Input};
 use plasma_firmware::pins;
 
 use crate::chip;

@@ -1,6 +1,6 @@
 //! The discrete I/O task, on its own interrupt executor above all serial work.
 //!
-//! It owns the input and output pins and a `plasma_firmware::discrete::DiscreteIo`. It wakes
+//! It owns the input and output pins and a `plasma_firmware::io::DiscreteIo`. It wakes
 //! on any input edge (EXTI, through the always-armed latch of [`crate::edges`]: an edge while
 //! the task is busy wakes its next wait), on the I/O logic's own deadlines, and on news from
 //! the bridge; each time it reads every input *level* (so a bouncing edge cannot leave START
@@ -18,8 +18,9 @@ use embassy_sync::blocking_mutex::raw::CriticalSectionRawMutex;
 use embassy_sync::channel::Channel;
 use embassy_sync::signal::Signal;
 use embassy_time::Timer;
-use plasma_firmware::discrete::DiscreteIo;
-use plasma_firmware::io::{self, Inputs, IoConfig, IoEvent, Outputs, SupplyState, Transition};
+use plasma_firmware::io::{
+    self, DiscreteIo, Inputs, IoConfig, IoEvent, Outputs, SupplyState, Transition,
+};
 use plasma_firmware::supervisor::IoExchange;
 use plasma_firmware::watchdog::TaskId;
 use plasma_protocol::time::{Duration, Instant, div_rem_u16};

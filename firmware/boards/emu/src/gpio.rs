@@ -3,8 +3,7 @@
 //! SYSCFG and EXTI models carry an edge driven from its qtest socket to the EXTI interrupt.
 
 use cortex_m::peripheral::NVIC;
-use plasma_firmware::inputs::{InputConfig, PinLevels, Pull};
-use plasma_firmware::io::{self, Input, Outputs};
+use plasma_firmware::io::{self, Input, InputConfig, Outputs, PinLevels, Pull};
 use plasma_firmware::pins::{self, Pin, Port};
 use stm32_metapac::gpio::Gpio;
 use stm32_metapac::gpio::vals::{Idr, Moder, Pupdr};

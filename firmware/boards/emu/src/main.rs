@@ -61,7 +61,7 @@ mod image {
     use defmt_semihosting as _;
     use embassy_executor::{InterruptExecutor, Spawner};
     use plasma_firmware::bridge::Bridge;
-    use plasma_firmware::inputs::InputConfig;
+    use plasma_firmware::io::InputConfig;
     use plasma_firmware::safe_state::BootReport;
     use plasma_protocol::time::Duration;
     use plasma_tasks::boot::boot_text;

@@ -51,7 +51,7 @@ mod image {
     use embassy_stm32::interrupt::InterruptExt;
     use embassy_stm32::{bind_interrupts, pac};
     use plasma_firmware::bridge::Bridge;
-    use plasma_firmware::inputs::InputConfig;
+    use plasma_firmware::io::InputConfig;
     use plasma_protocol::time::Duration;
     use plasma_tasks::boot::boot_text;
     use plasma_tasks::clock::now;

@@ -5,8 +5,7 @@ use embassy_stm32::Peri;
 use embassy_stm32::gpio::{AnyPin, Level, Output, Pull, Speed};
 use embassy_stm32::interrupt;
 use embassy_stm32::interrupt::{InterruptExt, Priority};
-use plasma_firmware::inputs::{self, InputConfig, PinLevels};
-use plasma_firmware::io::{self, Input, Outputs};
+use plasma_firmware::io::{self, Input, InputConfig, Outputs, PinLevels};
 use plasma_firmware::pins::{self, Pin, Wiring};
 use plasma_firmware::safe_state::SAFE_OUTPUTS;
 
@@ -130,8 +129,8 @@ unsafe fn EXTI15_10() {
 /// `input`'s pin as a GPIO input with the pull that reads inactive on an open wire.
 fn input(config: &InputConfig, input: Input) -> embassy_stm32::gpio::Input<'static> {
     let pull = match config.get(input).polarity.pull() {
-        inputs::Pull::Up => Pull::Up,
-        inputs::Pull::Down => Pull::Down,
+        io::Pull::Up => Pull::Up,
+        io::Pull::Down => Pull::Down,
     };
     embassy_stm32::gpio::Input::new(table_pin(pins::input(input).pin), pull)
 }

@@ -1,6 +1,5 @@
 use super::*;
-use crate::inputs::Polarity;
-use crate::io::{Interlock, IoEvent, Output, Reason};
+use crate::io::{Interlock, IoEvent, Output, Polarity, Reason};
 use crate::pins;
 use plasma_protocol::time::Duration;
 

@@ -10,9 +10,7 @@
 //! report a bridge that is not there. Those keep the table's polarity, always.
 //!
 //! ```
-//! use plasma_firmware::inputs::Polarity;
-//! use plasma_firmware::io::{Output, Outputs};
-//! use plasma_firmware::output_levels::OutputConfig;
+//! use plasma_firmware::io::{Output, OutputConfig, Outputs, Polarity};
 //!
 //! let mut config = OutputConfig::default();
 //! config.set(Output::Fault, Polarity::ActiveLow).unwrap();
@@ -21,8 +19,8 @@
 //! assert!(config.for_table(Outputs::OFF).fault);
 //! ```
 
-use crate::inputs::Polarity;
-use crate::io::{Output, Outputs};
+use super::input_config::Polarity;
+use super::signals::{Output, Outputs};
 use crate::pins;
 
 /// An output that must keep the pin table's polarity (see the module documentation).

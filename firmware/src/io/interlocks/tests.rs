@@ -4,6 +4,7 @@
 use std::vec::Vec;
 
 use super::*;
+use crate::io::SafetyMonitor;
 use plasma_protocol::time::{Duration, Instant};
 
 fn ms(v: u64) -> Instant {
@@ -844,28 +845,6 @@ fn rampdown_error_is_an_event_on_its_rising_edge() {
 }
 
 // ---- logs ----
-
-#[test]
-fn every_reason_and_transition_has_text() {
-    let t = Transition {
-        output: Output::Start,
-        level: false,
-        reason: Reason::Interlock(Interlock::RestartBlackout),
-        at: us(2_100_250),
-    };
-    assert_eq!(
-        t.to_string(),
-        "2100.250 ms START off: quick-restart blackout"
-    );
-    assert_eq!(
-        IoEvent::StartRefused {
-            reason: Interlock::LinkDown
-        }
-        .to_string(),
-        "start refused: link to power supply down"
-    );
-    assert_eq!(Reason::TorchOff.as_str(), "torch-on released by CNC");
-}
 
 #[test]
 fn an_undrained_log_keeps_the_newest_and_counts_the_lost() {

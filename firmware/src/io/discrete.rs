@@ -1,13 +1,11 @@
 //! The discrete I/O as the board runs it: pin levels in, output levels out.
 //!
-//! [`DiscreteIo`] puts the [`InputFilter`] (polarity, debounce) in front of
+//! [`DiscreteIo`] puts the input filter (polarity, debounce: [`InputConfig`](super::InputConfig)) in front of
 //! [`Interlocks`], so the board's high-priority I/O task only samples pins, calls one method
 //! and drives the outputs. It is sans-IO like its parts.
 //!
 //! ```
-//! use plasma_firmware::discrete::DiscreteIo;
-//! use plasma_firmware::inputs::PinLevels;
-//! use plasma_firmware::io::{Input, IoConfig, SupplyState};
+//! use plasma_firmware::io::{DiscreteIo, Input, IoConfig, PinLevels, SupplyState};
 //! use plasma_protocol::time::Instant;
 //!
 //! let t = Instant::from_millis;
@@ -23,8 +21,11 @@
 //! assert!(!io.outputs().start);
 //! ```
 
-use crate::inputs::{InputFilter, PinLevels};
-use crate::io::{Input, Inputs, Interlocks, IoConfig, IoEvent, Outputs, SupplyState, Transition};
+use super::config::IoConfig;
+use super::input_filter::{InputFilter, PinLevels};
+use super::interlocks::Interlocks;
+use super::reason::{IoEvent, Transition};
+use super::signals::{Input, Inputs, Outputs, SupplyState};
 use plasma_protocol::time::Instant;
 
 /// Input filter and interlocks.
@@ -35,10 +36,10 @@ pub struct DiscreteIo {
 }
 
 impl DiscreteIo {
-    /// Power-up with the pins as they read now (see [`InputFilter::new`] and
+    /// Power-up with the pins as they read now (see
     /// [`Interlocks::new`]: a TORCH_ON already active is ignored until released).
     pub fn new(config: IoConfig, now: Instant, pins: PinLevels) -> Self {
-        let filter = InputFilter::new(config.inputs, now, pins);
+        let filter = InputFilter::new(config.inputs, pins);
         let interlocks = Interlocks::new(config, now, filter.inputs());
         DiscreteIo { filter, interlocks }
     }
@@ -47,7 +48,7 @@ impl DiscreteIo {
     ///
     /// The interlocks' rules apply live ([`Interlocks::set_config`]: a stricter setting at
     /// once, a looser one from the next TORCH_ON). An input whose active level or debounce
-    /// changed takes its level from `pins` at once ([`InputFilter::set_config`]); for
+    /// changed takes its level from `pins` at once, as at power-up; for
     /// TORCH_ON that is the power-up rule ([`Interlocks::rearm_torch_on`]): a START that is on
     /// drops, and a TORCH_ON that reads active under the new setting must be seen inactive
     /// before it fires the torch. So no change, at any moment of a press, produces a START.
@@ -103,7 +104,7 @@ impl DiscreteIo {
 
     /// The levels to hand a board that drives its pins from the pin table
     /// ([`pins::output`](crate::pins::output)): [`outputs`](Self::outputs) with the inverted
-    /// ones flipped ([`OutputConfig::for_table`](crate::output_levels::OutputConfig::for_table)).
+    /// ones flipped ([`OutputConfig::for_table`](super::OutputConfig::for_table)).
     pub fn table_outputs(&self) -> Outputs {
         self.interlocks.config().outputs.for_table(self.outputs())
     }
