@@ -37,11 +37,17 @@ use plasma_protocol::serial::{Parity, PortConfig, StopBits};
 use plasma_protocol::time::Duration;
 
 /// Accepted `arc_ok_debounce_ms` values.
-pub const ARC_OK_DEBOUNCE_MS: (u32, u32) = (0, 100);
+pub const ARC_OK_DEBOUNCE_MS: (u32, u32) = (0, IoConfig::MAX_ARC_OK_DEBOUNCE.as_millis_u32());
 /// Accepted `transfer_timeout_ms` values.
-pub const TRANSFER_TIMEOUT_MS: (u32, u32) = (100, 10_000);
+pub const TRANSFER_TIMEOUT_MS: (u32, u32) = (
+    IoConfig::MIN_TRANSFER_TIMEOUT.as_millis_u32(),
+    IoConfig::MAX_TRANSFER_TIMEOUT.as_millis_u32(),
+);
 /// Accepted gap between starts, ms (stored; not a `CONFIG` key).
-pub const START_GAP_MS: (u32, u32) = (50, 1000);
+pub const START_GAP_MS: (u32, u32) = (
+    MIN_START_GAP.as_millis_u32(),
+    IoConfig::MAX_START_GAP.as_millis_u32(),
+);
 /// The Phoenix format used until one is configured: SOH, STX, CR LF, ETX, EOT and check byte.
 pub const DEFAULT_PHOENIX_FORMAT: u8 = 113;
 /// Length of the version-1 record (no wiring, no CNC port block).

@@ -38,6 +38,15 @@ pub struct IoConfig {
 }
 
 impl IoConfig {
+    /// Longest [`start_gap`](Self::start_gap) a setting may hold.
+    pub const MAX_START_GAP: Duration = Duration::from_millis(1000);
+    /// Longest [`arc_ok_debounce`](Self::arc_ok_debounce) a setting may hold.
+    pub const MAX_ARC_OK_DEBOUNCE: Duration = Duration::from_millis(100);
+    /// Shortest [`transfer_timeout`](Self::transfer_timeout) a setting may hold.
+    pub const MIN_TRANSFER_TIMEOUT: Duration = Duration::from_millis(100);
+    /// Longest [`transfer_timeout`](Self::transfer_timeout) a setting may hold.
+    pub const MAX_TRANSFER_TIMEOUT: Duration = Duration::from_secs(10);
+
     /// The gap actually enforced: `start_gap`, but never less than [`MIN_START_GAP`].
     pub fn effective_start_gap(&self) -> Duration {
         if self.start_gap < MIN_START_GAP {

@@ -20,7 +20,7 @@ use heapless::Vec;
 
 use plasma_protocol::time::{Duration, Instant};
 
-use super::Input;
+use super::signals::Input;
 
 /// The manuals' least delay between Start signals. Deliberately its own constant rather than
 /// the controller's setting, so a wrong setting is caught.
