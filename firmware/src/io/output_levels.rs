@@ -57,7 +57,7 @@ impl OutputConfig {
     }
 
     /// The outputs' bits that may be set (for a stored record).
-    pub const INVERTIBLE: u8 = bit(Output::Hold) | bit(Output::Fault);
+    pub(crate) const INVERTIBLE: u8 = bit(Output::Hold) | bit(Output::Fault);
 
     /// The active level of `output`.
     pub const fn get(&self, output: Output) -> Polarity {
@@ -85,12 +85,12 @@ impl OutputConfig {
     }
 
     /// The stored form: one bit per inverted output.
-    pub const fn bits(&self) -> u8 {
+    pub(crate) const fn bits(&self) -> u8 {
         self.inverted
     }
 
     /// From the stored form; `None` if it inverts an output that may not be.
-    pub const fn from_bits(bits: u8) -> Option<Self> {
+    pub(crate) const fn from_bits(bits: u8) -> Option<Self> {
         if bits & !Self::INVERTIBLE != 0 {
             return None;
         }
