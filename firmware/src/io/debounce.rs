@@ -1,5 +1,5 @@
 //! The one level filter of the discrete I/O: a new level counts once it has held for a set
-//! time. [`InputFilter`](super::InputFilter) runs one per input pin (the wiring's debounce),
+//! time. [`InputFilter`](super::input_filter::InputFilter) runs one per input pin (the wiring's debounce),
 //! [`Interlocks`](super::Interlocks) one on MOTION (ARC_OK's debounce).
 //!
 //! The hold time is passed to every call that needs it, not kept: it is a setting, and the

@@ -1,5 +1,5 @@
 //! The CNC's wiring of the inputs, as settings: which pin level is active, and how long a new
-//! level must hold before it counts. [`InputFilter`](super::InputFilter) applies them.
+//! level must hold before it counts. [`InputFilter`](super::input_filter::InputFilter) applies them.
 
 use super::signals::Input;
 use plasma_protocol::time::Duration;

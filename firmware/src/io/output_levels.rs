@@ -4,7 +4,7 @@
 //! ignition) and **FAULT** (the CNC stops). The reason is the time no setting can reach: from
 //! reset until the I/O task runs, and after a panic or a stalled task, the pins are
 //! high-impedance (held by the board's pull-downs) or driven by the register-level safe state,
-//! which knows only the pin table ([`pins::SAFE_STATE`](crate::pins::SAFE_STATE)). An inverted
+//! which knows only the pin table ([`pins::SAFE_STATE`]). An inverted
 //! output reads ON there. For PS_HOLD and FAULT that is the fail-safe reading; for START it
 //! would fire the torch, for ARC_OK it would start motion without an arc, for READY it would
 //! report a bridge that is not there. Those keep the table's polarity, always.

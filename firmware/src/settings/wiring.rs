@@ -1,6 +1,6 @@
 //! The CNC's wiring as `CONFIG` keys and as part of the stored record: every input's active
 //! level and debounce, and the outputs a table may invert (see
-//! [`OutputConfig`](crate::io::OutputConfig) for why only PS_HOLD and FAULT).
+//! [`OutputConfig`] for why only PS_HOLD and FAULT).
 //!
 //! Levels are the level at the bridge's pin: `LOW` is the reference board's default for the
 //! inputs (the opto-coupler conducts when the signal is on) and `HIGH` for the outputs.
