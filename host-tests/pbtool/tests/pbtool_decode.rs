@@ -431,3 +431,39 @@ fn binary_usage_error_exits_2() {
     assert_eq!(pbtool(&["decode"]).0, Some(2));
     assert_eq!(pbtool(&["frobnicate"]).0, Some(2));
 }
+
+#[test]
+fn hpr_diagnostic_reads_are_typed() {
+    // HPR manual (002_72b43a5685974c77.txt) line 266: 132 READ COOLANT PRESSURE, `>13296<`
+    // answered `>13280FE<` (80 counts; "83 counts = 225 psi 73 counts = 200 psi").
+    let coolant = decode_frames(&[">13296<", ">13280FE<"]);
+    assert!(all_valid(&coolant), "{coolant:?}");
+    assert_eq!(coolant[1].answers_request, Some(true));
+    assert_eq!(field(&coolant[1], "coolant pressure (raw A/D)"), Some("80"));
+    assert_eq!(field(&coolant[1], "coolant pressure"), Some("217.5"));
+    // Line 200: 100 GET_CONTROL_DATA, HPR form.
+    let control = decode_frames(&[
+        ">10091<",
+        ">100CAT0482 CBT0021 LVO0118 CFL0009 CTP0481 TTP0481 CAC0001 CBC0014 WLC0005 CAS0000 CBS0534 PWMA0000 PWMB00000B<",
+    ]);
+    assert!(all_valid(&control), "{control:?}");
+    assert_eq!(control[0].kind, Some(Kind::Request));
+    assert_eq!(field(&control[1], "line voltage"), Some("11.8"));
+    assert_eq!(field(&control[1], "coolant flow"), Some("0.09"));
+    assert_eq!(field(&control[1], "chopper B setpoint"), Some("534"));
+    // Line 239: 117 READ_GAS_INPUTS_FROM_PS, seven inputs (the manual console's list).
+    let inputs = one(">1170000000E9<");
+    assert!(inputs.valid, "{inputs:?}");
+    assert_eq!(field(&inputs, "error select"), Some("off"));
+    assert_eq!(field(&inputs, "serial ID bit 2"), Some("off"));
+    // Line 269: 133 GET CONTROL DATA3.
+    let data3 = one(">133CCT0482 CDT0021 CCC0000 CDC000050<");
+    assert!(data3.valid, "{data3:?}");
+    assert_eq!(
+        field(&data3, "chopper C temperature (raw A/D)"),
+        Some("482")
+    );
+    // Line 162: 074's bits, listed by port and bit (the manual names none).
+    let io = one(">074PA00000100 PB00000000 PC00010101 PD00100000 PE00010000 PF10000000B7<");
+    assert_eq!(field(&io, "bits on"), Some("PA2 PC4 PC2 PC0 PD5 PE4 PF7"));
+}

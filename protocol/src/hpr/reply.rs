@@ -8,6 +8,10 @@
 //! flags and 121's test time without padding. Parsing accepts shorter fields too.
 
 use super::command::id;
+use super::diagnostics::{
+    ControlData, ControlData3, CoolantCounts, GasConsoleInputs, MaxProControlData, MfgData1,
+    MfgData2,
+};
 use super::error_codes::ErrorCode;
 use super::field::{DataWriter, Fields};
 use super::frame::Frame;
@@ -225,12 +229,22 @@ pub enum Reply<'a> {
     InletGases(GasPair),
     /// 099: pressure setpoints, psi.
     GasFlows(GasFlows),
+    /// 100, HPR form: chopper, line and coolant readings.
+    ControlData(ControlData),
+    /// 100, MaxPro200 form: 141's and 142's fields.
+    MaxProControlData(MaxProControlData),
+    /// 117: the gas console's inputs.
+    GasConsoleInputs(GasConsoleInputs),
     /// 121: test duration in seconds; 0 = not accepted.
     LeakCheck(u16),
     /// 122: gas selector switch positions.
     GasSwitch(GasPair),
     /// 125: timers and counters.
     TimerCounter(TimerCounter),
+    /// 132: coolant pressure, raw A/D counts.
+    CoolantPressure(CoolantCounts),
+    /// 133: the HPR400's third and fourth choppers.
+    ControlData3(ControlData3),
     /// 134: the last four errors, most recent first.
     ErrorLog([ErrorCode; 4]),
     /// 138: ready for a start signal.
@@ -238,6 +252,10 @@ pub enum Reply<'a> {
     /// 143: the reply digit. The only sample asks for mode 1 and gets `1`; the manual does
     /// not say whether it is an echo of the mode or an accept flag, so it is kept as is.
     SetTestMode(u8),
+    /// 141: the first half of the MaxPro200's control data.
+    MfgData1(MfgData1),
+    /// 142: the second half of the MaxPro200's control data.
+    MfgData2(MfgData2),
     /// 145: torch id.
     TorchId(TorchId),
     /// 500: the command had a bad checksum.
@@ -402,6 +420,12 @@ impl<'a> Reply<'a> {
             Reply::LeakCheck(_) => id::LEAK_CHECK_MODE,
             Reply::GasSwitch(_) => id::READ_GAS_SWITCH,
             Reply::TimerCounter(_) => id::GET_TIMER_COUNTER,
+            Reply::ControlData(_) | Reply::MaxProControlData(_) => id::GET_CONTROL_DATA,
+            Reply::GasConsoleInputs(_) => id::READ_GAS_INPUTS_FROM_PS,
+            Reply::CoolantPressure(_) => id::READ_COOLANT_PRESSURE,
+            Reply::ControlData3(_) => id::GET_CONTROL_DATA3,
+            Reply::MfgData1(_) => id::GET_MFG_DATA1,
+            Reply::MfgData2(_) => id::GET_MFG_DATA2,
             Reply::ErrorLog(_) => id::READ_ERROR_LOG,
             Reply::ReadyForStart(_) => id::IS_SYSTEM_READY_FOR_START,
             Reply::SetTestMode(_) => id::SET_TEST_MODE,
@@ -463,6 +487,23 @@ impl<'a> Reply<'a> {
                 }
                 Reply::GasFlows(GasFlows::from_array(v))
             }
+            // Told apart like 079: the MaxPro200's tags are lower case.
+            id::GET_CONTROL_DATA => {
+                if data.first().is_some_and(u8::is_ascii_lowercase) {
+                    Reply::MaxProControlData(MaxProControlData::parse(&mut f)?)
+                } else {
+                    Reply::ControlData(ControlData::parse(&mut f)?)
+                }
+            }
+            id::READ_GAS_INPUTS_FROM_PS => {
+                Reply::GasConsoleInputs(GasConsoleInputs::parse(&mut f)?)
+            }
+            id::READ_COOLANT_PRESSURE => {
+                Reply::CoolantPressure(CoolantCounts(f.number(4, 0, 9999)?))
+            }
+            id::GET_CONTROL_DATA3 => Reply::ControlData3(ControlData3::parse(&mut f)?),
+            id::GET_MFG_DATA1 => Reply::MfgData1(MfgData1::parse(&mut f)?),
+            id::GET_MFG_DATA2 => Reply::MfgData2(MfgData2::parse(&mut f)?),
             id::LEAK_CHECK_MODE => Reply::LeakCheck(f.number(4, 0, 9999)?),
             id::READ_GAS_SWITCH => Reply::GasSwitch(parse_gas_pair(&mut f)?),
             id::GET_TIMER_COUNTER => {
@@ -581,6 +622,14 @@ impl<'a> Reply<'a> {
             Reply::ReadyForStart(ready) => w.field((*ready).into(), 1, 1),
             Reply::SetTestMode(v) => w.field((*v).into(), 1, 1),
             Reply::TorchId(t) => four(w, t.0),
+            Reply::ControlData(d) => d.write(w),
+            Reply::MaxProControlData(d) => d.write(w),
+            Reply::GasConsoleInputs(inputs) => inputs.write(w),
+            // Unpadded, as the sample `>13280FE<` (80 counts).
+            Reply::CoolantPressure(counts) => w.field(counts.0.into(), 1, 4),
+            Reply::ControlData3(d) => d.write(w),
+            Reply::MfgData1(d) => d.write(w),
+            Reply::MfgData2(d) => d.write(w),
             Reply::BadChecksum | Reply::UnknownCommand => Ok(()),
         }
     }
@@ -786,6 +835,110 @@ mod tests {
             Reply::IoStatus(IoStatus {
                 ports: [0x04, 0x00, 0x15, 0x20, 0x10, 0x80],
             }),
+        );
+    }
+
+    #[test]
+    fn seed_diagnostic_reads() {
+        // HPR manual (002_72b43a5685974c77.txt) line 200: 100 GET_CONTROL_DATA, HPR form.
+        seed(
+            b">100CAT0482 CBT0021 LVO0118 CFL0009 CTP0481 TTP0481 CAC0001 CBC0014 WLC0005 CAS0000 CBS0534 PWMA0000 PWMB00000B<",
+            Reply::ControlData(ControlData {
+                chopper_a_temp: 482,
+                chopper_b_temp: 21,
+                line_voltage: 118,
+                coolant_flow: 9,
+                coolant_temp: 481,
+                transformer_temp: 481,
+                chopper_a_current: 1,
+                chopper_b_current: 14,
+                work_lead_current: 5,
+                chopper_a_setpoint: 0,
+                chopper_b_setpoint: 534,
+                pwm_chopper_a: 0,
+                pwm_chopper_b: 0,
+            }),
+        );
+        // Line 239: 117 READ_GAS_INPUTS_FROM_PS, seven inputs all off.
+        seed(
+            b">1170000000E9<",
+            Reply::GasConsoleInputs(GasConsoleInputs::new(&[false; 7]).unwrap()),
+        );
+        // Line 266: 132 READ COOLANT PRESSURE, 80 counts ("83 counts = 225 psi").
+        seed(b">13280FE<", Reply::CoolantPressure(CoolantCounts(80)));
+        // Line 269: 133 GET CONTROL DATA3 (HPR400).
+        seed(
+            b">133CCT0482 CDT0021 CCC0000 CDC000050<",
+            Reply::ControlData3(ControlData3 {
+                chopper_c_temp: 482,
+                chopper_d_temp: 21,
+                chopper_c_current: 0,
+                chopper_d_current: 0,
+            }),
+        );
+    }
+
+    #[test]
+    fn maxpro_control_data_is_141_then_142() {
+        // No MaxPro200 sample frame exists for 100, 141 or 142 (lines 200, 289, 290): these
+        // are built from the field lists, with the manual's example `flow0100` (1.00 gpm).
+        let first = MfgData1 {
+            plasma_pressure: 56,
+            shield_pressure: 58,
+            inlet_pressure: 110,
+            coolant_temp: 300,
+            chopper_temp: 310,
+            channel_a_current: 100,
+        };
+        let second = MfgData2 {
+            channel_b_current: 99,
+            transformer_temp: 320,
+            inductor_a_temp: 330,
+            inductor_b_temp: 340,
+            bus_voltage: 400,
+            coolant_flow: 100,
+        };
+        let mut out = [0u8; 160];
+        let n = Reply::MaxProControlData(MaxProControlData { first, second })
+            .emit(&mut out)
+            .unwrap();
+        assert_eq!(
+            &out[4..n - 3],
+            &b"plap0056 shap0058 icrp0110 colt0300 chpt0310 chac0100 \
+               chbc0099 xfmr0320 inat0330 inbt0340 busv0400 flow0100"[..]
+        );
+        assert_eq!(
+            Reply::parse(&Frame::parse(&out[..n]).unwrap()),
+            Ok(Reply::MaxProControlData(MaxProControlData {
+                first,
+                second
+            }))
+        );
+        for (reply, data) in [
+            (Reply::MfgData1(first), &out[4..57]),
+            (Reply::MfgData2(second), &out[58..n - 3]),
+        ] {
+            let mut half = [0u8; 96];
+            let m = reply.emit(&mut half).unwrap();
+            assert_eq!(&half[4..m - 3], data);
+            assert_eq!(Reply::parse(&Frame::parse(&half[..m]).unwrap()), Ok(reply));
+        }
+        // A field out of order or a tag of the other form is not this reply.
+        let mut buf = [0u8; 160];
+        let n = Frame::new(
+            141,
+            b"shap0058 plap0056 icrp0110 colt0300 chpt0310 chac0100",
+        )
+        .emit(&mut buf)
+        .unwrap();
+        assert_eq!(
+            Reply::parse(&Frame::parse(&buf[..n]).unwrap()),
+            Err(Error::Malformed)
+        );
+        let n = Frame::new(100, b"CAT0482").emit(&mut buf).unwrap();
+        assert_eq!(
+            Reply::parse(&Frame::parse(&buf[..n]).unwrap()),
+            Err(Error::Malformed)
         );
     }
 

@@ -11,14 +11,6 @@ use crate::Error;
 const VALID: &[(&[u8], u16, &[u8], Class)] = &[
     // 071 MANUAL_PUMP_CONTROL: request "1" (force the pump on), reply 1 = accepted.
     (b">0711C9<", 71, b"1", Class::Dangerous),
-    // 100 GET_CONTROL_DATA (HPR form).
-    (b">10091<", 100, b"", Class::Normal),
-    (
-        b">100CAT0482 CBT0021 LVO0118 CFL0009 CTP0481 TTP0481 CAC0001 CBC0014 WLC0005 CAS0000 CBS0534 PWMA0000 PWMB00000B<",
-        100,
-        b"CAT0482 CBT0021 LVO0118 CFL0009 CTP0481 TTP0481 CAC0001 CBC0014 WLC0005 CAS0000 CBS0534 PWMA0000 PWMB0000",
-        Class::Normal,
-    ),
     // 101 SET_IO_STATUS reply.
     (b">1011C3<", 101, b"1", Class::Dangerous),
     // 102 SET_GAS_IO_FROM_PS reply.
@@ -50,21 +42,12 @@ const VALID: &[(&[u8], u16, &[u8], Class)] = &[
     (b">1131C6<", 113, b"1", Class::FactoryTestingOnly),
     (b">11597<", 115, b"", Class::FactoryTestingOnly),
     (b">11698<", 116, b"", Class::FactoryTestingOnly),
-    // 117 READ_GAS_INPUTS_FROM_PS.
-    (b">11799<", 117, b"", Class::Normal),
-    (b">1170000000E9<", 117, b"0000000", Class::Normal),
     // 118 GAS_DISPLAY_TEST_MODE: request mode 0, reply 1.
     (b">1180CA<", 118, b"0", Class::FactoryTestingOnly),
     (b">1181CB<", 118, b"1", Class::FactoryTestingOnly),
     // 124 INDEX_MOTORVALVES: open motor valve 1 by 30 counts, reply 1.
     (b">1241 1 36C<", 124, b"1 1 3", Class::Dangerous),
     (b">1241C8<", 124, b"1", Class::Dangerous),
-    // 132 READ COOLANT PRESSURE: 80 counts.
-    (b">13296<", 132, b"", Class::Normal),
-    (b">13280FE<", 132, b"80", Class::Normal),
-    // 133 GET CONTROL DATA3 (HPR400).
-    (b">13397<", 133, b"", Class::Normal),
-    (b">133CCT0482 CDT0021 CCC0000 CDC000050<", 133, b"CCT0482 CDT0021 CCC0000 CDC0000", Class::Normal),
     // 135 CAN LOOPBACK TEST.
     (b">13599<", 135, b"", Class::FactoryTestingOnly),
     (b">1351CA<", 135, b"1", Class::FactoryTestingOnly),

@@ -3,9 +3,9 @@
 use plasma_protocol::Error;
 use plasma_protocol::hpr::command::id;
 use plasma_protocol::hpr::{
-    Acceptance, Class, ErrorCode, Frame, GasCode, GasConsole, GasFlows, GasPair, GasPressures,
-    HprRating, LeakCheckMode, Reply, Request, StateCode, SystemId, TestMode, checksum,
-    command_info,
+    Acceptance, Class, ControlData, ErrorCode, Frame, GasCode, GasConsole, GasFlows, GasPair,
+    GasPressures, HprRating, LeakCheckMode, MfgData1, MfgData2, Reply, Request, StateCode,
+    SystemId, TestMode, checksum, command_info,
 };
 
 use super::{Command, Fault, FrameReport, Kind};
@@ -227,9 +227,45 @@ fn describe_reply(reply: &Reply<'_>, report: &mut FrameReport) {
             report.field("control voltage", format!("{}.{}", tenths / 10, tenths % 10), Some("V"))
         }
         Reply::IoStatus(io) => {
+            let mut on = Vec::new();
             for (port, bits) in ["A", "B", "C", "D", "E", "F"].iter().zip(io.ports) {
                 report.field(format!("port {port} (bit 7..0)"), format!("{bits:08b}"), None);
+                on.extend((0..8).rev().filter(|b| bits >> b & 1 == 1).map(|b| format!("P{port}{b}")));
             }
+            report.field("bits on", if on.is_empty() { "none".to_owned() } else { on.join(" ") }, None);
+            // HPR manual (002_72b43a5685974c77.txt) line 162: "Refer to IO listing for
+            // description of each bit"; the manual has no such listing.
+            report.note("the manual names no bit of ports A-F (its IO listing is not printed)");
+        }
+        Reply::ControlData(d) => control_data(&d, report),
+        Reply::MaxProControlData(d) => {
+            mfg_data1(&d.first, report);
+            mfg_data2(&d.second, report);
+        }
+        Reply::MfgData1(d) => mfg_data1(&d, report),
+        Reply::MfgData2(d) => mfg_data2(&d, report),
+        Reply::GasConsoleInputs(inputs) => {
+            let console = if inputs.count() == 7 { "manual" } else { "automatic" };
+            report.note(format!(
+                "{} inputs: named from the manual's {console} gas console list",
+                inputs.count()
+            ));
+            for (index, name) in inputs.names().iter().enumerate() {
+                let on = inputs.input(index).unwrap_or(false);
+                report.field(*name, if on { "on" } else { "off" }, None);
+            }
+        }
+        Reply::CoolantPressure(counts) => {
+            report.field("coolant pressure (raw A/D)", counts.0, Some("counts"));
+            let tenths = counts.psi_tenths();
+            report.field("coolant pressure", format!("{}.{}", tenths / 10, tenths % 10), Some("psi"));
+            report.note("psi on the line through the manual's 83 counts = 225 psi and 73 counts = 200 psi");
+        }
+        Reply::ControlData3(d) => {
+            report.field("chopper C temperature (raw A/D)", d.chopper_c_temp, Some("counts"));
+            report.field("chopper D temperature (raw A/D)", d.chopper_d_temp, Some("counts"));
+            report.field("chopper C current", d.chopper_c_current, Some("A"));
+            report.field("chopper D current", d.chopper_d_current, Some("A"));
         }
         Reply::PsInfo(info) => {
             pressures(&info.pressures, report);
@@ -294,6 +330,87 @@ fn describe_reply(reply: &Reply<'_>, report: &mut FrameReport) {
              check the id and the supply's firmware revision",
         ),
     }
+}
+
+/// `value` hundredths as `1.00`.
+fn hundredths(value: u16) -> String {
+    format!("{}.{:02}", value / 100, value % 100)
+}
+
+fn control_data(d: &ControlData, report: &mut FrameReport) {
+    report.field(
+        "chopper A temperature (raw A/D)",
+        d.chopper_a_temp,
+        Some("counts"),
+    );
+    report.field(
+        "chopper B temperature (raw A/D)",
+        d.chopper_b_temp,
+        Some("counts"),
+    );
+    let volts = d.line_voltage;
+    report.field(
+        "line voltage",
+        format!("{}.{}", volts / 10, volts % 10),
+        Some("V"),
+    );
+    report.field("coolant flow", hundredths(d.coolant_flow), Some("gpm"));
+    report.field(
+        "coolant temperature (raw A/D)",
+        d.coolant_temp,
+        Some("counts"),
+    );
+    report.field(
+        "transformer temperature (raw A/D)",
+        d.transformer_temp,
+        Some("counts"),
+    );
+    report.field("chopper A current", d.chopper_a_current, Some("A"));
+    report.field("chopper B current", d.chopper_b_current, Some("A"));
+    report.field("work lead current", d.work_lead_current, Some("A"));
+    report.field("chopper A setpoint", d.chopper_a_setpoint, Some("A"));
+    report.field("chopper B setpoint", d.chopper_b_setpoint, Some("A"));
+    // 1070 = 100 %, shown in tenths of a percent.
+    let percent = |pwm: u16| {
+        let tenths = u32::from(pwm) * 1000 / 1070;
+        format!("{} ({}.{} %)", pwm, tenths / 10, tenths % 10)
+    };
+    report.field("chopper A PWM", percent(d.pwm_chopper_a), None);
+    report.field("chopper B PWM", percent(d.pwm_chopper_b), None);
+}
+
+fn mfg_data1(d: &MfgData1, report: &mut FrameReport) {
+    report.field("plasma pressure", d.plasma_pressure, Some("psi"));
+    report.field("shield pressure", d.shield_pressure, Some("psi"));
+    report.field(
+        "inlet pressure (psi in the 100 list, ADC counts in 141's)",
+        d.inlet_pressure,
+        None,
+    );
+    report.field("coolant temperature (ADC)", d.coolant_temp, Some("counts"));
+    report.field("chopper temperature (ADC)", d.chopper_temp, Some("counts"));
+    report.field("channel A current", d.channel_a_current, Some("A"));
+}
+
+fn mfg_data2(d: &MfgData2, report: &mut FrameReport) {
+    report.field("channel B current", d.channel_b_current, Some("A"));
+    report.field(
+        "transformer temperature",
+        d.transformer_temp,
+        Some("counts"),
+    );
+    report.field(
+        "inductor A temperature (ADC)",
+        d.inductor_a_temp,
+        Some("counts"),
+    );
+    report.field(
+        "inductor B temperature (ADC)",
+        d.inductor_b_temp,
+        Some("counts"),
+    );
+    report.field("bus voltage", d.bus_voltage, Some("V"));
+    report.field("coolant flow", hundredths(d.coolant_flow), Some("gpm"));
 }
 
 fn state_field(name: &str, state: StateCode, report: &mut FrameReport) {
