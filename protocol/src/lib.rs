@@ -10,6 +10,7 @@
 //! - [`hpr`]: the `>ID data CK<` protocol of HyPerformance HPR and MaxPro200 units.
 //! - [`units`]: exact fixed-point amps (1/64 A), psi (1/128 psi) and pressure settings, shared
 //!   by the Powermax registers and the CNC commands.
+//! - [`errata`]: the manuals' sample frames printed with a typo, and what each meant.
 //! - [`cnc`]: what the CNC sends: Phoenix serial-messaging framing and the text commands.
 //! - [`serial`]: a UART's framing (baud, parity, stop bits) and how long a character takes.
 //! - [`time`]: instants and durations as values (the caller's clock, never read here).
@@ -39,6 +40,7 @@ mod text_table;
 pub use error::{Error, Result};
 
 pub mod cnc;
+pub mod errata;
 pub mod hpr;
 pub mod modbus_ascii;
 pub mod powermax;

@@ -467,3 +467,60 @@ fn hpr_diagnostic_reads_are_typed() {
     let io = one(">074PA00000100 PB00000000 PC00010101 PD00100000 PE00010000 PF10000000B7<");
     assert_eq!(field(&io, "bits on"), Some("PA2 PC4 PC2 PC0 PD5 PE4 PF7"));
 }
+
+#[test]
+fn manual_typos_are_invalid_and_show_what_was_meant() {
+    // SYNC guide (000_dd931256418ae627.txt) line 1154: exit remote mode, one `0` too many;
+    // its reply (line 1173) answers the corrected request.
+    let reports = decode_frames(&[":01103080000306000000000000036<CR><LF>", ":0110308000033C"]);
+    let printed = &reports[0];
+    assert!(!printed.valid);
+    assert!(printed.error.as_deref().unwrap().contains("odd number"));
+    let meant = printed.meant.as_deref().unwrap();
+    assert_eq!(meant.frame, ":0110308000030600000000000036");
+    assert!(meant.valid, "{meant:?}");
+    assert_eq!(meant.kind, Some(Kind::Request));
+    assert_eq!(
+        meant.registers[0].value.as_deref(),
+        Some("0 (with current and pressure 0: leave remote control)")
+    );
+    assert!(
+        printed
+            .notes
+            .iter()
+            .any(|n| n.contains("printed with a typo"))
+    );
+    assert_eq!(reports[1].answers_request, Some(true), "{:?}", reports[1]);
+    let text = lines(printed).join("\n");
+    assert!(
+        text.contains("the manual meant :0110308000030600000000000036:"),
+        "{text}"
+    );
+    // Line 1589: the fault log reply, after its request (line 1574).
+    let log = decode_frames(&[":01043044000483", ":0104080079007900000000001"]).remove(1);
+    assert!(!log.valid);
+    let meant = log.meant.as_deref().unwrap();
+    assert!(meant.valid, "{meant:?}");
+    assert_eq!(meant.faults[0].code, "0-12-1");
+    // Line 1662: the cartridge name reply.
+    let name = one(":01040C43204D45434800000000000006F");
+    assert!(!name.valid);
+    assert!(name.meant.as_deref().unwrap().valid);
+    // HPR manual (002_72b43a5685974c77.txt) line 139: HELLO, "HYPERPERFORMANCE".
+    let hello = one(">000HYPERPERFORMANCE130MANUALB5<");
+    assert!(!hello.valid);
+    assert_eq!(
+        hello.error.as_deref(),
+        Some("checksum B5 wrong, should be 9C")
+    );
+    let meant = hello.meant.as_deref().unwrap();
+    assert!(meant.valid);
+    assert_eq!(
+        field(meant, "system"),
+        Some("HPR130 with manual gas console")
+    );
+    // A frame that is not a listed typo has nothing meant.
+    assert!(one(">00091<").meant.is_none());
+    let json = to_json(&hello);
+    assert_eq!(json["meant"]["valid"], true);
+}

@@ -649,6 +649,7 @@ impl<'a> Reply<'a> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::errata;
     use crate::hpr::identity::{GasConsole, HprRating};
 
     /// Parse a seed reply frame, check it equals `expected`, and check that emitting
@@ -676,8 +677,9 @@ mod tests {
 
     #[test]
     fn hello_identities() {
-        // The manual prints `>000HYPERPERFORMANCE130MANUALB5<` etc.; the checksums (B5, 30,
-        // 1E) only match `HYPERFORMANCE`, so the doubled "PER" is a typo. Corrected frames:
+        // HPR manual (002_72b43a5685974c77.txt) line 139 prints `>000HYPERPERFORMANCE130MANUALB5<`
+        // etc.; the checksums (B5, 30, 1E) only match `HYPERFORMANCE`, so the doubled "PER"
+        // is a typo. The frames meant (the errata table's):
         let hpr = |console| {
             Reply::Hello(SystemId::Hpr {
                 rating: HprRating::Hpr130,
@@ -686,18 +688,21 @@ mod tests {
             })
         };
         seed(
-            b">000HYPERFORMANCE130MANUALB5<",
+            errata::HPR_HELLO_MANUAL_CONSOLE.meant.as_bytes(),
             hpr(Some(GasConsole::Manual)),
         );
-        seed(b">000HYPERFORMANCE130AUTO30<", hpr(Some(GasConsole::Auto)));
         seed(
-            b">000HYPERFORMANCE130AUTOMIX1E<",
+            errata::HPR_HELLO_AUTO_CONSOLE.meant.as_bytes(),
+            hpr(Some(GasConsole::Auto)),
+        );
+        seed(
+            errata::HPR_HELLO_AUTOMIX_CONSOLE.meant.as_bytes(),
             hpr(Some(GasConsole::AutoMix)),
         );
         seed(b">000MaxPro20079<", Reply::Hello(SystemId::MaxPro200));
         // As printed, the frames fail their checksum.
         assert_eq!(
-            Frame::parse(b">000HYPERPERFORMANCE130MANUALB5<"),
+            Frame::parse(errata::HPR_HELLO_MANUAL_CONSOLE.printed.as_bytes()),
             Err(Error::BadChecksum {
                 expected: 0x9C,
                 found: 0xB5

@@ -11,6 +11,7 @@
 
 use super::*;
 use crate::Error;
+use crate::errata;
 
 type Bytes = heapless::Vec<u8, 600>;
 
@@ -117,9 +118,9 @@ fn sync_fault_log_request() {
 /// byte count 08 its length).
 #[test]
 fn sync_fault_log_reply() {
-    rejected_as_printed(":0104080079007900000000001", Error::OddLength);
+    rejected_as_printed(errata::SYNC_FAULT_LOG_REPLY.printed, Error::OddLength);
     seed_reply(
-        ":010408007900790000000001",
+        errata::SYNC_FAULT_LOG_REPLY.meant,
         0x01,
         &read_input(0x3044, 4),
         input_values(&[0x0079, 0x0079, 0x0000, 0x0000]),
@@ -287,12 +288,12 @@ fn sync_quick_restart() {
 /// 0x36 confirms the corrected frame.
 #[test]
 fn sync_exit_remote_mode() {
-    rejected_as_printed(":01103080000306000000000000036", Error::OddLength);
+    rejected_as_printed(errata::SYNC_EXIT_REMOTE_MODE.printed, Error::OddLength);
     let request = Request::WriteMultipleRegisters {
         start: 0x3080,
         values: Registers::Words(&[0, 0, 0]),
     };
-    seed_request(":0110308000030600000000000036", 0x01, request);
+    seed_request(errata::SYNC_EXIT_REMOTE_MODE.meant, 0x01, request);
     seed_reply(
         ":0110308000033C",
         0x01,
@@ -378,10 +379,10 @@ fn sync_cartridge_counters() {
 /// NUL bytes need twelve. The recomputed LRC 0x6F confirms the corrected frame.
 #[test]
 fn sync_cartridge_name() {
-    rejected_as_printed(":01040C43204D45434800000000000006F", Error::OddLength);
+    rejected_as_printed(errata::SYNC_CARTRIDGE_NAME_REPLY.printed, Error::OddLength);
     seed_request(":0104304800067D", 0x01, read_input(0x3048, 6));
     seed_reply(
-        ":01040C43204D4543480000000000006F",
+        errata::SYNC_CARTRIDGE_NAME_REPLY.meant,
         0x01,
         &read_input(0x3048, 6),
         input_values(&[0x4320, 0x4D45, 0x4348, 0x0000, 0x0000, 0x0000]),

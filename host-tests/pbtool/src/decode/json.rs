@@ -49,5 +49,6 @@ pub fn to_json(report: &FrameReport) -> Value {
         "notes": report.notes,
         "text": super::lines(report),
         "error": report.error,
+        "meant": report.meant.as_deref().map(to_json),
     })
 }

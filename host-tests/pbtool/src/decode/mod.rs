@@ -202,6 +202,8 @@ pub struct FrameReport {
     pub notes: Vec<String>,
     /// Why the frame is invalid, or what could not be decoded.
     pub error: Option<String>,
+    /// For a manual's sample printed with a typo: the frame the manual meant, decoded.
+    pub meant: Option<Box<FrameReport>>,
 }
 
 impl FrameReport {
@@ -238,10 +240,13 @@ enum Pending {
     Hpr(protocol_hpr::Request),
 }
 
+use plasma_protocol::errata;
 use plasma_protocol::hpr as protocol_hpr;
 
 /// Decodes frames given as separate arguments, in order; a frame right after a request is
-/// checked as its reply.
+/// checked as its reply. A manual's sample printed with a typo is decoded as given (and is
+/// invalid), and the frame the manual meant is decoded beside it ([`FrameReport::meant`]) and
+/// read in the light of the request before it.
 pub fn decode_frames<S: AsRef<str>>(inputs: &[S]) -> Vec<FrameReport> {
     let mut pending: Option<Pending> = None;
     inputs
@@ -250,33 +255,51 @@ pub fn decode_frames<S: AsRef<str>>(inputs: &[S]) -> Vec<FrameReport> {
             let mut report = FrameReport::new(input.as_ref());
             let frame = clean(input.as_ref(), &mut report);
             report.frame = frame.clone();
-            pending = match frame.as_bytes().first() {
-                Some(b':') => {
-                    report.protocol = Some(Protocol::ModbusAscii);
-                    let previous = match &pending {
-                        Some(Pending::Modbus(request)) => Some(request),
-                        _ => None,
-                    };
-                    modbus::decode(&frame, previous, &mut report).map(Pending::Modbus)
+            let next = decode_one(&frame, pending.as_ref(), &mut report);
+            pending = match errata::erratum_for(&frame) {
+                Some(erratum) => {
+                    report.note(format!(
+                        "{} is printed with a typo: {}; the manual meant {}",
+                        erratum.sample, erratum.why, erratum.meant
+                    ));
+                    let mut meant = FrameReport::new(erratum.meant);
+                    meant.frame = erratum.meant.to_owned();
+                    let next = decode_one(erratum.meant, pending.as_ref(), &mut meant);
+                    report.meant = Some(Box::new(meant));
+                    next
                 }
-                Some(b'>') => {
-                    report.protocol = Some(Protocol::Hpr);
-                    let previous = match &pending {
-                        Some(Pending::Hpr(request)) => Some(request),
-                        _ => None,
-                    };
-                    hpr::decode(&frame, previous, &mut report).map(Pending::Hpr)
-                }
-                _ => {
-                    report.fail(
-                        "not a frame: Modbus ASCII frames start with ':', HPR frames with '>'",
-                    );
-                    None
-                }
+                None => next,
             };
             report
         })
         .collect()
+}
+
+/// Decodes one cleaned frame into `report`; returns the request to match the next frame
+/// against.
+fn decode_one(frame: &str, pending: Option<&Pending>, report: &mut FrameReport) -> Option<Pending> {
+    match frame.as_bytes().first() {
+        Some(b':') => {
+            report.protocol = Some(Protocol::ModbusAscii);
+            let previous = match pending {
+                Some(Pending::Modbus(request)) => Some(request),
+                _ => None,
+            };
+            modbus::decode(frame, previous, report).map(Pending::Modbus)
+        }
+        Some(b'>') => {
+            report.protocol = Some(Protocol::Hpr);
+            let previous = match pending {
+                Some(Pending::Hpr(request)) => Some(request),
+                _ => None,
+            };
+            hpr::decode(frame, previous, report).map(Pending::Hpr)
+        }
+        _ => {
+            report.fail("not a frame: Modbus ASCII frames start with ':', HPR frames with '>'");
+            None
+        }
+    }
 }
 
 /// True when every frame is valid (the CLI's exit status 0).

@@ -93,6 +93,10 @@ pub fn lines(report: &FrameReport) -> Vec<String> {
         let text = f.text.as_deref().unwrap_or("not in the error table");
         out.push(format!("error {} {text}", f.code));
     }
+    if let Some(meant) = &report.meant {
+        out.push(format!("the manual meant {}:", meant.frame));
+        out.extend(lines(meant).into_iter().map(|line| format!("  {line}")));
+    }
     out
 }
 
