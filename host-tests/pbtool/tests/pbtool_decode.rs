@@ -524,3 +524,26 @@ fn manual_typos_are_invalid_and_show_what_was_meant() {
     let json = to_json(&hello);
     assert_eq!(json["meant"]["valid"], true);
 }
+
+#[test]
+fn fault_steps_keep_the_tables_three_values() {
+    // SYNC guide (000_dd931256418ae627.txt) line 945: 0-12-1 "No, but recommended"; the
+    // fault log sample of lines 1574 and 1589 (corrected) holds it.
+    let reports = decode_frames(&[":01043044000483", ":010408007900790000000001"]);
+    let low = &reports[1].faults[0];
+    assert_eq!(low.steps_required, Some("no, but recommended"));
+    // Legacy guide (001_0bf4bbd6620a48c8.txt) line 281: 0-12-0 is only in the legacy list
+    // (no action column): taken as required. Read of 0x2098 answered 0x0078 (LRC computed).
+    let reports = decode_frames(&[":01042098000142", ":010402007881"]);
+    assert!(all_valid(&reports), "{reports:?}");
+    let legacy = &reports[1].faults[0];
+    assert_eq!(legacy.code, "0-12-0");
+    assert_eq!(legacy.text.as_deref(), Some("Low input gas pressure"));
+    assert_eq!(
+        (legacy.steps_required, legacy.action_required),
+        (Some("yes"), Some(true))
+    );
+    let value = reports[1].registers[0].value.as_deref().unwrap();
+    assert!(value.ends_with("taken as required)"), "{value}");
+    assert_eq!(to_json(&reports[1])["fault"][0]["steps_required"], "yes");
+}

@@ -96,6 +96,21 @@ impl FaultCode {
         })
     }
 
+    /// What it takes to clear the fault, for a code read from either register family: the
+    /// SYNC table's "Steps Required to Remove?" (Table 6: Yes / No, but recommended / No).
+    ///
+    /// A deliberate choice for the codes the SYNC table does not list: [`StepsRequired::Yes`].
+    /// That covers the three codes only the legacy list has (0-12-0 low input gas pressure,
+    /// 0-19-0 power board hardware protection, 0-99-0 system hardware fault - service
+    /// required), whose list has no action column and calls itself partial, and any code in
+    /// neither table. A fault whose consequence no table states is taken to stop cutting, so
+    /// the bridge refuses a start rather than fire into it; the SYNC rows nearest them agree
+    /// for two of the three (0-19-9 "power PCB hardware protection": Yes; 0-22-0 "no gas
+    /// supply input": Yes), and 0-99-0 says service is required.
+    pub fn steps_required(self) -> StepsRequired {
+        self.info().map_or(StepsRequired::Yes, |info| info.steps)
+    }
+
     /// The description in the legacy Powermax65/85 fault list; 0 reads as "No fault" (the
     /// legacy list has no row for it, the value is the SYNC table's "no active fault").
     pub fn legacy_info(self) -> Option<&'static str> {
@@ -186,6 +201,24 @@ mod tests {
         );
         assert_eq!(text(FaultCode::NONE).as_str(), "0-00-0");
         assert_eq!(text(FaultCode(3700)).as_str(), "3-70-0");
+    }
+
+    #[test]
+    fn steps_required_keeps_the_tables_three_values() {
+        // SYNC guide (000_dd931256418ae627.txt) line 945: 0-12-1 "No, but recommended";
+        // line 948: 0-14-0 "Yes"; line 941: no fault "No".
+        assert_eq!(FaultCode(121).steps_required(), StepsRequired::Recommended);
+        assert_eq!(FaultCode(140).steps_required(), StepsRequired::Yes);
+        assert_eq!(FaultCode(0).steps_required(), StepsRequired::No);
+        // Legacy guide (001_0bf4bbd6620a48c8.txt) lines 281, 283 and 295: codes only the
+        // legacy list has are taken as Yes (the choice documented on `steps_required`).
+        for legacy_only in [120, 190, 990] {
+            let code = FaultCode(legacy_only);
+            assert!(code.info().is_none() && code.legacy_info().is_some());
+            assert_eq!(code.steps_required(), StepsRequired::Yes);
+        }
+        // A code in neither table.
+        assert_eq!(FaultCode(4321).steps_required(), StepsRequired::Yes);
     }
 
     #[test]

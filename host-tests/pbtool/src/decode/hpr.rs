@@ -437,6 +437,7 @@ fn error_code(code: ErrorCode, report: &mut FrameReport) {
         raw: code.0,
         text,
         action_required: None,
+        steps_required: None,
     });
 }
 

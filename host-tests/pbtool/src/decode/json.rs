@@ -45,6 +45,7 @@ pub fn to_json(report: &FrameReport) -> Value {
             "raw": f.raw,
             "text": f.text,
             "action_required": f.action_required,
+            "steps_required": f.steps_required,
         })).collect::<Vec<_>>(),
         "notes": report.notes,
         "text": super::lines(report),

@@ -141,8 +141,12 @@ pub struct Fault {
     pub raw: u16,
     /// The manual's description; `None` for a code the tables do not list.
     pub text: Option<String>,
-    /// SYNC table "Steps Required to Remove?" = Yes; `None` where the table has no such column.
+    /// SYNC table "Steps Required to Remove?" = Yes; `None` for a code no table lists, or an
+    /// HPR error.
     pub action_required: Option<bool>,
+    /// The "Steps Required to Remove?" words (`yes`, `no, but recommended`, `no`); a code only
+    /// the legacy list has reads `yes` (the protocol crate's documented choice).
+    pub steps_required: Option<&'static str>,
 }
 
 /// HPR command id, name and class.

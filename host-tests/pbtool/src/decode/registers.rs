@@ -94,7 +94,7 @@ fn scale(
         ValueKind::Fault => {
             let fault = fault(address, raw);
             let value = match &fault.text {
-                Some(text) => format!("{} {}{}", fault.code, text, steps_suffix(address, raw)),
+                Some(text) => format!("{} {}{}", fault.code, text, steps_suffix(raw)),
                 None => format!("{} (not in the fault tables)", fault.code),
             };
             report.faults.push(fault);
@@ -139,31 +139,43 @@ fn scale(
 fn fault(address: u16, raw: u16) -> Fault {
     let code = FaultCode(raw);
     let sync_row = code.info();
-    let (text, action_required) = match (is_legacy(address), sync_row, code.legacy_info()) {
-        (true, _, Some(text)) => (Some(text.to_owned()), None),
-        (_, Some(info), _) => (Some(info.text.to_owned()), Some(info.action_required())),
-        (false, None, Some(text)) => (Some(text.to_owned()), None),
-        (_, None, None) => (None, None),
+    let text = match (is_legacy(address), sync_row, code.legacy_info()) {
+        (true, _, Some(text)) | (false, None, Some(text)) => Some(text.to_owned()),
+        (_, Some(info), _) => Some(info.text.to_owned()),
+        (_, None, None) => None,
     };
+    // The steps the bridge goes by: the SYNC row's, or the crate's documented choice for a
+    // code it has no row for (the legacy list has no steps column).
+    let steps = Some(code.steps_required());
     Fault {
         address: Some(address),
         code: code.to_string(),
         raw,
         text,
-        action_required,
+        action_required: steps.map(|s| s == StepsRequired::Yes),
+        steps_required: steps.map(steps_word),
     }
 }
 
-fn steps_suffix(address: u16, raw: u16) -> &'static str {
-    if is_legacy(address) && FaultCode(raw).legacy_info().is_some() {
+/// The SYNC table's words for a steps value.
+fn steps_word(steps: StepsRequired) -> &'static str {
+    match steps {
+        StepsRequired::Yes => "yes",
+        StepsRequired::Recommended => "no, but recommended",
+        StepsRequired::No => "no",
+    }
+}
+
+fn steps_suffix(raw: u16) -> &'static str {
+    let code = FaultCode(raw);
+    if raw == 0 {
         return "";
     }
-    match FaultCode(raw).info().map(|i| i.steps) {
-        _ if raw == 0 => "",
-        Some(StepsRequired::Yes) => " (action required)",
-        Some(StepsRequired::Recommended) => " (no action required, but recommended)",
-        Some(StepsRequired::No) => " (no action required)",
-        None => "",
+    match (code.info(), code.steps_required()) {
+        (None, _) => " (action required: the SYNC table has no row for it, taken as required)",
+        (Some(_), StepsRequired::Yes) => " (action required)",
+        (Some(_), StepsRequired::Recommended) => " (no action required, but recommended)",
+        (Some(_), StepsRequired::No) => " (no action required)",
     }
 }
 
