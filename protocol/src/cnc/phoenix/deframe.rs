@@ -513,6 +513,39 @@ mod tests {
         assert!(!rx.in_frame());
     }
 
+    /// Phoenix manual (003_610fea73110d789e.txt) lines 7204-7217: format 0 adds nothing, 1
+    /// appends CR (0x0D) LF (0x0A), 16 appends the XOR check byte, 17 both; line 7279: a
+    /// type-22 message waits for ACK (0x06). The wire carries no message type, so each
+    /// message a receiver takes in its configured format is one to ACK (types 20 and 21 do
+    /// not wait for it): here every format yields the payload of `(>22,<f><FAULT)`.
+    #[test]
+    fn formats_0_1_16_17_as_the_manual_lists_them() {
+        // "FAULT": F^A^U^L^T = 0x4A.
+        let cases: [(u8, &[u8]); 4] = [
+            (0, b"FAULT"),
+            (1, b"FAULT\r\n"),
+            (16, b"FAULT\x4A"),
+            (17, b"FAULT\r\n\x4A"),
+        ];
+        for (value, wire) in cases {
+            let format = fmt(value);
+            let mut out = [0u8; 16];
+            let n = super::super::frame(format, b"FAULT", &mut out).unwrap();
+            assert_eq!(&out[..n], wire, "format {value}");
+            let mut rx = Rx::new(format);
+            let (used, outcome) = rx.feed(wire);
+            assert_eq!(used, wire.len(), "format {value}");
+            let copy =
+                |r: Result<&[u8]>| r.map(|m| heapless::Vec::<u8, 32>::from_slice(m).unwrap());
+            let got = match outcome {
+                Some(r) => Some(copy(r)),
+                // 0 and 16 have no end byte: the message ends when the line goes quiet.
+                None => rx.idle().map(copy),
+            };
+            assert_eq!(got, Some(ok(b"FAULT")), "format {value}");
+        }
+    }
+
     #[test]
     fn push_and_feed_agree() {
         let wire = b"\x01\x02AB\r\n\x03\x04\x03";

@@ -22,6 +22,13 @@
 //! SOH/STX cannot be told apart that way: format 1 (CR LF) *is* a text line, and formats 0, 16
 //! and 17 need a port of their own.
 //!
+//! # Which message to ACK
+//! The message type (20, 21, 22) is in the part program, not on the wire: a type-22 message
+//! is framed like the others and the CNC then waits for [`ACK`]. So a receiver ACKs every
+//! message its [`Deframer`] takes, in any of the sixteen formats (types 20 and 21 do not wait
+//! for it), format 1 included, where a message is a CR LF line: a port expecting format 1
+//! reads its lines as messages, not as text commands.
+//!
 //! # Byte order, where the manual is silent
 //! The manual fixes that CR LF comes right after the message, inside ETX, and that ETX
 //! precedes the check byte. It does not say where SOH/EOT go relative to STX/ETX and the check
