@@ -547,3 +547,38 @@ fn fault_steps_keep_the_tables_three_values() {
     assert!(value.ends_with("taken as required)"), "{value}");
     assert_eq!(to_json(&reports[1])["fault"][0]["steps_required"], "yes");
 }
+
+#[test]
+fn torch_lead_length_of_the_legacy_coils_and_sync_0x3000() {
+    // Legacy guide (001_0bf4bbd6620a48c8.txt) lines 258-271: read 2 coils from 0x0808
+    // (`:010108080002EC`, the OCR'd sample rebuilt with its LRC) and the three responses.
+    for (reply, length) in [
+        (":01010100FD", "15-25 ft (up to 7.6 m)"),
+        (":01010101FC", "35-50 ft (up to 15 m)"),
+        (":01010102FB", "75 ft (up to 23 m)"),
+    ] {
+        let reports = decode_frames(&[":010108080002EC", reply]);
+        assert!(all_valid(&reports), "{reports:?}");
+        assert_eq!(
+            field(&reports[1], "torch lead length"),
+            Some(length),
+            "{reply}"
+        );
+    }
+    // Bits 11 are not in the guide's table (LRC computed).
+    let reports = decode_frames(&[":010108080002EC", ":01010103FA"]);
+    assert_eq!(
+        field(&reports[1], "torch lead length"),
+        Some("bits 11: not a length the legacy guide lists")
+    );
+    // SYNC guide (000_dd931256418ae627.txt) line 607: 0x3000 = 0x0508, machine torch with a
+    // 35-50 ft lead (Table 3) on a Powermax105 SYNC CSA 200-600 V (Table 4); LRCs computed.
+    let reports = decode_frames(&[":010430000001CA", ":0104020508EC"]);
+    assert!(all_valid(&reports), "{reports:?}");
+    let value = reports[1].registers[0].value.as_deref().unwrap();
+    assert!(value.contains("35") && value.contains("50"), "{value}");
+    assert!(
+        value.contains("Powermax105") && value.contains("600"),
+        "{value}"
+    );
+}

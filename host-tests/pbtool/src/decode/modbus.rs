@@ -6,6 +6,7 @@ use plasma_protocol::modbus_ascii::{
 };
 use plasma_protocol::powermax::device_id::{PRODUCT_CODE_OBJECT, model_from_device_id};
 use plasma_protocol::powermax::registers as catalogue;
+use plasma_protocol::powermax::{LeadLength, legacy};
 
 use super::registers::{describe_range, explain_block, explain_one, printable};
 use super::{CoilValue, Field, FrameReport, Function, Kind};
@@ -313,6 +314,19 @@ fn describe_request(request: &Request<'_>, report: &mut FrameReport) {
     }
 }
 
+/// The legacy `torch_index` coils' lead length, in the legacy guide's words.
+fn legacy_lead_length(bits: &[u8]) -> String {
+    match LeadLength::from_legacy_coils(bits) {
+        Ok(LeadLength::Upto7m6) => "15-25 ft (up to 7.6 m)".to_owned(),
+        Ok(LeadLength::Upto15m) => "35-50 ft (up to 15 m)".to_owned(),
+        Ok(LeadLength::Upto23m) => "75 ft (up to 23 m)".to_owned(),
+        Err(_) => {
+            let pair = bits.first().map_or(0, |b| b & 0b11);
+            format!("bits {pair:02b}: not a length the legacy guide lists")
+        }
+    }
+}
+
 fn describe_response(
     response: &Response<'_>,
     request: Option<&Request<'_>>,
@@ -329,6 +343,9 @@ fn describe_response(
                             name: coil_name(address),
                             on: Some(on),
                         });
+                    }
+                    if start == legacy::TORCH_LEAD_BIT0_COIL && quantity >= 2 {
+                        report.field("torch lead length", legacy_lead_length(bits), None);
                     }
                 }
                 _ => {
