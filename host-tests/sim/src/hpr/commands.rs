@@ -195,10 +195,12 @@ impl Hpr {
                     .collect::<Vec<_>>()
                     .join(" "),
             ),
+            // The manual answers both `>1360CA<` and `>1361CB<` with `>1361CB<`: an accept
+            // flag, not an echo of the setting.
             136 if self.is_xd() => match data {
                 "0" | "1" => {
                     self.response_delay = data == "1";
-                    reply(data.into())
+                    reply("1".into())
                 }
                 _ => reply("0".into()),
             },

@@ -89,6 +89,11 @@ fn replies_come_1_to_7_ms_after_the_request_and_faster_on_xd() {
     let (_, due) = talk_at(&mut u, ms(20), ">00292<").unwrap();
     let d = due.saturating_since(ms(20)).as_micros();
     assert!((1_500..=5_300).contains(&d), "{d}");
+    // HPR manual (002_72b43a5685974c77.txt) line 274: disabling is answered `>1361CB<` too
+    // (an accept flag), and the delay is gone.
+    assert_eq!(talk(&mut u, ms(30), ">1360CA<").unwrap(), ">1361CB<");
+    let (_, due) = talk_at(&mut u, ms(40), ">00292<").unwrap();
+    assert!(due <= ms(40) + Duration::from_micros(3_500));
     // Not on a plain HPR.
     let mut u = unit(Model::Hpr130);
     assert_eq!(talk(&mut u, ms(0), ">1361CB<").unwrap(), ">50196<");
