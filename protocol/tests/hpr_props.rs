@@ -3,11 +3,10 @@
 
 use plasma_protocol::Error;
 use plasma_protocol::hpr::{
-    ACK_COMMANDS, Acceptance, ControlData3, CoolantCounts, Decoder, ErrorCode, Frame, GasCode,
-    GasConsole, GasConsoleInputs, GasFlows, GasPair, GasPressures, HprParameters, HprRating,
-    IoStatus, LeakCheckMode, MAX_DATA_LEN, MAX_FRAME_LEN, MaxProParameters, MaxProPressures,
-    MaxProPsInfo, MfgData1, PsInfo, Reply, Request, StateCode, SystemId, TestMode, TimerCounter,
-    TorchId, Version,
+    ACK_COMMANDS, Acceptance, Decoder, ErrorCode, Frame, GasCode, GasConsole, GasFlows, GasPair,
+    GasPressures, HprParameters, HprRating, IoStatus, LeakCheckMode, MAX_DATA_LEN, MAX_FRAME_LEN,
+    MaxProParameters, MaxProPressures, MaxProPsInfo, PsInfo, Reply, Request, StateCode, SystemId,
+    TestMode, TimerCounter, TorchId, Version,
 };
 use proptest::prelude::*;
 
@@ -67,12 +66,6 @@ fn request() -> impl Strategy<Value = Request> {
         Request::ReadErrorLog,
         Request::IsSystemReadyForStart,
         Request::ReadTorchId,
-        Request::GetControlData,
-        Request::ReadGasInputs,
-        Request::ReadCoolantPressure,
-        Request::GetControlData3,
-        Request::GetMfgData1,
-        Request::GetMfgData2,
     ]);
     prop_oneof![
         simple,
@@ -201,23 +194,6 @@ fn reply() -> impl Strategy<Value = Reply<'static>> {
         any::<bool>().prop_map(Reply::ReadyForStart),
         (0u8..=9).prop_map(Reply::SetTestMode),
         psi4().prop_map(|v| Reply::TorchId(TorchId(v))),
-        psi4().prop_map(|v| Reply::CoolantPressure(CoolantCounts(v))),
-        prop::collection::vec(any::<bool>(), 7..=8)
-            .prop_map(|v| Reply::GasConsoleInputs(GasConsoleInputs::new(&v).unwrap())),
-        prop::array::uniform4(psi4()).prop_map(|v| Reply::ControlData3(ControlData3 {
-            chopper_c_temp: v[0],
-            chopper_d_temp: v[1],
-            chopper_c_current: v[2],
-            chopper_d_current: v[3],
-        })),
-        prop::array::uniform6(psi4()).prop_map(|v| Reply::MfgData1(MfgData1 {
-            plasma_pressure: v[0],
-            shield_pressure: v[1],
-            inlet_pressure: v[2],
-            coolant_temp: v[3],
-            chopper_temp: v[4],
-            channel_a_current: v[5],
-        })),
         Just(Reply::BadChecksum),
         Just(Reply::UnknownCommand),
     ]

@@ -4,9 +4,129 @@
 //!
 //! Every tagged field is a tag and four digits (`CAT0482`, `flow0100`), as the manual's
 //! samples and field lists show them; the values are kept raw, in the unit the manual gives.
+//!
+//! Only host tools read these (the bridge never sends the commands), so they are behind the
+//! `diagnostics` feature: the board image leaves them out (1.6 KB of flash).
 
+use super::command::id;
 use super::field::{DataWriter, Fields};
 use crate::{Error, Result};
+
+/// A diagnostic read request; none has data.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum DiagnosticRead {
+    /// 100 GET_CONTROL_DATA.
+    ControlData,
+    /// 117 READ_GAS_INPUTS_FROM_PS.
+    GasInputs,
+    /// 132 READ COOLANT PRESSURE (HPR260).
+    CoolantPressure,
+    /// 133 GET CONTROL DATA3 (HPR400).
+    ControlData3,
+    /// 141 GET MFG DATA1 (MaxPro200).
+    MfgData1,
+    /// 142 GET MFG DATA2 (MaxPro200).
+    MfgData2,
+}
+
+impl DiagnosticRead {
+    /// The command id.
+    pub const fn id(self) -> u16 {
+        match self {
+            DiagnosticRead::ControlData => id::GET_CONTROL_DATA,
+            DiagnosticRead::GasInputs => id::READ_GAS_INPUTS_FROM_PS,
+            DiagnosticRead::CoolantPressure => id::READ_COOLANT_PRESSURE,
+            DiagnosticRead::ControlData3 => id::GET_CONTROL_DATA3,
+            DiagnosticRead::MfgData1 => id::GET_MFG_DATA1,
+            DiagnosticRead::MfgData2 => id::GET_MFG_DATA2,
+        }
+    }
+
+    /// The read with command id `command`, if it is one.
+    pub const fn from_id(command: u16) -> Option<Self> {
+        Some(match command {
+            id::GET_CONTROL_DATA => DiagnosticRead::ControlData,
+            id::READ_GAS_INPUTS_FROM_PS => DiagnosticRead::GasInputs,
+            id::READ_COOLANT_PRESSURE => DiagnosticRead::CoolantPressure,
+            id::GET_CONTROL_DATA3 => DiagnosticRead::ControlData3,
+            id::GET_MFG_DATA1 => DiagnosticRead::MfgData1,
+            id::GET_MFG_DATA2 => DiagnosticRead::MfgData2,
+            _ => return None,
+        })
+    }
+}
+
+/// The reply to a [`DiagnosticRead`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum DiagnosticReply {
+    /// 100, HPR form: chopper, line and coolant readings.
+    ControlData(ControlData),
+    /// 100, MaxPro200 form: 141's and 142's fields.
+    MaxProControlData(MaxProControlData),
+    /// 117: the gas console's inputs.
+    GasConsoleInputs(GasConsoleInputs),
+    /// 132: coolant pressure, raw A/D counts.
+    CoolantPressure(CoolantCounts),
+    /// 133: the HPR400's third and fourth choppers.
+    ControlData3(ControlData3),
+    /// 141: the first half of the MaxPro200's control data.
+    MfgData1(MfgData1),
+    /// 142: the second half of the MaxPro200's control data.
+    MfgData2(MfgData2),
+}
+
+impl DiagnosticReply {
+    /// The command id the reply echoes.
+    pub const fn id(&self) -> u16 {
+        match self {
+            DiagnosticReply::ControlData(_) | DiagnosticReply::MaxProControlData(_) => {
+                id::GET_CONTROL_DATA
+            }
+            DiagnosticReply::GasConsoleInputs(_) => id::READ_GAS_INPUTS_FROM_PS,
+            DiagnosticReply::CoolantPressure(_) => id::READ_COOLANT_PRESSURE,
+            DiagnosticReply::ControlData3(_) => id::GET_CONTROL_DATA3,
+            DiagnosticReply::MfgData1(_) => id::GET_MFG_DATA1,
+            DiagnosticReply::MfgData2(_) => id::GET_MFG_DATA2,
+        }
+    }
+
+    /// The reply of `command` from its `data` (whose fields `f` reads); the caller checks
+    /// that every field was used. [`Error::Unsupported`] for another command.
+    pub(super) fn parse(command: u16, data: &[u8], f: &mut Fields<'_>) -> Result<Self> {
+        let read = DiagnosticRead::from_id(command).ok_or(Error::Unsupported)?;
+        Ok(match read {
+            // Told apart like 079: the MaxPro200's tags are lower case.
+            DiagnosticRead::ControlData if data.first().is_some_and(u8::is_ascii_lowercase) => {
+                DiagnosticReply::MaxProControlData(MaxProControlData::parse(f)?)
+            }
+            DiagnosticRead::ControlData => DiagnosticReply::ControlData(ControlData::parse(f)?),
+            DiagnosticRead::GasInputs => {
+                DiagnosticReply::GasConsoleInputs(GasConsoleInputs::parse(f)?)
+            }
+            DiagnosticRead::CoolantPressure => {
+                DiagnosticReply::CoolantPressure(CoolantCounts(f.number(4, 0, 9999)?))
+            }
+            DiagnosticRead::ControlData3 => DiagnosticReply::ControlData3(ControlData3::parse(f)?),
+            DiagnosticRead::MfgData1 => DiagnosticReply::MfgData1(MfgData1::parse(f)?),
+            DiagnosticRead::MfgData2 => DiagnosticReply::MfgData2(MfgData2::parse(f)?),
+        })
+    }
+
+    pub(super) fn write(&self, w: &mut DataWriter) -> Result<()> {
+        match self {
+            DiagnosticReply::ControlData(d) => d.write(w),
+            DiagnosticReply::MaxProControlData(d) => d.write(w),
+            DiagnosticReply::GasConsoleInputs(inputs) => inputs.write(w),
+            // Unpadded, as the sample `>13280FE<` (80 counts).
+            DiagnosticReply::CoolantPressure(counts) => w.field(counts.0.into(), 1, 4),
+            DiagnosticReply::ControlData3(d) => d.write(w),
+            DiagnosticReply::MfgData1(d) => d.write(w),
+            DiagnosticReply::MfgData2(d) => d.write(w),
+        }
+    }
+}
 
 /// A reply of tagged four-digit fields, written once: the struct, its tags in wire order, and
 /// the parse/write pair.

@@ -30,6 +30,7 @@
 //! ```
 
 pub mod command;
+#[cfg(feature = "diagnostics")]
 mod diagnostics;
 pub mod error_codes;
 mod field;
@@ -46,9 +47,10 @@ mod values;
 #[cfg(feature = "descriptions")]
 pub use command::command_name;
 pub use command::{Class, CommandInfo, classify, command_info, is_allowed};
+#[cfg(feature = "diagnostics")]
 pub use diagnostics::{
-    AUTO_CONSOLE_INPUTS, ControlData, ControlData3, CoolantCounts, GasConsoleInputs,
-    MANUAL_CONSOLE_INPUTS, MaxProControlData, MfgData1, MfgData2,
+    AUTO_CONSOLE_INPUTS, ControlData, ControlData3, CoolantCounts, DiagnosticRead, DiagnosticReply,
+    GasConsoleInputs, MANUAL_CONSOLE_INPUTS, MaxProControlData, MfgData1, MfgData2,
 };
 pub use error_codes::ErrorCode;
 pub use frame::{Decoder, Frame, MAX_DATA_LEN, MAX_FRAME_LEN, checksum};

@@ -8,10 +8,8 @@
 //! flags and 121's test time without padding. Parsing accepts shorter fields too.
 
 use super::command::id;
-use super::diagnostics::{
-    ControlData, ControlData3, CoolantCounts, GasConsoleInputs, MaxProControlData, MfgData1,
-    MfgData2,
-};
+#[cfg(feature = "diagnostics")]
+use super::diagnostics::{DiagnosticRead, DiagnosticReply};
 use super::error_codes::ErrorCode;
 use super::field::{DataWriter, Fields};
 use super::frame::Frame;
@@ -229,22 +227,12 @@ pub enum Reply<'a> {
     InletGases(GasPair),
     /// 099: pressure setpoints, psi.
     GasFlows(GasFlows),
-    /// 100, HPR form: chopper, line and coolant readings.
-    ControlData(ControlData),
-    /// 100, MaxPro200 form: 141's and 142's fields.
-    MaxProControlData(MaxProControlData),
-    /// 117: the gas console's inputs.
-    GasConsoleInputs(GasConsoleInputs),
     /// 121: test duration in seconds; 0 = not accepted.
     LeakCheck(u16),
     /// 122: gas selector switch positions.
     GasSwitch(GasPair),
     /// 125: timers and counters.
     TimerCounter(TimerCounter),
-    /// 132: coolant pressure, raw A/D counts.
-    CoolantPressure(CoolantCounts),
-    /// 133: the HPR400's third and fourth choppers.
-    ControlData3(ControlData3),
     /// 134: the last four errors, most recent first.
     ErrorLog([ErrorCode; 4]),
     /// 138: ready for a start signal.
@@ -252,12 +240,12 @@ pub enum Reply<'a> {
     /// 143: the reply digit. The only sample asks for mode 1 and gets `1`; the manual does
     /// not say whether it is an echo of the mode or an accept flag, so it is kept as is.
     SetTestMode(u8),
-    /// 141: the first half of the MaxPro200's control data.
-    MfgData1(MfgData1),
-    /// 142: the second half of the MaxPro200's control data.
-    MfgData2(MfgData2),
     /// 145: torch id.
     TorchId(TorchId),
+    /// 100, 117, 132, 133, 141, 142: a diagnostic read (host tools only, feature
+    /// `diagnostics`).
+    #[cfg(feature = "diagnostics")]
+    Diagnostic(DiagnosticReply),
     /// 500: the command had a bad checksum.
     BadChecksum,
     /// 501: the command id is unknown.
@@ -420,12 +408,8 @@ impl<'a> Reply<'a> {
             Reply::LeakCheck(_) => id::LEAK_CHECK_MODE,
             Reply::GasSwitch(_) => id::READ_GAS_SWITCH,
             Reply::TimerCounter(_) => id::GET_TIMER_COUNTER,
-            Reply::ControlData(_) | Reply::MaxProControlData(_) => id::GET_CONTROL_DATA,
-            Reply::GasConsoleInputs(_) => id::READ_GAS_INPUTS_FROM_PS,
-            Reply::CoolantPressure(_) => id::READ_COOLANT_PRESSURE,
-            Reply::ControlData3(_) => id::GET_CONTROL_DATA3,
-            Reply::MfgData1(_) => id::GET_MFG_DATA1,
-            Reply::MfgData2(_) => id::GET_MFG_DATA2,
+            #[cfg(feature = "diagnostics")]
+            Reply::Diagnostic(d) => d.id(),
             Reply::ErrorLog(_) => id::READ_ERROR_LOG,
             Reply::ReadyForStart(_) => id::IS_SYSTEM_READY_FOR_START,
             Reply::SetTestMode(_) => id::SET_TEST_MODE,
@@ -487,23 +471,10 @@ impl<'a> Reply<'a> {
                 }
                 Reply::GasFlows(GasFlows::from_array(v))
             }
-            // Told apart like 079: the MaxPro200's tags are lower case.
-            id::GET_CONTROL_DATA => {
-                if data.first().is_some_and(u8::is_ascii_lowercase) {
-                    Reply::MaxProControlData(MaxProControlData::parse(&mut f)?)
-                } else {
-                    Reply::ControlData(ControlData::parse(&mut f)?)
-                }
+            #[cfg(feature = "diagnostics")]
+            command if DiagnosticRead::from_id(command).is_some() => {
+                Reply::Diagnostic(DiagnosticReply::parse(command, data, &mut f)?)
             }
-            id::READ_GAS_INPUTS_FROM_PS => {
-                Reply::GasConsoleInputs(GasConsoleInputs::parse(&mut f)?)
-            }
-            id::READ_COOLANT_PRESSURE => {
-                Reply::CoolantPressure(CoolantCounts(f.number(4, 0, 9999)?))
-            }
-            id::GET_CONTROL_DATA3 => Reply::ControlData3(ControlData3::parse(&mut f)?),
-            id::GET_MFG_DATA1 => Reply::MfgData1(MfgData1::parse(&mut f)?),
-            id::GET_MFG_DATA2 => Reply::MfgData2(MfgData2::parse(&mut f)?),
             id::LEAK_CHECK_MODE => Reply::LeakCheck(f.number(4, 0, 9999)?),
             id::READ_GAS_SWITCH => Reply::GasSwitch(parse_gas_pair(&mut f)?),
             id::GET_TIMER_COUNTER => {
@@ -622,14 +593,8 @@ impl<'a> Reply<'a> {
             Reply::ReadyForStart(ready) => w.field((*ready).into(), 1, 1),
             Reply::SetTestMode(v) => w.field((*v).into(), 1, 1),
             Reply::TorchId(t) => four(w, t.0),
-            Reply::ControlData(d) => d.write(w),
-            Reply::MaxProControlData(d) => d.write(w),
-            Reply::GasConsoleInputs(inputs) => inputs.write(w),
-            // Unpadded, as the sample `>13280FE<` (80 counts).
-            Reply::CoolantPressure(counts) => w.field(counts.0.into(), 1, 4),
-            Reply::ControlData3(d) => d.write(w),
-            Reply::MfgData1(d) => d.write(w),
-            Reply::MfgData2(d) => d.write(w),
+            #[cfg(feature = "diagnostics")]
+            Reply::Diagnostic(d) => d.write(w),
             Reply::BadChecksum | Reply::UnknownCommand => Ok(()),
         }
     }
@@ -650,6 +615,11 @@ impl<'a> Reply<'a> {
 mod tests {
     use super::*;
     use crate::errata;
+    #[cfg(feature = "diagnostics")]
+    use crate::hpr::diagnostics::{
+        ControlData, ControlData3, CoolantCounts, GasConsoleInputs, MaxProControlData, MfgData1,
+        MfgData2,
+    };
     use crate::hpr::identity::{GasConsole, HprRating};
 
     /// Parse a seed reply frame, check it equals `expected`, and check that emitting
@@ -843,12 +813,13 @@ mod tests {
         );
     }
 
+    #[cfg(feature = "diagnostics")]
     #[test]
     fn seed_diagnostic_reads() {
         // HPR manual (002_72b43a5685974c77.txt) line 200: 100 GET_CONTROL_DATA, HPR form.
         seed(
             b">100CAT0482 CBT0021 LVO0118 CFL0009 CTP0481 TTP0481 CAC0001 CBC0014 WLC0005 CAS0000 CBS0534 PWMA0000 PWMB00000B<",
-            Reply::ControlData(ControlData {
+            Reply::Diagnostic(DiagnosticReply::ControlData(ControlData {
                 chopper_a_temp: 482,
                 chopper_b_temp: 21,
                 line_voltage: 118,
@@ -862,27 +833,33 @@ mod tests {
                 chopper_b_setpoint: 534,
                 pwm_chopper_a: 0,
                 pwm_chopper_b: 0,
-            }),
+            })),
         );
         // Line 239: 117 READ_GAS_INPUTS_FROM_PS, seven inputs all off.
         seed(
             b">1170000000E9<",
-            Reply::GasConsoleInputs(GasConsoleInputs::new(&[false; 7]).unwrap()),
+            Reply::Diagnostic(DiagnosticReply::GasConsoleInputs(
+                GasConsoleInputs::new(&[false; 7]).unwrap(),
+            )),
         );
         // Line 266: 132 READ COOLANT PRESSURE, 80 counts ("83 counts = 225 psi").
-        seed(b">13280FE<", Reply::CoolantPressure(CoolantCounts(80)));
+        seed(
+            b">13280FE<",
+            Reply::Diagnostic(DiagnosticReply::CoolantPressure(CoolantCounts(80))),
+        );
         // Line 269: 133 GET CONTROL DATA3 (HPR400).
         seed(
             b">133CCT0482 CDT0021 CCC0000 CDC000050<",
-            Reply::ControlData3(ControlData3 {
+            Reply::Diagnostic(DiagnosticReply::ControlData3(ControlData3 {
                 chopper_c_temp: 482,
                 chopper_d_temp: 21,
                 chopper_c_current: 0,
                 chopper_d_current: 0,
-            }),
+            })),
         );
     }
 
+    #[cfg(feature = "diagnostics")]
     #[test]
     fn maxpro_control_data_is_141_then_142() {
         // No MaxPro200 sample frame exists for 100, 141 or 142 (lines 200, 289, 290): these
@@ -904,9 +881,12 @@ mod tests {
             coolant_flow: 100,
         };
         let mut out = [0u8; 160];
-        let n = Reply::MaxProControlData(MaxProControlData { first, second })
-            .emit(&mut out)
-            .unwrap();
+        let n = Reply::Diagnostic(DiagnosticReply::MaxProControlData(MaxProControlData {
+            first,
+            second,
+        }))
+        .emit(&mut out)
+        .unwrap();
         assert_eq!(
             &out[4..n - 3],
             &b"plap0056 shap0058 icrp0110 colt0300 chpt0310 chac0100 \
@@ -914,14 +894,19 @@ mod tests {
         );
         assert_eq!(
             Reply::parse(&Frame::parse(&out[..n]).unwrap()),
-            Ok(Reply::MaxProControlData(MaxProControlData {
-                first,
-                second
-            }))
+            Ok(Reply::Diagnostic(DiagnosticReply::MaxProControlData(
+                MaxProControlData { first, second }
+            )))
         );
         for (reply, data) in [
-            (Reply::MfgData1(first), &out[4..57]),
-            (Reply::MfgData2(second), &out[58..n - 3]),
+            (
+                Reply::Diagnostic(DiagnosticReply::MfgData1(first)),
+                &out[4..57],
+            ),
+            (
+                Reply::Diagnostic(DiagnosticReply::MfgData2(second)),
+                &out[58..n - 3],
+            ),
         ] {
             let mut half = [0u8; 96];
             let m = reply.emit(&mut half).unwrap();

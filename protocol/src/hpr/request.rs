@@ -8,6 +8,8 @@
 //! refused both ways with [`Error::Malformed`], so the bridge cannot send them.
 
 use super::command::id;
+#[cfg(feature = "diagnostics")]
+use super::diagnostics::DiagnosticRead;
 use super::field::{DataWriter, Fields, field_count};
 use super::frame::Frame;
 use super::gas::GasCode;
@@ -97,10 +99,6 @@ pub enum Request {
     GetInletGases,
     /// 099 GET_GAS_FLOWS.
     GetGasFlows,
-    /// 100 GET_CONTROL_DATA.
-    GetControlData,
-    /// 117 READ_GAS_INPUTS_FROM_PS.
-    ReadGasInputs,
     /// 121 LEAK_CHECK_MODE.
     LeakCheckMode(LeakCheckMode),
     /// 122 READ_GAS_SWITCH.
@@ -123,20 +121,16 @@ pub enum Request {
         /// Plasma and shield gases.
         gases: GasPair,
     },
-    /// 132 READ COOLANT PRESSURE (HPR260).
-    ReadCoolantPressure,
-    /// 133 GET CONTROL DATA3 (HPR400).
-    GetControlData3,
     /// 138 IS SYSTEM READY FOR START (MaxPro200).
     IsSystemReadyForStart,
-    /// 141 GET MFG DATA1 (MaxPro200).
-    GetMfgData1,
-    /// 142 GET MFG DATA2 (MaxPro200).
-    GetMfgData2,
     /// 143 SET TEST MODE (MaxPro200).
     SetTestMode(TestMode),
     /// 145 READ TORCH ID (MaxPro200).
     ReadTorchId,
+    /// 100, 117, 132, 133, 141, 142: a diagnostic read (host tools only, feature
+    /// `diagnostics`).
+    #[cfg(feature = "diagnostics")]
+    ReadDiagnostic(DiagnosticRead),
 }
 
 fn gas(code: GasCode) -> Result<u32> {
@@ -228,8 +222,6 @@ impl Request {
             Request::ReadCornerCurrent => id::READ_CORNER_CURRENT,
             Request::GetInletGases => id::GET_INLET_GASES,
             Request::GetGasFlows => id::GET_GAS_FLOWS,
-            Request::GetControlData => id::GET_CONTROL_DATA,
-            Request::ReadGasInputs => id::READ_GAS_INPUTS_FROM_PS,
             Request::LeakCheckMode(_) => id::LEAK_CHECK_MODE,
             Request::ReadGasSwitch => id::READ_GAS_SWITCH,
             Request::GetTimerCounter => id::GET_TIMER_COUNTER,
@@ -237,13 +229,11 @@ impl Request {
             Request::ReadErrorLog => id::READ_ERROR_LOG,
             Request::SerialResponseDelay { .. } => id::SERIAL_RESPONSE_DELAY,
             Request::SetProcess { .. } => id::SET_PROCESS,
-            Request::ReadCoolantPressure => id::READ_COOLANT_PRESSURE,
-            Request::GetControlData3 => id::GET_CONTROL_DATA3,
             Request::IsSystemReadyForStart => id::IS_SYSTEM_READY_FOR_START,
-            Request::GetMfgData1 => id::GET_MFG_DATA1,
-            Request::GetMfgData2 => id::GET_MFG_DATA2,
             Request::SetTestMode(_) => id::SET_TEST_MODE,
             Request::ReadTorchId => id::READ_TORCH_ID,
+            #[cfg(feature = "diagnostics")]
+            Request::ReadDiagnostic(read) => read.id(),
         }
     }
 
@@ -383,8 +373,6 @@ impl Request {
             id::READ_CORNER_CURRENT => Request::ReadCornerCurrent,
             id::GET_INLET_GASES => Request::GetInletGases,
             id::GET_GAS_FLOWS => Request::GetGasFlows,
-            id::GET_CONTROL_DATA => Request::GetControlData,
-            id::READ_GAS_INPUTS_FROM_PS => Request::ReadGasInputs,
             id::LEAK_CHECK_MODE => {
                 let code: u8 = f.number(1, 0, 3)?;
                 Request::LeakCheckMode(LeakCheckMode::from_code(code).ok_or(Error::Malformed)?)
@@ -400,16 +388,18 @@ impl Request {
                 amps: f.number(3, MIN_AMPS.into(), MAX_MAXPRO_AMPS.into())?,
                 gases: parse_gases(&mut f)?,
             },
-            id::READ_COOLANT_PRESSURE => Request::ReadCoolantPressure,
-            id::GET_CONTROL_DATA3 => Request::GetControlData3,
             id::IS_SYSTEM_READY_FOR_START => Request::IsSystemReadyForStart,
-            id::GET_MFG_DATA1 => Request::GetMfgData1,
-            id::GET_MFG_DATA2 => Request::GetMfgData2,
             id::SET_TEST_MODE => {
                 let code: u8 = f.number(1, 0, 6)?;
                 Request::SetTestMode(TestMode::from_code(code).ok_or(Error::Malformed)?)
             }
             id::READ_TORCH_ID => Request::ReadTorchId,
+            #[cfg(feature = "diagnostics")]
+            command => match DiagnosticRead::from_id(command) {
+                Some(read) => Request::ReadDiagnostic(read),
+                None => return Err(Error::Unsupported),
+            },
+            #[cfg(not(feature = "diagnostics"))]
             _ => return Err(Error::Unsupported),
         };
         if req.has_data() {
@@ -487,14 +477,23 @@ mod tests {
         seed(b">13498<", Request::ReadErrorLog);
         seed(b">1389C<", Request::IsSystemReadyForStart);
         seed(b">1459A<", Request::ReadTorchId);
+    }
+
+    #[cfg(feature = "diagnostics")]
+    #[test]
+    fn seed_diagnostic_reads() {
+        use crate::hpr::diagnostics::DiagnosticRead::*;
         // HPR manual (002_72b43a5685974c77.txt) lines 200, 239, 266 and 269.
-        seed(b">10091<", Request::GetControlData);
-        seed(b">11799<", Request::ReadGasInputs);
-        seed(b">13296<", Request::ReadCoolantPressure);
-        seed(b">13397<", Request::GetControlData3);
+        seed(b">10091<", Request::ReadDiagnostic(ControlData));
+        seed(b">11799<", Request::ReadDiagnostic(GasInputs));
+        seed(b">13296<", Request::ReadDiagnostic(CoolantPressure));
+        seed(b">13397<", Request::ReadDiagnostic(ControlData3));
         // 141 and 142 have no sample (lines 289-290); the checksum is the sum of the id digits.
-        seed(b">14196<", Request::GetMfgData1);
-        seed(b">14297<", Request::GetMfgData2);
+        seed(b">14196<", Request::ReadDiagnostic(MfgData1));
+        seed(b">14297<", Request::ReadDiagnostic(MfgData2));
+        // With data, none of them is a request.
+        let f = Frame::parse(b">13280FE<").unwrap();
+        assert_eq!(Request::parse(&f), Err(Error::Malformed));
     }
 
     #[test]

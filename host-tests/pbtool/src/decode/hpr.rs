@@ -3,9 +3,9 @@
 use plasma_protocol::Error;
 use plasma_protocol::hpr::command::id;
 use plasma_protocol::hpr::{
-    Acceptance, Class, ControlData, ErrorCode, Frame, GasCode, GasConsole, GasFlows, GasPair,
-    GasPressures, HprRating, LeakCheckMode, MfgData1, MfgData2, Reply, Request, StateCode,
-    SystemId, TestMode, checksum, command_info,
+    Acceptance, Class, ControlData, DiagnosticReply, ErrorCode, Frame, GasCode, GasConsole,
+    GasFlows, GasPair, GasPressures, HprRating, LeakCheckMode, MfgData1, MfgData2, Reply, Request,
+    StateCode, SystemId, TestMode, checksum, command_info,
 };
 
 use super::{Command, Fault, FrameReport, Kind};
@@ -237,36 +237,7 @@ fn describe_reply(reply: &Reply<'_>, report: &mut FrameReport) {
             // description of each bit"; the manual has no such listing.
             report.note("the manual names no bit of ports A-F (its IO listing is not printed)");
         }
-        Reply::ControlData(d) => control_data(&d, report),
-        Reply::MaxProControlData(d) => {
-            mfg_data1(&d.first, report);
-            mfg_data2(&d.second, report);
-        }
-        Reply::MfgData1(d) => mfg_data1(&d, report),
-        Reply::MfgData2(d) => mfg_data2(&d, report),
-        Reply::GasConsoleInputs(inputs) => {
-            let console = if inputs.count() == 7 { "manual" } else { "automatic" };
-            report.note(format!(
-                "{} inputs: named from the manual's {console} gas console list",
-                inputs.count()
-            ));
-            for (index, name) in inputs.names().iter().enumerate() {
-                let on = inputs.input(index).unwrap_or(false);
-                report.field(*name, if on { "on" } else { "off" }, None);
-            }
-        }
-        Reply::CoolantPressure(counts) => {
-            report.field("coolant pressure (raw A/D)", counts.0, Some("counts"));
-            let tenths = counts.psi_tenths();
-            report.field("coolant pressure", format!("{}.{}", tenths / 10, tenths % 10), Some("psi"));
-            report.note("psi on the line through the manual's 83 counts = 225 psi and 73 counts = 200 psi");
-        }
-        Reply::ControlData3(d) => {
-            report.field("chopper C temperature (raw A/D)", d.chopper_c_temp, Some("counts"));
-            report.field("chopper D temperature (raw A/D)", d.chopper_d_temp, Some("counts"));
-            report.field("chopper C current", d.chopper_c_current, Some("A"));
-            report.field("chopper D current", d.chopper_d_current, Some("A"));
-        }
+        Reply::Diagnostic(d) => diagnostic(&d, report),
         Reply::PsInfo(info) => {
             pressures(&info.pressures, report);
             report.field("current setpoint", info.current_setpoint, Some("A"));
@@ -329,6 +300,59 @@ fn describe_reply(reply: &Reply<'_>, report: &mut FrameReport) {
             "501: the supply does not know the command id it received (or not on this system); \
              check the id and the supply's firmware revision",
         ),
+    }
+}
+
+fn diagnostic(reply: &DiagnosticReply, report: &mut FrameReport) {
+    match *reply {
+        DiagnosticReply::ControlData(d) => control_data(&d, report),
+        DiagnosticReply::MaxProControlData(d) => {
+            mfg_data1(&d.first, report);
+            mfg_data2(&d.second, report);
+        }
+        DiagnosticReply::MfgData1(d) => mfg_data1(&d, report),
+        DiagnosticReply::MfgData2(d) => mfg_data2(&d, report),
+        DiagnosticReply::GasConsoleInputs(inputs) => {
+            let console = if inputs.count() == 7 {
+                "manual"
+            } else {
+                "automatic"
+            };
+            report.note(format!(
+                "{} inputs: named from the manual's {console} gas console list",
+                inputs.count()
+            ));
+            for (index, name) in inputs.names().iter().enumerate() {
+                let on = inputs.input(index).unwrap_or(false);
+                report.field(*name, if on { "on" } else { "off" }, None);
+            }
+        }
+        DiagnosticReply::CoolantPressure(counts) => {
+            report.field("coolant pressure (raw A/D)", counts.0, Some("counts"));
+            let tenths = counts.psi_tenths();
+            report.field(
+                "coolant pressure",
+                format!("{}.{}", tenths / 10, tenths % 10),
+                Some("psi"),
+            );
+            report.note(
+                "psi on the line through the manual's 83 counts = 225 psi and 73 counts = 200 psi",
+            );
+        }
+        DiagnosticReply::ControlData3(d) => {
+            report.field(
+                "chopper C temperature (raw A/D)",
+                d.chopper_c_temp,
+                Some("counts"),
+            );
+            report.field(
+                "chopper D temperature (raw A/D)",
+                d.chopper_d_temp,
+                Some("counts"),
+            );
+            report.field("chopper C current", d.chopper_c_current, Some("A"));
+            report.field("chopper D current", d.chopper_d_current, Some("A"));
+        }
     }
 }
 
