@@ -5,7 +5,7 @@ use plasma_protocol::powermax::sync::{
     Cartridge, FaultLog, Identification, PermittedModes, PsCounters,
 };
 use plasma_protocol::powermax::{
-    Amps, CartridgeName, FaultCode, OperatingMode, PowerSupplyModel, Pressure, Psi,
+    Amps, CartridgeName, FaultCode, OperatingMode, PowerSupplyModel, Pressure, Psi, StepsRequired,
 };
 
 use plasma_protocol::time::Instant;
@@ -66,11 +66,12 @@ pub enum ActiveFault {
 
 impl ActiveFault {
     /// True when cutting cannot go on until someone acts. Powermax: the SYNC table's
-    /// "Steps required: Yes" (a code the table does not list counts as blocking); HPR: any
+    /// "Steps required: Yes" ([`FaultCode::steps_required`]: a code the table does not list
+    /// counts as blocking); HPR: any
     /// error that is not a warning (codes 1-42 are warnings 131 CLEAR WARNINGS clears).
     pub fn action_required(&self) -> bool {
         match self {
-            ActiveFault::Powermax(code) => code.info().is_none_or(|info| info.action_required()),
+            ActiveFault::Powermax(code) => code.steps_required() == StepsRequired::Yes,
             ActiveFault::Hpr(code) => code.is_error() && !code.is_warning(),
         }
     }

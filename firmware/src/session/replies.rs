@@ -20,7 +20,7 @@ use crate::link::{
     ActiveFault, CommandFailure, CommandOutput, Family, Limits, Model, PsLink, UnitStatus,
 };
 use crate::settings::Process;
-use plasma_protocol::powermax::FaultCode;
+use plasma_protocol::powermax::{FaultCode, StepsRequired};
 
 pub(super) fn help(sim: bool) -> ReplyLine {
     ok_line(|w| {
@@ -159,6 +159,21 @@ fn powermax_limits(limits: &Limits, family: Family) -> ReplyLine {
     })
 }
 
+/// `action=`: a Powermax fault's "Steps Required to Remove?" (SYNC Table 6: Yes / No, but
+/// recommended / No, with the protocol crate's choice for codes the table does not list); an
+/// HPR error is `required` unless it is a warning.
+fn action_word(fault: ActiveFault) -> &'static str {
+    match fault {
+        ActiveFault::Powermax(code) => match code.steps_required() {
+            StepsRequired::Yes => "required",
+            StepsRequired::Recommended => "recommended",
+            StepsRequired::No => "none",
+        },
+        ActiveFault::Hpr(_) if fault.action_required() => "required",
+        ActiveFault::Hpr(_) => "none",
+    }
+}
+
 pub(super) fn fault(
     status: &UnitStatus,
     family: Option<Family>,
@@ -175,11 +190,7 @@ pub(super) fn fault(
                 l,
                 "OK fault={} action={} text={}\r\n",
                 FaultId(fault),
-                if fault.action_required() {
-                    "required"
-                } else {
-                    "none"
-                },
+                action_word(fault),
                 Text(fault_text(fault, family))
             )
         }),

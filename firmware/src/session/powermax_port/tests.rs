@@ -145,9 +145,10 @@ fn a_current_the_unit_refuses_reads_as_0_11_1_and_is_an_event() {
     assert!(rig.writes().is_empty(), "not sent");
     assert_eq!(read(&mut rig, 0x2098), 111, "0-11-1");
     // The text protocol shows it as the unit would: FAULT and STATUS.
+    // SYNC guide (000_dd931256418ae627.txt) line 943: 0-11-1 "No, but recommended".
     let fault = rig.cmd("FAULT");
     assert!(
-        fault.starts_with("OK fault=0-11-1 action=none text="),
+        fault.starts_with("OK fault=0-11-1 action=recommended text="),
         "{fault}"
     );
     assert!(rig.cmd("STATUS").contains(" fault=0-11-1 "));
