@@ -24,6 +24,16 @@ pub trait Led {
     fn toggle(&mut self);
 }
 
+/// The board's watchdog, which the stall judge ([`crate::progress::judge`]) feeds while every
+/// task reports progress.
+pub trait Watchdog: Send + 'static {
+    /// Every task is alive: keep the watchdog from resetting.
+    fn feed(&mut self);
+    /// A task stalled and the outputs are already safe: the reset follows (the IWDG's, or
+    /// what stands for it); never completes.
+    fn expire(self) -> impl core::future::Future<Output = ()> + Send;
+}
+
 /// A board: the types the tasks run over, and the few facts they need from it.
 pub trait Board: 'static {
     /// The inputs.
@@ -38,6 +48,8 @@ pub trait Board: 'static {
     type CncUart: ConfigurablePort<Error: defmt::Format>;
     /// The CNC UART's transmit buffer: the bridge writes output in pieces of at most this.
     const CNC_TX_BUFFER: usize;
+    /// The watchdog the stall judge feeds.
+    type Watchdog: Watchdog;
     /// The flash the settings are stored in.
     type SettingsFlash: NorFlash;
 

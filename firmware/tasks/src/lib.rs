@@ -6,10 +6,12 @@
 //! LED, the power-supply and CNC UARTs, the settings flash and its read errors. The tasks are
 //! generic over it; `#[embassy_executor::task]` functions cannot be, so each board expands
 //! [`board_tasks!`] with its board type, which declares the thin task wrappers around
-//! [`io::run`], [`bridge::run`], [`settings::run`] and [`progress::heartbeat`] ([`tasks`]). A board also brings, outside the trait: its
-//! executors and interrupt priorities, its watchdog (fed while [`progress::should_feed`]
-//! says so), its fault handlers (which call [`safe_state::drive_safe_state`] and
-//! [`reset::mark_panic`]), and the defmt global logger it links.
+//! [`io::run`], [`bridge::run`], [`settings::run`], [`progress::heartbeat`] and
+//! [`progress::judge`] ([`tasks`]), and the `start_tasks` that puts each in its executor at
+//! its priority ([`layout`], the same for every board). A board also brings, outside the
+//! trait: its thread executor, its fault handlers (which call
+//! [`safe_state::drive_safe_state`] and [`reset::mark_panic`]), and the defmt global logger
+//! it links.
 //!
 //! No HAL code here, and register code only where both chips are the same ([`chip`]): the
 //! register-level safe state, from the pin table `plasma_firmware::pins`, and the reset cause.
@@ -26,6 +28,7 @@ pub mod chip;
 pub mod clock;
 pub mod edges;
 pub mod io;
+pub mod layout;
 pub mod progress;
 pub mod reset;
 pub mod safe_state;

@@ -1,16 +1,17 @@
-//! Task progress for the watchdog (`plasma_firmware::watchdog::ProgressMonitor`), and the
-//! heartbeat LED. The board's watchdog task asks [`should_feed`] before every feed.
+//! Task progress for the watchdog (`plasma_firmware::watchdog::ProgressMonitor`), the stall
+//! judge that feeds the board's watchdog while every task reports ([`judge`]), and the
+//! heartbeat LED.
 
 use core::cell::RefCell;
 
-use defmt::error;
+use defmt::{error, warn};
 use embassy_sync::blocking_mutex::Mutex;
 use embassy_sync::blocking_mutex::raw::CriticalSectionRawMutex;
 use embassy_time::Timer;
 use plasma_firmware::watchdog::{ProgressMonitor, TaskId};
 use plasma_protocol::time::Duration;
 
-use crate::board::Led;
+use crate::board::{Led, Watchdog};
 use crate::clock::now;
 use crate::safe_state::trip_fail_safe;
 
@@ -63,4 +64,35 @@ pub async fn heartbeat(mut led: impl Led, progress: TaskId) {
         report(progress);
         Timer::after_millis(500).await;
     }
+}
+
+/// How often the judge looks at the tasks and feeds the watchdog.
+const FEED_PERIOD: embassy_time::Duration = embassy_time::Duration::from_millis(100);
+
+/// The stall judge, the body of the board's judge task (on its own executor above every task
+/// it judges: `crate::layout`): feeds `watchdog` while [`should_feed`]; when a task stalls,
+/// the outputs go safe at once and `watchdog` expires.
+///
+/// A round in which the judge itself woke more than a feed period late is not judged: every
+/// task looks late after a jump of the clock (the emulated board's guest clock jumps when the
+/// host stops QEMU), so the tasks get one more period. Only a jump, or interrupts held off
+/// that long, make the judge late; a task that really stalled is caught a round later.
+pub async fn judge(mut watchdog: impl Watchdog) {
+    loop {
+        watchdog.feed();
+        let due = embassy_time::Instant::now() + FEED_PERIOD;
+        Timer::at(due).await;
+        let late = embassy_time::Instant::now().saturating_duration_since(due);
+        if late > FEED_PERIOD {
+            warn!(
+                "the stall judge woke {=u64} ms late: progress not judged this round",
+                late.as_millis()
+            );
+            continue;
+        }
+        if !should_feed() {
+            break;
+        }
+    }
+    watchdog.expire().await
 }

@@ -1,20 +1,23 @@
 //! The board's task wrappers, written once: `#[embassy_executor::task]` functions cannot be
 //! generic, so each board expands [`board_tasks!`](crate::board_tasks) with its [`Board`]
-//! type, which declares the four tasks with that board's concrete types. Each wrapper returns
+//! type, which declares the five tasks with that board's concrete types, and `start_tasks`,
+//! which spawns each in the executor [`layout`](crate::layout) gives it. Each wrapper returns
 //! the shared body's future rather than being an `async fn` around `.await`: that future would
 //! keep the arguments twice (its own and the body's).
 //!
 //! [`Board`]: crate::Board
 
-/// Declares, in the calling module, the board's four tasks around the shared bodies:
+/// Declares, in the calling module, the board's five tasks around the shared bodies:
 /// `io_task` ([`io::run`](crate::io::run)), `bridge_task` ([`bridge::run`](crate::bridge::run)),
-/// `settings_task` ([`settings::run`](crate::settings::run)) and `heartbeat_task`
-/// ([`progress::heartbeat`](crate::progress::heartbeat)), with the types of `$board` (a
-/// [`Board`](crate::Board)). The calling crate depends on `embassy-executor`.
+/// `settings_task` ([`settings::run`](crate::settings::run)), `heartbeat_task`
+/// ([`progress::heartbeat`](crate::progress::heartbeat)) and `judge_task`
+/// ([`progress::judge`](crate::progress::judge)), with the types of `$board` (a
+/// [`Board`](crate::Board)), and `start_tasks`, the one task layout
+/// ([`layout`](crate::layout)). The calling crate depends on `embassy-executor`.
 ///
 /// ```ignore
 /// plasma_tasks::board_tasks!(Nucleo);
-/// spawner.spawn(heartbeat_task(led, progress).unwrap());
+/// start_tasks(thread_spawner, tasks);
 /// ```
 #[macro_export]
 macro_rules! board_tasks {
@@ -58,6 +61,45 @@ macro_rules! board_tasks {
             progress: ::plasma_firmware::watchdog::TaskId,
         ) -> impl ::core::future::Future<Output = ()> {
             $crate::progress::heartbeat(led, progress)
+        }
+
+        /// The stall judge ([`plasma_tasks::progress::judge`]).
+        #[::embassy_executor::task]
+        pub fn judge_task(
+            watchdog: <$board as $crate::Board>::Watchdog,
+        ) -> impl ::core::future::Future<Output = ()> {
+            $crate::progress::judge(watchdog)
+        }
+
+        /// Spawns every task in its executor ([`plasma_tasks::layout`]): the I/O task on the
+        /// I/O executor, bridge, settings and heartbeat on `thread`, then the stall judge on
+        /// its executor above them all, once every task it judges is registered. A spawn
+        /// fails only if a task is spawned twice, a build mistake: panic = safe state.
+        pub fn start_tasks(
+            thread: ::embassy_executor::Spawner,
+            tasks: $crate::layout::Tasks<$board>,
+        ) {
+            use $crate::layout;
+            use $crate::progress::register;
+            let io = register("io", layout::IO_DEADLINE);
+            let bridge = register("bridge", layout::BRIDGE_DEADLINE);
+            let settings = register("settings", layout::SETTINGS_DEADLINE);
+            let heartbeat = register("heartbeat", layout::HEARTBEAT_DEADLINE);
+            layout::io_executor()
+                .spawn(io_task(tasks.inputs, tasks.outputs, tasks.io_config, io).unwrap());
+            thread.spawn(
+                bridge_task(
+                    tasks.bridge,
+                    tasks.ps,
+                    tasks.cnc,
+                    $crate::io::BoardIo,
+                    bridge,
+                )
+                .unwrap(),
+            );
+            thread.spawn(settings_task(tasks.store, settings).unwrap());
+            thread.spawn(heartbeat_task(tasks.led, heartbeat).unwrap());
+            layout::judge_executor().spawn(judge_task(tasks.watchdog).unwrap());
         }
     };
 }

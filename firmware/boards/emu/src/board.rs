@@ -19,6 +19,7 @@ impl Board for Emulated {
     type CncUart = ProbedCnc;
     /// The shared driver's transmit ring, as on the Nucleo.
     const CNC_TX_BUFFER: usize = plasma_tasks::uart::TX_CAPACITY;
+    type Watchdog = crate::watchdog::SoftWatchdog;
     type SettingsFlash = SettingsFlash;
 
     /// The RAM model has no ECC: no read errors.
@@ -27,5 +28,5 @@ impl Board for Emulated {
     }
 }
 
-// io_task, bridge_task, settings_task, heartbeat_task.
+// io_task, bridge_task, settings_task, heartbeat_task, judge_task and start_tasks.
 plasma_tasks::board_tasks!(Emulated);

@@ -14,7 +14,9 @@
 //! - USART1 (power supply, hardware DE) and USART2 (CNC): the shared register-level driver
 //!   (`plasma_tasks::uart`), as on the Nucleo;
 //! - [`flash`]: the settings store on a RAM model of the flash;
-//! - [`watchdog`]: the progress check of the Nucleo, with a software reset for the IWDG;
+//! - the tasks in the executors and at the priorities of the Nucleo's, one layout
+//!   (`plasma_tasks::layout`), so the tests here prove the Nucleo's arrangement;
+//! - [`watchdog`]: a software reset where the Nucleo has the IWDG, after the same stall judge;
 //! - [`executor`]: the thread executor with sleep accounting, and [`probe`]: the latency
 //!   and idle measurements;
 //! - [`fault`]: panic and HardFault leave every output off and reset;
@@ -59,33 +61,24 @@ mod image {
     use cortex_m::peripheral::NVIC;
     use defmt::{info, warn};
     use defmt_semihosting as _;
-    use embassy_executor::{InterruptExecutor, Spawner};
+    use embassy_executor::Spawner;
     use plasma_firmware::bridge::Bridge;
     use plasma_firmware::io::InputConfig;
     use plasma_firmware::safe_state::BootReport;
-    use plasma_protocol::time::Duration;
     use plasma_tasks::boot::boot_text;
     use plasma_tasks::clock::now;
-    use plasma_tasks::io::BoardIo;
-    use plasma_tasks::progress::register;
+    use plasma_tasks::layout::{Tasks, set_serial_priorities};
     use plasma_tasks::reset;
     use plasma_tasks::safe_state::drive_safe_state;
     use plasma_tasks::settings as shared_settings;
     use static_cell::StaticCell;
     use stm32_metapac::{Interrupt, USART1, USART2, interrupt};
 
-    use crate::board::{Emulated, bridge_task, heartbeat_task, io_task, settings_task};
+    use crate::board::{Emulated, start_tasks};
     use crate::flash::{SETTINGS_SIZE, SettingsFlash};
     use crate::gpio::{InputPins, Led, OutputPins};
     use crate::{executor, probe, rcc, reset_flags, time_driver, watchdog};
     use plasma_tasks::uart::{Uart, UartState, on_interrupt};
-
-    /// NVIC priorities as on the Nucleo (4 bits, upper nibble): EXTI and SysTick 0, the I/O
-    /// executor 1, the USARTs 4. The watchdog's executor stands in for the IWDG, which no
-    /// task can block: 0, above every task.
-    const WATCHDOG_PRIORITY: u8 = 0;
-    const IO_EXECUTOR_PRIORITY: u8 = 1 << 4;
-    const SERIAL_PRIORITY: u8 = 4 << 4;
 
     static PS_STATE: UartState = UartState::new();
     static CNC_STATE: UartState = UartState::new();
@@ -102,24 +95,6 @@ mod image {
         if on_interrupt(USART2, &CNC_STATE) {
             time_driver::keep_receiving();
         }
-    }
-
-    /// The I/O task's executor, on the UART4 interrupt as on the Nucleo.
-    static IO_EXECUTOR: InterruptExecutor = InterruptExecutor::new();
-
-    #[interrupt]
-    fn UART4() {
-        // SAFETY: called from its own interrupt only, after it was started below.
-        unsafe { IO_EXECUTOR.on_interrupt() }
-    }
-
-    /// The watchdog task's executor, on the unused USART3 vector (see [`watchdog`]).
-    static WATCHDOG_EXECUTOR: InterruptExecutor = InterruptExecutor::new();
-
-    #[interrupt]
-    fn USART3() {
-        // SAFETY: called from its own interrupt only, after it was started below.
-        unsafe { WATCHDOG_EXECUTOR.on_interrupt() }
     }
 
     static BRIDGE: StaticCell<Bridge> = StaticCell::new();
@@ -156,23 +131,12 @@ mod image {
             );
         }
 
+        // Serial interrupts below the I/O executor, as on the Nucleo.
+        set_serial_priorities();
         executor::run(
-            |spawner| start(spawner, boot, &mut core.NVIC),
+            |spawner| spawner.spawn(boot_task(spawner, boot).unwrap()),
             probe::report,
         )
-    }
-
-    /// Everything after the clocks, in the thread executor (the settings load is async).
-    fn start(spawner: Spawner, boot: BootReport, nvic: &mut NVIC) {
-        // SAFETY: priorities are set before the interrupts are unmasked; no priority-based
-        // critical sections exist in this image.
-        unsafe {
-            nvic.set_priority(Interrupt::USART3, WATCHDOG_PRIORITY);
-            nvic.set_priority(Interrupt::UART4, IO_EXECUTOR_PRIORITY);
-            nvic.set_priority(Interrupt::USART1, SERIAL_PRIORITY);
-            nvic.set_priority(Interrupt::USART2, SERIAL_PRIORITY);
-        }
-        spawner.spawn(boot_task(spawner, boot).unwrap());
     }
 
     #[embassy_executor::task]
@@ -186,9 +150,7 @@ mod image {
 
         let inputs = InputPins::new(&input_config);
         let outputs = OutputPins::new();
-        let io_progress = register("io", Duration::from_millis(200));
-        let io_spawner = IO_EXECUTOR.start(Interrupt::UART4);
-        io_spawner.spawn(io_task(inputs, outputs, settings.io, io_progress).unwrap());
+        let io_config = settings.io;
 
         // The pin table's UART pins, as wired on the Nucleo; QEMU routes the USARTs to its
         // sockets whatever the pins say.
@@ -217,23 +179,20 @@ mod image {
 
         let bridge = BRIDGE.init_with(|| Bridge::new(settings, now()));
         bridge.set_boot_report(now(), boot_text(&boot, loaded.outcome));
-        spawner.spawn(
-            bridge_task(
+        start_tasks(
+            spawner,
+            Tasks {
+                inputs,
+                outputs,
+                io_config,
                 bridge,
-                ps_uart,
-                probe::ProbedCnc(cnc_uart),
-                BoardIo,
-                register("bridge", Duration::from_millis(500)),
-            )
-            .unwrap(),
+                ps: ps_uart,
+                cnc: probe::ProbedCnc(cnc_uart),
+                store,
+                led: Led::new(),
+                watchdog: watchdog::SoftWatchdog,
+            },
         );
-        spawner.spawn(settings_task(store, register("settings", Duration::from_secs(1))).unwrap());
-        spawner.spawn(
-            heartbeat_task(Led::new(), register("heartbeat", Duration::from_secs(1))).unwrap(),
-        );
-        WATCHDOG_EXECUTOR
-            .start(Interrupt::USART3)
-            .spawn(watchdog::watchdog().unwrap());
         #[cfg(feature = "test-hooks")]
         spawner.spawn(crate::test_hooks::fail_on_request().unwrap());
     }

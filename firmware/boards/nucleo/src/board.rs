@@ -18,6 +18,7 @@ impl Board for Nucleo {
     type CncUart = CncUart;
     /// The shared driver's transmit ring: the bridge writes CNC output in pieces of this.
     const CNC_TX_BUFFER: usize = plasma_tasks::uart::TX_CAPACITY;
+    type Watchdog = crate::watchdog::Iwdg;
     type SettingsFlash = crate::flash::SettingsFlash;
 
     fn flash_errors_seen() -> u32 {
@@ -25,5 +26,5 @@ impl Board for Nucleo {
     }
 }
 
-// io_task, bridge_task, settings_task, heartbeat_task.
+// io_task, bridge_task, settings_task, heartbeat_task, judge_task and start_tasks.
 plasma_tasks::board_tasks!(Nucleo);

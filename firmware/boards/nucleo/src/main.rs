@@ -10,14 +10,16 @@
 //! - boot: outputs to safe state before anything else, reset cause, clocks (80 MHz),
 //!   settings from flash ([`flash`]), the reset cause and the settings outcome handed to the
 //!   bridge for the CNC port (`!BOOT`, `ID`);
-//! - the I/O task on an interrupt executor above all serial work ([`io_executor`]): input
-//!   edges (EXTI, lines armed for good: `plasma_tasks::edges`) to outputs, on the pins of the one pin table ([`pins`]);
-//! - the bridge task in thread mode: the power-supply link on USART1 with hardware
-//!   driver-enable, the CNC session on USART2 ([`cnc_uart`]), both through the shared
-//!   register-level driver (`plasma_tasks::uart`);
-//! - the settings task that stores `CONFIG SAVE` in flash ([`flash`]);
-//! - [`watchdog`]: the IWDG, started before anything that could hang, then fed only while
-//!   every task reports progress; the heartbeat LED;
+//! - the tasks in the executors and at the priorities of the one layout both boards use
+//!   (`plasma_tasks::layout`): the I/O task on an interrupt executor above all serial work,
+//!   input edges (EXTI, lines armed for good: `plasma_tasks::edges`) to outputs, on the pins of
+//!   the one pin table ([`pins`]); the bridge task in thread mode: the power-supply link on
+//!   USART1 with hardware driver-enable, the CNC session on USART2 ([`cnc_uart`]), both through
+//!   the shared register-level driver (`plasma_tasks::uart`); the settings task that stores
+//!   `CONFIG SAVE` in flash ([`flash`]); the heartbeat LED; the stall judge on its own
+//!   executor above every task;
+//! - [`watchdog`]: the IWDG, started before anything that could hang, then fed by the stall
+//!   judge only while every task reports progress;
 //! - [`fault`]: panic, HardFault and NMI leave every output off and reset.
 #![cfg_attr(target_os = "none", no_std)]
 #![cfg_attr(target_os = "none", no_main)]
@@ -36,8 +38,6 @@ mod fault;
 #[cfg(target_os = "none")]
 mod flash;
 #[cfg(target_os = "none")]
-mod io_executor;
-#[cfg(target_os = "none")]
 mod pins;
 #[cfg(target_os = "none")]
 mod watchdog;
@@ -52,19 +52,17 @@ mod image {
     use embassy_stm32::{bind_interrupts, pac};
     use plasma_firmware::bridge::Bridge;
     use plasma_firmware::io::InputConfig;
-    use plasma_protocol::time::Duration;
     use plasma_tasks::boot::boot_text;
     use plasma_tasks::clock::now;
-    use plasma_tasks::io::BoardIo;
-    use plasma_tasks::progress::register;
     use plasma_tasks::reset;
     use plasma_tasks::safe_state::drive_safe_state;
     use plasma_tasks::settings as shared_settings;
     use static_cell::StaticCell;
 
-    use crate::board::{Nucleo, bridge_task, heartbeat_task, io_task, settings_task};
+    use plasma_tasks::layout::{Tasks, set_serial_priorities};
+
+    use crate::board::{Nucleo, start_tasks};
     use crate::cnc_uart::CncUart;
-    use crate::io_executor::{SERIAL_PRIORITY, start_io_executor};
     use crate::pins::{InputPins, OutputPins};
     use plasma_tasks::uart::{Uart, UartState, on_interrupt, route_pins};
 
@@ -134,7 +132,7 @@ mod image {
         drive_safe_state();
         let boot = reset::boot_report();
         // Before clocks, flash and UARTs, any of which could hang: a stalled boot resets.
-        watchdog::start();
+        let iwdg = watchdog::start();
 
         let p = embassy_stm32::init(clock_config());
         // The HAL takes the pins over at the level they already have.
@@ -154,9 +152,7 @@ mod image {
         }
 
         // Serial and flash interrupts below the I/O executor (docs/board.md, START latency).
-        for irq in [interrupt::USART1, interrupt::USART2, interrupt::FLASH] {
-            irq.set_priority(SERIAL_PRIORITY);
-        }
+        set_serial_priorities();
 
         let mut store = flash::open(flash::SettingsFlash::new(embassy_stm32::flash::Flash::new(
             p.FLASH, Irqs,
@@ -168,8 +164,7 @@ mod image {
         let input_config = InputConfig::default();
 
         let inputs = InputPins::new(&input_config);
-        let io_progress = register("io", Duration::from_millis(200));
-        start_io_executor().spawn(io_task(inputs, outputs, settings.io, io_progress).unwrap());
+        let io_config = settings.io;
 
         pac::RCC.apb2enr().modify(|w| w.set_usart1en(true));
         pac::RCC.apb1enr1().modify(|w| w.set_usart2en(true));
@@ -197,20 +192,19 @@ mod image {
 
         let bridge = BRIDGE.init_with(|| Bridge::new(settings, now()));
         bridge.set_boot_report(now(), boot_text(&boot, loaded.outcome));
-        spawner.spawn(
-            bridge_task(
+        start_tasks(
+            spawner,
+            Tasks {
+                inputs,
+                outputs,
+                io_config,
                 bridge,
-                ps_uart,
-                CncUart(cnc_uart),
-                BoardIo,
-                register("bridge", Duration::from_millis(500)),
-            )
-            .unwrap(),
+                ps: ps_uart,
+                cnc: CncUart(cnc_uart),
+                store,
+                led: crate::pins::led(),
+                watchdog: iwdg,
+            },
         );
-        spawner.spawn(settings_task(store, register("settings", Duration::from_secs(1))).unwrap());
-
-        let led = crate::pins::led();
-        spawner.spawn(heartbeat_task(led, register("heartbeat", Duration::from_secs(1))).unwrap());
-        spawner.spawn(watchdog::watchdog().unwrap());
     }
 }

@@ -1,12 +1,10 @@
 //! The independent watchdog (IWDG), by register: started first thing at boot, before the
 //! clocks, the settings load and the UART set-up, any of which could hang; from then on fed
-//! only while every task reports progress (`plasma_tasks::progress`).
+//! by the stall judge (`plasma_tasks::progress::judge`) only while every task reports progress.
 
 use embassy_stm32::pac;
 use embassy_stm32::pac::iwdg::vals::{Key, Pr};
 use embassy_time::Timer;
-
-use plasma_tasks::progress::should_feed;
 
 /// IWDG clock: the LSI, 32 kHz nominal (RM0351; 29.5 to 34 kHz over temperature and parts).
 const LSI_HZ: u32 = 32_000;
@@ -21,11 +19,10 @@ const RELOAD: u16 = {
     assert!(reload <= 0x0FFF, "the IWDG reload is 12 bits");
     reload as u16
 };
-const FEED_PERIOD_MS: u64 = 100;
 
 /// Starts the IWDG (it starts the LSI itself) with a 1 s time-out. Call before anything that
 /// could hang: no task feeds it yet, so a boot that stalls for a second resets.
-pub fn start() {
+pub fn start() -> Iwdg {
     // Halting the core in a debugger must not reset it.
     pac::DBGMCU.apb1fzr1().modify(|w| w.set_iwdg(true));
     let iwdg = pac::IWDG;
@@ -37,21 +34,25 @@ pub fn start() {
     // reset value (LSI / 4, 4095: 512 ms) applies, which is also safe.
     while iwdg.sr().read().0 != 0 {}
     feed();
+    Iwdg(())
 }
 
 fn feed() {
     pac::IWDG.kr().write(|w| w.set_key(Key::RESET));
 }
 
-/// Feeds the IWDG while every task reports progress.
-#[embassy_executor::task]
-pub async fn watchdog() {
-    while should_feed() {
+/// The running IWDG, for the stall judge: only [`start`] makes one.
+pub struct Iwdg(());
+
+impl plasma_tasks::board::Watchdog for Iwdg {
+    fn feed(&mut self) {
         feed();
-        Timer::after_millis(FEED_PERIOD_MS).await;
     }
-    // No more feeds: the IWDG resets the MCU within TIMEOUT_MS.
-    loop {
-        Timer::after_secs(1).await;
+
+    /// No more feeds: the IWDG resets the MCU within [`TIMEOUT_MS`].
+    async fn expire(self) {
+        loop {
+            Timer::after_secs(1).await;
+        }
     }
 }
