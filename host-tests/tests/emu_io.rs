@@ -19,7 +19,7 @@ use common::emu::{
 use host_tests::emu::log::LogLine;
 use host_tests::emu::safety::{GAP_TOLERANCE, START_GAP};
 use host_tests::emu::{Board, BoardOptions, TestHook, Wiring};
-use plasma_firmware::io::{Input, IoEvent, Output};
+use plasma_firmware::io::{Input, IoEvent, Output, Reason};
 use plasma_firmware::safe_state::ResetCause;
 use plasma_sim::Model;
 
@@ -64,7 +64,9 @@ fn start_follows_torch_on_and_keeps_50_ms_between_starts() {
     set(&board, Input::TorchOn, true);
     expect_output(&board, Output::Start, true, EDGE);
     let changes = wait_logged(&board, Output::Start, 5);
-    assert_eq!(changes[4].reason, changes[0].reason, "{changes:?}");
+    // Not changes[0]'s reason: a first TORCH_ON within 50 ms of the I/O task's start waits
+    // out the gap too, which depends on how soon the link came up.
+    assert_eq!(changes[4].reason, Reason::TorchOn.as_str(), "{changes:?}");
     set(&board, Input::TorchOn, false);
     expect_output(&board, Output::Start, false, EDGE);
     board.assert_safe();
