@@ -171,8 +171,12 @@ pub const TEST_PANIC: Pin = Pin::new(Port::C, 11);
 /// Test images only, as [`TEST_PANIC`]: pulled low, the firmware takes a HardFault.
 pub const TEST_HARD_FAULT: Pin = Pin::new(Port::C, 12);
 
+/// Test images only, as [`TEST_PANIC`]: pulled low, the firmware overflows its stack. PC9
+/// (ST morpho CN10-1 on the Nucleo) is free, on EXTI line 9, which no input uses.
+pub const TEST_STACK_OVERFLOW: Pin = Pin::new(Port::C, 9);
+
 /// The test hooks' pins, for the checks that tie them to the rest of the table.
-pub const TEST_HOOKS: [Pin; 3] = [TEST_STALL, TEST_PANIC, TEST_HARD_FAULT];
+pub const TEST_HOOKS: [Pin; 4] = [TEST_STALL, TEST_PANIC, TEST_HARD_FAULT, TEST_STACK_OVERFLOW];
 
 /// A UART's pins (alternate function 7 on both).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]

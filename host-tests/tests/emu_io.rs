@@ -261,3 +261,16 @@ fn a_hard_fault_makes_the_outputs_safe_resets_and_is_reported_at_the_next_boot()
             .is_some_and(|pc| (0x0800_0000..0x0810_0000).contains(&pc))
     });
 }
+
+/// The stack runs off the bottom of SRAM2 (unmapped): the HardFault's own frame cannot be
+/// stacked either, so a handler that pushed on entry would fault again at HardFault priority:
+/// lockup with START on, which the silicon holds until the IWDG resets it and QEMU ends
+/// itself ("qemu: fatal: Lockup: can't escalate 3 to HardFault (current priority -1)"; this
+/// test then fails with "no reset after the StackOverflow", as it did with cortex-m-rt's
+/// `#[exception]` handler).
+#[test]
+fn a_stack_overflow_makes_the_outputs_safe_resets_and_is_reported_at_the_next_boot() {
+    a_fault_while_cutting(TestHook::StackOverflow, |l| {
+        l.text.starts_with("hard fault: stack overflow (sp 0x0fff")
+    });
+}

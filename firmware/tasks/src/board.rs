@@ -55,4 +55,8 @@ pub trait Board: 'static {
 
     /// Read errors the flash reported since the last call (torn writes the store skipped).
     fn flash_errors_seen() -> u32;
+
+    /// On the fault path, after its log line and before the reset: gives the logger time to
+    /// get the line out (interrupts are off).
+    fn drain_log();
 }

@@ -1,12 +1,19 @@
 //! The few STM32L4 registers the tasks touch themselves, the same on the STM32L476RG and the
 //! emulated STM32L475VG (RM0351): the GPIO ports' mode and set/reset registers, for the safe
-//! state before any driver exists and in the fault handlers, RCC's clock enables and reset
-//! flags, and the EXTI lines of the inputs (SYSCFG routing, edge triggers, mask, pending). Addresses of the GPIO ports come from the pin table
+//! state before any driver exists and in the fault handlers, RCC's clock enables, clock tree
+//! and reset flags, and the EXTI lines of the inputs (SYSCFG routing, edge triggers, mask, pending). Addresses of the GPIO ports come from the pin table
 //! (`plasma_firmware::pins::Port::register_block`).
 
 use plasma_firmware::pins::Pin;
 
+use crate::clock_tree::RccSnapshot;
+
 const RCC: usize = 0x4002_1000;
+/// The clock tree's registers ([`rcc_snapshot`]).
+const RCC_CR: usize = RCC;
+const RCC_CFGR: usize = RCC + 0x08;
+const RCC_PLLCFGR: usize = RCC + 0x0C;
+const RCC_CCIPR: usize = RCC + 0x88;
 /// RCC_AHB2ENR: GPIOxEN is bit `port index`.
 const RCC_AHB2ENR: usize = RCC + 0x4C;
 /// RCC_CSR: the reset flags (bits 24..31) and RMVF (bit 23, write 1 to clear them).
@@ -90,6 +97,17 @@ pub fn take_pending_edges() -> u32 {
     let pending = read(EXTI_PR1) & GPIO_LINES;
     write(EXTI_PR1, pending);
     pending
+}
+
+/// The RCC's clock registers as they are now, for [`RccSnapshot`]'s frequencies.
+pub fn rcc_snapshot() -> RccSnapshot {
+    RccSnapshot {
+        cr: read(RCC_CR),
+        cfgr: read(RCC_CFGR),
+        pllcfgr: read(RCC_PLLCFGR),
+        ccipr: read(RCC_CCIPR),
+        csr: read(RCC_CSR),
+    }
 }
 
 /// RCC_CSR as it is now.

@@ -16,24 +16,43 @@
 //! No HAL code here, and register code only where both chips are the same ([`chip`]): the
 //! register-level safe state, from the pin table `plasma_firmware::pins`, and the reset cause.
 //! docs/board.md says what each board puts behind the trait and why they differ.
-#![no_std]
-// MCU only: on the host the crate is empty, so that the workspace builds there.
-#![cfg(target_os = "none")]
+//!
+//! MCU only, but for [`clock_tree`] (pure arithmetic, tested on the host): on the host the
+//! crate holds nothing else, so that the workspace builds there.
+#![cfg_attr(not(test), no_std)]
 #![warn(missing_docs)]
 
+#[cfg(target_os = "none")]
 pub mod board;
+#[cfg(target_os = "none")]
 pub mod boot;
+#[cfg(target_os = "none")]
 pub mod bridge;
+#[cfg(target_os = "none")]
 pub mod chip;
+#[cfg(target_os = "none")]
 pub mod clock;
+pub mod clock_tree;
+#[cfg(target_os = "none")]
 pub mod edges;
+#[cfg(target_os = "none")]
+pub mod hard_fault;
+#[cfg(target_os = "none")]
 pub mod io;
+#[cfg(target_os = "none")]
 pub mod layout;
+#[cfg(target_os = "none")]
 pub mod progress;
+#[cfg(target_os = "none")]
 pub mod reset;
+#[cfg(target_os = "none")]
 pub mod safe_state;
+#[cfg(target_os = "none")]
 pub mod settings;
+#[cfg(target_os = "none")]
 pub mod tasks;
+#[cfg(target_os = "none")]
 pub mod uart;
 
+#[cfg(target_os = "none")]
 pub use board::Board;

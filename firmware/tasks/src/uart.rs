@@ -28,6 +28,8 @@ use core::sync::atomic::{AtomicBool, Ordering};
 use core::task::Poll;
 
 use critical_section::Mutex;
+
+use crate::clock_tree::UsartClock;
 use embassy_sync::waitqueue::AtomicWaker;
 use embedded_io_async::{ErrorKind, ErrorType, Read, ReadReady, Write};
 use heapless::Deque;
@@ -156,15 +158,18 @@ pub const fn runs_every_baud(kernel_clock_hz: u32, bauds: &[u32]) -> bool {
 }
 
 impl Uart {
-    /// Takes `regs` (clocked at `kernel_clock_hz`, pins routed) with `config`; with
-    /// `driver_enable` the USART drives its DE pin (RS-485). The caller unmasks its interrupt.
+    /// Takes `regs` (its clock on, pins routed) with `config`; with `driver_enable` the USART
+    /// drives its DE pin (RS-485). The caller unmasks its interrupt. BRR follows the kernel
+    /// clock the RCC runs (`clock`'s, read now: `crate::clock_tree`), whatever the board meant
+    /// to set; `None` if that clock is unknown or cannot make the baud rate.
     pub fn new(
         regs: Usart,
         state: &'static UartState,
-        kernel_clock_hz: u32,
+        clock: UsartClock,
         config: PortConfig,
         driver_enable: bool,
     ) -> Option<Self> {
+        let kernel_clock_hz = crate::chip::rcc_snapshot().usart_clock_hz(clock)?;
         let mut uart = Uart {
             regs,
             state,

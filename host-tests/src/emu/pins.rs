@@ -76,11 +76,18 @@ pub enum TestHook {
     Panic,
     /// A HardFault (an undefined instruction) in a task.
     HardFault,
+    /// A task recurses until the stack runs off the bottom of SRAM2.
+    StackOverflow,
 }
 
 impl TestHook {
     /// Every hook.
-    pub const ALL: [TestHook; 3] = [TestHook::Stall, TestHook::Panic, TestHook::HardFault];
+    pub const ALL: [TestHook; 4] = [
+        TestHook::Stall,
+        TestHook::Panic,
+        TestHook::HardFault,
+        TestHook::StackOverflow,
+    ];
 
     /// The pin that asks for it.
     pub const fn pin(self) -> Pin {
@@ -88,6 +95,7 @@ impl TestHook {
             TestHook::Stall => pins::TEST_STALL,
             TestHook::Panic => pins::TEST_PANIC,
             TestHook::HardFault => pins::TEST_HARD_FAULT,
+            TestHook::StackOverflow => pins::TEST_STACK_OVERFLOW,
         }
     }
 }

@@ -1,12 +1,15 @@
 //! Panic and HardFault: outputs to safe state first, a marker that survives the reset
-//! (`plasma_tasks::reset`), a log line, reset (SYSRESETREQ, which QEMU models).
+//! (`plasma_tasks::reset`), a log line, reset (SYSRESETREQ, which QEMU models). The
+//! HardFault vector is the Nucleo's (`plasma_tasks::hard_fault`).
 
-use cortex_m_rt::{ExceptionFrame, exception};
 use defmt::error;
+use plasma_tasks::Board;
 
-/// The shared fault path; the semihosting log needs no time to drain.
+use crate::board::Emulated;
+
+/// The shared fault path.
 fn fail(reason: impl FnOnce()) -> ! {
-    plasma_tasks::safe_state::fail(reason, || {})
+    plasma_tasks::safe_state::fail(reason, Emulated::drain_log)
 }
 
 #[panic_handler]
@@ -15,8 +18,4 @@ fn panic(info: &core::panic::PanicInfo) -> ! {
     fail(|| error!("panic: {}", defmt::Display2Format(info)))
 }
 
-#[exception]
-unsafe fn HardFault(frame: &ExceptionFrame) -> ! {
-    let pc = frame.pc();
-    fail(|| error!("hard fault at pc {=u32:#010x}", pc))
-}
+plasma_tasks::hard_fault_handler!(Emulated);

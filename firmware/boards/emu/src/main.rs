@@ -67,6 +67,7 @@ mod image {
     use plasma_firmware::safe_state::BootReport;
     use plasma_tasks::boot::boot_text;
     use plasma_tasks::clock::now;
+    use plasma_tasks::clock_tree::UsartClock;
     use plasma_tasks::layout::{Tasks, set_serial_priorities};
     use plasma_tasks::reset;
     use plasma_tasks::safe_state::drive_safe_state;
@@ -158,14 +159,14 @@ mod image {
         let ps_uart = uart(Uart::new(
             USART1,
             &PS_STATE,
-            rcc::SYSCLK_HZ,
+            UsartClock::Usart1,
             settings.link.modbus_port(),
             true,
         ));
         let cnc_uart = uart(Uart::new(
             USART2,
             &CNC_STATE,
-            rcc::SYSCLK_HZ,
+            UsartClock::Usart2,
             // The saved CNC framing (115200 8N1 unless saved otherwise); CONFIG
             // cnc_baud/cnc_parity/cnc_stop_bits switch it while the board runs.
             settings.cnc_port_config(),

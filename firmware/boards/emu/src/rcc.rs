@@ -7,10 +7,11 @@
 use stm32_metapac::rcc::vals::{Pllm, Plln, Pllr, Pllsrc, Sw};
 use stm32_metapac::{FLASH, RCC};
 
-/// SYSCLK = HCLK = PCLK1 = PCLK2 after [`init`].
+/// SYSCLK = HCLK = PCLK1 = PCLK2 after [`init`], as [`init`] means to set it: the UARTs
+/// program BRR from the clock QEMU's RCC reports (`plasma_tasks::clock_tree`), so the tests
+/// check that arithmetic too; this checks at build time that every baud rate `CONFIG
+/// cnc_baud` accepts runs at the intended clock.
 pub const SYSCLK_HZ: u32 = 80_000_000;
-
-// The USARTs run on SYSCLK: every baud rate `CONFIG cnc_baud` accepts runs on USART2.
 const _: () = assert!(plasma_tasks::uart::runs_every_baud(
     SYSCLK_HZ,
     &plasma_firmware::settings::CNC_BAUDS

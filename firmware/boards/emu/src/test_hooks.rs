@@ -14,6 +14,10 @@
 //!   `udf` is undefined on every Armv7-M core by definition, whereas which addresses fault
 //!   depends on the memory map as modelled (QEMU's STM32L4x5 backs many unmodelled
 //!   peripherals with registers that read as zero), so the hook would test the model.
+//! - `TEST_STACK_OVERFLOW` (PC9): a recursion that runs the stack off the bottom of SRAM2
+//!   (memory.x), where nothing is mapped: the push faults, and so does the stacking of the
+//!   HardFault's own frame, so the handler starts with the stack pointer outside the stack
+//!   (`plasma_tasks::hard_fault`).
 //!
 //! The pins' EXTI lines (on the inputs' EXTI15_10 interrupt) wake the hook task, so it costs
 //! no wake-ups while unused (the idle figures stay those of the plain image).
@@ -21,7 +25,7 @@
 use defmt::warn;
 use embassy_sync::blocking_mutex::raw::CriticalSectionRawMutex;
 use embassy_sync::signal::Signal;
-use plasma_firmware::pins::{Pin, TEST_HARD_FAULT, TEST_HOOKS, TEST_PANIC};
+use plasma_firmware::pins::{Pin, TEST_HARD_FAULT, TEST_HOOKS, TEST_PANIC, TEST_STACK_OVERFLOW};
 use stm32_metapac::gpio::vals::{Idr, Moder, Pupdr};
 
 use crate::gpio::gpio;
@@ -64,6 +68,10 @@ pub async fn fail_on_request() {
             warn!("test hook: undefined instruction now");
             cortex_m::asm::udf()
         }
+        TEST_STACK_OVERFLOW => {
+            warn!("test hook: stack overflow now");
+            overflow_the_stack(0);
+        }
         _ => {
             warn!("test hook: thread mode stalls now");
             loop {
@@ -71,4 +79,13 @@ pub async fn fail_on_request() {
             }
         }
     }
+}
+
+/// Recurses for good, 256 bytes of stack a call (`black_box` keeps the frames real): the
+/// 32 KiB stack overflows after about 128 calls.
+#[allow(unconditional_recursion)]
+#[inline(never)]
+fn overflow_the_stack(depth: u32) -> u32 {
+    let frame = core::hint::black_box([depth; 64]);
+    overflow_the_stack(frame[0] + 1).wrapping_add(frame[63])
 }

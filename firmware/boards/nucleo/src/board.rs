@@ -24,6 +24,10 @@ impl Board for Nucleo {
     fn flash_errors_seen() -> u32 {
         crate::flash::flash_errors_seen()
     }
+
+    fn drain_log() {
+        crate::fault::drain_log()
+    }
 }
 
 // io_task, bridge_task, settings_task, heartbeat_task, judge_task and start_tasks.

@@ -1,18 +1,42 @@
 //! Panic, HardFault and NMI: outputs to safe state first, a marker that survives the reset
-//! (`plasma_tasks::reset`, which reads it back at boot), a log line, reset.
+//! (`plasma_tasks::reset`, which reads it back at boot), a log line, reset. The HardFault
+//! vector is the shared one that survives a stack overflow (`plasma_tasks::hard_fault`).
 
 use core::sync::atomic::{AtomicU32, Ordering};
 
-use cortex_m_rt::{ExceptionFrame, exception};
+use cortex_m::peripheral::DWT;
+use cortex_m_rt::exception;
 use defmt::error;
 use embassy_stm32::pac;
+use plasma_tasks::Board;
+use plasma_tasks::chip::rcc_snapshot;
 
 use crate::flash::{FLASH_BANK2, FLASH_BASE, settings_region};
 
-/// The shared fault path (`plasma_tasks::safe_state::fail`), then ~50 ms for a probe to drain
-/// the RTT buffer before the reset; the outputs are already safe.
+use crate::board::Nucleo;
+
+/// The shared fault path (`plasma_tasks::safe_state::fail`), then [`drain_log`].
 fn fail(reason: impl FnOnce()) -> ! {
-    plasma_tasks::safe_state::fail(reason, || cortex_m::asm::delay(4_000_000))
+    plasma_tasks::safe_state::fail(reason, Nucleo::drain_log)
+}
+
+/// How long the fault path waits for a probe to drain the RTT buffer: 1/20 s.
+const DRAIN_PER_SECOND: u32 = 20;
+
+/// Waits 50 ms for a probe to drain the RTT buffer before the reset (the outputs are already
+/// safe), timed by the cycle counter at the SYSCLK the RCC runs, so it is 50 ms on the 4 MHz
+/// boot clock as at 80 MHz and well inside the IWDG's second. A clock it cannot tell: no
+/// wait (the reset matters more than the line).
+pub fn drain_log() {
+    let Some(sysclk_hz) = rcc_snapshot().sysclk_hz() else {
+        return;
+    };
+    // SAFETY: the fault path, interrupts off; nothing else uses DCB or DWT.
+    let mut core = unsafe { cortex_m::Peripherals::steal() };
+    core.DCB.enable_trace();
+    core.DWT.enable_cycle_counter();
+    let start = DWT::cycle_count();
+    while DWT::cycle_count().wrapping_sub(start) < sysclk_hz / DRAIN_PER_SECOND {}
 }
 
 /// The outcome is the same in every build: safe state, marker (`!BOOT reason=panic`), reset.
@@ -32,11 +56,7 @@ fn panic(info: &core::panic::PanicInfo) -> ! {
     }
 }
 
-#[exception]
-unsafe fn HardFault(frame: &ExceptionFrame) -> ! {
-    let pc = frame.pc();
-    fail(|| error!("hard fault at pc {=u32:#010x}", pc))
-}
+plasma_tasks::hard_fault_handler!(Nucleo);
 
 /// Double ECC errors seen in the settings region (a program cut by a power loss can leave
 /// one), for the log.

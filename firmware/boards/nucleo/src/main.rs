@@ -54,6 +54,7 @@ mod image {
     use plasma_firmware::io::InputConfig;
     use plasma_tasks::boot::boot_text;
     use plasma_tasks::clock::now;
+    use plasma_tasks::clock_tree::UsartClock;
     use plasma_tasks::reset;
     use plasma_tasks::safe_state::drive_safe_state;
     use plasma_tasks::settings as shared_settings;
@@ -91,12 +92,14 @@ mod image {
         config
     }
 
-    /// The USARTs' kernel clock: PCLK1 and PCLK2 (the reset choice in RCC_CCIPR), both
-    /// SYSCLK (80 MHz, [`clock_config`]; the APB prescalers stay at 1).
-    const USART_CLOCK_HZ: u32 = 80_000_000;
-    // Every baud rate `CONFIG cnc_baud` accepts runs on USART2.
+    /// The USARTs' kernel clock [`clock_config`] means to set: PCLK1 and PCLK2 (the reset
+    /// choice in RCC_CCIPR), both SYSCLK (the APB prescalers stay at 1). The UARTs program
+    /// BRR from the clock the RCC actually runs (`plasma_tasks::clock_tree`); this only
+    /// checks at build time that the intended one runs every baud rate `CONFIG cnc_baud`
+    /// accepts.
+    const INTENDED_USART_CLOCK_HZ: u32 = 80_000_000;
     const _: () = assert!(plasma_tasks::uart::runs_every_baud(
-        USART_CLOCK_HZ,
+        INTENDED_USART_CLOCK_HZ,
         &plasma_firmware::settings::CNC_BAUDS
     ));
 
@@ -117,8 +120,8 @@ mod image {
 
     static BRIDGE: StaticCell<Bridge> = StaticCell::new();
 
-    /// A UART with fixed, valid settings; `None` only for a baud rate BRR cannot make at
-    /// 80 MHz, a build mistake: panic = safe state.
+    /// A UART with fixed, valid settings; `None` only for a clock the RCC runs that cannot
+    /// make the baud rate, a build mistake: panic = safe state.
     fn uart(built: Option<Uart>) -> Uart {
         match built {
             Some(uart) => uart,
@@ -172,14 +175,14 @@ mod image {
         let ps_uart = uart(Uart::new(
             pac::USART1,
             &PS_STATE,
-            USART_CLOCK_HZ,
+            UsartClock::Usart1,
             settings.link.modbus_port(),
             true,
         ));
         let cnc_uart = uart(Uart::new(
             pac::USART2,
             &CNC_STATE,
-            USART_CLOCK_HZ,
+            UsartClock::Usart2,
             // The saved CNC framing (115200 8N1 unless saved otherwise); CONFIG
             // cnc_baud/cnc_parity/cnc_stop_bits switch it while the board runs.
             settings.cnc_port_config(),
