@@ -43,6 +43,12 @@ const RX_CAPACITY: usize = 256;
 /// Transmit ring per port: the longest PS frame, or a CNC piece (`Board::CNC_TX_BUFFER`).
 pub const TX_CAPACITY: usize = 256;
 
+/// The most bytes moved between a ring and a caller under one critical section. Every
+/// interrupt waits while one runs (PRIMASK): the I/O executor's START path and the other
+/// USART, whose receiver has no FIFO. Eight bytes keep each section to a couple of hundred
+/// cycles (docs/board.md, "START path latency"), far below one character time.
+const BYTES_PER_CRITICAL_SECTION: usize = 8;
+
 /// Driver-enable assertion and de-assertion time, in 1/16 bit (8 = half a bit, 26 us at
 /// 19200: far more than a transceiver's enable time).
 const DE_TIME: u8 = 8;
@@ -342,34 +348,51 @@ impl Read for Uart {
             if state.overrun.swap(false, Ordering::AcqRel) {
                 return Poll::Ready(Err(UartError::Overrun));
             }
-            critical_section::with(|cs| {
+            // A flagged character first in the ring is reported alone...
+            let flagged = critical_section::with(|cs| {
                 let mut rx = state.rx.borrow(cs).borrow_mut();
-                // A flagged character first in the ring is reported alone...
-                if let Some(Received {
-                    error: Some(error), ..
-                }) = rx.front().copied()
-                {
-                    rx.pop_front();
-                    return Poll::Ready(Err(error));
-                }
-                // ...otherwise the good ones up to the next flagged one.
-                let mut n = 0;
-                for slot in buf.iter_mut() {
-                    match rx.front() {
-                        Some(Received { byte, error: None }) => {
-                            *slot = *byte;
-                            rx.pop_front();
-                            n += 1;
-                        }
-                        _ => break,
+                match rx.front().copied() {
+                    Some(Received {
+                        error: Some(error), ..
+                    }) => {
+                        rx.pop_front();
+                        Some(error)
                     }
+                    _ => None,
                 }
-                if n > 0 {
-                    Poll::Ready(Ok(n))
-                } else {
-                    Poll::Pending
+            });
+            if let Some(error) = flagged {
+                return Poll::Ready(Err(error));
+            }
+            // ...otherwise the good ones up to the next flagged one, a few per critical
+            // section (only this reader takes from the ring; the interrupt only adds).
+            let mut n = 0;
+            for chunk in buf.chunks_mut(BYTES_PER_CRITICAL_SECTION) {
+                let taken = critical_section::with(|cs| {
+                    let mut rx = state.rx.borrow(cs).borrow_mut();
+                    let mut taken = 0;
+                    for slot in chunk.iter_mut() {
+                        match rx.front() {
+                            Some(Received { byte, error: None }) => {
+                                *slot = *byte;
+                                rx.pop_front();
+                                taken += 1;
+                            }
+                            _ => break,
+                        }
+                    }
+                    taken
+                });
+                n += taken;
+                if taken < chunk.len() {
+                    break;
                 }
-            })
+            }
+            if n > 0 {
+                Poll::Ready(Ok(n))
+            } else {
+                Poll::Pending
+            }
         })
         .await
     }
@@ -392,10 +415,22 @@ impl Write for Uart {
         let (regs, state) = (self.regs, self.state);
         poll_fn(|cx| {
             state.tx_waker.register(cx.waker());
-            let n = critical_section::with(|cs| {
-                let mut tx = state.tx.borrow(cs).borrow_mut();
-                buf.iter().take_while(|&&b| tx.push_back(b).is_ok()).count()
-            });
+            // A few bytes per critical section (only this writer adds to the ring; the
+            // interrupt only takes).
+            let mut n = 0;
+            for chunk in buf.chunks(BYTES_PER_CRITICAL_SECTION) {
+                let queued = critical_section::with(|cs| {
+                    let mut tx = state.tx.borrow(cs).borrow_mut();
+                    chunk
+                        .iter()
+                        .take_while(|&&b| tx.push_back(b).is_ok())
+                        .count()
+                });
+                n += queued;
+                if queued < chunk.len() {
+                    break;
+                }
+            }
             if n > 0 {
                 enable(regs, |w| w.set_txeie(true));
                 Poll::Ready(Ok(n))
