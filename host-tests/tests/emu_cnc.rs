@@ -12,7 +12,7 @@ use common::emu::{
     ready_board, set, value,
 };
 use host_tests::emu::Board;
-use plasma_firmware::io::{Input, Output};
+use plasma_firmware::io::{Input, Interlock, IoEvent, Output};
 use plasma_protocol::serial::{Parity, PortConfig, StopBits};
 use plasma_sim::Model;
 use plasma_sim::powermax::Powermax;
@@ -97,8 +97,12 @@ fn a_fault_raised_by_the_unit_reaches_the_cnc_and_holds_start_off() {
     let mut board = ready_board(Model::Sync65);
     assert_eq!(command(&mut board, "EVENTS ON"), "OK events=ON");
     let mark = events_mark(&mut board);
+    let log_mark = board.log().len();
     board.sim().inject_fault(500).unwrap();
     let fault = event(&mut board, mark, "!FAULT 0-50-0", LINK_EVENT);
+    // The board's log says it as the unit's panel does, not as the types are declared.
+    let fault_line = "power supply fault 0-50-0 (action required)";
+    logged(&board, log_mark, fault_line, |l| l == fault_line);
     assert!(fault.len() > "!FAULT 0-50-0 ".len(), "no text: {fault}");
     expect_output(&board, Output::Fault, true, EDGE);
     expect_output(&board, Output::Ready, false, EDGE);
@@ -108,9 +112,17 @@ fn a_fault_raised_by_the_unit_reaches_the_cnc_and_holds_start_off() {
 
     // 0-50-0 requires action: TORCH_ON does not start the torch, and the CNC hears why.
     let mark = events_mark(&mut board);
+    let log_mark = board.log().len();
     set(&board, Input::TorchOn, true);
     expect_held(&board, Output::Start, false, STAYS_OFF);
     event(&mut board, mark, "!START REFUSED reason=fault", EDGE);
+    let refused = IoEvent::StartRefused {
+        reason: Interlock::FaultRequiresAction,
+    };
+    let refused_line = format!(" us: {refused}");
+    logged(&board, log_mark, &refused_line, |l| {
+        l.starts_with("I/O event at ") && l.ends_with(&refused_line)
+    });
 
     // Cleared: the fault is gone, but the refused TORCH_ON stays refused until released.
     let mark = events_mark(&mut board);
@@ -231,4 +243,12 @@ fn the_cnc_framing_follows_config_at_once_and_the_port_answers_modbus_after() {
     framing.stop_bits = StopBits::Two;
     expect_cnc_framing(&board, framing);
     board.assert_safe();
+}
+
+/// Waits for a firmware log line since `mark` for which `matches` holds (`what` names it).
+fn logged(board: &Board, mark: usize, what: &str, matches: impl Fn(&str) -> bool) {
+    board
+        .log()
+        .wait_for(mark, EDGE, |l| matches(&l.text))
+        .unwrap_or_else(|e| panic!("no log line {what:?}: {e}\n{}", board.log().tail(20)));
 }

@@ -9,6 +9,7 @@ use common::emu::{EDGE, LINK, boot, command, expect_output, value};
 use host_tests::emu::usart::KERNEL_CLOCK_HZ as USART_CLOCK_HZ;
 use host_tests::emu::{Board, BoardOptions};
 use plasma_firmware::io::Output;
+use plasma_protocol::powermax::PowerSupplyModel;
 use plasma_protocol::serial::PortConfig;
 use plasma_sim::Model;
 
@@ -32,7 +33,16 @@ fn detect(model: Model, expect_model: &str) -> (Board, String, String) {
 
 #[test]
 fn a_powermax_sync_unit_is_detected() {
-    let (_board, status, id) = detect(Model::Sync65, "Powermax65");
+    let (board, status, id) = detect(Model::Sync65, "Powermax65");
+    // The log names the unit as the guide does, not as the types are declared.
+    let link_up = format!(
+        "link up: {}",
+        PowerSupplyModel::Powermax65_85_105Sync.name()
+    );
+    board
+        .log()
+        .wait_for(0, EDGE, |l| l.text == link_up)
+        .unwrap_or_else(|e| panic!("no {link_up:?} in the log: {e}\n{}", board.log().tail(20)));
     assert_eq!(value(&status, "link"), Some("UP"), "{status}");
     assert_eq!(value(&status, "family"), Some("SYNC"), "{status}");
     assert_eq!(value(&status, "fault"), Some("none"), "{status}");

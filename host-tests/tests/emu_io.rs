@@ -229,7 +229,7 @@ fn a_fault_while_cutting(hook: TestHook, fault_logged: impl Fn(&LogLine) -> bool
 
     // The firmware found TORCH_ON active as it started: held through the reset. The link
     // comes back, and that TORCH_ON does not fire the torch.
-    let held = format!("{:?}", IoEvent::StuckTorchOnAtPowerUp);
+    let held = IoEvent::StuckTorchOnAtPowerUp.to_string();
     board
         .log()
         .wait_for(mark, LINK_EVENT, |l| l.text.ends_with(&held))

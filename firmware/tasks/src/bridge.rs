@@ -11,6 +11,7 @@ use plasma_protocol::serial::PortConfig;
 use crate::Board;
 use crate::clock::EmbassyClock;
 use crate::io::BoardIo;
+use crate::log_text::{FaultName, TurnFailure, UnitName, framing};
 use crate::progress::report;
 use crate::settings::BoardSaver;
 
@@ -34,13 +35,13 @@ pub async fn run<B: Board>(
     loop {
         let turn = supervisor.turn(bridge, &clock).await;
         if let Err(e) = &turn {
-            warn!("serial: {}", e);
+            warn!("serial: {}", TurnFailure(e));
         }
         let now_applied = supervisor.ps().applied_config();
         if now_applied != applied {
             applied = now_applied;
             if let Some(config) = now_applied {
-                debug!("PS UART: {} baud {=str}", config.baud, describe(config));
+                debug!("PS UART: {} baud {=str}", config.baud, framing(config));
             }
         }
         if let Some(now_framing) = supervisor.cnc_framing()
@@ -52,7 +53,7 @@ pub async fn run<B: Board>(
                 info!(
                     "CNC UART: {} baud {=str}",
                     cnc_framing.baud,
-                    describe(cnc_framing)
+                    framing(cnc_framing)
                 );
             }
         }
@@ -81,7 +82,7 @@ impl Seen {
         }
         if now.link_up != self.link_up {
             if now.link_up {
-                info!("link up: {} ({})", status.model, status.family);
+                info!("link up: {}", UnitName(status.model));
             } else {
                 warn!("link down");
             }
@@ -89,9 +90,13 @@ impl Seen {
         if now.fault != self.fault {
             match now.fault {
                 Some(fault) => warn!(
-                    "power supply fault {} (action required: {=bool})",
-                    fault,
-                    fault.action_required()
+                    "power supply fault {}{=str}",
+                    FaultName(fault),
+                    if fault.action_required() {
+                        " (action required)"
+                    } else {
+                        ""
+                    }
                 ),
                 None => info!("power supply fault cleared"),
             }
@@ -100,18 +105,5 @@ impl Seen {
             info!("power supply ready: {=bool}", now.ready);
         }
         *self = now;
-    }
-}
-
-/// Short text for a line setting, for logs.
-fn describe(config: PortConfig) -> &'static str {
-    use plasma_protocol::serial::{Parity, StopBits};
-    match (config.parity, config.stop_bits) {
-        (Parity::None, StopBits::One) => "8N1",
-        (Parity::Even, StopBits::One) => "8E1",
-        (Parity::Odd, StopBits::One) => "8O1",
-        (Parity::None, StopBits::Two) => "8N2",
-        (Parity::Even, StopBits::Two) => "8E2",
-        (Parity::Odd, StopBits::Two) => "8O2",
     }
 }

@@ -28,6 +28,7 @@ use plasma_protocol::time::{Duration, Instant, div_rem_u16};
 use crate::board::{InputPins, OutputPins};
 use crate::clock::{embassy_instant, now};
 use crate::edges::EDGES;
+use crate::log_text::EventText;
 use crate::progress::report;
 use crate::safe_state::drive_outputs;
 
@@ -147,8 +148,10 @@ pub fn log_transitions() {
 /// Thread mode: logs an I/O event as it is passed to the CNC session.
 pub fn log_event(at: Instant, event: IoEvent) {
     match event {
-        IoEvent::ArcOn | IoEvent::ArcOff => debug!("I/O event at {} us: {}", at.as_micros(), event),
-        _ => warn!("I/O event at {} us: {}", at.as_micros(), event),
+        IoEvent::ArcOn | IoEvent::ArcOff => {
+            debug!("I/O event at {} us: {}", at.as_micros(), EventText(event))
+        }
+        _ => warn!("I/O event at {} us: {}", at.as_micros(), EventText(event)),
     }
 }
 

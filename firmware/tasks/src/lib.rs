@@ -42,6 +42,8 @@ pub mod io;
 #[cfg(target_os = "none")]
 pub mod layout;
 #[cfg(target_os = "none")]
+pub mod log_text;
+#[cfg(target_os = "none")]
 pub mod progress;
 #[cfg(target_os = "none")]
 pub mod reset;

@@ -116,7 +116,7 @@ pub async fn run<B: Board>(mut store: Option<Store<B>>, progress: TaskId) {
         };
         match result {
             Ok(()) => info!("settings saved"),
-            Err(e) => warn!("settings not saved: {}", e),
+            Err(e) => warn!("settings not saved: {}", defmt::Display2Format(&e)),
         }
         report_flash_errors::<B>();
         SAVE_RESULT.signal(result);

@@ -54,7 +54,7 @@ const BYTES_PER_CRITICAL_SECTION: usize = 8;
 const DE_TIME: u8 = 8;
 
 /// What a read can report.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, defmt::Format)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum UartError {
     /// A byte arrived before the previous one was read: bytes were lost.
     Overrun,
@@ -66,14 +66,27 @@ pub enum UartError {
     Noise,
 }
 
-impl core::fmt::Display for UartError {
-    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        f.write_str(match self {
+impl UartError {
+    /// What happened, in words (`framing error`).
+    pub const fn as_str(self) -> &'static str {
+        match self {
             UartError::Overrun => "receive overrun",
             UartError::Parity => "parity error",
             UartError::Framing => "framing error",
             UartError::Noise => "noise error",
-        })
+        }
+    }
+}
+
+impl core::fmt::Display for UartError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
+impl defmt::Format for UartError {
+    fn format(&self, f: defmt::Formatter<'_>) {
+        defmt::write!(f, "{=str}", self.as_str())
     }
 }
 

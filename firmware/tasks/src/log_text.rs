@@ -1,0 +1,105 @@
+//! How the board's log names the unit, its faults and the I/O events: the words a person
+//! reads on the unit's panel and in the docs (`link up: Powermax65/85/105 SYNC`, `power supply
+//! fault 0-50-0`, `start refused: link to power supply down`), not the library's types as
+//! `defmt::Format` derives them (`Some(Powermax(Powermax65_85_105Sync))`). The texts are the
+//! library's and the protocol crate's own (`Display`, `name()`), formatted through `core::fmt`
+//! (already in the image for the CNC replies).
+
+use defmt::{Display2Format, Format, Formatter, write};
+use plasma_firmware::io::IoEvent;
+use plasma_firmware::link::{ActiveFault, Model};
+use plasma_firmware::runner::PortError;
+use plasma_firmware::supervisor::TurnError;
+use plasma_protocol::hpr::SystemId;
+use plasma_protocol::serial::{Parity, PortConfig, StopBits};
+
+/// The unit that answered: the model's name (`Powermax65/85/105 SYNC`, `HPR260XD`,
+/// `MaxPro200`, `Powermax` when it did not say which).
+pub struct UnitName(pub Option<Model>);
+
+impl Format for UnitName {
+    fn format(&self, f: Formatter<'_>) {
+        match self.0 {
+            Some(Model::Powermax(model)) => write!(f, "{=str}", model.name()),
+            Some(Model::PowermaxUnidentified) => write!(f, "Powermax"),
+            Some(Model::Hpr(SystemId::MaxPro200)) => write!(f, "MaxPro200"),
+            Some(Model::Hpr(SystemId::Hpr { rating, xd, .. })) => write!(
+                f,
+                "HPR{=u16}{=str}",
+                rating.max_amps(),
+                if xd { "XD" } else { "" }
+            ),
+            None => write!(f, "unknown unit"),
+        }
+    }
+}
+
+/// A fault as the unit shows it: `0-50-0` (Powermax, X-YY-Z) or `error 023 <name>` (HPR,
+/// MaxPro200).
+pub struct FaultName(pub ActiveFault);
+
+impl Format for FaultName {
+    fn format(&self, f: Formatter<'_>) {
+        match self.0 {
+            ActiveFault::Powermax(code) => write!(f, "{}", Display2Format(&code)),
+            ActiveFault::Hpr(code) => write!(
+                f,
+                "error {=u16:03} {=str}",
+                code.0,
+                code.name().unwrap_or("(not in the manual)")
+            ),
+        }
+    }
+}
+
+/// An I/O event in the library's words (`io::IoEvent`'s `Display`).
+pub struct EventText(pub IoEvent);
+
+impl Format for EventText {
+    fn format(&self, f: Formatter<'_>) {
+        write!(f, "{}", Display2Format(&self.0))
+    }
+}
+
+/// A serial port's failure in a bridge turn, naming the port (`CNC port: read failed:
+/// framing error`).
+pub struct TurnFailure<'a, P, C>(pub &'a TurnError<P, C>);
+
+impl<P: Format, C: Format> Format for TurnFailure<'_, P, C> {
+    fn format(&self, f: Formatter<'_>) {
+        match self.0 {
+            TurnError::Ps(PortError::Read(e)) => write!(f, "power-supply port: read failed: {}", e),
+            TurnError::Ps(PortError::Write(e)) => {
+                write!(f, "power-supply port: write failed: {}", e)
+            }
+            TurnError::Ps(PortError::Closed) => write!(f, "power-supply port closed"),
+            TurnError::Ps(PortError::Unsupported(config)) => write!(
+                f,
+                "power-supply port cannot run {=u32} baud {=str}",
+                config.baud,
+                framing(*config)
+            ),
+            TurnError::CncRead(e) => write!(f, "CNC port: read failed: {}", e),
+            TurnError::CncWrite(e) => write!(f, "CNC port: write failed, output lost: {}", e),
+            TurnError::CncClosed => write!(f, "CNC port closed"),
+            TurnError::CncUnsupported(config) => write!(
+                f,
+                "CNC port cannot run {=u32} baud {=str}",
+                config.baud,
+                framing(*config)
+            ),
+        }
+    }
+}
+
+/// A line setting's short form (`8E1`).
+pub fn framing(config: PortConfig) -> &'static str {
+    match (config.parity, config.stop_bits) {
+        (Parity::None, StopBits::One) => "8N1",
+        (Parity::Even, StopBits::One) => "8E1",
+        (Parity::Odd, StopBits::One) => "8O1",
+        (Parity::None, StopBits::Two) => "8N2",
+        (Parity::Even, StopBits::Two) => "8E2",
+        (Parity::Odd, StopBits::Two) => "8O2",
+    }
+}
