@@ -81,7 +81,10 @@ unsafe fn NonMaskableInt() {
         // ECCD is write-1-to-clear.
         pac::FLASH.eccr().modify(|w| w.set_eccd(true));
         let settings = settings_region();
-        if (settings.start + FLASH_BASE..settings.end + FLASH_BASE).contains(&address) {
+        // SYSF_ECC: ADDR_ECC is an offset in system flash (the bootloader), never a setting.
+        if !eccr.sysf_ecc()
+            && (settings.start + FLASH_BASE..settings.end + FLASH_BASE).contains(&address)
+        {
             SETTINGS_ECC_ERRORS.fetch_add(1, Ordering::Relaxed);
             return;
         }

@@ -95,7 +95,15 @@ impl NorFlash for SettingsFlash {
 }
 
 /// The store over the settings region; build.rs checks the region against the page size.
+/// `None` (logged) while the banks are swapped (option bit BFB2 booted bank 2, SYSCFG_MEMRMP
+/// FB_MODE): the region's addresses would then be in the other bank from the one the flash
+/// controller erases, and every save would fail its read-back (docs/board.md).
 pub fn open(flash: SettingsFlash) -> Option<Store<Nucleo>> {
+    plasma_tasks::chip::enable_syscfg_clock();
+    if pac::SYSCFG.memrmp().read().fb_mode() {
+        defmt::error!("flash banks swapped (BFB2 set): settings will not be kept");
+        return None;
+    }
     plasma_tasks::settings::open::<Nucleo>(flash, settings_region())
 }
 

@@ -89,6 +89,11 @@ mod image {
             divr: Some(PllRDiv::DIV2),
         });
         config.rcc.sys = Sysclk::PLL1_R;
+        // No RTC: embassy's default clocks an RTC the bridge never reads from the LSI (the
+        // IWDG keeps the LSI running by itself once started). DBG_SLEEP stays on (embassy's
+        // default): probe-rs reads the RTT buffer while the core sleeps in WFE, and it only
+        // costs power; the bridge never enters Stop or Standby (docs/board.md).
+        config.rcc.ls = embassy_stm32::rcc::LsConfig::off();
         config
     }
 
