@@ -31,7 +31,7 @@ fn stacked_pc(sp: usize) -> Option<u32> {
     let bottom = (&raw const _stack_end) as usize;
     let top = (&raw const _stack_start) as usize;
     let frame_end = sp.checked_add(FRAME_WORDS * 4)?;
-    if sp < bottom || frame_end > top || sp % 4 != 0 {
+    if sp < bottom || frame_end > top || !sp.is_multiple_of(4) {
         return None;
     }
     // SAFETY: an aligned word inside the stack region, which is RAM.

@@ -307,6 +307,23 @@ impl Board {
     /// port again. The safety rules treat the reset as a power-up.
     pub fn reboot_after_reset(&mut self, timeout: Duration) -> Result<Vec<Output>> {
         self.qemu.qmp().wait_status("shutdown", timeout)?;
+        self.restart_stopped(timeout)
+    }
+
+    /// Cuts the power now and brings it back: QEMU stops at once (a reset the harness asks
+    /// for, held), then boots again as [`Board::reboot_after_reset`] does. RAM stays, so the
+    /// emulated settings flash keeps what the cut left, as flash would. Returns the outputs
+    /// that were on at the cut once the firmware has enabled its CNC port again.
+    pub fn cut_power(&mut self, timeout: Duration) -> Result<Vec<Output>> {
+        self.qemu.qmp().hold_guest_resets(true)?;
+        self.qemu.qmp().execute("system_reset")?;
+        self.qemu.qmp().wait_status("shutdown", timeout)?;
+        self.restart_stopped(timeout)
+    }
+
+    /// From a stop at a reset: notes the outputs, resets the machine paused, drives the
+    /// inputs again and starts the core.
+    fn restart_stopped(&mut self, timeout: Duration) -> Result<Vec<Output>> {
         let mut on_at_reset = Vec::new();
         for output in Output::ALL {
             if self.output(output)? {

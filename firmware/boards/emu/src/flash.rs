@@ -1,13 +1,93 @@
-//! Settings "flash" in RAM. QEMU models no FLASH controller, so the store runs on the
-//! library's model of the L4 flash (`plasma_firmware::storage::ram_flash`, 2 KiB pages,
-//! double-word programming), the size of the Nucleo's settings region. `CONFIG SAVE` works
-//! and is read back; the settings last until the board resets (RAM is cleared at boot) or
-//! QEMU exits.
+//! Settings "flash" in RAM that survives a reset, as flash survives a power cut. QEMU models
+//! no FLASH controller, so the store runs on the library's model of the L4 flash
+//! (`plasma_firmware::storage::ram_flash`: 2 KiB pages, double-word programming), the size of
+//! the Nucleo's settings region, kept in a `.uninit` section the start-up code does not clear
+//! (QEMU keeps RAM across a reset and zeroes it only when it starts). So `CONFIG SAVE` lasts
+//! until QEMU exits, and a reset in the middle of a save leaves what the silicon would: the
+//! steps done so far, one perhaps torn, none after.
+//!
+//! Each program and erase takes the L4's time (datasheet: 22 ms a page erase, 82 µs a double
+//! word), as an async wait after the step: a save lasts as long as on the Nucleo, and a reset
+//! at a random instant during it cuts it somewhere in the middle.
 
-use plasma_firmware::storage::ram_flash::RamFlash;
+use core::mem::MaybeUninit;
+
+use embassy_time::Timer;
+use embedded_storage_async::nor_flash::{ErrorType, NorFlash, ReadNorFlash};
+use plasma_firmware::storage::ram_flash::{PAGE_SIZE, RamFlash, RamFlashError, WORD_SIZE};
 
 /// The Nucleo's settings region: 8 KiB (memory.x).
 pub const SETTINGS_SIZE: usize = 8192;
 
-/// The flash the settings store writes.
-pub type SettingsFlash = RamFlash<SETTINGS_SIZE>;
+/// Page erase time (STM32L476 datasheet, tERASE typical).
+const PAGE_ERASE_US: u64 = 22_000;
+/// Double-word program time (tPROG typical).
+const WORD_PROGRAM_US: u64 = 82;
+
+/// Marks a [`STORE`] that holds flash contents (QEMU zeroes RAM when it starts: not erased
+/// flash, so the first boot erases the model).
+const KEPT: u32 = 0x464C_5348;
+
+#[unsafe(link_section = ".uninit.EMU_SETTINGS_FLASH")]
+static mut STORE: MaybeUninit<(u32, RamFlash<SETTINGS_SIZE>)> = MaybeUninit::uninit();
+
+/// The flash the settings store writes: the model that outlives resets.
+pub struct SettingsFlash(&'static mut RamFlash<SETTINGS_SIZE>);
+
+impl SettingsFlash {
+    /// The kept flash (erased on QEMU's first boot). Call once.
+    pub fn new() -> Self {
+        // SAFETY: called once, at boot, before anything else uses STORE. Every bit pattern the
+        // previous run can have left is a valid RamFlash (it only ever stores whole valid
+        // values: bytes, counters, flags written as 0 or 1), and a store never marked KEPT is
+        // overwritten before it is read as one.
+        let place = &raw mut STORE;
+        let store = unsafe { &mut *place };
+        let kept = unsafe { (&raw const (*store.as_ptr()).0).read_volatile() } == KEPT;
+        if !kept {
+            store.write((KEPT, RamFlash::new()));
+        }
+        // SAFETY: initialised above or by a previous run.
+        let (_, flash) = unsafe { store.assume_init_mut() };
+        // A cut scheduled by the previous run (none: only tests schedule them) is over.
+        flash.power_cycle();
+        SettingsFlash(flash)
+    }
+}
+
+impl ErrorType for SettingsFlash {
+    type Error = RamFlashError;
+}
+
+impl ReadNorFlash for SettingsFlash {
+    const READ_SIZE: usize = 1;
+
+    async fn read(&mut self, offset: u32, bytes: &mut [u8]) -> Result<(), Self::Error> {
+        self.0.read(offset, bytes).await
+    }
+
+    fn capacity(&self) -> usize {
+        SETTINGS_SIZE
+    }
+}
+
+impl NorFlash for SettingsFlash {
+    const WRITE_SIZE: usize = WORD_SIZE;
+    const ERASE_SIZE: usize = PAGE_SIZE;
+
+    async fn erase(&mut self, from: u32, to: u32) -> Result<(), Self::Error> {
+        for page in (from..to).step_by(PAGE_SIZE) {
+            self.0.erase(page, page + PAGE_SIZE as u32).await?;
+            Timer::after_micros(PAGE_ERASE_US).await;
+        }
+        Ok(())
+    }
+
+    async fn write(&mut self, offset: u32, bytes: &[u8]) -> Result<(), Self::Error> {
+        for (i, word) in bytes.chunks(WORD_SIZE).enumerate() {
+            self.0.write(offset + (i * WORD_SIZE) as u32, word).await?;
+            Timer::after_micros(WORD_PROGRAM_US).await;
+        }
+        Ok(())
+    }
+}
