@@ -6,6 +6,7 @@
 use std::time::Duration;
 
 use host_tests::emu::log::{LoggedTransition, parse_transition};
+use host_tests::emu::pins::input_pin;
 use host_tests::emu::{Board, BoardOptions};
 use plasma_firmware::io::{Input, Output};
 use plasma_sim::Model;
@@ -82,11 +83,27 @@ pub fn set(board: &Board, input: Input, active: bool) {
 /// inputs' debounce (about 1 ms on TORCH_ON, 2 ms on MOTION). A stimulus, not an assertion.
 pub const HOLD: Duration = Duration::from_millis(20);
 
-/// Releases TORCH_ON and presses it again, each level held for [`HOLD`].
+/// Releases TORCH_ON and presses it again, each level held for [`HOLD`]. The firmware must
+/// see the release: a host-time sleep alone does not promise that (on a loaded machine QEMU
+/// may get no CPU for those 20 ms, and then meets both levels at once), so first the
+/// release's edge must have been taken (its EXTI handler clears the line's pending bit).
 pub fn press_again(board: &Board) {
     set(board, Input::TorchOn, false);
+    wait_edge_taken(board, Input::TorchOn);
     std::thread::sleep(HOLD);
     set(board, Input::TorchOn, true);
+}
+
+/// Waits until the firmware's EXTI handler has taken the last edge of `input` (EXTI_PR1's
+/// bit for the pin is clear; the harness's pin change set it).
+fn wait_edge_taken(board: &Board, input: Input) {
+    const EXTI_PR1: u64 = 0x4001_0414;
+    let line = 1u32 << input_pin(input).number;
+    let began = std::time::Instant::now();
+    while board.qtest().readl(EXTI_PR1).unwrap() & line != 0 {
+        assert!(began.elapsed() < EDGE, "the {input:?} edge was never taken");
+        std::thread::sleep(Duration::from_millis(1));
+    }
 }
 
 /// Waits for an output to reach `on`.
