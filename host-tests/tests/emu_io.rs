@@ -188,8 +188,8 @@ fn once_a_task_stalls_the_outputs_stay_safe_until_the_reset() {
     );
 }
 
-/// The reset cause the boot report gives on the CNC port. Settings are lost with the emulated
-/// board's RAM at a reset (defaults: events off), so the report is `ID`'s `reset=<cause>,...`.
+/// The reset cause the boot report gives on the CNC port. The tests save no settings, so
+/// the boot runs the defaults (events off) and the report is `ID`'s `reset=<cause>,...`.
 fn reported_reset_cause(board: &mut Board) -> String {
     let id = command(board, "ID");
     let reset = value(&id, "reset").unwrap_or_else(|| panic!("no reset= in {id}"));
