@@ -3,7 +3,7 @@
 //! Owns which probe is asked at which port settings (the search over the Modbus framings,
 //! then HPR), the known-good probe asked first after a link-down, re-asking a probe whose
 //! replies arrived damaged, and what a probe's answer or failure means. The move to a
-//! family driver once a unit is found is [`super::phase`]'s.
+//! family driver once a unit is found is [`crate::link::phase`]'s.
 
 use heapless::Vec;
 use plasma_protocol::hpr::{self as hpr_wire, Reply, SystemId};
@@ -12,10 +12,9 @@ use plasma_protocol::powermax::{PowerSupplyModel, device_id, legacy as pm_legacy
 use plasma_protocol::serial::{Parity, PortConfig, StopBits};
 use plasma_protocol::time::{Duration, Instant};
 
-use super::modbus::MbRequest;
-use super::schedule::{Outgoing, Tag};
-use super::transaction::{RetrySpacing, TX_CAPACITY, TransactionError};
-use super::{Family, Model, Phase, ProtocolChoice, PsLink, Wire};
+use crate::link::powermax::modbus::MbRequest;
+use crate::link::transaction::{Outgoing, RetrySpacing, TX_CAPACITY, TransactionError};
+use crate::link::{Family, Model, Phase, ProtocolChoice, PsLink, Wire};
 
 /// Pause between two detection rounds, so a silent line is not hammered.
 pub const DETECT_ROUND_PAUSE: Duration = Duration::from_millis(250);
@@ -329,8 +328,12 @@ impl PsLink {
         }
     }
 
-    /// The probe to send now, if detection is due for one.
-    pub(super) fn next_probe(&mut self, now: Instant) -> Option<Outgoing> {
+    /// The probe to send now, if detection is due for one (tagged with its step and what it
+    /// expects back).
+    pub(super) fn next_probe(
+        &mut self,
+        now: Instant,
+    ) -> Option<Outgoing<(DetectStep, DetectExpect)>> {
         let Phase::Detecting(detector) = &self.phase else {
             return None;
         };
@@ -355,7 +358,7 @@ impl PsLink {
             .and_then(|len| buf.get(..len))
             .and_then(|b| Vec::from_slice(b).ok())?;
         Some(Outgoing {
-            tag: Tag::Detect(step, expect),
+            tag: (step, expect),
             frame,
             retries: config.retries,
             spacing,
@@ -445,3 +448,6 @@ pub(super) fn identified_model(response: &Response<'_>) -> Option<PowerSupplyMod
         _ => None,
     }
 }
+
+#[cfg(test)]
+mod tests;

@@ -2,7 +2,7 @@
 
 use plasma_protocol::modbus_ascii::ExceptionCode;
 
-use super::transaction::TransactionError;
+use crate::link::transaction::TransactionError;
 
 /// Link counters. Every failed attempt is counted by its class; a transaction that needs
 /// retries counts each failed attempt and each retry. Counters saturate instead of wrapping.
@@ -39,7 +39,7 @@ pub struct Diagnostics {
     /// Frames (or damaged frames) received while no reply was awaited (late replies, noise).
     pub unsolicited_frames: u32,
     /// Characters the UART flagged with a parity or framing error
-    /// ([`PsLink::handle_rx_error`](super::PsLink::handle_rx_error)).
+    /// ([`PsLink::handle_rx_error`](crate::link::PsLink::handle_rx_error)).
     pub rx_errors: u32,
     /// Frames equal to the request just sent, taken for its echo (2-wire line with the
     /// receiver left on) and ignored.

@@ -4,12 +4,12 @@ use heapless::Deque;
 use plasma_protocol::hpr::{ErrorCode, StateCode};
 use plasma_protocol::powermax::FaultCode;
 
-use super::command::Refusal;
-use super::diagnostics::Diagnostics;
-use super::status::{ActiveFault, Family, Model, PowermaxSettings};
-use super::transaction::TransactionError;
+use crate::link::command::Refusal;
+use crate::link::diagnostics::Diagnostics;
+use crate::link::status::{ActiveFault, Family, Model, PowermaxSettings};
+use crate::link::transaction::TransactionError;
 
-/// Identifies one submitted [`LinkCommand`](super::LinkCommand); returned by `submit` and
+/// Identifies one submitted [`LinkCommand`](crate::link::LinkCommand); returned by `submit` and
 /// repeated in its [`LinkEvent::CommandDone`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -130,7 +130,7 @@ pub enum LinkEvent {
         /// Why.
         reason: SettingsFailure,
     },
-    /// The persisted process ([`PsLink::restore`](super::PsLink::restore)) was refused before
+    /// The persisted process ([`PsLink::restore`](crate::link::PsLink::restore)) was refused before
     /// sending (outside the unit's limits); it is dropped.
     RestoreRefused {
         /// Why.

@@ -14,13 +14,13 @@
 //!   first. It is one attempt, like a command: a process outside the unit's limits is
 //!   reported ([`LinkEvent::RestoreRefused`]) and dropped, not tried again.
 //!
-//! [`PsLink::restore`]: super::PsLink::restore
-//! [`LinkEvent::RestoreRefused`]: super::LinkEvent::RestoreRefused
+//! [`PsLink::restore`]: crate::link::PsLink::restore
+//! [`LinkEvent::RestoreRefused`]: crate::link::LinkEvent::RestoreRefused
 
 use plasma_protocol::hpr::Request;
 
-use super::hpr::HprKept;
-use super::status::PowermaxSettings;
+use crate::link::hpr::HprKept;
+use crate::link::status::PowermaxSettings;
 
 /// The settings the link re-applies. See the module docs.
 #[derive(Debug, Clone, Default, PartialEq, Eq)]

@@ -84,13 +84,12 @@
 
 pub(crate) mod command;
 pub(crate) mod config;
+mod core;
 mod detect;
 pub(crate) mod diagnostics;
 pub(crate) mod event;
 pub(crate) mod hpr;
 pub(crate) mod kept;
-pub(crate) mod legacy;
-pub(crate) mod modbus;
 mod phase;
 pub(crate) mod powermax;
 mod receive;
@@ -98,9 +97,10 @@ mod schedule;
 pub(crate) mod slow;
 pub(crate) mod status;
 pub mod support;
-pub(crate) mod sync;
 pub(crate) mod transaction;
 
+#[cfg(test)]
+mod test_support;
 #[cfg(test)]
 mod tests;
 
@@ -117,8 +117,8 @@ pub use event::{
 pub use status::{ActiveFault, Family, Limits, Model, PowermaxSettings, UnitStatus};
 pub use transaction::TransactionError;
 
+use self::core::Core;
 use detect::{DetectStep, Detector, KnownGood};
-use event::EventQueue;
 pub use kept::Kept;
 use phase::Phase;
 pub use powermax::FAULT_CHECK_INTERVAL;
@@ -128,63 +128,6 @@ use transaction::Transaction;
 
 use plasma_protocol::serial::PortConfig;
 use plasma_protocol::time::{Duration, Instant};
-
-/// State shared by the link and its family drivers (the link's own; [`PsLink`] shows it
-/// read-only).
-#[derive(Debug)]
-pub(crate) struct Core {
-    /// The (validated) configuration.
-    pub(super) config: LinkConfig,
-    /// What is known about the unit.
-    pub(super) status: UnitStatus,
-    /// Counters.
-    pub(super) diagnostics: Diagnostics,
-    /// What is re-applied, for every family (see [`kept`]).
-    pub(super) kept: Kept,
-    events: EventQueue,
-}
-
-impl Core {
-    /// Queue an event.
-    pub(super) fn emit(&mut self, event: LinkEvent) {
-        self.events.push(event, &mut self.diagnostics);
-    }
-
-    /// The link went down: the active command (`active`, when there is one) and every queued
-    /// one fail.
-    pub(super) fn fail_commands<J, const N: usize>(
-        &mut self,
-        active: Option<Ticket>,
-        queue: &mut heapless::Deque<(Ticket, J), N>,
-    ) {
-        let queued = core::iter::from_fn(|| queue.pop_front().map(|(ticket, _)| ticket));
-        for ticket in active.into_iter().chain(queued) {
-            self.emit(LinkEvent::CommandDone {
-                ticket,
-                result: Err(CommandFailure::LinkDown),
-            });
-        }
-    }
-
-    /// The unit's active fault is now `new`: a change is reported (the old fault cleared,
-    /// the new one raised). False when nothing changed.
-    pub(super) fn set_active_fault(&mut self, new: Option<ActiveFault>) -> bool {
-        if self.status.active_fault == new {
-            return false;
-        }
-        if let Some(old) = self.status.active_fault {
-            self.emit(LinkEvent::FaultCleared { code: old });
-        }
-        if let Some(fault) = new {
-            self.emit(LinkEvent::FaultRaised {
-                code: fault,
-                action_required: fault.action_required(),
-            });
-        }
-        self.status.active_fault = new;
-        true
-    }
-}
 
 /// Which framing the receiver expects.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -253,13 +196,7 @@ impl PsLink {
     pub fn new(config: LinkConfig, now: Instant) -> Self {
         let config = sanitize(config);
         let mut link = PsLink {
-            core: Core {
-                config,
-                status: UnitStatus::default(),
-                diagnostics: Diagnostics::default(),
-                kept: Kept::default(),
-                events: EventQueue::new(),
-            },
+            core: Core::new(config),
             phase: Phase::Detecting(Detector::searching(DetectStep::DeviceId, 0, now)),
             port: config.modbus_port(),
             wire: Wire::Modbus,
@@ -373,7 +310,7 @@ impl PsLink {
 
     /// Drain events for the rest of the bridge.
     pub fn poll_event(&mut self) -> Option<LinkEvent> {
-        self.core.events.pop()
+        self.core.pop_event()
     }
 
     /// Ask for an operation. Validates against the unit's limits BEFORE anything is sent;

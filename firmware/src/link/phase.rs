@@ -7,11 +7,11 @@ use plasma_protocol::hpr::SystemId;
 use plasma_protocol::powermax::{AddressingSystem, PowerSupplyModel};
 use plasma_protocol::time::Instant;
 
-use super::detect::{DetectStep, Detector};
-use super::hpr::HprDriver;
-use super::powermax::{PowermaxDriver, Variant};
-use super::transaction::TransactionError;
-use super::{Family, LinkDownReason, LinkEvent, Model, ProtocolChoice, PsLink};
+use crate::link::detect::{DetectStep, Detector};
+use crate::link::hpr::HprDriver;
+use crate::link::powermax::{PowermaxDriver, Variant};
+use crate::link::transaction::TransactionError;
+use crate::link::{Family, LinkDownReason, LinkEvent, Model, ProtocolChoice, PsLink};
 
 /// What the link is doing: detecting, or talking to a unit through its family's driver.
 // One phase at a time, held inline (no allocator).
@@ -117,3 +117,6 @@ impl PsLink {
         true
     }
 }
+
+#[cfg(test)]
+mod tests;

@@ -11,13 +11,13 @@ use plasma_protocol::hpr::{self as hpr_wire, Reply};
 use plasma_protocol::modbus_ascii::{self, Response};
 use plasma_protocol::time::Instant;
 
-use super::detect::{DetectExpect, identified_model};
-use super::hpr::HprExpect;
-use super::modbus::{self, MbRequest};
-use super::powermax::MbPurpose;
-use super::schedule::Tag;
-use super::transaction::{TX_CAPACITY, TransactionError};
-use super::{Phase, PsLink};
+use crate::link::detect::{DetectExpect, identified_model};
+use crate::link::hpr::HprExpect;
+use crate::link::powermax::MbPurpose;
+use crate::link::powermax::modbus::{self, MbRequest};
+use crate::link::schedule::Tag;
+use crate::link::transaction::{TX_CAPACITY, TransactionError};
+use crate::link::{Phase, PsLink};
 
 /// A Modbus frame as decoded (address and PDU), or why it was rejected.
 type ModbusFrame = plasma_protocol::Result<(u8, Vec<u8, { modbus_ascii::MAX_FRAME_BYTES }>)>;
@@ -287,3 +287,6 @@ fn hpr_expectation(tag: &Tag) -> Option<HprExpect> {
         _ => None,
     }
 }
+
+#[cfg(test)]
+mod tests;

@@ -7,22 +7,22 @@
 //! unit is there.
 
 use heapless::Vec;
-use plasma_protocol::time::{Duration, Instant};
+use plasma_protocol::time::Instant;
 
-use super::detect::{DetectExpect, DetectStep};
-use super::hpr::{HprExpect, HprPurpose};
-use super::modbus::MbRequest;
-use super::powermax::MbPurpose;
-use super::transaction::{Outcome, RetrySpacing, TX_CAPACITY, Transaction, TransactionError};
-use super::{Phase, PsLink};
+use crate::link::detect::{DetectExpect, DetectStep};
+use crate::link::hpr::{HprExpect, HprPurpose};
+use crate::link::powermax::MbPurpose;
+use crate::link::powermax::modbus::MbRequest;
+use crate::link::transaction::{
+    Outcome, Outgoing, RetrySpacing, SLEEP_QUIET, TX_CAPACITY, Transaction, TransactionError,
+};
+use crate::link::{Phase, PsLink};
 
 /// A unit that answers, but only with damaged replies, is declared down after this many
-/// times [`LinkConfig::failures_before_down`](super::LinkConfig::failures_before_down) failed
+/// times [`LinkConfig::failures_before_down`](crate::link::LinkConfig::failures_before_down) failed
 /// transactions in a row (a line too noisy to carry a single valid reply is no link, but a
 /// damaged reply is no silence either).
 pub const UNANSWERED_FACTOR: u8 = 4;
-/// Quiet time after HPR SLEEP (086), which no unit answers.
-pub const SLEEP_QUIET: Duration = Duration::from_millis(20);
 
 /// What a transaction is for: the probe or driver purpose, and what its reply must answer.
 #[derive(Debug, Clone)]
@@ -32,21 +32,13 @@ pub(super) enum Tag {
     Hpr(HprPurpose, HprExpect),
 }
 
-/// A request ready to become the transaction in flight.
-pub(super) struct Outgoing {
-    pub(super) tag: Tag,
-    pub(super) frame: Vec<u8, TX_CAPACITY>,
-    pub(super) retries: u8,
-    pub(super) spacing: RetrySpacing,
-    /// Nothing answers it (HPR SLEEP): the line stays quiet for [`SLEEP_QUIET`] instead.
-    pub(super) no_reply: bool,
-}
-
 impl PsLink {
     /// Start the next transaction, if anything is due.
     pub(super) fn start_next(&mut self, now: Instant) {
         let next = match self.phase {
-            Phase::Detecting(_) => self.next_probe(now),
+            Phase::Detecting(_) => self
+                .next_probe(now)
+                .map(|probe| probe.map_tag(|(step, expect)| Tag::Detect(step, expect))),
             Phase::Powermax(_) => self.next_powermax_request(now),
             Phase::Hpr(_) => self.next_hpr_request(now),
         };
@@ -70,7 +62,7 @@ impl PsLink {
     }
 
     /// The Powermax driver's next request, encoded for the configured node.
-    fn next_powermax_request(&mut self, now: Instant) -> Option<Outgoing> {
+    fn next_powermax_request(&mut self, now: Instant) -> Option<Outgoing<Tag>> {
         let Phase::Powermax(driver) = &mut self.phase else {
             return None;
         };
@@ -92,7 +84,7 @@ impl PsLink {
     }
 
     /// The HPR driver's next request; its retries ride through an HF-ignition blackout.
-    fn next_hpr_request(&mut self, now: Instant) -> Option<Outgoing> {
+    fn next_hpr_request(&mut self, now: Instant) -> Option<Outgoing<Tag>> {
         let Phase::Hpr(driver) = &mut self.phase else {
             return None;
         };
@@ -229,3 +221,6 @@ impl PsLink {
         Some(txn.tag().clone())
     }
 }
+
+#[cfg(test)]
+mod tests;

@@ -7,10 +7,10 @@
 
 use heapless::Vec;
 
-use super::Core;
-use super::command::Refusal;
-use super::event::{CommandFailure, CommandOutput, LinkEvent, Ticket};
-use super::transaction::TransactionError;
+use crate::link::command::Refusal;
+use crate::link::core::Core;
+use crate::link::event::{CommandFailure, CommandOutput, LinkEvent, Ticket};
+use crate::link::transaction::TransactionError;
 use plasma_protocol::time::{Duration, Instant};
 
 /// First wait before a slow-data read that failed on the line is tried again (doubling with
@@ -147,21 +147,11 @@ impl SlowData {
 mod tests {
     use super::*;
     use crate::link::config::LinkConfig;
-    use crate::link::diagnostics::Diagnostics;
-    use crate::link::event::EventQueue;
-    use crate::link::kept::Kept;
-    use crate::link::status::UnitStatus;
 
     const INTERVAL: Duration = Duration::from_secs(1);
 
     fn core() -> Core {
-        Core {
-            config: LinkConfig::default(),
-            status: UnitStatus::default(),
-            diagnostics: Diagnostics::default(),
-            kept: Kept::default(),
-            events: EventQueue::new(),
-        }
+        Core::new(LinkConfig::default())
     }
 
     fn at(ms: u64) -> Instant {
@@ -250,7 +240,7 @@ mod tests {
             INTERVAL,
             &mut core,
         );
-        assert_eq!(core.events.pop(), None);
+        assert_eq!(core.pop_event(), None);
         slow.finish(at(2), 0b10, None, INTERVAL, &mut core);
         let failed = Err(CommandFailure::Transaction(TransactionError::Timeout));
         for ticket in [Ticket(1), Ticket(2)] {
@@ -258,9 +248,9 @@ mod tests {
                 ticket,
                 result: failed,
             };
-            assert_eq!(core.events.pop(), Some(done));
+            assert_eq!(core.pop_event(), Some(done));
         }
-        assert_eq!(core.events.pop(), None);
+        assert_eq!(core.pop_event(), None);
         // The next round starts without the old error.
         slow.request_for(Ticket(3), 0b10).unwrap();
         slow.finish(at(3), 0b10, None, INTERVAL, &mut core);
@@ -268,7 +258,7 @@ mod tests {
             ticket: Ticket(3),
             result: Ok(CommandOutput::Done),
         };
-        assert_eq!(core.events.pop(), Some(done));
+        assert_eq!(core.pop_event(), Some(done));
     }
 
     #[test]
@@ -287,8 +277,8 @@ mod tests {
                 ticket: Ticket(n),
                 result: Err(CommandFailure::LinkDown),
             };
-            assert_eq!(core.events.pop(), Some(done));
+            assert_eq!(core.pop_event(), Some(done));
         }
-        assert_eq!(core.events.pop(), None);
+        assert_eq!(core.pop_event(), None);
     }
 }

@@ -173,7 +173,7 @@ pub struct UnitStatus {
 
 impl UnitStatus {
     /// Forget everything learned from the unit (after link-down); what the link re-applies
-    /// is not part of the status ([`Kept`](super::Kept)).
+    /// is not part of the status ([`Kept`](crate::link::Kept)).
     pub fn forget_unit(&mut self) {
         *self = UnitStatus::default();
     }

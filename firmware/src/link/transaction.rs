@@ -38,6 +38,32 @@ pub const TX_CAPACITY: usize = 520;
 /// guarantees: the manual's 1 s HF-ignition blackout plus a 0.25 s margin.
 pub const BLACKOUT_SPAN: Duration = Duration::from_millis(1250);
 
+/// Quiet time after HPR SLEEP (086), which no unit answers.
+pub const SLEEP_QUIET: Duration = Duration::from_millis(20);
+
+/// A request ready to become the transaction in flight, tagged with what it is for.
+pub(crate) struct Outgoing<T> {
+    pub(crate) tag: T,
+    pub(crate) frame: Vec<u8, TX_CAPACITY>,
+    pub(crate) retries: u8,
+    pub(crate) spacing: RetrySpacing,
+    /// Nothing answers it (HPR SLEEP): the line stays quiet for [`SLEEP_QUIET`] instead.
+    pub(crate) no_reply: bool,
+}
+
+impl<T> Outgoing<T> {
+    /// The same request with its tag turned into another by `f`.
+    pub(crate) fn map_tag<U>(self, f: impl FnOnce(T) -> U) -> Outgoing<U> {
+        Outgoing {
+            tag: f(self.tag),
+            frame: self.frame,
+            retries: self.retries,
+            spacing: self.spacing,
+            no_reply: self.no_reply,
+        }
+    }
+}
+
 /// How a transaction (one request, all its attempts) failed, or why one attempt failed.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]

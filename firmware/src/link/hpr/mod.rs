@@ -20,10 +20,10 @@ mod submit;
 use heapless::{Deque, Vec};
 use plasma_protocol::hpr::{self, Request, StateCode, SystemId};
 
-use super::Core;
-use super::event::{LinkEvent, SettingsFailure, Ticket};
-use super::slow::SlowData;
-use super::status::Family;
+use crate::link::core::Core;
+use crate::link::event::{LinkEvent, SettingsFailure, Ticket};
+use crate::link::slow::SlowData;
+use crate::link::status::Family;
 use plasma_protocol::time::{Duration, Instant};
 
 pub use kept::{HprKept, KEPT_CAPACITY};
@@ -352,3 +352,6 @@ pub fn emit(request: &Request) -> Option<Vec<u8, RAW_HPR_CAPACITY>> {
     let len = request.emit(&mut buf).ok()?;
     Vec::from_slice(buf.get(..len)?).ok()
 }
+
+#[cfg(test)]
+mod tests;

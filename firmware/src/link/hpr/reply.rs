@@ -5,15 +5,15 @@
 use plasma_protocol::hpr::{Acceptance, ErrorCode, Reply, Request, StateCode};
 use plasma_protocol::time::Instant;
 
-use super::super::Core;
-use super::super::event::{CommandFailure, CommandOutput, LinkEvent, SettingsFailure};
-use super::super::status::ActiveFault;
-use super::super::transaction::TransactionError;
 use super::kept::sets;
 use super::{
     ActiveJob, HprDriver, HprJob, HprPurpose, PILOT_ARC_PAUSE, REAPPLY_BACKOFF, SLOW_ERROR_LOG,
     SLOW_TIMERS, is_pilot_arc, is_power_up,
 };
+use crate::link::core::Core;
+use crate::link::event::{CommandFailure, CommandOutput, LinkEvent, SettingsFailure};
+use crate::link::status::ActiveFault;
+use crate::link::transaction::TransactionError;
 
 impl HprDriver {
     /// The unit lost its settings or restarted (state back to power-up, or a set point

@@ -6,11 +6,11 @@ use plasma_protocol::hpr::command::id;
 use plasma_protocol::hpr::{self, Frame, GasCode, GasPair, Request, StateCode};
 use plasma_protocol::time::Instant;
 
-use super::super::Core;
-use super::super::command::{HprGasFlow, HprValue, LinkCommand, Refusal};
-use super::super::event::{CommandOutput, LinkEvent, Ticket};
-use super::super::support;
 use super::{HprDriver, HprJob, SLOW_ALL, is_cutting};
+use crate::link::command::{HprGasFlow, HprValue, LinkCommand, Refusal};
+use crate::link::core::Core;
+use crate::link::event::{CommandOutput, LinkEvent, Ticket};
+use crate::link::support;
 
 impl HprDriver {
     /// Validate and queue a command.

@@ -4,14 +4,14 @@
 use plasma_protocol::modbus_ascii::Response;
 use plasma_protocol::time::Instant;
 
-use super::super::Core;
-use super::super::event::{CommandFailure, CommandOutput, LinkEvent, SettingsFailure};
-use super::super::legacy;
-use super::super::modbus::MbRequest;
-use super::super::sync;
-use super::super::transaction::TransactionError;
 use super::settings::legacy_writes;
 use super::{Active, Job, MbPurpose, PowermaxDriver, REAPPLY_BACKOFF, Variant};
+use crate::link::core::Core;
+use crate::link::event::{CommandFailure, CommandOutput, LinkEvent, SettingsFailure};
+use crate::link::powermax::legacy;
+use crate::link::powermax::modbus::MbRequest;
+use crate::link::powermax::sync;
+use crate::link::transaction::TransactionError;
 
 impl PowermaxDriver {
     pub(super) fn active_request(

@@ -1,5 +1,6 @@
 //! The Powermax driver (SYNC and legacy): polling, slow data, settings and commands over
-//! Modbus ASCII. Family specifics live in [`super::sync`] and [`super::legacy`].
+//! Modbus ASCII. Family specifics live in [`sync`] and [`legacy`]; [`modbus`] holds the
+//! Modbus pieces both use (and auto-detection's device-identification probe).
 //!
 //! The driver's jobs are split by module: this one schedules (what goes out next: the rest of
 //! the active command, the fault register when it is due, the rest of a poll cycle, then
@@ -9,22 +10,24 @@
 //! before it is queued.
 
 mod jobs;
+pub(crate) mod legacy;
+pub(crate) mod modbus;
 mod reply;
 mod settings;
 mod submit;
+pub(crate) mod sync;
 
 use heapless::Deque;
 use plasma_protocol::powermax::device_id;
 
-use super::Core;
-use super::config::ProtocolChoice;
-use super::event::Ticket;
-use super::legacy;
-use super::modbus::{BlockPart, BlockPoller, MbRequest};
-use super::slow::SlowData;
-use super::status::{Family, Model};
-use super::sync::{self, SlowItem};
+use crate::link::config::ProtocolChoice;
+use crate::link::core::Core;
+use crate::link::event::Ticket;
+use crate::link::slow::SlowData;
+use crate::link::status::{Family, Model};
+use modbus::{BlockPart, BlockPoller, MbRequest};
 use plasma_protocol::time::{Duration, Instant};
+use sync::SlowItem;
 
 use settings::Desired;
 
@@ -433,3 +436,6 @@ impl PowermaxDriver {
         self.slow.fail_all(core);
     }
 }
+
+#[cfg(test)]
+mod tests;

@@ -7,14 +7,14 @@ use plasma_protocol::powermax::sync::{Cartridge, FaultLog, Identification, PsCou
 use plasma_protocol::powermax::{CartridgeName, CartridgeUid, FaultCode};
 use plasma_protocol::time::Instant;
 
-use super::super::Core;
-use super::super::event::LinkEvent;
-use super::super::legacy;
-use super::super::modbus::{self, read_values};
-use super::super::status::ActiveFault;
-use super::super::sync::{self, SlowItem};
-use super::super::transaction::TransactionError;
 use super::{FAULT_CHECK_INTERVAL, MbPurpose, PowermaxDriver, Variant};
+use crate::link::core::Core;
+use crate::link::event::LinkEvent;
+use crate::link::powermax::legacy;
+use crate::link::powermax::modbus::{self, read_values};
+use crate::link::powermax::sync::{self, SlowItem};
+use crate::link::status::ActiveFault;
+use crate::link::transaction::TransactionError;
 
 impl PowermaxDriver {
     /// A valid reply arrived for `purpose`. `raw_len` is the length of the reply frame kept

@@ -6,16 +6,16 @@ use plasma_protocol::modbus_ascii::Response;
 use plasma_protocol::powermax::{Amps, FaultCode, OperatingMode, Pressure, Psi};
 use plasma_protocol::time::Instant;
 
-use super::super::Core;
-use super::super::command::Refusal;
-use super::super::event::{CommandFailure, CommandOutput, LinkEvent, SettingsFailure};
-use super::super::kept::Reapply;
-use super::super::legacy;
-use super::super::modbus::{MbRequest, read_values};
-use super::super::status::{Limits, PowermaxSettings};
-use super::super::sync;
-use super::super::transaction::TransactionError;
 use super::{Active, Job, PowermaxDriver, REAPPLY_BACKOFF, Variant};
+use crate::link::command::Refusal;
+use crate::link::core::Core;
+use crate::link::event::{CommandFailure, CommandOutput, LinkEvent, SettingsFailure};
+use crate::link::kept::Reapply;
+use crate::link::powermax::legacy;
+use crate::link::powermax::modbus::{MbRequest, read_values};
+use crate::link::powermax::sync;
+use crate::link::status::{Limits, PowermaxSettings};
+use crate::link::transaction::TransactionError;
 
 /// Settings the CNC asked for, validated.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -223,3 +223,6 @@ pub(super) fn legacy_writes(desired: &Desired) -> heapless::Vec<MbRequest, 4> {
     };
     legacy::settings_writes(desired.mode, desired.current, desired.pressure, &limits)
 }
+
+#[cfg(test)]
+mod tests;

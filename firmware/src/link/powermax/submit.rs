@@ -5,15 +5,15 @@ use plasma_protocol::modbus_ascii::{self, Request};
 use plasma_protocol::powermax::FaultCode;
 use plasma_protocol::time::Instant;
 
-use super::super::Core;
-use super::super::command::{LinkCommand, Refusal};
-use super::super::event::{CommandOutput, LinkEvent, Ticket};
-use super::super::modbus::{self, MbRequest};
-use super::super::status::{ActiveFault, Family};
-use super::super::support;
-use super::super::sync::SlowItem;
 use super::settings::{Desired, validate_settings};
 use super::{Job, PowermaxDriver, Variant};
+use crate::link::command::{LinkCommand, Refusal};
+use crate::link::core::Core;
+use crate::link::event::{CommandOutput, LinkEvent, Ticket};
+use crate::link::powermax::modbus::{self, MbRequest};
+use crate::link::powermax::sync::SlowItem;
+use crate::link::status::{ActiveFault, Family};
+use crate::link::support;
 
 impl PowermaxDriver {
     /// Validate and queue a command.

@@ -8,9 +8,9 @@ use plasma_protocol::modbus_ascii::{
 };
 use plasma_protocol::powermax::BlockRead;
 
-use super::command::Refusal;
-use super::status::Family;
-use super::transaction::TransactionError;
+use crate::link::command::Refusal;
+use crate::link::status::Family;
+use crate::link::transaction::TransactionError;
 
 /// Most registers a request built by the link writes (remote settings: 3).
 pub const MAX_WRITE_WORDS: usize = 8;
@@ -456,3 +456,6 @@ mod raw_allow_list_tests {
         }
     }
 }
+
+#[cfg(test)]
+mod tests;

@@ -13,8 +13,8 @@ use plasma_protocol::powermax::legacy::{
 };
 use plasma_protocol::powermax::{Amps, FaultCode, OperatingMode, Pressure};
 
-use super::modbus::{BlockPoller, MbRequest};
-use super::status::{Limits, PowermaxSettings};
+use crate::link::powermax::modbus::{BlockPoller, MbRequest};
+use crate::link::status::{Limits, PowermaxSettings};
 
 /// The poll: 0x2093-0x209F in one request (force registers read back, fault, limits, arc
 /// time), falling back to its documented parts on exception 02; a part the unit refuses
@@ -136,3 +136,6 @@ pub fn gas_test(on: bool) -> MbRequest {
 pub fn is_setting_fault(fault: FaultCode) -> bool {
     (110..=112).contains(&fault.0)
 }
+
+#[cfg(test)]
+mod tests;

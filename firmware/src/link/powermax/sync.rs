@@ -8,8 +8,8 @@ use plasma_protocol::powermax::sync::{
 };
 use plasma_protocol::powermax::{Amps, FaultCode, Pressure, Psi, RegisterSpan};
 
-use super::modbus::MbRequest;
-use super::status::{Limits, PowermaxSettings};
+use crate::link::powermax::modbus::MbRequest;
+use crate::link::status::{Limits, PowermaxSettings};
 
 /// The poll: 0x3010-0x301A in one function-04 request (fallback: 0x3010-0x3012 and
 /// 0x3018-0x301A).

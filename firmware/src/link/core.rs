@@ -1,0 +1,81 @@
+//! The state every part of the link shares: the configuration, what is known about the unit,
+//! the counters, the settings to re-apply and the event queue. The family drivers and
+//! detection reach it as `&mut Core`; [`PsLink`](crate::link::PsLink) shows it read-only.
+
+use crate::link::config::LinkConfig;
+use crate::link::diagnostics::Diagnostics;
+use crate::link::event::{CommandFailure, EventQueue, LinkEvent, Ticket};
+use crate::link::kept::Kept;
+use crate::link::status::{ActiveFault, UnitStatus};
+
+/// State shared by the link and its family drivers.
+#[derive(Debug)]
+pub(crate) struct Core {
+    /// The (validated) configuration.
+    pub(crate) config: LinkConfig,
+    /// What is known about the unit.
+    pub(crate) status: UnitStatus,
+    /// Counters.
+    pub(crate) diagnostics: Diagnostics,
+    /// What is re-applied, for every family (see [`kept`](crate::link::kept)).
+    pub(crate) kept: Kept,
+    events: EventQueue,
+}
+
+impl Core {
+    /// The state of a link that knows nothing yet, configured with `config`.
+    pub(crate) fn new(config: LinkConfig) -> Self {
+        Core {
+            config,
+            status: UnitStatus::default(),
+            diagnostics: Diagnostics::default(),
+            kept: Kept::default(),
+            events: EventQueue::new(),
+        }
+    }
+
+    /// Queue an event.
+    pub(crate) fn emit(&mut self, event: LinkEvent) {
+        self.events.push(event, &mut self.diagnostics);
+    }
+
+    /// The oldest queued event, taken.
+    pub(crate) fn pop_event(&mut self) -> Option<LinkEvent> {
+        self.events.pop()
+    }
+
+    /// The link went down: the active command (`active`, when there is one) and every queued
+    /// one fail.
+    pub(crate) fn fail_commands<J, const N: usize>(
+        &mut self,
+        active: Option<Ticket>,
+        queue: &mut heapless::Deque<(Ticket, J), N>,
+    ) {
+        let queued = core::iter::from_fn(|| queue.pop_front().map(|(ticket, _)| ticket));
+        for ticket in active.into_iter().chain(queued) {
+            self.emit(LinkEvent::CommandDone {
+                ticket,
+                result: Err(CommandFailure::LinkDown),
+            });
+        }
+    }
+
+    /// The unit's active fault is now `new`: a change is reported (the old fault cleared,
+    /// the new one raised). False when nothing changed.
+    pub(crate) fn set_active_fault(&mut self, new: Option<ActiveFault>) -> bool {
+        if self.status.active_fault == new {
+            return false;
+        }
+        if let Some(old) = self.status.active_fault {
+            self.emit(LinkEvent::FaultCleared { code: old });
+        }
+        if let Some(fault) = new {
+            self.emit(LinkEvent::FaultRaised {
+                code: fault,
+                action_required: fault.action_required(),
+            });
+        }
+        self.status.active_fault = new;
+        true
+    }
+}

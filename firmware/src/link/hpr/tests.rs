@@ -1,0 +1,384 @@
+//! The HPR / MaxPro200 driver against scripted replies: retries over a blackout, error replies,
+//! the pilot-arc pause, remote settings and their re-apply.
+
+use std::vec::Vec;
+
+use plasma_protocol::hpr::{ErrorCode, GasCode, GasPair, StateCode};
+use plasma_protocol::time::Duration;
+
+use crate::link::test_support::*;
+use crate::link::{
+    ActiveFault, CommandFailure, CommandOutput, Family, HprValue, LinkCommand, LinkConfig,
+    LinkEvent, ProtocolChoice, Refusal, SettingsFailure,
+};
+
+// ---------------------------------------------------------------------------------------
+// HPR
+
+fn hpr_bench(system: &str) -> Bench {
+    let config = LinkConfig {
+        protocol: ProtocolChoice::Hpr,
+        ..LinkConfig::default()
+    };
+    let mut bench = Bench::new(config);
+    bench.next_tx(ms(0)).unwrap();
+    bench.rx(3, &hf(0, system));
+    assert!(bench.link.status().link_up);
+    bench
+}
+
+fn ps_info(state: u16, error: u16) -> Vec<u8> {
+    hf(
+        79,
+        &std::format!(
+            "PC0044 PP0042 SC0034 SP0035 CS0130 ST{state:04} ER{error:04} CG0000 CG0000 MV0000 MV0000"
+        ),
+    )
+}
+
+#[test]
+fn hpr_retries_span_more_than_a_one_second_blackout() {
+    let mut bench = hpr_bench("HYPERFORMANCE260AUTO");
+    let t0 = bench.now;
+    let mut times = Vec::new();
+    for _ in 0..3 {
+        bench.next_tx(t0 + Duration::from_secs(5)).unwrap();
+        times.push(bench.now);
+    }
+    assert_eq!(
+        times[1].saturating_since(times[0]),
+        Duration::from_millis(450)
+    );
+    assert!(times[2].saturating_since(times[0]) > Duration::from_millis(1200));
+    // The third attempt gets through the noise.
+    bench.rx(3, &ps_info(3, 0));
+    assert_eq!(bench.link.status().hpr.state, Some(StateCode(3)));
+    assert!(bench.link.status().ready);
+}
+
+#[test]
+fn hpr_error_replies_are_classified() {
+    let mut bench = hpr_bench("HYPERFORMANCE130MANUAL");
+    bench.next_tx(bench.now).unwrap();
+    bench.rx(2, b">50095<");
+    assert_eq!(bench.link.diagnostics().hpr_bad_checksum_500, 1);
+    let retry = bench.next_tx(bench.now + Duration::from_secs(2)).unwrap();
+    assert_eq!(retry, b">079A0<");
+    bench.rx(2, b">50196<");
+    assert_eq!(bench.link.diagnostics().hpr_unknown_command_501, 1);
+    assert_eq!(bench.link.diagnostics().transactions_failed, 1);
+}
+
+#[test]
+fn hpr_pauses_during_pilot_arc_then_asks_only_for_the_state() {
+    let mut bench = hpr_bench("HYPERFORMANCE130AUTO");
+    bench.next_tx(bench.now).unwrap();
+    bench.rx(2, &ps_info(5, 0));
+    let t = bench.now;
+    assert_eq!(bench.link.poll_at(), Some(t + Duration::from_secs(1)));
+    assert!(
+        bench
+            .link
+            .poll_transmit(t + Duration::from_millis(999))
+            .is_none()
+    );
+    assert_eq!(
+        bench
+            .link
+            .poll_transmit(t + Duration::from_secs(1))
+            .map(|f| f.to_vec()),
+        Some(b">00292<".to_vec())
+    );
+}
+
+#[test]
+fn hpr_settings_are_range_checked_and_preceded_by_remote_mode() {
+    let mut bench = hpr_bench("HYPERFORMANCE130AUTO");
+    bench.next_tx(bench.now).unwrap();
+    bench.rx(2, &ps_info(3, 0));
+    assert_eq!(
+        bench
+            .link
+            .submit(bench.now, LinkCommand::HprSetNominalAmps { amps: 131 }),
+        Err(Refusal::HprValueOutOfRange {
+            value: HprValue::Amps,
+            requested: 131,
+            min: 5,
+            max: 130
+        })
+    );
+    assert_eq!(
+        bench
+            .link
+            .submit(bench.now, LinkCommand::HprSetCornerCurrent { percent: 49 }),
+        Err(Refusal::HprValueOutOfRange {
+            value: HprValue::CornerPercent,
+            requested: 49,
+            min: 50,
+            max: 100
+        })
+    );
+    assert_eq!(
+        bench.link.submit(bench.now, LinkCommand::HprSoftwareReset),
+        Err(Refusal::StateForbids {
+            state: Some(StateCode(3)),
+            error: Some(ErrorCode(0))
+        })
+    );
+    assert_eq!(
+        bench.link.submit(bench.now, LinkCommand::QuickRestart),
+        Err(Refusal::NotSupported {
+            family: Family::Hpr
+        })
+    );
+    let ticket = bench
+        .link
+        .submit(bench.now, LinkCommand::HprSetNominalAmps { amps: 130 })
+        .unwrap();
+    let frame = bench.next_tx(bench.now + Duration::from_secs(1)).unwrap();
+    assert_eq!(frame, b">00494<", "REMOTE_MODE first");
+    bench.rx(2, b">0041C5<");
+    let frame = bench.next_tx(bench.now).unwrap();
+    assert_eq!(frame, b">05813031<");
+    bench.rx(2, b">058013061<");
+    let events = bench.events();
+    std::println!("{events:?}");
+    assert!(events.contains(&LinkEvent::RemoteModeChanged { remote: true }));
+    assert!(events.contains(&LinkEvent::CommandDone {
+        ticket,
+        result: Ok(CommandOutput::Value(130))
+    }));
+}
+
+#[test]
+fn maxpro_set_process_needs_state_2_or_3() {
+    let mut bench = hpr_bench("MaxPro200");
+    let gases = GasPair {
+        plasma: GasCode(5),
+        shield: GasCode(5),
+    };
+    assert!(matches!(
+        bench
+            .link
+            .submit(bench.now, LinkCommand::HprSetProcess { amps: 200, gases }),
+        Err(Refusal::StateForbids { state: None, .. })
+    ));
+    bench.next_tx(bench.now).unwrap();
+    bench.rx(
+        2,
+        &hf(
+            79,
+            "st0003 er0000 pg0005 ps0056 sg0005 ss0058 cs0200 dm0001 lm0000",
+        ),
+    );
+    assert_eq!(bench.link.status().hpr.state, Some(StateCode(3)));
+    assert_eq!(
+        bench
+            .link
+            .submit(bench.now, LinkCommand::HprSetProcess { amps: 201, gases }),
+        Err(Refusal::HprValueOutOfRange {
+            value: HprValue::Amps,
+            requested: 201,
+            min: 5,
+            max: 200
+        })
+    );
+    bench
+        .link
+        .submit(bench.now, LinkCommand::HprSetProcess { amps: 200, gases })
+        .unwrap();
+    assert_eq!(
+        bench.next_tx(bench.now + Duration::from_secs(1)).unwrap(),
+        b">00494<"
+    );
+    bench.rx(2, b">0041C5<");
+    // Manual sample `>137200 5 5D7<`.
+    assert_eq!(bench.next_tx(bench.now).unwrap(), b">137200 5 5D7<");
+}
+
+#[test]
+fn hpr_raw_commands_outside_the_allow_list_are_refused() {
+    let mut bench = hpr_bench("HYPERFORMANCE400XD");
+    fn raw(bytes: &[u8]) -> LinkCommand<'_> {
+        LinkCommand::Raw(bytes)
+    }
+    for id in [120u16, 119, 102, 101, 71, 103, 85, 86, 87, 999] {
+        let frame = hf(id, "");
+        assert_eq!(
+            bench.link.submit(bench.now, raw(&frame)),
+            Err(Refusal::RawCommandNotAllowed { id }),
+            "id {id}"
+        );
+    }
+    let ticket = bench.link.submit(bench.now, raw(b">00292<")).unwrap();
+    // Commands go before the next poll.
+    assert_eq!(bench.next_tx(bench.now).unwrap(), b">00292<");
+    bench.rx(2, b">002000355<");
+    assert!(bench.events().contains(&LinkEvent::CommandDone {
+        ticket,
+        result: Ok(CommandOutput::Raw { len: 11 })
+    }));
+    assert_eq!(bench.link.raw_reply(), b">002000355<");
+}
+
+#[test]
+fn hpr_errors_raise_and_clear_faults() {
+    let mut bench = hpr_bench("HYPERFORMANCE130AUTO");
+    bench.events();
+    bench.next_tx(bench.now).unwrap();
+    bench.rx(2, &ps_info(14, 116));
+    let events = bench.events();
+    assert!(events.contains(&LinkEvent::FaultRaised {
+        code: ActiveFault::Hpr(ErrorCode(116)),
+        action_required: true
+    }));
+    assert!(events.contains(&LinkEvent::StateChanged {
+        from: None,
+        to: StateCode(14)
+    }));
+    // Shutdown error: software reset allowed now.
+    assert!(
+        bench
+            .link
+            .submit(bench.now, LinkCommand::HprSoftwareReset)
+            .is_ok()
+    );
+}
+
+/// An HPR130 in state 3 that took REMOTE_MODE and 058 at 100 A.
+fn hpr_at_100_a() -> Bench {
+    let mut bench = hpr_bench("HYPERFORMANCE130AUTO");
+    // Past the first poll and the slow data (error log, timers).
+    while bench.link.status().hpr.timers.is_none() {
+        let frame = bench.next_tx(bench.now + Duration::from_secs(1)).unwrap();
+        let reply = match &frame[1..4] {
+            b"079" => ps_info_at(3, 130),
+            b"134" => hf(134, "000 000 000 000"),
+            b"125" => hf(125, &"0000000 ".repeat(7)),
+            other => panic!("unexpected {other:?}"),
+        };
+        bench.rx(2, &reply);
+    }
+    bench
+        .link
+        .submit(bench.now, LinkCommand::HprSetNominalAmps { amps: 100 })
+        .unwrap();
+    assert_eq!(bench.next_tx(bench.now).unwrap(), b">00494<");
+    bench.rx(2, b">0041C5<");
+    assert_eq!(bench.next_tx(bench.now).unwrap(), hf(58, "100"));
+    bench.rx(2, &hf(58, "0100"));
+    assert_eq!(
+        bench.link.kept().hpr_requests(),
+        [plasma_protocol::hpr::Request::SetNominalAmps { amps: 100 }]
+    );
+    bench.events();
+    bench
+}
+
+fn ps_info_at(state: u16, amps: u16) -> Vec<u8> {
+    hf(
+        79,
+        &std::format!(
+            "PC0044 PP0042 SC0034 SP0035 CS{amps:04} ST{state:04} ER0000 CG0000 CG0000 MV0000 MV0000"
+        ),
+    )
+}
+
+#[test]
+fn an_hpr_back_in_its_power_up_state_gets_remote_mode_and_its_settings_again() {
+    let mut bench = hpr_at_100_a();
+    // A blip: the next poll finds the unit powering up, at its rated current.
+    assert_eq!(
+        bench.next_tx(bench.now + Duration::from_secs(1)).unwrap(),
+        b">079A0<"
+    );
+    bench.rx(2, &ps_info_at(0, 130));
+    assert!(!bench.link.status().hpr.remote_accepted);
+    assert!(
+        bench
+            .events()
+            .contains(&LinkEvent::RemoteModeChanged { remote: false })
+    );
+    // Nothing is re-applied before the unit is in state 2 or 3.
+    assert_eq!(
+        bench.next_tx(bench.now + Duration::from_secs(1)).unwrap(),
+        b">079A0<"
+    );
+    bench.rx(2, &ps_info_at(2, 130));
+    assert_eq!(
+        bench.next_tx(bench.now + Duration::from_secs(1)).unwrap(),
+        b">00494<"
+    );
+    bench.rx(2, b">0041C5<");
+    assert_eq!(bench.next_tx(bench.now).unwrap(), hf(58, "100"));
+    bench.rx(2, &hf(58, "0100"));
+    assert!(bench.link.status().hpr.remote_accepted);
+}
+
+#[test]
+fn an_hpr_set_point_other_than_the_kept_one_is_set_again() {
+    let mut bench = hpr_at_100_a();
+    // The state never showed the restart, but the set point did.
+    bench.next_tx(bench.now + Duration::from_secs(1)).unwrap();
+    bench.rx(2, &ps_info_at(3, 130));
+    assert_eq!(
+        bench.next_tx(bench.now + Duration::from_secs(1)).unwrap(),
+        b">00494<"
+    );
+}
+
+#[test]
+fn an_hpr_setting_answered_with_another_value_is_never_a_success() {
+    let mut bench = hpr_at_100_a();
+    let ticket = bench
+        .link
+        .submit(bench.now, LinkCommand::HprSetNominalAmps { amps: 80 })
+        .unwrap();
+    assert_eq!(
+        bench.next_tx(bench.now + Duration::from_secs(1)).unwrap(),
+        hf(58, "80")
+    );
+    // The unit answers its old value (it left remote mode): 004 again, then 058 once more.
+    bench.rx(2, &hf(58, "0100"));
+    assert_eq!(bench.next_tx(bench.now).unwrap(), b">00494<");
+    bench.rx(2, b">0041C5<");
+    assert_eq!(bench.next_tx(bench.now).unwrap(), hf(58, "80"));
+    bench.rx(2, &hf(58, "0100"));
+    let events = bench.events();
+    assert!(events.contains(&LinkEvent::CommandDone {
+        ticket,
+        result: Err(CommandFailure::NotAccepted)
+    }));
+    // What is kept is what the unit confirmed.
+    assert_eq!(
+        bench.link.kept().hpr_requests(),
+        [plasma_protocol::hpr::Request::SetNominalAmps { amps: 100 }]
+    );
+}
+
+#[test]
+fn kept_hpr_settings_are_not_given_to_another_model() {
+    let mut bench = hpr_at_100_a();
+    // The HPR130 goes silent: link down.
+    while bench.link.status().link_up {
+        bench.next_tx(bench.now + Duration::from_secs(10)).unwrap();
+    }
+    assert!(
+        !bench.link.kept().hpr_requests().is_empty(),
+        "kept across the link-down"
+    );
+    // An HPR260 answers HELLO instead.
+    loop {
+        let frame = bench.next_tx(bench.now + Duration::from_secs(10)).unwrap();
+        if frame == b">00090<" {
+            break;
+        }
+    }
+    bench.events();
+    bench.rx(3, &hf(0, "HYPERFORMANCE260AUTO"));
+    assert!(bench.link.status().link_up);
+    assert!(bench.link.kept().hpr_requests().is_empty());
+    assert!(bench.events().contains(&LinkEvent::SettingsFailed {
+        reason: SettingsFailure::OutsideLimits
+    }));
+}
