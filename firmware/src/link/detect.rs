@@ -17,10 +17,10 @@ use crate::link::transaction::{Outgoing, RetrySpacing, TX_CAPACITY, TransactionE
 use crate::link::{Family, Model, Phase, ProtocolChoice, PsLink, Wire};
 
 /// Pause between two detection rounds, so a silent line is not hammered.
-pub const DETECT_ROUND_PAUSE: Duration = Duration::from_millis(250);
+pub(crate) const DETECT_ROUND_PAUSE: Duration = Duration::from_millis(250);
 /// Times a detection step whose replies all arrived damaged is asked again before detection
 /// moves on (a damaged reply shows a unit that speaks this protocol at this framing).
-pub const DETECT_REASKS: u8 = 3;
+pub(crate) const DETECT_REASKS: u8 = 3;
 
 /// Modbus line settings tried in turn by auto-detection (the configured one first).
 const MODBUS_FRAMINGS: [(Parity, StopBits); 6] = [

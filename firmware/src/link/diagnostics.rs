@@ -51,7 +51,7 @@ fn bump(counter: &mut u32) {
 }
 
 /// The raw code byte of an exception.
-pub fn exception_code_byte(code: ExceptionCode) -> u8 {
+pub(crate) fn exception_code_byte(code: ExceptionCode) -> u8 {
     match code {
         ExceptionCode::IllegalFunction => 0x01,
         ExceptionCode::IllegalDataAddress => 0x02,
@@ -68,7 +68,7 @@ pub fn exception_code_byte(code: ExceptionCode) -> u8 {
 
 impl Diagnostics {
     /// Count one failed attempt by its class.
-    pub fn record_error(&mut self, error: TransactionError) {
+    pub(crate) fn record_error(&mut self, error: TransactionError) {
         match error {
             TransactionError::Timeout => bump(&mut self.timeouts),
             TransactionError::BadChecksum => bump(&mut self.bad_checksums),
@@ -96,42 +96,42 @@ impl Diagnostics {
     }
 
     /// Count a retry.
-    pub fn record_retry(&mut self) {
+    pub(crate) fn record_retry(&mut self) {
         bump(&mut self.retries);
     }
 
     /// Count a transaction that succeeded.
-    pub fn record_ok(&mut self) {
+    pub(crate) fn record_ok(&mut self) {
         bump(&mut self.transactions_ok);
     }
 
     /// Count a transaction that failed for good.
-    pub fn record_failed(&mut self) {
+    pub(crate) fn record_failed(&mut self) {
         bump(&mut self.transactions_failed);
     }
 
     /// Count a link-down.
-    pub fn record_link_down(&mut self) {
+    pub(crate) fn record_link_down(&mut self) {
         bump(&mut self.link_downs);
     }
 
     /// Count a dropped event.
-    pub fn record_event_dropped(&mut self) {
+    pub(crate) fn record_event_dropped(&mut self) {
         bump(&mut self.events_dropped);
     }
 
     /// Count a frame that arrived while no reply was awaited.
-    pub fn record_unsolicited(&mut self) {
+    pub(crate) fn record_unsolicited(&mut self) {
         bump(&mut self.unsolicited_frames);
     }
 
     /// Count an echo of our own request.
-    pub fn record_echo(&mut self) {
+    pub(crate) fn record_echo(&mut self) {
         bump(&mut self.echoes);
     }
 
     /// Count a character the UART flagged.
-    pub fn record_rx_error(&mut self) {
+    pub(crate) fn record_rx_error(&mut self) {
         bump(&mut self.rx_errors);
     }
 }

@@ -180,25 +180,25 @@ impl LinkEvent {
 }
 
 /// Capacity of the event queue.
-pub const EVENT_CAPACITY: usize = 16;
+pub(crate) const EVENT_CAPACITY: usize = 16;
 
 /// Bounded event queue. When full, the oldest non-critical event makes room (or, if every
 /// queued event is critical, the oldest one); each drop is counted in the diagnostics.
 #[derive(Debug, Default)]
-pub struct EventQueue {
+pub(crate) struct EventQueue {
     events: Deque<LinkEvent, EVENT_CAPACITY>,
 }
 
 impl EventQueue {
     /// An empty queue.
-    pub const fn new() -> Self {
+    pub(crate) const fn new() -> Self {
         EventQueue {
             events: Deque::new(),
         }
     }
 
     /// Queue `event`, making room if needed.
-    pub fn push(&mut self, event: LinkEvent, diagnostics: &mut Diagnostics) {
+    pub(crate) fn push(&mut self, event: LinkEvent, diagnostics: &mut Diagnostics) {
         if self.events.is_full() {
             self.drop_one();
             diagnostics.record_event_dropped();
@@ -229,13 +229,13 @@ impl EventQueue {
     }
 
     /// Oldest event.
-    pub fn pop(&mut self) -> Option<LinkEvent> {
+    pub(crate) fn pop(&mut self) -> Option<LinkEvent> {
         self.events.pop_front()
     }
 
     /// Number of queued events.
     #[cfg(test)]
-    pub fn len(&self) -> usize {
+    pub(crate) fn len(&self) -> usize {
         self.events.len()
     }
 }

@@ -19,7 +19,7 @@
 
 use plasma_protocol::hpr::Request;
 
-use crate::link::hpr::HprKept;
+use crate::link::hpr::kept::HprKept;
 use crate::link::status::PowermaxSettings;
 
 /// The settings the link re-applies. See the module docs.

@@ -22,7 +22,7 @@ use crate::link::{Phase, PsLink};
 /// times [`LinkConfig::failures_before_down`](crate::link::LinkConfig::failures_before_down) failed
 /// transactions in a row (a line too noisy to carry a single valid reply is no link, but a
 /// damaged reply is no silence either).
-pub const UNANSWERED_FACTOR: u8 = 4;
+pub(crate) const UNANSWERED_FACTOR: u8 = 4;
 
 /// What a transaction is for: the probe or driver purpose, and what its reply must answer.
 #[derive(Debug, Clone)]

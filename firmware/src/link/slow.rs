@@ -15,13 +15,13 @@ use plasma_protocol::time::{Duration, Instant};
 
 /// First wait before a slow-data read that failed on the line is tried again (doubling with
 /// each further failure, up to the slow-data interval).
-pub const SLOW_RETRY_FIRST: Duration = Duration::from_millis(200);
+pub(crate) const SLOW_RETRY_FIRST: Duration = Duration::from_millis(200);
 /// Refresh commands that can wait for one round.
 const TICKET_CAPACITY: usize = 4;
 
 /// Slow-data state of one driver.
 #[derive(Debug, Clone)]
-pub struct SlowData {
+pub(crate) struct SlowData {
     /// Items to read now.
     pending: u8,
     /// Items whose read failed on the line, read again from `retry_at`.
@@ -38,7 +38,7 @@ pub struct SlowData {
 
 impl SlowData {
     /// `items` to read at once; the first refresh one `interval` after `now`.
-    pub fn new(items: u8, now: Instant, interval: Duration) -> Self {
+    pub(crate) fn new(items: u8, now: Instant, interval: Duration) -> Self {
         SlowData {
             pending: items,
             retry: 0,
@@ -51,17 +51,17 @@ impl SlowData {
     }
 
     /// Items to read now (call [`SlowData::take_due_retries`] first).
-    pub fn pending(&self) -> u8 {
+    pub(crate) fn pending(&self) -> u8 {
         self.pending
     }
 
     /// Read `items` (again).
-    pub fn request(&mut self, items: u8) {
+    pub(crate) fn request(&mut self, items: u8) {
         self.pending |= items;
     }
 
     /// Read `items` for a refresh command: `ticket` completes when the round ends.
-    pub fn request_for(&mut self, ticket: Ticket, items: u8) -> Result<(), Refusal> {
+    pub(crate) fn request_for(&mut self, ticket: Ticket, items: u8) -> Result<(), Refusal> {
         self.tickets.push(ticket).map_err(|_| Refusal::QueueFull)?;
         self.request(items);
         Ok(())
@@ -69,7 +69,7 @@ impl SlowData {
 
     /// When the next refresh or retry is due (pending items want the line at once: the
     /// caller checks [`SlowData::pending`] first).
-    pub fn wake_at(&self) -> Instant {
+    pub(crate) fn wake_at(&self) -> Instant {
         if self.retry != 0 {
             self.next_refresh_at.min(self.retry_at)
         } else {
@@ -78,7 +78,7 @@ impl SlowData {
     }
 
     /// Items whose retry is due become pending.
-    pub fn take_due_retries(&mut self, now: Instant) {
+    pub(crate) fn take_due_retries(&mut self, now: Instant) {
         if self.retry != 0 && now >= self.retry_at {
             self.pending |= self.retry;
             self.retry = 0;
@@ -86,7 +86,7 @@ impl SlowData {
     }
 
     /// True when the periodic refresh is due; the next one is planned `interval` later.
-    pub fn refresh_due(&mut self, now: Instant, interval: Duration) -> bool {
+    pub(crate) fn refresh_due(&mut self, now: Instant, interval: Duration) -> bool {
         if now < self.next_refresh_at {
             return false;
         }

@@ -174,12 +174,12 @@ pub struct UnitStatus {
 impl UnitStatus {
     /// Forget everything learned from the unit (after link-down); what the link re-applies
     /// is not part of the status ([`Kept`](crate::link::Kept)).
-    pub fn forget_unit(&mut self) {
+    pub(crate) fn forget_unit(&mut self) {
         *self = UnitStatus::default();
     }
 
     /// Recompute [`UnitStatus::ready`] for time `now`.
-    pub fn update_ready(&mut self, now: Instant) {
+    pub(crate) fn update_ready(&mut self, now: Instant) {
         let blackout = self.restart_blackout_until.is_some_and(|until| now < until);
         let fault_blocks = self.active_fault.is_some_and(|f| f.action_required());
         let state_ready = match self.family {

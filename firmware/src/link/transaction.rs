@@ -36,10 +36,10 @@ pub const TX_CAPACITY: usize = 520;
 
 /// Time from the first to the last attempt that [`RetrySpacing::RideThroughBlackout`]
 /// guarantees: the manual's 1 s HF-ignition blackout plus a 0.25 s margin.
-pub const BLACKOUT_SPAN: Duration = Duration::from_millis(1250);
+pub(crate) const BLACKOUT_SPAN: Duration = Duration::from_millis(1250);
 
 /// Quiet time after HPR SLEEP (086), which no unit answers.
-pub const SLEEP_QUIET: Duration = Duration::from_millis(20);
+pub(crate) const SLEEP_QUIET: Duration = Duration::from_millis(20);
 
 /// A request ready to become the transaction in flight, tagged with what it is for.
 pub(crate) struct Outgoing<T> {
@@ -88,7 +88,7 @@ pub enum TransactionError {
 impl TransactionError {
     /// Whether another attempt can help: the request or the reply was lost or damaged.
     /// An exception or an unknown-command reply is the unit's definite answer.
-    pub const fn is_retryable(&self) -> bool {
+    pub(crate) const fn is_retryable(&self) -> bool {
         !matches!(
             self,
             TransactionError::Exception(_) | TransactionError::HprUnknownCommand501
@@ -99,7 +99,7 @@ impl TransactionError {
 /// When a retry may follow a failed attempt (see the module docs for the arithmetic).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub enum RetrySpacing {
+pub(crate) enum RetrySpacing {
     /// Retry as soon as the failed attempt is over (Modbus).
     Immediate,
     /// Retry on a schedule spanning more than [`BLACKOUT_SPAN`] (HPR).
@@ -109,7 +109,7 @@ pub enum RetrySpacing {
 impl RetrySpacing {
     /// Offset from the first transmission at which attempt `attempt` (0-based) may be sent,
     /// given the response time-out and the number of retries configured.
-    pub fn attempt_offset(self, attempt: u8, timeout: Duration, retries: u8) -> Duration {
+    pub(crate) fn attempt_offset(self, attempt: u8, timeout: Duration, retries: u8) -> Duration {
         match self {
             RetrySpacing::Immediate => Duration::ZERO,
             RetrySpacing::RideThroughBlackout => {
@@ -138,12 +138,12 @@ impl RetrySpacing {
 /// The frame was longer than [`TX_CAPACITY`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct FrameTooLong;
+pub(crate) struct FrameTooLong;
 
 /// What happened to a transaction after a failed attempt or a time-out.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub enum Outcome {
+pub(crate) enum Outcome {
     /// Another attempt is scheduled.
     Retrying(TransactionError),
     /// No attempts left (or the error is final): the transaction failed.
@@ -162,7 +162,7 @@ enum Phase {
 
 /// One request with its retries. `T` is the driver's note of what was asked.
 #[derive(Debug, Clone)]
-pub struct Transaction<T> {
+pub(crate) struct Transaction<T> {
     tag: T,
     frame: Vec<u8, TX_CAPACITY>,
     timeout: Duration,
@@ -178,7 +178,7 @@ pub struct Transaction<T> {
 
 impl<T> Transaction<T> {
     /// A request whose first attempt may go out from `ready_at` on.
-    pub fn new(
+    pub(crate) fn new(
         tag: T,
         frame: &[u8],
         ready_at: Instant,
@@ -204,7 +204,7 @@ impl<T> Transaction<T> {
 
     /// A request the unit never answers (HPR SLEEP, 086): sent once, then the line is
     /// left quiet for `quiet` before the transaction counts as done.
-    pub fn without_reply(
+    pub(crate) fn without_reply(
         tag: T,
         frame: &[u8],
         ready_at: Instant,
@@ -216,34 +216,34 @@ impl<T> Transaction<T> {
     }
 
     /// The driver's note of what was asked.
-    pub fn tag(&self) -> &T {
+    pub(crate) fn tag(&self) -> &T {
         &self.tag
     }
 
     /// The encoded request.
-    pub fn frame(&self) -> &[u8] {
+    pub(crate) fn frame(&self) -> &[u8] {
         &self.frame
     }
 
     /// Attempts transmitted so far.
     #[cfg(test)]
-    pub fn attempts_sent(&self) -> u8 {
+    pub(crate) fn attempts_sent(&self) -> u8 {
         self.attempts_sent
     }
 
     /// True when some attempt got a reply, even a damaged or unusable one: the unit is
     /// there (only silence, [`TransactionError::Timeout`], says otherwise).
-    pub fn heard_reply(&self) -> bool {
+    pub(crate) fn heard_reply(&self) -> bool {
         self.heard_reply
     }
 
     /// True while an attempt is on the wire and its reply is awaited.
-    pub fn is_awaiting_reply(&self) -> bool {
+    pub(crate) fn is_awaiting_reply(&self) -> bool {
         self.expects_reply && matches!(self.phase, Phase::AwaitingReply { .. })
     }
 
     /// The next time this transaction needs attention: the send time or the deadline.
-    pub fn poll_at(&self) -> Instant {
+    pub(crate) fn poll_at(&self) -> Instant {
         match self.phase {
             Phase::Ready { at } => at,
             Phase::AwaitingReply { deadline } => deadline,
@@ -251,7 +251,7 @@ impl<T> Transaction<T> {
     }
 
     /// The frame to transmit now, if an attempt is due.
-    pub fn poll_transmit(&mut self, now: Instant) -> Option<&[u8]> {
+    pub(crate) fn poll_transmit(&mut self, now: Instant) -> Option<&[u8]> {
         match self.phase {
             Phase::Ready { at } if now >= at => {
                 if self.first_sent.is_none() {
@@ -272,7 +272,7 @@ impl<T> Transaction<T> {
     /// so the frame's own transmission (10-25 ms of a 100 ms time-out at 19200 baud) does not
     /// eat into it. Never moves the deadline earlier; without this call it runs from the hand
     /// over ([`Transaction::poll_transmit`]).
-    pub fn transmitted(&mut self, at: Instant) {
+    pub(crate) fn transmitted(&mut self, at: Instant) {
         if let Phase::AwaitingReply { deadline } = self.phase {
             self.phase = Phase::AwaitingReply {
                 deadline: deadline.max(at + self.timeout),
@@ -281,7 +281,7 @@ impl<T> Transaction<T> {
     }
 
     /// Call when time passes; reports a time-out (and what follows) once the deadline is hit.
-    pub fn handle_timeout(&mut self, now: Instant) -> Option<Outcome> {
+    pub(crate) fn handle_timeout(&mut self, now: Instant) -> Option<Outcome> {
         match self.phase {
             Phase::AwaitingReply { deadline } if now >= deadline => {
                 if self.expects_reply {
@@ -296,7 +296,7 @@ impl<T> Transaction<T> {
 
     /// The current attempt ended with a bad or unusable reply (or an error reply).
     /// Schedules a retry when the error allows it and attempts remain.
-    pub fn attempt_failed(&mut self, now: Instant, error: TransactionError) -> Outcome {
+    pub(crate) fn attempt_failed(&mut self, now: Instant, error: TransactionError) -> Outcome {
         if error != TransactionError::Timeout {
             self.heard_reply = true;
         }

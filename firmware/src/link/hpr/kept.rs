@@ -5,7 +5,7 @@ use heapless::Vec;
 use plasma_protocol::hpr::{Request, SystemId};
 
 /// Kept settings requests (one per kind at most: see [`HprKept::keep`]).
-pub const KEPT_CAPACITY: usize = 6;
+pub(crate) const KEPT_CAPACITY: usize = 6;
 
 /// What a settings request sets (bits), to tell which earlier requests a new one replaces.
 const SETS_AMPS: u8 = 1;
@@ -35,7 +35,7 @@ fn amps_of(request: &Request) -> Option<u16> {
 /// are kept across link-downs and re-applied (after 004 REMOTE_MODE) when the unit returns or
 /// shows that it restarted, like the Powermax settings.
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
-pub struct HprKept {
+pub(crate) struct HprKept {
     requests: Vec<Request, KEPT_CAPACITY>,
     /// The unit that confirmed them (another unit does not get them).
     system: Option<SystemId>,
@@ -43,23 +43,23 @@ pub struct HprKept {
 
 impl HprKept {
     /// The kept requests, in the order they are re-applied.
-    pub fn as_slice(&self) -> &[Request] {
+    pub(crate) fn as_slice(&self) -> &[Request] {
         &self.requests
     }
 
     /// True when nothing is kept.
-    pub fn is_empty(&self) -> bool {
+    pub(crate) fn is_empty(&self) -> bool {
         self.requests.is_empty()
     }
 
     /// The unit that confirmed the kept settings.
-    pub fn system(&self) -> Option<SystemId> {
+    pub(crate) fn system(&self) -> Option<SystemId> {
         self.system
     }
 
     /// Keep `request` (a setting `system` confirmed); earlier requests whose every setting
     /// it sets again are dropped, and so is everything another unit confirmed.
-    pub fn keep(&mut self, system: SystemId, request: Request) {
+    pub(crate) fn keep(&mut self, system: SystemId, request: Request) {
         let new = sets(&request);
         if new == 0 {
             return;
@@ -83,13 +83,13 @@ impl HprKept {
     }
 
     /// Forget everything kept.
-    pub fn clear(&mut self) {
+    pub(crate) fn clear(&mut self) {
         self.requests.clear();
         self.system = None;
     }
 
     /// The nominal current the kept settings give, if they set one.
-    pub fn amps(&self) -> Option<u16> {
+    pub(crate) fn amps(&self) -> Option<u16> {
         self.requests.iter().rev().find_map(amps_of)
     }
 }

@@ -13,7 +13,7 @@
 //! [`kept`] keeps the settings to re-apply, `reply` reads what the unit answers, and `submit`
 //! checks a command against the manual's rules before it is queued.
 
-mod kept;
+pub(crate) mod kept;
 mod reply;
 mod submit;
 
@@ -26,18 +26,18 @@ use crate::link::slow::SlowData;
 use crate::link::status::Family;
 use plasma_protocol::time::{Duration, Instant};
 
-pub use kept::{HprKept, KEPT_CAPACITY};
+use kept::KEPT_CAPACITY;
 
 /// How long all traffic stops when the state is pilot arc: the manual's HF-ignition burst
 /// ("can be active for up to 1 second").
-pub const PILOT_ARC_PAUSE: Duration = Duration::from_secs(1);
+pub(crate) const PILOT_ARC_PAUSE: Duration = Duration::from_secs(1);
 /// Longest RAW HPR frame.
-pub const RAW_HPR_CAPACITY: usize = hpr::MAX_FRAME_LEN;
+pub(crate) const RAW_HPR_CAPACITY: usize = hpr::MAX_FRAME_LEN;
 const QUEUE_CAPACITY: usize = 4;
 
 /// What is expected back.
 #[derive(Debug, Clone, PartialEq, Eq)]
-pub enum HprExpect {
+pub(crate) enum HprExpect {
     /// A typed request; its reply is parsed for it.
     Typed(Request),
     /// A RAW frame with this id; any reply echoing it (or 500/501) is forwarded.
@@ -46,7 +46,7 @@ pub enum HprExpect {
 
 /// What an HPR transaction is for.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum HprPurpose {
+pub(crate) enum HprPurpose {
     /// GET_PS_INFO.
     Poll,
     /// GET_STATE while the pilot arc lasts.
@@ -82,7 +82,7 @@ const SLOW_TIMERS: u8 = 2;
 const SLOW_ALL: u8 = SLOW_ERROR_LOG | SLOW_TIMERS;
 
 /// Wait before re-applying kept settings again after a re-apply failed.
-pub const REAPPLY_BACKOFF: Duration = Duration::from_secs(5);
+pub(crate) const REAPPLY_BACKOFF: Duration = Duration::from_secs(5);
 
 /// The command being carried out.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -96,7 +96,7 @@ struct ActiveJob {
 
 /// Driver state for one detected HPR or MaxPro200.
 #[derive(Debug, Clone)]
-pub struct HprDriver {
+pub(crate) struct HprDriver {
     system: SystemId,
     next_poll_at: Instant,
     pause_until: Option<Instant>,
@@ -176,7 +176,7 @@ impl HprDriver {
     }
 
     /// Family of the unit.
-    pub fn family(&self) -> Family {
+    pub(crate) fn family(&self) -> Family {
         if self.maxpro() {
             Family::MaxPro200
         } else {
@@ -347,7 +347,7 @@ fn typed(
 }
 
 /// The frame for `request`: `>ID data CK<`, nothing after `<`.
-pub fn emit(request: &Request) -> Option<Vec<u8, RAW_HPR_CAPACITY>> {
+pub(crate) fn emit(request: &Request) -> Option<Vec<u8, RAW_HPR_CAPACITY>> {
     let mut buf = [0u8; hpr::MAX_FRAME_LEN];
     let len = request.emit(&mut buf).ok()?;
     Vec::from_slice(buf.get(..len)?).ok()

@@ -19,7 +19,7 @@ use crate::link::status::{Limits, PowermaxSettings};
 /// The poll: 0x2093-0x209F in one request (force registers read back, fault, limits, arc
 /// time), falling back to its documented parts on exception 02; a part the unit refuses
 /// too (e.g. the write-only force registers) is left out from then on.
-pub const POLL_PLAN: plasma_protocol::powermax::BlockRead = FULL_BLOCK;
+pub(crate) const POLL_PLAN: plasma_protocol::powermax::BlockRead = FULL_BLOCK;
 
 /// Part indexes of [`POLL_PLAN`].
 const PART_MODE_CURRENT: usize = 0;
@@ -31,7 +31,7 @@ const STATUS_OFFSET: usize = 5;
 
 /// What one poll tells.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct PollData {
+pub(crate) struct PollData {
     /// Force registers as read back, when the unit allows reading them.
     pub settings: Option<PowermaxSettings>,
     /// Active fault.
@@ -43,7 +43,7 @@ pub struct PollData {
 }
 
 /// Decode what a poll cycle read.
-pub fn decode_poll(poller: &BlockPoller) -> Option<PollData> {
+pub(crate) fn decode_poll(poller: &BlockPoller) -> Option<PollData> {
     let registers = poller.registers();
     if !poller.uses_parts() {
         let full = LegacyFullStatus::decode(registers).ok()?;
@@ -85,7 +85,7 @@ fn from_parts(settings: Option<legacy::LegacySettings>, status: LegacyStatus) ->
 }
 
 /// The writes that enter remote control, in order (see the module docs).
-pub fn settings_writes(
+pub(crate) fn settings_writes(
     mode: OperatingMode,
     current: Amps,
     pressure: Pressure,
@@ -103,7 +103,7 @@ pub fn settings_writes(
 }
 
 /// Zeros to the three force registers, in order.
-pub fn exit_writes() -> [MbRequest; 3] {
+pub(crate) fn exit_writes() -> [MbRequest; 3] {
     [
         write(MODE_FORCE, 0),
         write(legacy::CURRENT_FORCE, 0),
@@ -117,7 +117,7 @@ fn write(address: u16, value: u16) -> MbRequest {
 
 /// Fault read (0x2098): between status polls, and to confirm the unit took the settings (no
 /// 0-11-n fault).
-pub fn read_fault() -> MbRequest {
+pub(crate) fn read_fault() -> MbRequest {
     MbRequest::ReadInput {
         start: legacy::FAULT_CODE,
         quantity: 1,
@@ -125,7 +125,7 @@ pub fn read_fault() -> MbRequest {
 }
 
 /// Gas test coil 0x0832 (SYNC guide Table 1).
-pub fn gas_test(on: bool) -> MbRequest {
+pub(crate) fn gas_test(on: bool) -> MbRequest {
     MbRequest::WriteCoil {
         address: legacy::GAS_TEST_COIL,
         on,
@@ -133,7 +133,7 @@ pub fn gas_test(on: bool) -> MbRequest {
 }
 
 /// True for the 0-11-n faults a unit raises for settings it does not permit.
-pub fn is_setting_fault(fault: FaultCode) -> bool {
+pub(crate) fn is_setting_fault(fault: FaultCode) -> bool {
     (110..=112).contains(&fault.0)
 }
 

@@ -33,11 +33,11 @@ use settings::Desired;
 
 /// Silence after a quick restart (SYNC guide: "wait 2 seconds before you send a new read or
 /// write request").
-pub const QUICK_RESTART_BLACKOUT: Duration = Duration::from_secs(2);
+pub(crate) const QUICK_RESTART_BLACKOUT: Duration = Duration::from_secs(2);
 /// How often the SYNC cartridge UID is read to notice a cartridge change.
-pub const UID_CHECK_INTERVAL: Duration = Duration::from_secs(1);
+pub(crate) const UID_CHECK_INTERVAL: Duration = Duration::from_secs(1);
 /// Wait before re-applying kept settings again after a re-apply failed.
-pub const REAPPLY_BACKOFF: Duration = Duration::from_secs(5);
+pub(crate) const REAPPLY_BACKOFF: Duration = Duration::from_secs(5);
 /// Commands waiting behind the active one.
 const QUEUE_CAPACITY: usize = 4;
 /// The active fault is read at least this often, from the start of one read of the fault
@@ -51,7 +51,7 @@ pub const FAULT_CHECK_INTERVAL: Duration = Duration::from_millis(60);
 
 /// Which register family.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Variant {
+pub(crate) enum Variant {
     /// 0x3xxx.
     Sync,
     /// 0x2xxx.
@@ -60,7 +60,7 @@ pub enum Variant {
 
 /// What a Modbus transaction of this driver is for.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum MbPurpose {
+pub(crate) enum MbPurpose {
     /// Status poll (whole block or part).
     Poll(BlockPart),
     /// A slow-data span.
@@ -111,7 +111,7 @@ struct Active {
 
 /// Driver state for one detected Powermax.
 #[derive(Debug, Clone)]
-pub struct PowermaxDriver {
+pub(crate) struct PowermaxDriver {
     variant: Variant,
     poll: BlockPoller,
     poll_started: Instant,
@@ -172,7 +172,7 @@ impl PowermaxDriver {
     }
 
     /// The family this driver speaks.
-    pub fn family(&self) -> Family {
+    pub(crate) fn family(&self) -> Family {
         match self.variant {
             Variant::Sync => Family::PowermaxSync,
             Variant::Legacy => Family::PowermaxLegacy,
@@ -180,7 +180,7 @@ impl PowermaxDriver {
     }
 
     /// True when the active command is a RAW forward (its reply bytes are kept).
-    pub fn active_is_raw(&self) -> bool {
+    pub(crate) fn active_is_raw(&self) -> bool {
         matches!(
             self.active,
             Some(Active {

@@ -13,12 +13,12 @@ use crate::link::status::Family;
 use crate::link::transaction::TransactionError;
 
 /// Most registers a request built by the link writes (remote settings: 3).
-pub const MAX_WRITE_WORDS: usize = 8;
+pub(crate) const MAX_WRITE_WORDS: usize = 8;
 
 /// A Modbus request the link owns (a [`Request`] borrows its written values).
 #[derive(Debug, Clone, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub enum MbRequest {
+pub(crate) enum MbRequest {
     /// Function 04.
     ReadInput {
         /// First register.
@@ -72,7 +72,7 @@ pub enum MbRequest {
 
 impl MbRequest {
     /// Owned copy of `request`; `None` when it writes more than [`MAX_WRITE_WORDS`] registers.
-    pub fn from_request(request: &Request<'_>) -> Option<Self> {
+    pub(crate) fn from_request(request: &Request<'_>) -> Option<Self> {
         Some(match *request {
             Request::ReadCoils { start, quantity } => MbRequest::ReadCoils { start, quantity },
             Request::ReadHoldingRegisters { start, quantity } => {
@@ -103,7 +103,7 @@ impl MbRequest {
     }
 
     /// The borrowed form the protocol crate works with.
-    pub fn as_request(&self) -> Request<'_> {
+    pub(crate) fn as_request(&self) -> Request<'_> {
         match self {
             MbRequest::ReadInput { start, quantity } => Request::ReadInputRegisters {
                 start: *start,
@@ -137,13 +137,13 @@ impl MbRequest {
     }
 
     /// The ASCII frame for node `address`, written into `out`.
-    pub fn encode(&self, address: u8, out: &mut [u8]) -> plasma_protocol::Result<usize> {
+    pub(crate) fn encode(&self, address: u8, out: &mut [u8]) -> plasma_protocol::Result<usize> {
         modbus_ascii::encode_request(address, &self.as_request(), out)
     }
 }
 
 /// Registers of a read reply (function 03 or 04).
-pub fn read_values<'a>(response: &Response<'a>) -> Option<Registers<'a>> {
+pub(crate) fn read_values<'a>(response: &Response<'a>) -> Option<Registers<'a>> {
     match response {
         Response::ReadInputRegisters { values } | Response::ReadHoldingRegisters { values } => {
             Some(*values)
@@ -153,7 +153,7 @@ pub fn read_values<'a>(response: &Response<'a>) -> Option<Registers<'a>> {
 }
 
 /// How a protocol-crate error on a received frame counts.
-pub fn classify(error: plasma_protocol::Error) -> TransactionError {
+pub(crate) fn classify(error: plasma_protocol::Error) -> TransactionError {
     match error {
         plasma_protocol::Error::BadChecksum { .. } => TransactionError::BadChecksum,
         plasma_protocol::Error::Mismatch => TransactionError::Mismatch,
@@ -175,7 +175,7 @@ const BLOCK_CAPACITY: usize = 32;
 /// A block read that falls back to its documented parts when the unit answers exception 02
 /// (illegal data address), and remembers that for the unit (and any part it refuses too).
 #[derive(Debug, Clone)]
-pub struct BlockPoller {
+pub(crate) struct BlockPoller {
     plan: BlockRead,
     use_parts: bool,
     refused_parts: u8,
@@ -188,11 +188,11 @@ pub struct BlockPoller {
 }
 
 /// What a [`BlockPoller`] asks for: the whole block (`None`) or part `Some(i)`.
-pub type BlockPart = Option<u8>;
+pub(crate) type BlockPart = Option<u8>;
 
 impl BlockPoller {
     /// A poller that tries the whole block first.
-    pub fn new(plan: BlockRead) -> Self {
+    pub(crate) fn new(plan: BlockRead) -> Self {
         BlockPoller {
             plan,
             use_parts: false,
@@ -205,17 +205,17 @@ impl BlockPoller {
     }
 
     /// True once the unit refused the whole block (the fallback is remembered).
-    pub fn uses_parts(&self) -> bool {
+    pub(crate) fn uses_parts(&self) -> bool {
         self.use_parts
     }
 
     /// True while a cycle is in progress.
-    pub fn in_cycle(&self) -> bool {
+    pub(crate) fn in_cycle(&self) -> bool {
         self.in_cycle
     }
 
     /// Begin a cycle.
-    pub fn start(&mut self) {
+    pub(crate) fn start(&mut self) {
         self.in_cycle = true;
         self.next_part = 0;
         self.read_parts = 0;
@@ -223,7 +223,7 @@ impl BlockPoller {
     }
 
     /// Abandon the cycle (a read failed).
-    pub fn abort(&mut self) {
+    pub(crate) fn abort(&mut self) {
         self.in_cycle = false;
     }
 
@@ -236,7 +236,7 @@ impl BlockPoller {
     }
 
     /// The read to send next in this cycle.
-    pub fn request(&self) -> Option<(MbRequest, BlockPart)> {
+    pub(crate) fn request(&self) -> Option<(MbRequest, BlockPart)> {
         if !self.in_cycle {
             return None;
         }
@@ -261,7 +261,7 @@ impl BlockPoller {
     }
 
     /// Store the reply to `part`. Returns true when the cycle is complete.
-    pub fn on_values(&mut self, part: BlockPart, values: Registers<'_>) -> bool {
+    pub(crate) fn on_values(&mut self, part: BlockPart, values: Registers<'_>) -> bool {
         let len = self.plan.len().min(BLOCK_CAPACITY);
         match part {
             None => {
@@ -293,7 +293,7 @@ impl BlockPoller {
 
     /// The unit refused `part` with exception 02: fall back (and remember it). Returns true
     /// when the cycle is complete (nothing left to read).
-    pub fn on_illegal_address(&mut self, part: BlockPart) -> bool {
+    pub(crate) fn on_illegal_address(&mut self, part: BlockPart) -> bool {
         match part {
             None => {
                 self.use_parts = true;
@@ -317,17 +317,17 @@ impl BlockPoller {
     }
 
     /// True when part `index` holds fresh values from this cycle.
-    pub fn part_read(&self, index: usize) -> bool {
+    pub(crate) fn part_read(&self, index: usize) -> bool {
         self.read_parts & (bit(index)) != 0
     }
 
     /// True when every documented part holds fresh values.
-    pub fn complete(&self) -> bool {
+    pub(crate) fn complete(&self) -> bool {
         (0..self.plan.parts().len()).all(|i| self.part_read(i))
     }
 
     /// The block-shaped registers (positions of unread parts hold stale values).
-    pub fn registers(&self) -> Registers<'_> {
+    pub(crate) fn registers(&self) -> Registers<'_> {
         let len = self.plan.len().min(BLOCK_CAPACITY);
         Registers::Words(self.buf.get(..len).unwrap_or(&[]))
     }
@@ -340,7 +340,7 @@ impl BlockPoller {
 /// Legacy: the force registers 0x2093, 0x2094, 0x2096 (06) and the gas-test coil 0x0832.
 /// The quick restart (0x308E/0x308F) is deliberately not here: it must go through
 /// `LinkCommand::QuickRestart`, which checks for 0-50-0 and keeps the 2 s silence.
-pub fn check_raw_request(family: Family, request: &Request<'_>) -> Result<(), Refusal> {
+pub(crate) fn check_raw_request(family: Family, request: &Request<'_>) -> Result<(), Refusal> {
     const LEGACY_FORCE: [u16; 3] = [0x2093, 0x2094, 0x2096];
     let sync = family == Family::PowermaxSync;
     match *request {
@@ -374,7 +374,7 @@ pub fn check_raw_request(family: Family, request: &Request<'_>) -> Result<(), Re
 }
 
 /// True for exception 02.
-pub fn is_illegal_address(error: TransactionError) -> bool {
+pub(crate) fn is_illegal_address(error: TransactionError) -> bool {
     error == TransactionError::Exception(ExceptionCode::IllegalDataAddress)
 }
 

@@ -13,11 +13,11 @@ use crate::link::status::{Limits, PowermaxSettings};
 
 /// The poll: 0x3010-0x301A in one function-04 request (fallback: 0x3010-0x3012 and
 /// 0x3018-0x301A).
-pub const POLL_PLAN: plasma_protocol::powermax::BlockRead = sync::STATUS_BLOCK;
+pub(crate) const POLL_PLAN: plasma_protocol::powermax::BlockRead = sync::STATUS_BLOCK;
 
 /// What one poll tells.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct PollData {
+pub(crate) struct PollData {
     /// Settings as the unit reports them.
     pub settings: PowermaxSettings,
     /// Actual output current.
@@ -29,7 +29,7 @@ pub struct PollData {
 }
 
 /// Decode a complete poll block.
-pub fn decode_poll(registers: Registers<'_>) -> Option<PollData> {
+pub(crate) fn decode_poll(registers: Registers<'_>) -> Option<PollData> {
     let block = StatusBlock::decode(registers).ok()?;
     Some(PollData {
         settings: PowermaxSettings {
@@ -44,7 +44,7 @@ pub fn decode_poll(registers: Registers<'_>) -> Option<PollData> {
 }
 
 /// A read request for a span (function 04).
-pub fn read(span: RegisterSpan) -> MbRequest {
+pub(crate) fn read(span: RegisterSpan) -> MbRequest {
     MbRequest::ReadInput {
         start: span.start,
         quantity: span.quantity,
@@ -54,7 +54,7 @@ pub fn read(span: RegisterSpan) -> MbRequest {
 /// Slow-data items of a SYNC unit, in the order they are read (limits first: settings
 /// commands need them).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum SlowItem {
+pub(crate) enum SlowItem {
     /// 0x3001-0x3005.
     Permitted,
     /// 0x3000.
@@ -71,7 +71,7 @@ pub enum SlowItem {
 
 impl SlowItem {
     /// Every item, in reading order.
-    pub const ALL: [SlowItem; 6] = [
+    pub(crate) const ALL: [SlowItem; 6] = [
         SlowItem::Permitted,
         SlowItem::Identification,
         SlowItem::PsCounters,
@@ -81,7 +81,7 @@ impl SlowItem {
     ];
 
     /// Bit in a pending-set.
-    pub const fn bit(self) -> u8 {
+    pub(crate) const fn bit(self) -> u8 {
         match self {
             SlowItem::Permitted => 1,
             SlowItem::Identification => 2,
@@ -93,16 +93,16 @@ impl SlowItem {
     }
 
     /// Items that depend on the installed cartridge.
-    pub const CARTRIDGE_ITEMS: u8 = SlowItem::Permitted.bit()
+    pub(crate) const CARTRIDGE_ITEMS: u8 = SlowItem::Permitted.bit()
         | SlowItem::Cartridge.bit()
         | SlowItem::FaultLog.bit()
         | SlowItem::CartridgeName.bit();
 
     /// Every item.
-    pub const ALL_ITEMS: u8 = 0x3F;
+    pub(crate) const ALL_ITEMS: u8 = 0x3F;
 
     /// The single-span read for this item (the cartridge block is read by its poller).
-    pub fn span(self) -> Option<RegisterSpan> {
+    pub(crate) fn span(self) -> Option<RegisterSpan> {
         match self {
             SlowItem::Permitted => Some(PERMITTED_SETTINGS_SPAN),
             SlowItem::Identification => Some(IDENTIFICATION_SPAN),
@@ -115,7 +115,7 @@ impl SlowItem {
 }
 
 /// Permitted settings as link limits.
-pub fn limits(registers: Registers<'_>) -> Option<Limits> {
+pub(crate) fn limits(registers: Registers<'_>) -> Option<Limits> {
     let p = PermittedSettings::decode(registers).ok()?;
     Some(Limits {
         modes: Some(p.modes),
@@ -127,7 +127,7 @@ pub fn limits(registers: Registers<'_>) -> Option<Limits> {
 }
 
 /// The one request that writes mode, current and pressure (0x3080-0x3082, function 0x10).
-pub fn write_settings(words: [u16; 3]) -> MbRequest {
+pub(crate) fn write_settings(words: [u16; 3]) -> MbRequest {
     MbRequest::WriteRegisters {
         start: sync::REMOTE_MODE,
         values: Vec::from_array(words),
@@ -135,7 +135,7 @@ pub fn write_settings(words: [u16; 3]) -> MbRequest {
 }
 
 /// The words for `settings`; `None` when the protocol crate refuses them.
-pub fn settings_words(
+pub(crate) fn settings_words(
     mode: plasma_protocol::powermax::OperatingMode,
     current: Amps,
     pressure: Pressure,
@@ -144,12 +144,12 @@ pub fn settings_words(
 }
 
 /// Read the settings back (0x3010-0x3012).
-pub fn read_back() -> MbRequest {
+pub(crate) fn read_back() -> MbRequest {
     read(SETTINGS_SPAN)
 }
 
 /// Decode a settings read-back.
-pub fn decode_settings(registers: Registers<'_>) -> Option<PowermaxSettings> {
+pub(crate) fn decode_settings(registers: Registers<'_>) -> Option<PowermaxSettings> {
     let s = sync::Settings::decode(registers).ok()?;
     Some(PowermaxSettings {
         mode: s.mode,
@@ -159,12 +159,12 @@ pub fn decode_settings(registers: Registers<'_>) -> Option<PowermaxSettings> {
 }
 
 /// Quick restart (0x308E-0x308F).
-pub fn quick_restart() -> Option<MbRequest> {
+pub(crate) fn quick_restart() -> Option<MbRequest> {
     MbRequest::from_request(&sync::quick_restart())
 }
 
 /// Gas test coil 0x3180.
-pub fn gas_test(on: bool) -> MbRequest {
+pub(crate) fn gas_test(on: bool) -> MbRequest {
     MbRequest::WriteCoil {
         address: sync::GAS_TEST_COIL,
         on,
@@ -172,16 +172,16 @@ pub fn gas_test(on: bool) -> MbRequest {
 }
 
 /// Zeros to 0x3080-0x3082 in one request.
-pub fn exit_remote() -> MbRequest {
+pub(crate) fn exit_remote() -> MbRequest {
     write_settings(sync::EXIT_REMOTE_WORDS)
 }
 
 /// The active fault alone (0x301A), read between status polls.
-pub fn read_fault() -> MbRequest {
+pub(crate) fn read_fault() -> MbRequest {
     read(sync::ACTIVE_FAULT_SPAN)
 }
 
 /// UID read used to notice a cartridge change (0x3030-0x3037).
-pub fn read_uid() -> MbRequest {
+pub(crate) fn read_uid() -> MbRequest {
     read(sync::CARTRIDGE_UID_SPAN)
 }
