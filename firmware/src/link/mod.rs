@@ -81,6 +81,20 @@
 //! link.handle_rx(Instant::from_millis(20), b":012B0E0481000101010630383133333504\r\n");
 //! assert!(link.status().link_up);
 //! ```
+//!
+//! # Where things are
+//! - This file: the public types and [`PsLink`]'s entry points. `core.rs`: `Core`, the state
+//!   the family drivers and detection share (configuration, status, counters, kept settings,
+//!   events).
+//! - The link's own machinery, as `impl PsLink` blocks: `detect.rs` (auto-detection),
+//!   `schedule.rs` (the transaction in flight, link-down counting), `receive.rs` (received
+//!   frames to answers), `phase.rs` (link up, re-identification, link down).
+//! - The family drivers, their own types: `powermax/` (with the Modbus pieces, `modbus.rs`,
+//!   and the SYNC and legacy register maps, `sync.rs` and `legacy.rs`) and `hpr/`.
+//! - Shared parts: `transaction.rs`, `slow.rs`, `kept.rs`, `event.rs`, `status.rs`,
+//!   `diagnostics.rs`, `config.rs`.
+//! - Tests sit beside the file they test (`detect/tests.rs` for `detect.rs`, ...), with the
+//!   byte-level test bench in `test_support.rs`.
 
 pub(crate) mod command;
 pub(crate) mod config;
