@@ -11,9 +11,6 @@ use plasma_protocol::time::{Duration, Instant};
 use crate::link::test_support::*;
 use crate::link::{Family, LinkConfig, LinkEvent, Model, ProtocolChoice};
 
-// ---------------------------------------------------------------------------------------
-// detection
-
 #[test]
 fn detects_sync_by_device_identification() {
     let mut bench = Bench::new(LinkConfig::default());

@@ -12,9 +12,6 @@ use crate::link::{
     LinkEvent, ProtocolChoice, Refusal, SettingsFailure,
 };
 
-// ---------------------------------------------------------------------------------------
-// HPR
-
 fn hpr_bench(system: &str) -> Bench {
     let config = LinkConfig {
         protocol: ProtocolChoice::Hpr,

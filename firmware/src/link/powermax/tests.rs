@@ -11,9 +11,6 @@ use crate::link::{
     ActiveFault, CommandOutput, FAULT_CHECK_INTERVAL, LinkCommand, LinkConfig, LinkEvent, Refusal,
 };
 
-// ---------------------------------------------------------------------------------------
-// faults, quick restart, gas test
-
 #[test]
 fn a_new_fault_is_reported_within_one_poll_interval() {
     let mut bench = sync_bench();

@@ -10,9 +10,6 @@ use crate::link::test_support::*;
 use crate::link::{CommandOutput, Family, LinkCommand, LinkConfig, LinkEvent};
 use crate::testing::SimPs;
 
-// ---------------------------------------------------------------------------------------
-// transactions: validation and classification
-
 #[test]
 fn replies_are_validated_and_errors_classified() {
     let mut bench = Bench::new(LinkConfig::default());

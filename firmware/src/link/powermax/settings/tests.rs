@@ -10,9 +10,6 @@ use crate::link::{
     SettingsFailure,
 };
 
-// ---------------------------------------------------------------------------------------
-// SYNC settings
-
 #[test]
 fn settings_outside_the_limits_are_refused_before_anything_is_sent() {
     let mut bench = Bench::new(LinkConfig::default());
