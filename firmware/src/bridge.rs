@@ -34,10 +34,10 @@
 //! assert_eq!(reply, expected.as_bytes());
 //! ```
 
+use crate::cnc::{Context, Session, SessionStats};
+pub use crate::cnc::{MAX_REPLY_LEN, OUTPUT_CAPACITY, SimCommand};
 use crate::io::{Inputs, IoConfig, IoEvent, Outputs, SupplyState};
 use crate::link::{Diagnostics, PowermaxSettings, PsLink, UnitStatus};
-use crate::session::{Context, Session, SessionStats};
-pub use crate::session::{MAX_REPLY_LEN, OUTPUT_CAPACITY, SimCommand};
 use crate::settings::{Process, SaveError, Settings};
 use plasma_protocol::serial::PortConfig;
 use plasma_protocol::time::Instant;
@@ -283,7 +283,7 @@ impl From<&UnitStatus> for SupplyState {
 /// A persisted process in the unit's terms (`CPA` and `EXPANDED` are one mode).
 fn unit_settings(process: &Process) -> PowermaxSettings {
     PowermaxSettings {
-        mode: Some(crate::session::unit_mode(process.mode)),
+        mode: Some(crate::cnc::unit_mode(process.mode)),
         current: process.amps,
         pressure: process.pressure,
     }
@@ -297,7 +297,7 @@ mod tests {
     use plasma_protocol::cnc::{Amps, Mode, Pressure};
 
     use super::*;
-    use crate::session::tests::{NAK_TOKEN, Rig};
+    use crate::cnc::tests::{NAK_TOKEN, Rig};
     use plasma_protocol::time::Duration;
 
     fn with_process(amps: u16, events: bool) -> Settings {
@@ -364,7 +364,7 @@ mod tests {
     fn a_phoenix_frame_that_stops_arriving_is_naked_after_the_idle_time() {
         let mut rig = Rig::new(Settings::default(), None);
         rig.bridge.handle_cnc_rx(rig.now, b"\x01\x02FAU");
-        let deadline = rig.now + crate::session::FRAME_IDLE_TIMEOUT;
+        let deadline = rig.now + crate::cnc::FRAME_IDLE_TIMEOUT;
         assert!(rig.bridge.poll_at().is_some_and(|at| at <= deadline));
         rig.bridge.poll(deadline - Duration::from_millis(1));
         rig.collect();
@@ -375,7 +375,7 @@ mod tests {
             rig.received,
             [
                 NAK_TOKEN,
-                std::format!("ERR SYNTAX {}", crate::session::texts::PHOENIX_TRUNCATED).as_str()
+                std::format!("ERR SYNTAX {}", crate::cnc::texts::PHOENIX_TRUNCATED).as_str()
             ]
         );
         // Text lines work again at once.

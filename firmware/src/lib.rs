@@ -5,7 +5,8 @@
 //!
 //! - [`bridge`]: the façade the board and the host harness drive: link, CNC session and
 //!   settings behind one sans-IO object.
-//! - [`session`]: the CNC text protocol and Phoenix serial messaging.
+//! - [`cnc`]: the CNC side: the text protocol, Phoenix serial messaging, the Powermax-speaking
+//!   port and the one command table.
 //! - [`settings`]: what survives a power cycle, and the `CONFIG` keys.
 //! - [`link`]: the power-supply link (Modbus ASCII and HPR).
 //! - [`io`]: all of the torch-safe discrete I/O: the CNC's wiring (input polarity and
@@ -65,14 +66,14 @@ macro_rules! log_texts {
 }
 
 pub mod bridge;
+mod cnc;
 pub mod io;
 pub mod link;
 pub mod pins;
 pub mod runner;
 pub mod safe_state;
-mod session;
 /// The CNC-visible texts of the ERR replies, written once: tests take them from here.
-pub use session::texts;
+pub use cnc::texts;
 pub mod settings;
 pub mod storage;
 pub mod supervisor;

@@ -64,7 +64,7 @@ const CNC_BAUD_WORDS: &str = "9600|19200|38400|57600|115200";
 const CNC_BLOCK_LEN: usize = 7;
 
 /// The CNC port: its UART framing and the node address the bridge answers at as a Powermax
-/// (Modbus ASCII requests on the CNC port, see `session::powermax_port`).
+/// (Modbus ASCII requests on the CNC port, see `cnc::powermax_port`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct CncPort {

@@ -11,9 +11,8 @@ use common::{
 use host_tests::harness::{CncItem, World, WorldOptions};
 use plasma_firmware::io::{Input, Interlock, IoEvent, Output, Reason};
 use plasma_firmware::link::Family;
-use plasma_firmware::link::support::UnitCommand;
 use plasma_firmware::settings::{SaveError, Settings};
-use plasma_firmware::texts::{self, UnsupportedText};
+use plasma_firmware::texts::{self, UnsupportedText, unsupported};
 use plasma_protocol::cnc::{ErrorCode, ParseError};
 use plasma_protocol::time::Duration;
 use plasma_sim::Model;
@@ -278,7 +277,7 @@ fn sync_commands_ok_and_err() {
                 "GASES O2 AIR",
                 err(
                     ErrorCode::Unsupported,
-                    UnsupportedText(UnitCommand::Gases, Family::PowermaxSync),
+                    UnsupportedText(unsupported::GASES, Family::PowermaxSync),
                 )
                 .as_str(),
             ),
@@ -286,7 +285,7 @@ fn sync_commands_ok_and_err() {
                 "CORNER 80",
                 err(
                     ErrorCode::Unsupported,
-                    UnsupportedText(UnitCommand::Corner, Family::PowermaxSync),
+                    UnsupportedText(unsupported::CORNER, Family::PowermaxSync),
                 )
                 .as_str(),
             ),
@@ -298,7 +297,7 @@ fn sync_commands_ok_and_err() {
                 "CLEARWARN",
                 err(
                     ErrorCode::Unsupported,
-                    UnsupportedText(UnitCommand::ClearWarn, Family::PowermaxSync),
+                    UnsupportedText(unsupported::CLEAR_WARN, Family::PowermaxSync),
                 )
                 .as_str(),
             ),
@@ -387,7 +386,7 @@ fn legacy_commands_ok_and_err() {
                 "FAULTLOG",
                 err(
                     ErrorCode::Unsupported,
-                    UnsupportedText(UnitCommand::FaultLog, Family::PowermaxLegacy),
+                    UnsupportedText(unsupported::FAULT_LOG, Family::PowermaxLegacy),
                 )
                 .as_str(),
             ),
@@ -396,7 +395,7 @@ fn legacy_commands_ok_and_err() {
                 "CARTRIDGE",
                 err(
                     ErrorCode::Unsupported,
-                    UnsupportedText(UnitCommand::Cartridge, Family::PowermaxLegacy),
+                    UnsupportedText(unsupported::CARTRIDGE, Family::PowermaxLegacy),
                 )
                 .as_str(),
             ),
@@ -417,7 +416,7 @@ fn legacy_commands_ok_and_err() {
                 "RESTART",
                 err(
                     ErrorCode::Unsupported,
-                    UnsupportedText(UnitCommand::Restart, Family::PowermaxLegacy),
+                    UnsupportedText(unsupported::RESTART, Family::PowermaxLegacy),
                 )
                 .as_str(),
             ),
@@ -467,7 +466,7 @@ fn hpr_commands_ok_and_err() {
                 "CARTRIDGE",
                 err(
                     ErrorCode::Unsupported,
-                    UnsupportedText(UnitCommand::Cartridge, Family::Hpr),
+                    UnsupportedText(unsupported::CARTRIDGE, Family::Hpr),
                 )
                 .as_str(),
             ),
@@ -478,7 +477,7 @@ fn hpr_commands_ok_and_err() {
                 "SET MODE CUT",
                 err(
                     ErrorCode::Unsupported,
-                    UnsupportedText(UnitCommand::SetMode, Family::Hpr),
+                    UnsupportedText(unsupported::SET_MODE, Family::Hpr),
                 )
                 .as_str(),
             ),
@@ -486,7 +485,7 @@ fn hpr_commands_ok_and_err() {
                 "SET PSI 70",
                 err(
                     ErrorCode::Unsupported,
-                    UnsupportedText(UnitCommand::SetPsi, Family::Hpr),
+                    UnsupportedText(unsupported::SET_PSI, Family::Hpr),
                 )
                 .as_str(),
             ),
@@ -494,7 +493,7 @@ fn hpr_commands_ok_and_err() {
                 "SET PROCESS CUT 45 AUTO",
                 err(
                     ErrorCode::Unsupported,
-                    UnsupportedText(UnitCommand::SetProcess, Family::Hpr),
+                    UnsupportedText(unsupported::SET_PROCESS, Family::Hpr),
                 )
                 .as_str(),
             ),
@@ -502,7 +501,7 @@ fn hpr_commands_ok_and_err() {
                 "REMOTE OFF",
                 err(
                     ErrorCode::Unsupported,
-                    UnsupportedText(UnitCommand::RemoteOff, Family::Hpr),
+                    UnsupportedText(unsupported::REMOTE_OFF, Family::Hpr),
                 )
                 .as_str(),
             ),
@@ -510,7 +509,7 @@ fn hpr_commands_ok_and_err() {
                 "RESTART",
                 err(
                     ErrorCode::Unsupported,
-                    UnsupportedText(UnitCommand::Restart, Family::Hpr),
+                    UnsupportedText(unsupported::RESTART, Family::Hpr),
                 )
                 .as_str(),
             ),
@@ -569,7 +568,7 @@ fn maxpro200_commands_ok_and_err() {
                 "FAULTLOG",
                 err(
                     ErrorCode::Unsupported,
-                    UnsupportedText(UnitCommand::FaultLog, Family::MaxPro200),
+                    UnsupportedText(unsupported::FAULT_LOG, Family::MaxPro200),
                 )
                 .as_str(),
             ),
@@ -580,7 +579,7 @@ fn maxpro200_commands_ok_and_err() {
                 "SET MODE CUT",
                 err(
                     ErrorCode::Unsupported,
-                    UnsupportedText(UnitCommand::SetMode, Family::MaxPro200),
+                    UnsupportedText(unsupported::SET_MODE, Family::MaxPro200),
                 )
                 .as_str(),
             ),
@@ -588,7 +587,7 @@ fn maxpro200_commands_ok_and_err() {
                 "GASTEST ON",
                 err(
                     ErrorCode::Unsupported,
-                    UnsupportedText(UnitCommand::GasTest, Family::MaxPro200),
+                    UnsupportedText(unsupported::NOT_SUPPORTED, Family::MaxPro200),
                 )
                 .as_str(),
             ),
@@ -596,7 +595,7 @@ fn maxpro200_commands_ok_and_err() {
                 "CORNER 80",
                 err(
                     ErrorCode::Unsupported,
-                    UnsupportedText(UnitCommand::Corner, Family::MaxPro200),
+                    UnsupportedText(unsupported::CORNER, Family::MaxPro200),
                 )
                 .as_str(),
             ),
@@ -604,7 +603,7 @@ fn maxpro200_commands_ok_and_err() {
                 "CLEARWARN",
                 err(
                     ErrorCode::Unsupported,
-                    UnsupportedText(UnitCommand::ClearWarn, Family::MaxPro200),
+                    UnsupportedText(unsupported::CLEAR_WARN, Family::MaxPro200),
                 )
                 .as_str(),
             ),

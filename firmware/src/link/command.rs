@@ -13,15 +13,6 @@ use plasma_protocol::time::{Decimal, Instant};
 /// refuses a longer one before it reaches the link.
 pub const RAW_CAPACITY: usize = 520;
 
-/// Which HPR gas test. Only the preflow test is offered: no CNC command asks for the
-/// cutflow test (066 / 067), which the protocol crate still knows as a manual command.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub enum HprGasFlow {
-    /// Preflow gases (064 / 065).
-    Preflow,
-}
-
 /// An operation asked of the link; it completes with `LinkEvent::CommandDone`.
 ///
 /// A RAW frame is borrowed: `submit` parses it into the link's own request before it
@@ -58,13 +49,6 @@ pub enum LinkCommand<'a> {
         /// Amps (5 up to the unit's rating).
         amps: u16,
     },
-    /// MaxPro200: set current and gases, the unit sets pressures itself (137).
-    HprSetProcess {
-        /// Amps 5-200.
-        amps: u16,
-        /// Plasma and shield gas.
-        gases: GasPair,
-    },
     /// HPR (auto gas) / MaxPro200: set the inlet gases (096).
     HprSetInletGases(GasPair),
     /// HPR: corner current percent 50-100 (070).
@@ -76,10 +60,9 @@ pub enum LinkCommand<'a> {
     HprClearWarnings,
     /// HPR / MaxPro200: software reset (068), only when the manual allows it.
     HprSoftwareReset,
-    /// HPR: start or stop a gas test (064-067).
+    /// HPR: start or stop the preflow gas test (064 / 065). No CNC command asks for the
+    /// cutflow test (066 / 067), which the protocol crate still knows as a manual command.
     HprGasTest {
-        /// Which gases.
-        flow: HprGasFlow,
         /// Start or stop.
         on: bool,
     },
@@ -90,6 +73,33 @@ pub enum LinkCommand<'a> {
     /// A whole frame to forward as is (Modbus `:...\r\n` or HPR `>...<`), subject to the
     /// allow-lists; the reply frame is returned.
     Raw(&'a [u8]),
+}
+
+impl LinkCommand<'_> {
+    /// True when the driver of `family` carries the command out: the link refuses the others
+    /// with [`Refusal::NotSupported`] before anything is sent. The CNC command table
+    /// (`cnc/table.rs`) sends a family only what this accepts; a test there ties the two.
+    pub const fn runs_on(&self, family: Family) -> bool {
+        let powermax = family.is_modbus();
+        match self {
+            LinkCommand::ApplySettings { .. }
+            | LinkCommand::ExitRemote
+            | LinkCommand::GasTest { .. } => powermax,
+            // Quick restart (clears 0-50-0) exists on SYNC units only.
+            LinkCommand::QuickRestart => matches!(family, Family::PowermaxSync),
+            // Every family's slow data can be read again (a MaxPro200 has none: done at once).
+            LinkCommand::RefreshSlowData | LinkCommand::Raw(_) => true,
+            LinkCommand::HprSetNominalAmps { .. }
+            | LinkCommand::HprSetInletGases(_)
+            | LinkCommand::HprSoftwareReset => !powermax,
+            // The MaxPro200 protocol has none of these.
+            LinkCommand::HprSetCornerCurrent { .. }
+            | LinkCommand::HprClearWarnings
+            | LinkCommand::HprGasTest { .. }
+            | LinkCommand::HprReadErrorLog
+            | LinkCommand::HprReadTimers => matches!(family, Family::Hpr),
+        }
+    }
 }
 
 /// Which HPR value was out of range.
@@ -292,6 +302,46 @@ impl fmt::Display for Refusal {
 mod tests {
     use super::*;
     use std::string::ToString;
+
+    #[test]
+    fn each_family_runs_the_requests_its_driver_has_and_nothing_else() {
+        use Family::{Hpr, MaxPro200, PowermaxLegacy, PowermaxSync};
+        assert!(LinkCommand::HprSetCornerCurrent { percent: 80 }.runs_on(Hpr));
+        assert!(!LinkCommand::HprSetCornerCurrent { percent: 80 }.runs_on(MaxPro200));
+        assert!(!LinkCommand::HprGasTest { on: true }.runs_on(MaxPro200));
+        assert!(LinkCommand::QuickRestart.runs_on(PowermaxSync));
+        assert!(!LinkCommand::QuickRestart.runs_on(PowermaxLegacy));
+        assert!(LinkCommand::RefreshSlowData.runs_on(PowermaxLegacy));
+        assert!(LinkCommand::RefreshSlowData.runs_on(MaxPro200));
+        assert!(LinkCommand::RefreshSlowData.runs_on(Hpr));
+        let settings = LinkCommand::ApplySettings {
+            mode: OperatingMode::Cut,
+            current: Amps::from_raw(45 * Amps::STEPS_PER_UNIT),
+            pressure: Pressure::Auto,
+        };
+        assert!(!settings.runs_on(Hpr));
+        for family in [PowermaxSync, PowermaxLegacy, Hpr, MaxPro200] {
+            assert!(LinkCommand::Raw(b">0020D<").runs_on(family));
+            // A Powermax request never goes to an HPR or MaxPro200, an HPR request never to a
+            // Powermax.
+            assert_eq!(settings.runs_on(family), family.is_modbus());
+            let hpr_requests = [
+                LinkCommand::HprSetNominalAmps { amps: 100 },
+                LinkCommand::HprSetCornerCurrent { percent: 80 },
+                LinkCommand::HprClearWarnings,
+                LinkCommand::HprSoftwareReset,
+                LinkCommand::HprGasTest { on: true },
+                LinkCommand::HprReadErrorLog,
+                LinkCommand::HprReadTimers,
+            ];
+            for request in hpr_requests {
+                assert!(
+                    !(request.runs_on(family) && family.is_modbus()),
+                    "{request:?}"
+                );
+            }
+        }
+    }
 
     #[test]
     fn refusal_texts_name_things_without_debug_output() {

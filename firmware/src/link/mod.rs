@@ -110,7 +110,6 @@ mod receive;
 mod schedule;
 pub(crate) mod slow;
 pub(crate) mod status;
-pub mod support;
 pub(crate) mod transaction;
 
 #[cfg(test)]
@@ -122,7 +121,7 @@ use heapless::Vec;
 use plasma_protocol::hpr as hpr_wire;
 use plasma_protocol::modbus_ascii;
 
-pub use command::{HprGasFlow, HprValue, LinkCommand, RAW_CAPACITY, Refusal};
+pub use command::{HprValue, LinkCommand, RAW_CAPACITY, Refusal};
 pub use config::{ConfigError, LinkConfig, ProtocolChoice};
 pub use diagnostics::Diagnostics;
 pub use event::{

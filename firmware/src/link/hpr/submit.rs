@@ -7,10 +7,9 @@ use plasma_protocol::hpr::{self, Frame, GasCode, GasPair, Request, StateCode};
 use plasma_protocol::time::Instant;
 
 use super::{HprDriver, HprJob, SLOW_ALL, is_cutting};
-use crate::link::command::{HprGasFlow, HprValue, LinkCommand, Refusal};
+use crate::link::command::{HprValue, LinkCommand, Refusal};
 use crate::link::core::Core;
 use crate::link::event::{CommandOutput, LinkEvent, Ticket};
-use crate::link::support;
 
 impl HprDriver {
     /// Validate and queue a command.
@@ -22,7 +21,7 @@ impl HprDriver {
         core: &mut Core,
     ) -> Result<(), Refusal> {
         self.now = now;
-        if !support::accepts(self.family(), command.op()) {
+        if !command.runs_on(self.family()) {
             return Err(self.unsupported());
         }
         let job = match command {
@@ -55,18 +54,6 @@ impl HprDriver {
             LinkCommand::HprSetNominalAmps { amps } => {
                 check_amps(*amps, self.max_amps())?;
                 Request::SetNominalAmps { amps: *amps }
-            }
-            LinkCommand::HprSetProcess { amps, gases } => {
-                check_amps(*amps, hpr::MAX_MAXPRO_AMPS)?;
-                check_gases(gases)?;
-                // "only accepted when the system is in state #2 or #3".
-                if !state.is_some_and(|s| matches!(s.0, 2 | 3)) {
-                    return Err(forbidden(core));
-                }
-                Request::SetProcess {
-                    amps: *amps,
-                    gases: *gases,
-                }
             }
             LinkCommand::HprSetInletGases(gases) => {
                 check_gases(gases)?;
@@ -102,18 +89,19 @@ impl HprDriver {
                 }
                 Request::SoftwareReset
             }
-            LinkCommand::HprGasTest { flow, on } => {
+            LinkCommand::HprGasTest { on } => {
                 if is_cutting(state) {
                     return Err(forbidden(core));
                 }
-                match (flow, on) {
-                    (HprGasFlow::Preflow, true) => Request::GasPreflowTestStart,
-                    (HprGasFlow::Preflow, false) => Request::GasPreflowTestStop,
+                if *on {
+                    Request::GasPreflowTestStart
+                } else {
+                    Request::GasPreflowTestStop
                 }
             }
             LinkCommand::HprReadErrorLog => Request::ReadErrorLog,
             LinkCommand::HprReadTimers => Request::GetTimerCounter,
-            // The support table routes no other command to an HPR or MaxPro200.
+            // `runs_on` lets no other command through to an HPR or MaxPro200.
             _ => return Err(self.unsupported()),
         })
     }

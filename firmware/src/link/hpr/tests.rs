@@ -3,7 +3,7 @@
 
 use std::vec::Vec;
 
-use plasma_protocol::hpr::{ErrorCode, GasCode, GasPair, StateCode};
+use plasma_protocol::hpr::{ErrorCode, StateCode};
 use plasma_protocol::time::Duration;
 
 use crate::link::test_support::*;
@@ -145,52 +145,6 @@ fn hpr_settings_are_range_checked_and_preceded_by_remote_mode() {
         ticket,
         result: Ok(CommandOutput::Value(130))
     }));
-}
-
-#[test]
-fn maxpro_set_process_needs_state_2_or_3() {
-    let mut bench = hpr_bench("MaxPro200");
-    let gases = GasPair {
-        plasma: GasCode(5),
-        shield: GasCode(5),
-    };
-    assert!(matches!(
-        bench
-            .link
-            .submit(bench.now, LinkCommand::HprSetProcess { amps: 200, gases }),
-        Err(Refusal::StateForbids { state: None, .. })
-    ));
-    bench.next_tx(bench.now).unwrap();
-    bench.rx(
-        2,
-        &hf(
-            79,
-            "st0003 er0000 pg0005 ps0056 sg0005 ss0058 cs0200 dm0001 lm0000",
-        ),
-    );
-    assert_eq!(bench.link.status().hpr.state, Some(StateCode(3)));
-    assert_eq!(
-        bench
-            .link
-            .submit(bench.now, LinkCommand::HprSetProcess { amps: 201, gases }),
-        Err(Refusal::HprValueOutOfRange {
-            value: HprValue::Amps,
-            requested: 201,
-            min: 5,
-            max: 200
-        })
-    );
-    bench
-        .link
-        .submit(bench.now, LinkCommand::HprSetProcess { amps: 200, gases })
-        .unwrap();
-    assert_eq!(
-        bench.next_tx(bench.now + Duration::from_secs(1)).unwrap(),
-        b">00494<"
-    );
-    bench.rx(2, b">0041C5<");
-    // Manual sample `>137200 5 5D7<`.
-    assert_eq!(bench.next_tx(bench.now).unwrap(), b">137200 5 5D7<");
 }
 
 #[test]

@@ -13,7 +13,6 @@ use crate::link::event::{CommandOutput, LinkEvent, Ticket};
 use crate::link::powermax::modbus::{self, MbRequest};
 use crate::link::powermax::sync::SlowItem;
 use crate::link::status::{ActiveFault, Family};
-use crate::link::support;
 
 impl PowermaxDriver {
     /// Validate and queue a command.
@@ -29,7 +28,7 @@ impl PowermaxDriver {
             return Err(Refusal::Blackout { until });
         }
         let family = self.family();
-        if !support::accepts(family, command.op()) {
+        if !command.runs_on(family) {
             return Err(Refusal::NotSupported { family });
         }
         let job = match command {
@@ -55,7 +54,7 @@ impl PowermaxDriver {
             LinkCommand::Raw(bytes) => {
                 Job::Raw(parse_raw(bytes, core.config.node_address, family)?)
             }
-            // The support table routes no other command to a Powermax.
+            // `runs_on` lets no other command through to a Powermax.
             _ => return Err(Refusal::NotSupported { family }),
         };
         self.queue
@@ -63,7 +62,7 @@ impl PowermaxDriver {
             .map_err(|_| Refusal::QueueFull)
     }
 
-    /// A quick restart (the support table allows it on SYNC only), allowed with fault
+    /// A quick restart (`runs_on` lets it through on SYNC only), allowed with fault
     /// 0-50-0 active.
     fn quick_restart_job(&self, core: &Core) -> Result<Job, Refusal> {
         let fault = match core.status.active_fault {

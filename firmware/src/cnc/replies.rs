@@ -7,13 +7,12 @@ use plasma_protocol::cnc::reply::ReplyWriter;
 use plasma_protocol::cnc::{ErrorCode, Pressure};
 use plasma_protocol::hpr;
 
-use super::commands::Op;
 use super::describe::{
-    FaultId, ModelName, OrDash, Text, family_word, fault_text, mode_word, on_off, state_name,
-    unit_mode, write_failure,
+    FaultId, ModelName, OrDash, Text, Uid, family_word, fault_text, mode_word, on_off, state_name,
+    unit_mode,
 };
-use super::events::Uid;
-use super::texts;
+use super::table::Awaiting;
+use super::texts::{self, write_failure};
 use super::{Context, List, ReplyLine, err_line, line, no_link, ok_line};
 use crate::io::{Inputs, Outputs};
 use crate::link::{
@@ -249,7 +248,7 @@ pub(super) fn counters_with(
 #[inline(never)]
 pub(super) fn complete(
     ctx: &Context<'_>,
-    op: Op,
+    awaiting: Awaiting,
     result: &Result<CommandOutput, CommandFailure>,
 ) -> ReplyLine {
     let family = ctx.link.status().family;
@@ -257,28 +256,28 @@ pub(super) fn complete(
         Err(failure) => return line(|l| write_failure(l, failure, family)),
         Ok(output) => *output,
     };
-    match op {
-        Op::Settings(process) => settings_done(process, output, family),
-        Op::RemoteOff => ok_line(|w| w.field("remote", "OFF")),
-        Op::GasTest(on) => ok_line(|w| w.field("gastest", on_off(on))),
-        Op::Restart => restart_done(ctx),
-        Op::HprAmps => match output {
+    match awaiting {
+        Awaiting::Settings(process) => settings_done(process, output, family),
+        Awaiting::RemoteOff => ok_line(|w| w.field("remote", "OFF")),
+        Awaiting::GasTest(on) => ok_line(|w| w.field("gastest", on_off(on))),
+        Awaiting::Restart => restart_done(ctx),
+        Awaiting::HprAmps => match output {
             CommandOutput::Value(amps) => ok_line(|w| w.field("amps", amps)),
             _ => ok_line(|w| w.field("amps", "set")),
         },
-        Op::Gases(plasma, shield) => ok_line(|w| {
+        Awaiting::Gases(plasma, shield) => ok_line(|w| {
             w.field("plasma", plasma.name())?;
             w.field("shield", shield.name())
         }),
-        Op::Corner => match output {
+        Awaiting::Corner => match output {
             CommandOutput::Value(percent) => ok_line(|w| w.field("corner", percent)),
             _ => ok_line(|w| w.field("corner", "set")),
         },
-        Op::Reset => ok_line(|w| w.field("reset", "done")),
-        Op::ClearWarn => ok_line(|w| w.field("clearwarn", "done")),
-        Op::Raw => raw_done(ctx, output),
-        Op::FaultLog => fault_log_done(ctx, output),
-        Op::Counters => counters_done(ctx),
+        Awaiting::Reset => ok_line(|w| w.field("reset", "done")),
+        Awaiting::ClearWarn => ok_line(|w| w.field("clearwarn", "done")),
+        Awaiting::Raw => raw_done(ctx, output),
+        Awaiting::FaultLog => fault_log_done(ctx, output),
+        Awaiting::Counters => counters_done(ctx),
     }
 }
 

@@ -1,185 +1,177 @@
-//! Words and texts the CNC sees for what the link knows: model names, modes, faults, and why
-//! a command was refused or failed.
+//! The texts of the CNC side's `ERR` replies, in one place: the session writes them and the
+//! tests read them from here, so a reworded text changes one line and no test. (Two kinds
+//! come from elsewhere: a line that does not parse, from the protocol crate's
+//! `write_parse_error`, and a `CONFIG` value refused, from the settings' `ConfigError`.)
+//!
+//! Texts that carry values (limits, fault codes, check bytes) are built here from the typed
+//! reason (a link `Refusal` or `CommandFailure`, a frame error); tests match those by their
+//! `ERR` code and the values.
 
 use core::fmt::{self, Display, Write};
 
 use plasma_protocol::cnc::reply::write_error;
-use plasma_protocol::cnc::{ErrorCode, Mode};
-use plasma_protocol::hpr::{ErrorCode as HprError, StateCode, SystemId};
+use plasma_protocol::cnc::{Amps, ErrorCode, phoenix};
+use plasma_protocol::hpr::ErrorCode as HprError;
 use plasma_protocol::modbus_ascii::ExceptionCode;
-use plasma_protocol::powermax::sync::Identification;
-use plasma_protocol::powermax::{FaultCode, OperatingMode, PowerSupplyModel};
-
-use crate::link::{
-    ActiveFault, CommandFailure, Family, Model, PowermaxSettings, Refusal, SettingsFailure,
-    TransactionError, UnitStatus,
-};
 use plasma_protocol::time::Instant;
 
-/// The family as one word: `SYNC`, `LEGACY`, `HPR`, `MAXPRO200`.
-pub const fn family_word(family: Family) -> &'static str {
-    match family {
-        Family::PowermaxSync => "SYNC",
-        Family::PowermaxLegacy => "LEGACY",
-        Family::Hpr => "HPR",
-        Family::MaxPro200 => "MAXPRO200",
-    }
-}
+use super::describe::{OrDash, SettingsText, mode_word, powermax_fault_text, state_name};
+use super::{ReplyLine, err_line};
+use crate::link::{CommandFailure, Family, Refusal, SettingsFailure, TransactionError};
+use crate::settings::SaveError;
 
-/// A readable family name for error texts.
-pub const fn family_name(family: Family) -> &'static str {
-    family.name()
-}
+/// No unit on the line.
+pub const NO_LINK: &str = "no power supply connected (the bridge is looking for one)";
+/// `SET MODE|AMPS|PSI` on a Powermax before any process is known.
+pub const SETTINGS_UNKNOWN: &str =
+    "the unit's settings are not known yet: use SET PROCESS <mode> <A> <psi|AUTO>";
+/// `LIMITS` (or a setting the link checks) before the slow data was read.
+pub const LIMITS_NOT_READ: &str = "the unit's permitted limits have not been read yet, try again";
+/// `CARTRIDGE` before the cartridge was read.
+pub const CARTRIDGE_NOT_READ: &str = "cartridge data not read yet, try again";
+/// `FAULTLOG` when neither log could be read.
+pub const FAULT_LOG_UNREADABLE: &str = "the fault log could not be read";
+/// `TORCH` on the board.
+pub const TORCH_SIMULATOR_ONLY: &str = "TORCH is a simulator command";
+/// `TORCH` while the driver has not taken the earlier ones.
+pub const SIMULATOR_QUEUE_FULL: &str = "simulator commands are waiting";
+/// `RAW` with a frame longer than the link takes.
+pub const RAW_TOO_LONG: &str = "frame too long";
+/// A reply that did not fit its line.
+pub const REPLY_TOO_LONG: &str = "reply longer than the line buffer";
+/// A text line cut short by a Phoenix frame start.
+pub const LINE_INTERRUPTED: &str =
+    "incomplete line dropped: a Phoenix message (SOH/STX) began before its CR/LF";
+/// A Phoenix message cut short.
+pub const PHOENIX_TRUNCATED: &str =
+    "Phoenix message incomplete: the next one began or the line went quiet (NAK sent)";
+/// A Phoenix message with a framing byte missing or out of place.
+pub const PHOENIX_FRAMING: &str =
+    "Phoenix message framing: a framing byte is missing or out of place (NAK sent)";
 
-/// The unit's model without spaces (`Powermax65`, `Powermax65/85/105`, `HPR260XD`,
-/// `MaxPro200`); a SYNC unit is named by its exact size once 0x3000 has been read.
-pub struct ModelName<'a>(pub &'a UnitStatus);
+/// `SET AMPS` with a fraction on a unit that takes whole amps.
+pub struct WholeAmps(pub Amps);
 
-impl Display for ModelName<'_> {
+impl Display for WholeAmps {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let status = self.0;
-        let size = status
-            .identification
-            .and_then(|Identification { model, .. }| model)
-            .map(|m| m.size());
-        match status.model {
-            None => f.write_str("-"),
-            Some(Model::Powermax(model)) => match (model, size) {
-                (
-                    PowerSupplyModel::Powermax65_85_105Sync | PowerSupplyModel::Powermax45Sync,
-                    Some(size),
-                ) => write!(f, "Powermax{size}"),
-                (PowerSupplyModel::Powermax45Xp, _) => f.write_str("Powermax45XP"),
-                (PowerSupplyModel::Powermax65_85_105, _)
-                | (PowerSupplyModel::Powermax65_85_105Sync, _) => f.write_str("Powermax65/85/105"),
-                (PowerSupplyModel::Powermax125, _) => f.write_str("Powermax125"),
-                (PowerSupplyModel::Powermax45Sync, _) => f.write_str("Powermax45"),
-            },
-            Some(Model::PowermaxUnidentified) => f.write_str("Powermax"),
-            Some(Model::Hpr(SystemId::MaxPro200)) => f.write_str("MaxPro200"),
-            Some(Model::Hpr(SystemId::Hpr { rating, xd, .. })) => {
-                write!(f, "HPR{}", rating.max_amps())?;
-                if xd {
-                    f.write_str("XD")?;
-                }
-                Ok(())
-            }
-        }
+        write!(f, "amps {}: this unit takes whole amps", self.0)
     }
 }
 
-/// The CNC word for a unit mode: expanded metal / CPA is named as the family names it.
-pub const fn mode_word(mode: OperatingMode, family: Option<Family>) -> &'static str {
-    match (mode, family) {
-        (OperatingMode::Cut, _) => "CUT",
-        (OperatingMode::Gouge, _) => "GOUGE",
-        (OperatingMode::ContinuousPilotArc, Some(Family::PowermaxLegacy)) => "CPA",
-        (OperatingMode::ContinuousPilotArc, _) => "EXPANDED",
-    }
-}
+/// `CONFIG SAVE` failed.
+pub struct NotSaved(pub SaveError);
 
-/// The unit mode for a CNC mode (`CPA` and `EXPANDED` are the same register value).
-pub const fn unit_mode(mode: Mode) -> OperatingMode {
-    match mode {
-        Mode::Cut => OperatingMode::Cut,
-        Mode::Cpa | Mode::Expanded => OperatingMode::ContinuousPilotArc,
-        Mode::Gouge => OperatingMode::Gouge,
-    }
-}
-
-/// The CNC mode for a unit mode, as the family names it.
-pub const fn cnc_mode(mode: OperatingMode, family: Option<Family>) -> Mode {
-    match (mode, family) {
-        (OperatingMode::Cut, _) => Mode::Cut,
-        (OperatingMode::Gouge, _) => Mode::Gouge,
-        (OperatingMode::ContinuousPilotArc, Some(Family::PowermaxLegacy)) => Mode::Cpa,
-        (OperatingMode::ContinuousPilotArc, _) => Mode::Expanded,
-    }
-}
-
-/// `-` for an unknown value.
-pub struct OrDash<T>(pub Option<T>);
-
-impl<T: Display> Display for OrDash<T> {
+impl Display for NotSaved {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match &self.0 {
-            Some(v) => v.fmt(f),
-            None => f.write_str("-"),
-        }
+        write!(f, "settings not saved: {}", self.0)
     }
 }
 
-/// `ON` / `OFF`.
-pub const fn on_off(on: bool) -> &'static str {
-    if on { "ON" } else { "OFF" }
-}
+/// A line that found the queue of [`QUEUE_CAPACITY`](super::QUEUE_CAPACITY) full (a test ties the number).
+pub const QUEUE_FULL: &str = "4 commands are already waiting, line dropped";
 
-/// A fault code as the unit shows it: `0-20-0` (Powermax) or `023` (HPR).
-pub struct FaultId(pub ActiveFault);
-
-impl Display for FaultId {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self.0 {
-            ActiveFault::Powermax(code) => code.fmt(f),
-            ActiveFault::Hpr(code) => write!(f, "{:03}", code.0),
-        }
-    }
-}
-
-/// The manual's description of a Powermax fault for `family`.
-pub fn powermax_fault_text(code: FaultCode, family: Option<Family>) -> Option<&'static str> {
-    let sync = code.info().map(|i| i.text);
-    let legacy = code.legacy_info();
-    match family {
-        Some(Family::PowermaxLegacy) => legacy.or(sync),
-        _ => sync.or(legacy),
-    }
-}
-
-/// The manual's text for a fault (HPR: the error name).
-pub fn fault_text(fault: ActiveFault, family: Option<Family>) -> &'static str {
-    match fault {
-        ActiveFault::Powermax(code) => powermax_fault_text(code, family),
-        ActiveFault::Hpr(code) => code.name(),
-    }
-    .unwrap_or("unknown fault")
-}
-
-/// The name of an HPR / MaxPro200 state for `family`.
-pub fn state_name(state: StateCode, family: Option<Family>) -> &'static str {
-    match family {
-        Some(Family::MaxPro200) => state.maxpro200_name(),
-        _ => state.hpr_name(),
-    }
-    .unwrap_or("unknown")
-}
-
-/// Free text that cannot break a line: control and non-ASCII characters become `?`.
-pub struct Text<'a>(pub &'a str);
-
-impl Display for Text<'_> {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        for c in self.0.chars() {
-            f.write_char(if c == ' ' || c.is_ascii_graphic() {
-                c
-            } else {
-                '?'
-            })?;
-        }
-        Ok(())
-    }
-}
-
-/// One word for a failed transaction (events: `last=timeout`).
-pub const fn transaction_word(error: TransactionError) -> &'static str {
+/// Why a Phoenix message was refused (NAK): its `ERR` line.
+pub fn frame_error(error: plasma_protocol::Error) -> ReplyLine {
+    use plasma_protocol::Error as E;
     match error {
-        TransactionError::Timeout => "timeout",
-        TransactionError::BadChecksum => "bad_checksum",
-        TransactionError::Exception(_) => "exception",
-        TransactionError::Mismatch => "mismatch",
-        TransactionError::HprBadChecksum500 => "hpr_500",
-        TransactionError::HprUnknownCommand501 => "hpr_501",
-        TransactionError::Malformed => "malformed",
+        E::BadChecksum { expected, found } => err_line(
+            ErrorCode::Syntax,
+            format_args!(
+                "Phoenix message check byte {found:02X}, expected {expected:02X} (NAK sent)"
+            ),
+        ),
+        E::Overlong => err_line(
+            ErrorCode::TooLong,
+            format_args!(
+                "Phoenix message longer than {} bytes (NAK sent)",
+                phoenix::MAX_MESSAGE_LEN
+            ),
+        ),
+        E::Truncated => err_line(ErrorCode::Syntax, PHOENIX_TRUNCATED),
+        _ => err_line(ErrorCode::Syntax, PHOENIX_FRAMING),
+    }
+}
+
+/// Why a command does not exist on a family: the words before and after the family's name
+/// in its `ERR UNSUPPORTED` text. The command table (`table.rs`) says which one a command
+/// gets on which family.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Unsupported {
+    before: &'static str,
+    after: &'static str,
+}
+
+const SETTINGS_HINT: &str = " takes SET AMPS and GASES";
+
+/// The `ERR UNSUPPORTED` texts, one per command the table refuses on some family.
+pub mod unsupported {
+    use super::{SETTINGS_HINT, Unsupported};
+
+    const fn words(before: &'static str, after: &'static str) -> Unsupported {
+        Unsupported { before, after }
+    }
+
+    /// `SET MODE` on an HPR or MaxPro200.
+    pub const SET_MODE: Unsupported = words("SET MODE is a Powermax command; ", SETTINGS_HINT);
+    /// `SET PSI` on an HPR or MaxPro200.
+    pub const SET_PSI: Unsupported = words("SET PSI is a Powermax command; ", SETTINGS_HINT);
+    /// `SET PROCESS` on an HPR or MaxPro200.
+    pub const SET_PROCESS: Unsupported =
+        words("SET PROCESS is a Powermax command; ", SETTINGS_HINT);
+    /// `REMOTE OFF` on an HPR or MaxPro200.
+    pub const REMOTE_OFF: Unsupported = words(
+        "REMOTE OFF is a Powermax command; ",
+        " stays in remote mode while the bridge talks to it",
+    );
+    /// `RESTART` on anything but a Powermax SYNC.
+    pub const RESTART: Unsupported = words(
+        "RESTART (quick restart, clears 0-50-0) is a Powermax SYNC function, not available on ",
+        "",
+    );
+    /// `GASES` on a Powermax.
+    pub const GASES: Unsupported = words(
+        "GASES is an HPR/MaxPro200 command; ",
+        " runs on air and sets no gases",
+    );
+    /// `CORNER` on anything but an HPR.
+    pub const CORNER: Unsupported = words(
+        "CORNER is an HPR command (070 corner current), not available on ",
+        "",
+    );
+    /// `RESET` on a Powermax.
+    pub const RESET: Unsupported = words(
+        "RESET is an HPR/MaxPro200 command (068 software reset), not available on ",
+        "; a Powermax SYNC clears 0-50-0 with RESTART",
+    );
+    /// `CLEARWARN` on anything but an HPR.
+    pub const CLEAR_WARN: Unsupported = words(
+        "CLEARWARN is an HPR command (131 clear warnings), not available on ",
+        "",
+    );
+    /// `FAULTLOG` on a family that keeps no log the bridge can read.
+    pub const FAULT_LOG: Unsupported = words(
+        "FAULTLOG: ",
+        " keeps no fault log the bridge can read; FAULT shows the active fault",
+    );
+    /// `CARTRIDGE` on anything but a Powermax SYNC.
+    pub const CARTRIDGE: Unsupported = words(
+        "CARTRIDGE is a Powermax SYNC function; ",
+        " has no cartridge data",
+    );
+    /// Any other command a family lacks (`GASTEST` on a MaxPro200), and a request the link
+    /// refuses for the family (`Refusal::NotSupported`).
+    pub const NOT_SUPPORTED: Unsupported = words("not supported by ", "");
+}
+
+/// The text of `ERR UNSUPPORTED` for a command the family does not have.
+pub struct UnsupportedText(pub Unsupported, pub Family);
+
+impl Display for UnsupportedText {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let UnsupportedText(Unsupported { before, after }, family) = *self;
+        f.write_str(before)?;
+        f.write_str(family.name())?;
+        f.write_str(after)
     }
 }
 
@@ -219,22 +211,6 @@ impl Display for ExceptionName {
     }
 }
 
-/// `mode=CUT amps=45 psi=AUTO` of settings as the unit reports them.
-pub struct SettingsText<'a>(pub &'a PowermaxSettings, pub Option<Family>);
-
-impl Display for SettingsText<'_> {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let SettingsText(s, family) = self;
-        write!(
-            f,
-            "mode={} amps={} psi={}",
-            OrDash(s.mode.map(|m| mode_word(m, *family))),
-            s.current,
-            s.pressure
-        )
-    }
-}
-
 /// The word naming what a limit applies to.
 fn limit_scope(family: Option<Family>) -> &'static str {
     match family {
@@ -259,9 +235,9 @@ pub fn write_refusal<W: Write>(
         Refusal::NotSupported { family } => write_error(
             out,
             ErrorCode::Unsupported,
-            format_args!("not supported by {}", family_name(*family)),
+            UnsupportedText(unsupported::NOT_SUPPORTED, *family),
         ),
-        Refusal::LimitsUnknown => write_error(out, ErrorCode::State, super::texts::LIMITS_NOT_READ),
+        Refusal::LimitsUnknown => write_error(out, ErrorCode::State, LIMITS_NOT_READ),
         Refusal::QuickRestartNeeds050 { .. } => write_error(out, ErrorCode::State, refusal),
         Refusal::Blackout { until } => write_error(
             out,
@@ -407,13 +383,16 @@ pub fn write_failure<W: Write>(
     }
 }
 
-/// One word for why settings failed (`!SETTINGS failed reason=...`).
-pub fn settings_failure_word(reason: &SettingsFailure) -> &'static str {
-    match reason {
-        SettingsFailure::Transaction(_) => "no_reply",
-        SettingsFailure::ReadBackDiffers { .. } => "read_back_differs",
-        SettingsFailure::RejectedByUnit { .. } => "rejected_by_unit",
-        SettingsFailure::OutsideLimits => "outside_limits",
-        SettingsFailure::NotAccepted => "not_accepted",
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_queue_full_text_names_the_queue_capacity() {
+        let count = QUEUE_FULL.split(' ').next();
+        assert_eq!(
+            count,
+            Some(std::format!("{}", super::super::QUEUE_CAPACITY).as_str())
+        );
     }
 }

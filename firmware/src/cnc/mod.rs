@@ -37,6 +37,7 @@ mod events;
 mod input;
 pub mod powermax_port;
 mod replies;
+mod table;
 #[cfg(test)]
 pub(crate) mod tests;
 pub mod texts;
@@ -53,9 +54,9 @@ use crate::link::{PsLink, Ticket};
 use crate::settings::{SaveError, Settings};
 use plasma_protocol::time::{Duration, Instant};
 
-use commands::Op;
 pub(crate) use describe::unit_mode;
 use input::Item;
+use table::Awaiting;
 
 /// Command lines that can wait behind a command in progress.
 pub const QUEUE_CAPACITY: usize = 4;
@@ -123,7 +124,7 @@ pub struct SessionStats {
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum Pending {
-    Link { ticket: Ticket, op: Op },
+    Link { ticket: Ticket, awaiting: Awaiting },
     Save { taken: bool },
 }
 
@@ -312,7 +313,7 @@ impl Session {
         self.pending = None;
         let reply = match result {
             Ok(()) => ok_line(|w| w.field("config", "saved")),
-            Err(e) => err_line(ErrorCode::Storage, format_args!("settings not saved: {e}")),
+            Err(e) => err_line(ErrorCode::Storage, texts::NotSaved(e)),
         };
         self.send(reply);
         self.pump(ctx);

@@ -12,9 +12,9 @@ use plasma_protocol::modbus_ascii::{self, Request};
 use proptest::prelude::*;
 
 use crate::bridge::Bridge;
+use crate::cnc::SimCommand;
 use crate::io::{Inputs, IoEvent, Outputs};
 use crate::link::ProtocolChoice;
-use crate::session::SimCommand;
 use crate::settings::{Process, SaveError, Settings};
 use crate::storage::Settings as _;
 use crate::testing::SimPs;
@@ -437,28 +437,28 @@ fn every_command_on_a_sync_unit() {
         rig.cmd("GASES O2 AIR"),
         err(
             ErrorCode::Unsupported,
-            UnsupportedText(UnitCommand::Gases, Family::PowermaxSync)
+            UnsupportedText(unsupported::GASES, Family::PowermaxSync)
         )
     );
     assert_eq!(
         rig.cmd("CORNER 80"),
         err(
             ErrorCode::Unsupported,
-            UnsupportedText(UnitCommand::Corner, Family::PowermaxSync)
+            UnsupportedText(unsupported::CORNER, Family::PowermaxSync)
         )
     );
     assert_eq!(
         rig.cmd("RESET"),
         err(
             ErrorCode::Unsupported,
-            UnsupportedText(UnitCommand::Reset, Family::PowermaxSync)
+            UnsupportedText(unsupported::RESET, Family::PowermaxSync)
         )
     );
     assert_eq!(
         rig.cmd("CLEARWARN"),
         err(
             ErrorCode::Unsupported,
-            UnsupportedText(UnitCommand::ClearWarn, Family::PowermaxSync)
+            UnsupportedText(unsupported::CLEAR_WARN, Family::PowermaxSync)
         )
     );
     assert_eq!(
@@ -563,21 +563,21 @@ fn every_command_on_an_hpr() {
         rig.cmd("SET PROCESS CUT 45 AUTO"),
         err(
             ErrorCode::Unsupported,
-            UnsupportedText(UnitCommand::SetProcess, Family::Hpr)
+            UnsupportedText(unsupported::SET_PROCESS, Family::Hpr)
         )
     );
     assert_eq!(
         rig.cmd("SET MODE CUT"),
         err(
             ErrorCode::Unsupported,
-            UnsupportedText(UnitCommand::SetMode, Family::Hpr)
+            UnsupportedText(unsupported::SET_MODE, Family::Hpr)
         )
     );
     assert_eq!(
         rig.cmd("SET PSI 60"),
         err(
             ErrorCode::Unsupported,
-            UnsupportedText(UnitCommand::SetPsi, Family::Hpr)
+            UnsupportedText(unsupported::SET_PSI, Family::Hpr)
         )
     );
     assert_eq!(rig.cmd("GASES O2 AIR"), "OK plasma=O2 shield=AIR");
@@ -606,21 +606,21 @@ fn every_command_on_an_hpr() {
         rig.cmd("CARTRIDGE"),
         err(
             ErrorCode::Unsupported,
-            UnsupportedText(UnitCommand::Cartridge, Family::Hpr)
+            UnsupportedText(unsupported::CARTRIDGE, Family::Hpr)
         )
     );
     assert_eq!(
         rig.cmd("RESTART"),
         err(
             ErrorCode::Unsupported,
-            UnsupportedText(UnitCommand::Restart, Family::Hpr)
+            UnsupportedText(unsupported::RESTART, Family::Hpr)
         )
     );
     assert_eq!(
         rig.cmd("REMOTE OFF"),
         err(
             ErrorCode::Unsupported,
-            UnsupportedText(UnitCommand::RemoteOff, Family::Hpr)
+            UnsupportedText(unsupported::REMOTE_OFF, Family::Hpr)
         )
     );
     assert_eq!(rig.cmd("RAW >00292<"), "OK reply=>002000355<");
@@ -643,21 +643,21 @@ fn maxpro200_commands_that_do_not_apply_say_why() {
         rig.cmd("CLEARWARN"),
         err(
             ErrorCode::Unsupported,
-            UnsupportedText(UnitCommand::ClearWarn, Family::MaxPro200)
+            UnsupportedText(unsupported::CLEAR_WARN, Family::MaxPro200)
         )
     );
     assert_eq!(
         rig.cmd("FAULTLOG"),
         err(
             ErrorCode::Unsupported,
-            UnsupportedText(UnitCommand::FaultLog, Family::MaxPro200)
+            UnsupportedText(unsupported::FAULT_LOG, Family::MaxPro200)
         )
     );
     assert_eq!(
         rig.cmd("GASTEST ON"),
         err(
             ErrorCode::Unsupported,
-            UnsupportedText(UnitCommand::GasTest, Family::MaxPro200)
+            UnsupportedText(unsupported::NOT_SUPPORTED, Family::MaxPro200)
         )
     );
     assert!(
@@ -1099,9 +1099,8 @@ fn documented_replies_not_covered_above() {
 // ERR lines: tests match the code and the values that matter; where the text matters they
 // take it from where the session writes it, so no wording is pinned here.
 
-use crate::link::support::UnitCommand;
+use crate::cnc::texts::{self, UnsupportedText, unsupported};
 use crate::link::{CommandFailure, Family, Refusal, SettingsFailure, TransactionError};
-use crate::session::texts::{self, UnsupportedText};
 use plasma_protocol::cnc::{ErrorCode, ParseError};
 
 /// An `ERR` line with `code` and `text`.
@@ -1123,14 +1122,14 @@ fn frame_err(expected: u8, found: u8) -> String {
 /// The `ERR` line of a command the link refused.
 fn refusal_line(refusal: &Refusal, family: Option<Family>) -> String {
     let mut line = super::ReplyLine::new();
-    let _ = super::describe::write_refusal(&mut line, refusal, family, Instant::ZERO);
+    let _ = super::texts::write_refusal(&mut line, refusal, family, Instant::ZERO);
     line.trim_end().to_string()
 }
 
 /// The `ERR` line of a command that was sent and failed.
 fn failure_line(failure: &CommandFailure) -> String {
     let mut line = super::ReplyLine::new();
-    let _ = super::describe::write_failure(&mut line, failure, None);
+    let _ = super::texts::write_failure(&mut line, failure, None);
     line.trim_end().to_string()
 }
 

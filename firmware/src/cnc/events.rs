@@ -1,12 +1,12 @@
 //! What the link and the interlocks report: the reply of the command in progress, and `!`
 //! event lines while events are on.
 
-use core::fmt::{self, Display, Write};
+use core::fmt::{self, Write};
 
 use plasma_protocol::cnc::reply::ReplyWriter;
 
 use super::describe::{
-    FaultId, ModelName, OrDash, SettingsText, Text, family_word, fault_text, on_off,
+    FaultId, ModelName, OrDash, SettingsText, Text, Uid, family_word, fault_text, on_off,
     settings_failure_word, state_name, transaction_word,
 };
 use super::replies::complete;
@@ -19,12 +19,15 @@ impl Session {
     pub fn on_link_event(&mut self, ctx: &mut Context<'_>, event: &LinkEvent) {
         self.powermax.on_link_event(ctx, event);
         if let LinkEvent::CommandDone { ticket, result } = event {
-            if let Some(Pending::Link { ticket: t, op }) = self.pending
+            if let Some(Pending::Link {
+                ticket: t,
+                awaiting,
+            }) = self.pending
                 && t == *ticket
             {
                 self.pending = None;
-                Session::keep_outcome(ctx, op, result);
-                let reply = complete(ctx, op, result);
+                Session::keep_outcome(ctx, awaiting, result);
+                let reply = complete(ctx, awaiting, result);
                 self.send(reply);
                 self.pump(ctx);
             }
@@ -188,20 +191,5 @@ fn interlock_word(interlock: Interlock) -> &'static str {
         Interlock::RestartBlackout => "restart_blackout",
         Interlock::FaultRequiresAction => "fault",
         Interlock::TransferTimeout => "transfer_timeout",
-    }
-}
-
-/// A cartridge UID as text (`unreadable` when all zero).
-pub(super) struct Uid<'a>(pub(super) &'a [u8; 16]);
-
-impl Display for Uid<'_> {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        if self.0.iter().all(|&b| b == 0) {
-            return f.write_str("unreadable");
-        }
-        for &b in self.0.iter().take_while(|&&b| b != 0) {
-            f.write_char(if b.is_ascii_graphic() { b as char } else { '?' })?;
-        }
-        Ok(())
     }
 }

@@ -1,0 +1,217 @@
+//! Words the CNC sees for what the link knows: model names, modes, faults, states, settings
+//! (the `ERR` texts built from them are in `texts`).
+
+use core::fmt::{self, Display, Write};
+
+use plasma_protocol::cnc::Mode;
+use plasma_protocol::hpr::{StateCode, SystemId};
+use plasma_protocol::powermax::sync::Identification;
+use plasma_protocol::powermax::{FaultCode, OperatingMode, PowerSupplyModel};
+
+use crate::link::{
+    ActiveFault, Family, Model, PowermaxSettings, SettingsFailure, TransactionError, UnitStatus,
+};
+
+/// The family as one word: `SYNC`, `LEGACY`, `HPR`, `MAXPRO200`.
+pub const fn family_word(family: Family) -> &'static str {
+    match family {
+        Family::PowermaxSync => "SYNC",
+        Family::PowermaxLegacy => "LEGACY",
+        Family::Hpr => "HPR",
+        Family::MaxPro200 => "MAXPRO200",
+    }
+}
+
+/// The unit's model without spaces (`Powermax65`, `Powermax65/85/105`, `HPR260XD`,
+/// `MaxPro200`); a SYNC unit is named by its exact size once 0x3000 has been read.
+pub struct ModelName<'a>(pub &'a UnitStatus);
+
+impl Display for ModelName<'_> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let status = self.0;
+        let size = status
+            .identification
+            .and_then(|Identification { model, .. }| model)
+            .map(|m| m.size());
+        match status.model {
+            None => f.write_str("-"),
+            Some(Model::Powermax(model)) => match (model, size) {
+                (
+                    PowerSupplyModel::Powermax65_85_105Sync | PowerSupplyModel::Powermax45Sync,
+                    Some(size),
+                ) => write!(f, "Powermax{size}"),
+                (PowerSupplyModel::Powermax45Xp, _) => f.write_str("Powermax45XP"),
+                (PowerSupplyModel::Powermax65_85_105, _)
+                | (PowerSupplyModel::Powermax65_85_105Sync, _) => f.write_str("Powermax65/85/105"),
+                (PowerSupplyModel::Powermax125, _) => f.write_str("Powermax125"),
+                (PowerSupplyModel::Powermax45Sync, _) => f.write_str("Powermax45"),
+            },
+            Some(Model::PowermaxUnidentified) => f.write_str("Powermax"),
+            Some(Model::Hpr(SystemId::MaxPro200)) => f.write_str("MaxPro200"),
+            Some(Model::Hpr(SystemId::Hpr { rating, xd, .. })) => {
+                write!(f, "HPR{}", rating.max_amps())?;
+                if xd {
+                    f.write_str("XD")?;
+                }
+                Ok(())
+            }
+        }
+    }
+}
+
+/// The CNC word for a unit mode: expanded metal / CPA is named as the family names it.
+pub const fn mode_word(mode: OperatingMode, family: Option<Family>) -> &'static str {
+    match (mode, family) {
+        (OperatingMode::Cut, _) => "CUT",
+        (OperatingMode::Gouge, _) => "GOUGE",
+        (OperatingMode::ContinuousPilotArc, Some(Family::PowermaxLegacy)) => "CPA",
+        (OperatingMode::ContinuousPilotArc, _) => "EXPANDED",
+    }
+}
+
+/// The unit mode for a CNC mode (`CPA` and `EXPANDED` are the same register value).
+pub const fn unit_mode(mode: Mode) -> OperatingMode {
+    match mode {
+        Mode::Cut => OperatingMode::Cut,
+        Mode::Cpa | Mode::Expanded => OperatingMode::ContinuousPilotArc,
+        Mode::Gouge => OperatingMode::Gouge,
+    }
+}
+
+/// The CNC mode for a unit mode, as the family names it.
+pub const fn cnc_mode(mode: OperatingMode, family: Option<Family>) -> Mode {
+    match (mode, family) {
+        (OperatingMode::Cut, _) => Mode::Cut,
+        (OperatingMode::Gouge, _) => Mode::Gouge,
+        (OperatingMode::ContinuousPilotArc, Some(Family::PowermaxLegacy)) => Mode::Cpa,
+        (OperatingMode::ContinuousPilotArc, _) => Mode::Expanded,
+    }
+}
+
+/// `-` for an unknown value.
+pub struct OrDash<T>(pub Option<T>);
+
+impl<T: Display> Display for OrDash<T> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match &self.0 {
+            Some(v) => v.fmt(f),
+            None => f.write_str("-"),
+        }
+    }
+}
+
+/// `ON` / `OFF`.
+pub const fn on_off(on: bool) -> &'static str {
+    if on { "ON" } else { "OFF" }
+}
+
+/// A fault code as the unit shows it: `0-20-0` (Powermax) or `023` (HPR).
+pub struct FaultId(pub ActiveFault);
+
+impl Display for FaultId {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self.0 {
+            ActiveFault::Powermax(code) => code.fmt(f),
+            ActiveFault::Hpr(code) => write!(f, "{:03}", code.0),
+        }
+    }
+}
+
+/// The manual's description of a Powermax fault for `family`.
+pub fn powermax_fault_text(code: FaultCode, family: Option<Family>) -> Option<&'static str> {
+    let sync = code.info().map(|i| i.text);
+    let legacy = code.legacy_info();
+    match family {
+        Some(Family::PowermaxLegacy) => legacy.or(sync),
+        _ => sync.or(legacy),
+    }
+}
+
+/// The manual's text for a fault (HPR: the error name).
+pub fn fault_text(fault: ActiveFault, family: Option<Family>) -> &'static str {
+    match fault {
+        ActiveFault::Powermax(code) => powermax_fault_text(code, family),
+        ActiveFault::Hpr(code) => code.name(),
+    }
+    .unwrap_or("unknown fault")
+}
+
+/// The name of an HPR / MaxPro200 state for `family`.
+pub fn state_name(state: StateCode, family: Option<Family>) -> &'static str {
+    match family {
+        Some(Family::MaxPro200) => state.maxpro200_name(),
+        _ => state.hpr_name(),
+    }
+    .unwrap_or("unknown")
+}
+
+/// Free text that cannot break a line: control and non-ASCII characters become `?`.
+pub struct Text<'a>(pub &'a str);
+
+impl Display for Text<'_> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        for c in self.0.chars() {
+            f.write_char(if c == ' ' || c.is_ascii_graphic() {
+                c
+            } else {
+                '?'
+            })?;
+        }
+        Ok(())
+    }
+}
+
+/// One word for a failed transaction (events: `last=timeout`).
+pub const fn transaction_word(error: TransactionError) -> &'static str {
+    match error {
+        TransactionError::Timeout => "timeout",
+        TransactionError::BadChecksum => "bad_checksum",
+        TransactionError::Exception(_) => "exception",
+        TransactionError::Mismatch => "mismatch",
+        TransactionError::HprBadChecksum500 => "hpr_500",
+        TransactionError::HprUnknownCommand501 => "hpr_501",
+        TransactionError::Malformed => "malformed",
+    }
+}
+
+/// `mode=CUT amps=45 psi=AUTO` of settings as the unit reports them.
+pub struct SettingsText<'a>(pub &'a PowermaxSettings, pub Option<Family>);
+
+impl Display for SettingsText<'_> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let SettingsText(s, family) = self;
+        write!(
+            f,
+            "mode={} amps={} psi={}",
+            OrDash(s.mode.map(|m| mode_word(m, *family))),
+            s.current,
+            s.pressure
+        )
+    }
+}
+
+/// One word for why settings failed (`!SETTINGS failed reason=...`).
+pub fn settings_failure_word(reason: &SettingsFailure) -> &'static str {
+    match reason {
+        SettingsFailure::Transaction(_) => "no_reply",
+        SettingsFailure::ReadBackDiffers { .. } => "read_back_differs",
+        SettingsFailure::RejectedByUnit { .. } => "rejected_by_unit",
+        SettingsFailure::OutsideLimits => "outside_limits",
+        SettingsFailure::NotAccepted => "not_accepted",
+    }
+}
+
+/// A cartridge UID as text (`unreadable` when all zero).
+pub struct Uid<'a>(pub &'a [u8; 16]);
+
+impl Display for Uid<'_> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        if self.0.iter().all(|&b| b == 0) {
+            return f.write_str("unreadable");
+        }
+        for &b in self.0.iter().take_while(|&&b| b != 0) {
+            f.write_char(if b.is_ascii_graphic() { b as char } else { '?' })?;
+        }
+        Ok(())
+    }
+}
