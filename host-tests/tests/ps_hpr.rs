@@ -3,9 +3,7 @@
 
 use host_tests::harness::{World, WorldOptions};
 use plasma_firmware::io::Interlock;
-use plasma_firmware::link::{
-    CommandOutput, HprGasFlow, LinkCommand, LinkEvent, RAW_CAPACITY, Refusal,
-};
+use plasma_firmware::link::{CommandOutput, LinkCommand, LinkEvent, RAW_CAPACITY, Refusal};
 use plasma_protocol::hpr::{self, Class, GasCode, GasPair, StateCode};
 use plasma_protocol::time::Duration;
 use plasma_sim::hpr::Hpr;
@@ -187,14 +185,8 @@ fn factory_only_dangerous_and_line_control_commands_never_reach_the_unit() {
         LinkCommand::HprClearWarnings,
         LinkCommand::HprReadErrorLog,
         LinkCommand::HprReadTimers,
-        LinkCommand::HprGasTest {
-            flow: HprGasFlow::Preflow,
-            on: true,
-        },
-        LinkCommand::HprGasTest {
-            flow: HprGasFlow::Preflow,
-            on: false,
-        },
+        LinkCommand::HprGasTest { on: true },
+        LinkCommand::HprGasTest { on: false },
         LinkCommand::HprSetInletGases(GasPair {
             plasma: GasCode::OXYGEN,
             shield: GasCode::AIR,
@@ -223,22 +215,24 @@ fn factory_only_dangerous_and_line_control_commands_never_reach_the_unit() {
 #[test]
 fn maxpro200_process_and_refusals() {
     let mut world = ready(Model::MaxPro200);
-    let gases = GasPair {
-        plasma: GasCode::AIR,
-        shield: GasCode::AIR,
-    };
     assert_eq!(
         world.submit(LinkCommand::HprSetCornerCurrent { percent: 80 }),
         Err(Refusal::NotSupported {
             family: plasma_firmware::link::Family::MaxPro200
         })
     );
-    assert!(matches!(
-        world.submit(LinkCommand::HprSetProcess { amps: 250, gases }),
-        Err(Refusal::HprValueOutOfRange { .. })
-    ));
-    let result = world.command(LinkCommand::HprSetProcess { amps: 130, gases }, secs(3));
+    // 137 SET PROCESS (current and gases, air/air): no CNC command sends it, RAW does, in
+    // remote mode (which the typed SET AMPS enters).
+    let result = world.command(LinkCommand::HprSetNominalAmps { amps: 100 }, secs(3));
     assert!(result.is_ok(), "{result:?}");
+    let gases = GasPair {
+        plasma: GasCode::AIR,
+        shield: GasCode::AIR,
+    };
+    let data = format!("130 {} {}", gases.plasma.0, gases.shield.0);
+    let result = world.command(LinkCommand::Raw(&hpr_frame(137, &data)), secs(3));
+    assert!(result.is_ok(), "{result:?}");
+    assert_eq!(world.link().raw_reply(), &hpr_frame(137, "1")[..]);
     assert_eq!(world.sim::<Hpr>().nominal_amps(), 130);
     assert!(
         world
