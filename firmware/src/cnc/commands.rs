@@ -33,7 +33,7 @@ impl Session {
                 _ => counters(ctx.link),
             }),
             Route::Unsupported(text) => Some(match family {
-                Some(family) => err_line(ErrorCode::Unsupported, UnsupportedText(text, family)),
+                Some(family) => err_line(ErrorCode::Unsupported, UnsupportedText(*text, family)),
                 None => no_link(),
             }),
             Route::NoLink => Some(no_link()),
@@ -119,7 +119,7 @@ impl Session {
     fn set_hpr_amps(&mut self, ctx: &mut Context<'_>, amps: Amps) -> Option<ReplyLine> {
         let steps = amps.raw();
         if !steps.is_multiple_of(Amps::STEPS_PER_UNIT) {
-            return Some(err_line(ErrorCode::Range, texts::WholeAmps(amps)));
+            return Some(texts::whole_amps(amps));
         }
         let command = LinkCommand::HprSetNominalAmps {
             amps: steps / Amps::STEPS_PER_UNIT,

@@ -313,7 +313,7 @@ impl Session {
         self.pending = None;
         let reply = match result {
             Ok(()) => ok_line(|w| w.field("config", "saved")),
-            Err(e) => err_line(ErrorCode::Storage, texts::NotSaved(e)),
+            Err(e) => texts::not_saved(e),
         };
         self.send(reply);
         self.pump(ctx);

@@ -46,7 +46,7 @@ pub(super) enum Route<'a> {
     /// Answered from what the bridge knows; nothing is sent.
     Local,
     /// The family has no such function.
-    Unsupported(Unsupported),
+    Unsupported(&'static Unsupported),
     /// The command needs a unit and none is connected.
     NoLink,
     /// Answered by the session whatever is on the line (`HELP`, `CONFIG`, `RAW`, ...).
@@ -55,6 +55,7 @@ pub(super) enum Route<'a> {
 
 /// The table: what `command` becomes on `family` (`None`: no unit connected).
 pub(super) fn route<'a>(command: &Command<'a>, family: Option<Family>) -> Route<'a> {
+    use Family::{Hpr, MaxPro200, PowermaxLegacy as Legacy, PowermaxSync as Sync};
     use LinkCommand as L;
     use Route::{Local, Send, Unsupported as No};
     use unsupported as text;
@@ -63,109 +64,72 @@ pub(super) fn route<'a>(command: &Command<'a>, family: Option<Family>) -> Route<
         amps,
         pressure,
     };
-    // Each row: [SYNC, LEGACY, HPR, MAXPRO200].
-    let row = match *command {
-        Command::SetMode(mode) => {
-            let set = settings(Some(mode), None, None);
-            [set, set, No(text::SET_MODE), No(text::SET_MODE)]
+    match (*command, family) {
+        (
+            Command::Help
+            | Command::Id
+            | Command::Status
+            | Command::Limits
+            | Command::Fault
+            | Command::Events(_)
+            | Command::Config(_)
+            | Command::Torch(_)
+            | Command::Raw(_),
+            _,
+        ) => Route::Session,
+        // Without a unit, COUNTERS still has the link's own counters.
+        (Command::Counters, None) => Local,
+        (_, None) => Route::NoLink,
+        (Command::SetMode(mode), Some(Sync | Legacy)) => settings(Some(mode), None, None),
+        (Command::SetMode(_), _) => No(&text::SET_MODE),
+        (Command::SetPsi(pressure), Some(Sync | Legacy)) => settings(None, None, Some(pressure)),
+        (Command::SetPsi(_), _) => No(&text::SET_PSI),
+        (
+            Command::SetProcess {
+                mode,
+                amps,
+                pressure,
+            },
+            Some(Sync | Legacy),
+        ) => settings(Some(mode), Some(amps), Some(pressure)),
+        (Command::SetProcess { .. }, _) => No(&text::SET_PROCESS),
+        (Command::SetAmps(amps), Some(Sync | Legacy)) => settings(None, Some(amps), None),
+        (Command::SetAmps(amps), Some(Hpr | MaxPro200)) => Route::HprAmps(amps),
+        (Command::RemoteOff, Some(Sync | Legacy)) => Send(L::ExitRemote, Awaiting::RemoteOff),
+        (Command::RemoteOff, _) => No(&text::REMOTE_OFF),
+        (Command::GasTest(on), Some(Sync | Legacy)) => {
+            Send(L::GasTest { on }, Awaiting::GasTest(on))
         }
-        Command::SetPsi(pressure) => {
-            let set = settings(None, None, Some(pressure));
-            [set, set, No(text::SET_PSI), No(text::SET_PSI)]
-        }
-        Command::SetProcess {
-            mode,
-            amps,
-            pressure,
-        } => {
-            let set = settings(Some(mode), Some(amps), Some(pressure));
-            [set, set, No(text::SET_PROCESS), No(text::SET_PROCESS)]
-        }
-        Command::SetAmps(amps) => {
-            let set = settings(None, Some(amps), None);
-            [set, set, Route::HprAmps(amps), Route::HprAmps(amps)]
-        }
-        Command::RemoteOff => {
-            let exit = Send(L::ExitRemote, Awaiting::RemoteOff);
-            [exit, exit, No(text::REMOTE_OFF), No(text::REMOTE_OFF)]
-        }
+        (Command::GasTest(on), Some(Hpr)) => Send(L::HprGasTest { on }, Awaiting::GasTest(on)),
         // The MaxPro200 protocol has no gas test.
-        Command::GasTest(on) => [
-            Send(L::GasTest { on }, Awaiting::GasTest(on)),
-            Send(L::GasTest { on }, Awaiting::GasTest(on)),
-            Send(L::HprGasTest { on }, Awaiting::GasTest(on)),
-            No(text::NOT_SUPPORTED),
-        ],
+        (Command::GasTest(_), Some(MaxPro200)) => No(&text::NOT_SUPPORTED),
         // Quick restart (clears 0-50-0) exists on SYNC units only.
-        Command::Restart => [
-            Send(L::QuickRestart, Awaiting::Restart),
-            No(text::RESTART),
-            No(text::RESTART),
-            No(text::RESTART),
-        ],
-        Command::Gases { plasma, shield } => {
-            let set = Send(
-                L::HprSetInletGases(gas_pair(plasma, shield)),
-                Awaiting::Gases(plasma, shield),
-            );
-            [No(text::GASES), No(text::GASES), set, set]
+        (Command::Restart, Some(Sync)) => Send(L::QuickRestart, Awaiting::Restart),
+        (Command::Restart, _) => No(&text::RESTART),
+        (Command::Gases { plasma, shield }, Some(Hpr | MaxPro200)) => Send(
+            L::HprSetInletGases(gas_pair(plasma, shield)),
+            Awaiting::Gases(plasma, shield),
+        ),
+        (Command::Gases { .. }, _) => No(&text::GASES),
+        (Command::Corner(percent), Some(Hpr)) => {
+            Send(L::HprSetCornerCurrent { percent }, Awaiting::Corner)
         }
-        Command::Corner(percent) => [
-            No(text::CORNER),
-            No(text::CORNER),
-            Send(L::HprSetCornerCurrent { percent }, Awaiting::Corner),
-            No(text::CORNER),
-        ],
-        Command::Reset => {
-            let reset = Send(L::HprSoftwareReset, Awaiting::Reset);
-            [No(text::RESET), No(text::RESET), reset, reset]
-        }
-        Command::ClearWarn => [
-            No(text::CLEAR_WARN),
-            No(text::CLEAR_WARN),
-            Send(L::HprClearWarnings, Awaiting::ClearWarn),
-            No(text::CLEAR_WARN),
-        ],
+        (Command::Corner(_), _) => No(&text::CORNER),
+        (Command::Reset, Some(Hpr | MaxPro200)) => Send(L::HprSoftwareReset, Awaiting::Reset),
+        (Command::Reset, _) => No(&text::RESET),
+        (Command::ClearWarn, Some(Hpr)) => Send(L::HprClearWarnings, Awaiting::ClearWarn),
+        (Command::ClearWarn, _) => No(&text::CLEAR_WARN),
         // A SYNC cartridge keeps a fault log (read with the slow data); legacy units and the
         // MaxPro200 keep none the bridge can read.
-        Command::FaultLog => [
-            Send(L::RefreshSlowData, Awaiting::FaultLog),
-            No(text::FAULT_LOG),
-            Send(L::HprReadErrorLog, Awaiting::FaultLog),
-            No(text::FAULT_LOG),
-        ],
+        (Command::FaultLog, Some(Sync)) => Send(L::RefreshSlowData, Awaiting::FaultLog),
+        (Command::FaultLog, Some(Hpr)) => Send(L::HprReadErrorLog, Awaiting::FaultLog),
+        (Command::FaultLog, _) => No(&text::FAULT_LOG),
+        (Command::Counters, Some(Sync | Legacy)) => Send(L::RefreshSlowData, Awaiting::Counters),
+        (Command::Counters, Some(Hpr)) => Send(L::HprReadTimers, Awaiting::Counters),
         // The MaxPro200 has no timer read: its COUNTERS are the link's own.
-        Command::Counters => [
-            Send(L::RefreshSlowData, Awaiting::Counters),
-            Send(L::RefreshSlowData, Awaiting::Counters),
-            Send(L::HprReadTimers, Awaiting::Counters),
-            Local,
-        ],
-        Command::Cartridge => [
-            Local,
-            No(text::CARTRIDGE),
-            No(text::CARTRIDGE),
-            No(text::CARTRIDGE),
-        ],
-        Command::Help
-        | Command::Id
-        | Command::Status
-        | Command::Limits
-        | Command::Fault
-        | Command::Events(_)
-        | Command::Config(_)
-        | Command::Torch(_)
-        | Command::Raw(_) => return Route::Session,
-    };
-    let [sync, legacy, hpr, maxpro200] = row;
-    match family {
-        Some(Family::PowermaxSync) => sync,
-        Some(Family::PowermaxLegacy) => legacy,
-        Some(Family::Hpr) => hpr,
-        Some(Family::MaxPro200) => maxpro200,
-        // Without a unit, COUNTERS still has the link's own counters.
-        None if matches!(command, Command::Counters) => Local,
-        None => Route::NoLink,
+        (Command::Counters, Some(MaxPro200)) => Local,
+        (Command::Cartridge, Some(Sync)) => Local,
+        (Command::Cartridge, _) => No(&text::CARTRIDGE),
     }
 }
 

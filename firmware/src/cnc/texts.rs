@@ -49,22 +49,20 @@ pub const PHOENIX_TRUNCATED: &str =
 pub const PHOENIX_FRAMING: &str =
     "Phoenix message framing: a framing byte is missing or out of place (NAK sent)";
 
-/// `SET AMPS` with a fraction on a unit that takes whole amps.
-pub struct WholeAmps(pub Amps);
-
-impl Display for WholeAmps {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "amps {}: this unit takes whole amps", self.0)
-    }
+/// `SET AMPS` with a fraction on a unit that takes whole amps: its `ERR` line.
+pub fn whole_amps(amps: Amps) -> ReplyLine {
+    err_line(
+        ErrorCode::Range,
+        format_args!("amps {amps}: this unit takes whole amps"),
+    )
 }
 
-/// `CONFIG SAVE` failed.
-pub struct NotSaved(pub SaveError);
-
-impl Display for NotSaved {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "settings not saved: {}", self.0)
-    }
+/// `CONFIG SAVE` failed: its `ERR` line.
+pub fn not_saved(error: SaveError) -> ReplyLine {
+    err_line(
+        ErrorCode::Storage,
+        format_args!("settings not saved: {error}"),
+    )
 }
 
 /// A line that found the queue of [`QUEUE_CAPACITY`](super::QUEUE_CAPACITY) full (a test ties the number).
