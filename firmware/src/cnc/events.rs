@@ -10,6 +10,7 @@ use super::describe::{
     settings_failure_word, state_name, transaction_word,
 };
 use super::replies::complete;
+use super::texts::RefusalText;
 use super::{Context, Pending, ReplyLine, Session};
 use crate::io::{Interlock, IoEvent};
 use crate::link::{Family, LinkDownReason, LinkEvent, UnitStatus};
@@ -136,7 +137,7 @@ fn write_link_event(l: &mut ReplyLine, event: &LinkEvent, status: &UnitStatus) -
             let mut w = ReplyWriter::event(l, "SETTINGS")?;
             w.word("failed")?;
             w.field("reason", "refused")?;
-            w.field("why", refusal)?;
+            w.field("why", RefusalText(&refusal))?;
             w.finish().map(|_| ())
         }
         LinkEvent::CartridgeChanged { uid } => {

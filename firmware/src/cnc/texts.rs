@@ -13,7 +13,8 @@ use plasma_protocol::cnc::reply::write_error;
 use plasma_protocol::cnc::{Amps, ErrorCode, phoenix};
 use plasma_protocol::hpr::ErrorCode as HprError;
 use plasma_protocol::modbus_ascii::ExceptionCode;
-use plasma_protocol::time::Instant;
+use plasma_protocol::powermax::OperatingMode;
+use plasma_protocol::time::{Decimal, Instant};
 
 use super::describe::{OrDash, SettingsText, mode_word, powermax_fault_text, state_name};
 use super::{ReplyLine, err_line};
@@ -236,7 +237,9 @@ pub fn write_refusal<W: Write>(
             UnsupportedText(unsupported::NOT_SUPPORTED, *family),
         ),
         Refusal::LimitsUnknown => write_error(out, ErrorCode::State, LIMITS_NOT_READ),
-        Refusal::QuickRestartNeeds050 { .. } => write_error(out, ErrorCode::State, refusal),
+        Refusal::QuickRestartNeeds050 { .. } => {
+            write_error(out, ErrorCode::State, RefusalText(refusal))
+        }
         Refusal::Blackout { until } => write_error(
             out,
             ErrorCode::Busy,
@@ -261,7 +264,9 @@ pub fn write_refusal<W: Write>(
         | Refusal::RawWrongAddress { .. }
         | Refusal::RawFunctionNotAllowed { .. }
         | Refusal::RawWriteNotAllowed { .. }
-        | Refusal::RawCommandNotAllowed { .. } => write_error(out, ErrorCode::Refused, refusal),
+        | Refusal::RawCommandNotAllowed { .. } => {
+            write_error(out, ErrorCode::Refused, RefusalText(refusal))
+        }
     }
 }
 
@@ -381,9 +386,93 @@ pub fn write_failure<W: Write>(
     }
 }
 
+/// A link refusal in plain words: the text of some `ERR` lines (RAW checks, quick restart)
+/// and of `!SETTINGS failed reason=refused why=...`. It uses no `Debug` formatting, which
+/// would bring core's `Debug` machinery (~1 KB) into the image.
+pub struct RefusalText<'a>(pub &'a Refusal);
+
+impl Display for RefusalText<'_> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let mode_name = |mode: Option<OperatingMode>| mode.map_or("-", OperatingMode::sync_name);
+        match self.0 {
+            Refusal::LinkNotUp => f.write_str("no power supply connected"),
+            Refusal::NotSupported { family } => write!(f, "not supported by {}", family.name()),
+            Refusal::LimitsUnknown => f.write_str("permitted limits not read yet"),
+            Refusal::ModeNotPermitted { mode, permitted } => write!(
+                f,
+                "mode {} not permitted (permitted: {}, {})",
+                mode.sync_name(),
+                mode_name(permitted.low_mode()),
+                mode_name(permitted.high_mode())
+            ),
+            Refusal::CurrentOutOfRange {
+                requested,
+                min,
+                max,
+            } => {
+                write!(f, "current {requested} A outside {min}-{max} A")
+            }
+            Refusal::PressureOutOfRange {
+                requested,
+                min,
+                max,
+            } => {
+                write!(f, "pressure {requested} psi outside {min}-{max} psi")
+            }
+            Refusal::QuickRestartNeeds050 { active } => match active {
+                Some(code) => write!(f, "quick restart needs fault 0-50-0, active is {code}"),
+                None => f.write_str("quick restart needs fault 0-50-0, no fault active"),
+            },
+            Refusal::Blackout { until } => {
+                // (Decimal: no 64-bit division in the board image.)
+                let until = Decimal(until.as_millis());
+                write!(f, "quiet after quick restart until {until} ms")
+            }
+            Refusal::QueueFull => f.write_str("too many commands waiting"),
+            Refusal::HprValueOutOfRange {
+                value,
+                requested,
+                min,
+                max,
+            } => {
+                write!(f, "{} {requested} outside {min}-{max}", value.word())
+            }
+            Refusal::StateForbids { state, error } => {
+                f.write_str("not allowed in state ")?;
+                match state {
+                    Some(state) => write!(f, "{}", state.0)?,
+                    None => f.write_str("unknown")?,
+                }
+                match error {
+                    Some(error) => write!(f, " with error {:03}", error.0),
+                    None => f.write_str(" with error unknown"),
+                }
+            }
+            Refusal::RawMalformed(e) => write!(f, "raw frame rejected: {e}"),
+            Refusal::RawWrongAddress { expected, found } => {
+                write!(
+                    f,
+                    "raw frame for node {found}, link talks to node {expected}"
+                )
+            }
+            Refusal::RawFunctionNotAllowed { function } => {
+                write!(f, "raw function {function:02X} not allowed")
+            }
+            Refusal::RawWriteNotAllowed { address } => {
+                write!(f, "raw write to {address:04X} not allowed")
+            }
+            Refusal::RawCommandNotAllowed { id } => write!(f, "raw command {id:03} not allowed"),
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::link::HprValue;
+    use plasma_protocol::hpr::StateCode;
+    use plasma_protocol::powermax::sync::PermittedModes;
+    use std::string::ToString;
 
     #[test]
     fn the_queue_full_text_names_the_queue_capacity() {
@@ -392,5 +481,56 @@ mod tests {
             count,
             Some(std::format!("{}", super::super::QUEUE_CAPACITY).as_str())
         );
+    }
+
+    #[test]
+    fn refusal_texts_name_things_without_debug_output() {
+        let texts = [
+            (
+                Refusal::NotSupported {
+                    family: Family::MaxPro200,
+                },
+                "not supported by a MaxPro200",
+            ),
+            (
+                Refusal::ModeNotPermitted {
+                    mode: OperatingMode::Gouge,
+                    permitted: PermittedModes { high: 2, low: 9 },
+                },
+                "mode gouge not permitted (permitted: -, expanded metal)",
+            ),
+            (
+                Refusal::HprValueOutOfRange {
+                    value: HprValue::CornerPercent,
+                    requested: 40,
+                    min: 50,
+                    max: 100,
+                },
+                "percent 40 outside 50-100",
+            ),
+            (
+                Refusal::StateForbids {
+                    state: Some(StateCode(14)),
+                    error: Some(HprError(7)),
+                },
+                "not allowed in state 14 with error 007",
+            ),
+            (
+                Refusal::StateForbids {
+                    state: None,
+                    error: None,
+                },
+                "not allowed in state unknown with error unknown",
+            ),
+            (
+                Refusal::Blackout {
+                    until: Instant::from_millis(12_345_678_901),
+                },
+                "quiet after quick restart until 12345678901 ms",
+            ),
+        ];
+        for (refusal, text) in texts {
+            assert_eq!(RefusalText(&refusal).to_string(), text);
+        }
     }
 }

@@ -1,13 +1,11 @@
 //! What the CNC session can ask of the link, and why the link may refuse before sending.
 
-use core::fmt;
-
 use plasma_protocol::hpr::{ErrorCode, GasPair, StateCode};
 use plasma_protocol::powermax::sync::PermittedModes;
 use plasma_protocol::powermax::{Amps, FaultCode, OperatingMode, Pressure, Psi};
 
 use super::status::Family;
-use plasma_protocol::time::{Decimal, Instant};
+use plasma_protocol::time::Instant;
 
 /// Longest RAW frame accepted (a Modbus ASCII frame is at most 513 characters); the session
 /// refuses a longer one before it reaches the link.
@@ -221,87 +219,9 @@ pub enum Refusal {
     },
 }
 
-/// The board image shows some refusals with this text (RAW checks, quick restart): it uses no
-/// `Debug` formatting, which would bring core's `Debug` machinery (~1 KB) into the image.
-impl fmt::Display for Refusal {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let mode_name = |mode: Option<OperatingMode>| mode.map_or("-", OperatingMode::sync_name);
-        match self {
-            Refusal::LinkNotUp => f.write_str("no power supply connected"),
-            Refusal::NotSupported { family } => write!(f, "not supported by {}", family.name()),
-            Refusal::LimitsUnknown => f.write_str("permitted limits not read yet"),
-            Refusal::ModeNotPermitted { mode, permitted } => write!(
-                f,
-                "mode {} not permitted (permitted: {}, {})",
-                mode.sync_name(),
-                mode_name(permitted.low_mode()),
-                mode_name(permitted.high_mode())
-            ),
-            Refusal::CurrentOutOfRange {
-                requested,
-                min,
-                max,
-            } => {
-                write!(f, "current {requested} A outside {min}-{max} A")
-            }
-            Refusal::PressureOutOfRange {
-                requested,
-                min,
-                max,
-            } => {
-                write!(f, "pressure {requested} psi outside {min}-{max} psi")
-            }
-            Refusal::QuickRestartNeeds050 { active } => match active {
-                Some(code) => write!(f, "quick restart needs fault 0-50-0, active is {code}"),
-                None => f.write_str("quick restart needs fault 0-50-0, no fault active"),
-            },
-            Refusal::Blackout { until } => {
-                // (Decimal: no 64-bit division in the board image.)
-                let until = Decimal(until.as_millis());
-                write!(f, "quiet after quick restart until {until} ms")
-            }
-            Refusal::QueueFull => f.write_str("too many commands waiting"),
-            Refusal::HprValueOutOfRange {
-                value,
-                requested,
-                min,
-                max,
-            } => {
-                write!(f, "{} {requested} outside {min}-{max}", value.word())
-            }
-            Refusal::StateForbids { state, error } => {
-                f.write_str("not allowed in state ")?;
-                match state {
-                    Some(state) => write!(f, "{}", state.0)?,
-                    None => f.write_str("unknown")?,
-                }
-                match error {
-                    Some(error) => write!(f, " with error {:03}", error.0),
-                    None => f.write_str(" with error unknown"),
-                }
-            }
-            Refusal::RawMalformed(e) => write!(f, "raw frame rejected: {e}"),
-            Refusal::RawWrongAddress { expected, found } => {
-                write!(
-                    f,
-                    "raw frame for node {found}, link talks to node {expected}"
-                )
-            }
-            Refusal::RawFunctionNotAllowed { function } => {
-                write!(f, "raw function {function:02X} not allowed")
-            }
-            Refusal::RawWriteNotAllowed { address } => {
-                write!(f, "raw write to {address:04X} not allowed")
-            }
-            Refusal::RawCommandNotAllowed { id } => write!(f, "raw command {id:03} not allowed"),
-        }
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-    use std::string::ToString;
 
     #[test]
     fn each_family_runs_the_requests_its_driver_has_and_nothing_else() {
@@ -340,57 +260,6 @@ mod tests {
                     "{request:?}"
                 );
             }
-        }
-    }
-
-    #[test]
-    fn refusal_texts_name_things_without_debug_output() {
-        let texts = [
-            (
-                Refusal::NotSupported {
-                    family: Family::MaxPro200,
-                },
-                "not supported by a MaxPro200",
-            ),
-            (
-                Refusal::ModeNotPermitted {
-                    mode: OperatingMode::Gouge,
-                    permitted: PermittedModes { high: 2, low: 9 },
-                },
-                "mode gouge not permitted (permitted: -, expanded metal)",
-            ),
-            (
-                Refusal::HprValueOutOfRange {
-                    value: HprValue::CornerPercent,
-                    requested: 40,
-                    min: 50,
-                    max: 100,
-                },
-                "percent 40 outside 50-100",
-            ),
-            (
-                Refusal::StateForbids {
-                    state: Some(StateCode(14)),
-                    error: Some(ErrorCode(7)),
-                },
-                "not allowed in state 14 with error 007",
-            ),
-            (
-                Refusal::StateForbids {
-                    state: None,
-                    error: None,
-                },
-                "not allowed in state unknown with error unknown",
-            ),
-            (
-                Refusal::Blackout {
-                    until: Instant::from_millis(12_345_678_901),
-                },
-                "quiet after quick restart until 12345678901 ms",
-            ),
-        ];
-        for (refusal, text) in texts {
-            assert_eq!(refusal.to_string(), text);
         }
     }
 }

@@ -377,7 +377,7 @@ impl CommandStream {
         let since = world.now();
         let ticket = world
             .submit(command)
-            .unwrap_or_else(|r| panic!("{command:?} refused: {r}"));
+            .unwrap_or_else(|r| panic!("{command:?} refused: {r:?}"));
         self.in_flight = Some((ticket, since, mark));
     }
 }

@@ -141,7 +141,7 @@ impl World<PsLink> {
     ) -> Result<CommandOutput, CommandFailure> {
         let ticket = self
             .submit(command)
-            .unwrap_or_else(|r| panic!("{command:?} refused: {r}"));
+            .unwrap_or_else(|r| panic!("{command:?} refused: {r:?}"));
         self.wait_command(ticket, timeout).unwrap_or_else(|t| {
             panic!("{command:?} did not complete: {t}\n{}", self.trace.tail(20))
         })
