@@ -297,7 +297,7 @@ mod tests {
     use plasma_protocol::cnc::{Amps, Mode, Pressure};
 
     use super::*;
-    use crate::cnc::tests::{NAK_TOKEN, Rig};
+    use crate::cnc::rig::{NAK_TOKEN, Rig};
     use plasma_protocol::time::Duration;
 
     fn with_process(amps: u16, events: bool) -> Settings {

@@ -230,3 +230,6 @@ fn base_process(ctx: &Context<'_>, family: Option<Family>) -> Option<Process> {
         })
     })
 }
+
+#[cfg(test)]
+mod tests;

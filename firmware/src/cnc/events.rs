@@ -194,3 +194,6 @@ fn interlock_word(interlock: Interlock) -> &'static str {
         Interlock::TransferTimeout => "transfer_timeout",
     }
 }
+
+#[cfg(test)]
+mod tests;

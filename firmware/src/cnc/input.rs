@@ -297,3 +297,6 @@ fn message_item(payload: &[u8]) -> Item {
     let error = error.or_else(|| Command::parse(&text).err().map(InputError::Parse));
     Item { text, error }
 }
+
+#[cfg(test)]
+mod tests;

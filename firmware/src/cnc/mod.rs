@@ -37,9 +37,9 @@ mod events;
 mod input;
 pub mod powermax_port;
 mod replies;
-mod table;
 #[cfg(test)]
-pub(crate) mod tests;
+pub(crate) mod rig;
+mod table;
 pub mod texts;
 
 use core::fmt::{self, Display, Write};

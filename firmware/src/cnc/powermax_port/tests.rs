@@ -8,7 +8,7 @@ use std::vec::Vec;
 use proptest::prelude::*;
 
 use super::SETTLE;
-use crate::cnc::tests::{Rig, mb};
+use crate::cnc::rig::{Rig, mb};
 use crate::settings::Settings;
 
 /// Send one Modbus frame; the reply line (without CR LF), or `None` when none came.

@@ -1,0 +1,524 @@
+//! Every command on each family, end to end on the rig: the replies `docs/cnc-protocol.md`
+//! shows, byte for byte.
+
+extern crate std;
+
+use crate::cnc::SimCommand;
+use crate::io::{Inputs, Outputs};
+use crate::settings::{Process, SaveError, Settings};
+use crate::storage::Settings as _;
+use plasma_protocol::time::Duration;
+use plasma_sim::clock::Accumulator;
+use plasma_sim::hpr::HprCounters;
+
+use crate::cnc::rig::*;
+use crate::cnc::texts::{self, UnsupportedText, unsupported};
+use crate::link::{CommandFailure, Family, Refusal, SettingsFailure, TransactionError};
+use plasma_protocol::cnc::{ErrorCode, ParseError};
+
+// ---------------------------------------------------------------------------------------
+// a session with a SYNC unit
+
+#[test]
+fn set_process_answers_once_after_the_read_back() {
+    let mut rig = Rig::sync65(Settings::default());
+    let reply = rig.cmd("SET PROCESS CUT 45 AUTO");
+    assert_eq!(reply, "OK mode=CUT amps=45 psi=AUTO");
+    // One write of all three remote registers: cut, 45 A x 64, automatic pressure.
+    assert_eq!(rig.writes(), std::vec![(0x3080, std::vec![1, 2880, 0])]);
+    assert_eq!(
+        rig.bridge.settings().process,
+        Some(Process {
+            mode: plasma_protocol::cnc::Mode::Cut,
+            amps: plasma_protocol::cnc::Amps::from_raw(2880),
+            pressure: plasma_protocol::cnc::Pressure::Auto,
+        })
+    );
+    rig.run(300);
+    assert_eq!(
+        rig.cmd("STATUS"),
+        "OK link=UP model=Powermax65 family=SYNC remote=ON mode=CUT amps=45 psi=72 \
+         out_amps=0 out_psi=0 fault=none start=OFF motion=OFF arc_ok=OFF ready=ON"
+    );
+}
+
+#[test]
+fn status_is_one_line_with_the_io_snapshot() {
+    let mut rig = Rig::sync65(Settings::default());
+    let inputs = Inputs {
+        torch_on: true,
+        motion: true,
+        ..Inputs::NONE
+    };
+    let outputs = Outputs {
+        start: true,
+        arc_ok: true,
+        ready: true,
+        ..Outputs::OFF
+    };
+    rig.bridge.set_io_snapshot(inputs, outputs);
+    assert_eq!(
+        rig.cmd("status"),
+        "OK link=UP model=Powermax65 family=SYNC remote=OFF mode=CUT amps=45 psi=76 \
+         out_amps=0 out_psi=0 fault=none start=ON motion=ON arc_ok=ON ready=ON"
+    );
+}
+
+#[test]
+fn limits_are_refused_with_the_permitted_range_before_anything_is_sent() {
+    let mut rig = Rig::sync65(Settings::default());
+    assert_err(&rig.cmd("SET AMPS 120"), "ERR RANGE *120*20..65*");
+    assert_err(&rig.cmd("SET PROCESS CUT 45 80"), "ERR RANGE *80*58..78*");
+    assert_err(&rig.cmd("SET MODE GOUGE"), "ERR RANGE *GOUGE*CUT*EXPANDED*");
+    // The protocol's absolute bounds come first.
+    assert_err(&rig.cmd("SET AMPS 500"), "ERR RANGE *5..400*");
+    assert_err(&rig.cmd("SET AMPS 45.01"), "ERR RANGE *1/64*");
+    assert!(rig.writes().is_empty(), "nothing was sent");
+    assert_eq!(
+        rig.cmd("LIMITS"),
+        "OK modes=CUT,EXPANDED amps=20..65 psi=58..78 scope=cartridge"
+    );
+}
+
+#[test]
+fn set_mode_amps_and_psi_combine_with_the_other_two_values() {
+    let mut rig = Rig::sync65(Settings::default());
+    // Nothing asked for yet: the unit's own settings (cut, 45 A, 76 psi) fill in.
+    assert_eq!(rig.cmd("SET AMPS 40"), "OK mode=CUT amps=40 psi=76");
+    assert_eq!(rig.cmd("SET PSI AUTO"), "OK mode=CUT amps=40 psi=AUTO");
+    assert_eq!(
+        rig.cmd("SET MODE EXPANDED"),
+        "OK mode=EXPANDED amps=40 psi=AUTO"
+    );
+    assert_eq!(rig.cmd("SET PSI 70.5"), "OK mode=EXPANDED amps=40 psi=70.5");
+    assert_eq!(
+        rig.writes(),
+        std::vec![
+            (0x3080, std::vec![1, 40 * 64, 76 * 128]),
+            (0x3080, std::vec![1, 40 * 64, 0]),
+            (0x3080, std::vec![2, 40 * 64, 0]),
+            (0x3080, std::vec![2, 40 * 64, 141 * 64]),
+        ]
+    );
+}
+
+#[test]
+fn settings_that_do_not_read_back_are_an_error_with_the_read_back_values() {
+    let mut rig = Rig::sync65(Settings::default());
+    rig.ps().powermax().config_mut().remote_settings_apply = false;
+    assert_err(
+        &rig.cmd("SET PROCESS CUT 50 AUTO"),
+        "ERR LINK *mode=CUT*amps=45*psi=76*",
+    );
+    assert_eq!(rig.bridge.settings().process, None);
+    rig.unplug(true);
+    assert_eq!(
+        rig.cmd("SET PROCESS CUT 50 AUTO"),
+        failure_line(&CommandFailure::Settings(SettingsFailure::Transaction(
+            TransactionError::Timeout
+        )))
+    );
+}
+
+#[test]
+fn every_command_on_a_sync_unit() {
+    let mut rig = Rig::sync65(Settings::default());
+    assert_eq!(
+        rig.cmd("HELP"),
+        "OK commands=HELP,ID,STATUS,LIMITS,FAULT,FAULTLOG,COUNTERS,CARTRIDGE,SET_MODE,\
+         SET_AMPS,SET_PSI,SET_PROCESS,REMOTE_OFF,GASTEST,RESTART,GASES,CORNER,RESET,CLEARWARN,\
+         EVENTS,CONFIG,CONFIG_SAVE,RAW simulator_only=TORCH simulator=NO"
+    );
+    assert_eq!(
+        rig.cmd("ID"),
+        "OK bridge=plasma-bridge version=0.1.0 reset=unknown link=UP model=Powermax65 \
+         family=SYNC product=081335"
+    );
+    assert_eq!(rig.cmd("FAULT"), "OK fault=none");
+    assert_eq!(rig.cmd("FAULTLOG"), "OK log=0-20-0,0-50-0");
+    assert_eq!(
+        rig.cmd("COUNTERS"),
+        std::format!(
+            "OK starts=1200 pilot_arc_s=300 transfers=1100 transfer_s=5000 link_ok={} \
+             link_failed=0 retries=0 timeouts={} bad_checksums=0 link_downs=0",
+            rig.bridge.diagnostics().transactions_ok,
+            rig.bridge.diagnostics().timeouts
+        )
+    );
+    assert_eq!(
+        rig.cmd("CARTRIDGE"),
+        "OK uid=E00401D0036FB25D part=428930 rev=1 nominal_amps=65 name=C_MECH starts=17 \
+         pilot_arc_s=40 transfers=15 transfer_s=40"
+    );
+    assert_eq!(rig.cmd("GASTEST ON"), "OK gastest=ON");
+    assert_eq!(rig.cmd("GASTEST OFF"), "OK gastest=OFF");
+    assert_err(&rig.cmd("RESTART"), "ERR STATE *0-50-0*");
+    rig.fault(500);
+    rig.run(300);
+    assert_eq!(
+        rig.cmd("FAULT"),
+        "OK fault=0-50-0 action=required text=The cartridge is off, the torch was disconnected \
+         when you set the plasma power supply to ON (I), or the torch was in the yellow lock (X) \
+         position during a restart."
+    );
+    let restart = rig.cmd("RESTART");
+    assert_eq!(restart, "OK restart=done quiet_ms=2000");
+    assert_eq!(rig.cmd("SET AMPS 40").split(' ').next(), Some("ERR"));
+    rig.run(2500);
+    assert_eq!(rig.cmd("FAULT"), "OK fault=none");
+    assert_eq!(
+        rig.cmd("GASES O2 AIR"),
+        err(
+            ErrorCode::Unsupported,
+            UnsupportedText(unsupported::GASES, Family::PowermaxSync)
+        )
+    );
+    assert_eq!(
+        rig.cmd("CORNER 80"),
+        err(
+            ErrorCode::Unsupported,
+            UnsupportedText(unsupported::CORNER, Family::PowermaxSync)
+        )
+    );
+    assert_eq!(
+        rig.cmd("RESET"),
+        err(
+            ErrorCode::Unsupported,
+            UnsupportedText(unsupported::RESET, Family::PowermaxSync)
+        )
+    );
+    assert_eq!(
+        rig.cmd("CLEARWARN"),
+        err(
+            ErrorCode::Unsupported,
+            UnsupportedText(unsupported::CLEAR_WARN, Family::PowermaxSync)
+        )
+    );
+    assert_eq!(
+        rig.cmd("SET PROCESS GOUGE 45 AUTO").split(' ').next(),
+        Some("ERR")
+    );
+    assert_eq!(
+        rig.cmd("SET PROCESS CUT 45 AUTO"),
+        "OK mode=CUT amps=45 psi=AUTO"
+    );
+    assert_eq!(rig.cmd("REMOTE OFF"), "OK remote=OFF");
+    assert_eq!(rig.writes().last(), Some(&(0x3080, std::vec![0, 0, 0])));
+    assert_eq!(rig.bridge.settings().process, None);
+    assert_eq!(
+        rig.cmd("TORCH ON"),
+        err(ErrorCode::Unsupported, texts::TORCH_SIMULATOR_ONLY)
+    );
+    assert_err(&rig.cmd("REMOTE ON"), "ERR SYNTAX *REMOTE*OFF*");
+    assert_eq!(rig.cmd("FLY"), parse_err(ParseError::UnknownCommand));
+}
+
+#[test]
+fn raw_frames_are_forwarded_or_refused_by_the_allow_list() {
+    let mut rig = Rig::sync65(Settings::default());
+    // Read the active fault register 0x301A.
+    let read = mb(&[0x04, 0x30, 0x1A, 0x00, 0x01]);
+    let read = core::str::from_utf8(&read).unwrap().trim_end();
+    assert_eq!(read, ":0104301A0001B0");
+    assert_eq!(
+        rig.cmd(&std::format!("RAW {read}")),
+        "OK reply=:0104020000F9"
+    );
+    // A write to a register not documented as writable.
+    let write = mb(&[0x06, 0x30, 0x10, 0x00, 0x01]);
+    let write = core::str::from_utf8(&write).unwrap().trim_end();
+    assert_err(&rig.cmd(&std::format!("RAW {write}")), "ERR REFUSED *3010*");
+    assert_err(&rig.cmd("RAW :0104301A0001B1"), "ERR REFUSED *B0*B1*");
+    assert_eq!(
+        rig.cmd("RAW"),
+        parse_err(ParseError::MissingArgument { what: "frame" })
+    );
+    assert!(rig.writes().is_empty());
+}
+
+#[test]
+fn without_a_unit_commands_that_need_one_say_link() {
+    let mut rig = Rig::new(Settings::default(), None);
+    rig.run(50);
+    for line in [
+        "SET PROCESS CUT 45 AUTO",
+        "SET AMPS 45",
+        "REMOTE OFF",
+        "GASTEST ON",
+        "RESTART",
+        "GASES O2 AIR",
+        "CORNER 80",
+        "RESET",
+        "CLEARWARN",
+        "FAULT",
+        "FAULTLOG",
+        "LIMITS",
+        "CARTRIDGE",
+    ] {
+        assert_eq!(
+            rig.cmd(line),
+            err(ErrorCode::Link, texts::NO_LINK),
+            "{line}"
+        );
+    }
+    assert_eq!(
+        rig.cmd("RAW :0104301A0001B0"),
+        refusal_line(&Refusal::LinkNotUp, None)
+    );
+    assert_eq!(
+        rig.cmd("STATUS"),
+        "OK link=DOWN model=- family=- remote=OFF mode=- amps=- psi=- out_amps=- out_psi=- \
+         fault=none start=OFF motion=OFF arc_ok=OFF ready=OFF"
+    );
+    assert!(rig.cmd("COUNTERS").starts_with("OK link_ok=0 link_failed="));
+}
+
+// ---------------------------------------------------------------------------------------
+// HPR and MaxPro200
+
+#[test]
+fn every_command_on_an_hpr() {
+    let mut rig = Rig::hpr("hpr130");
+    assert_eq!(
+        rig.cmd("STATUS"),
+        "OK link=UP model=HPR130 family=HPR remote=OFF mode=- amps=130 psi=- out_amps=- \
+         out_psi=- fault=none start=OFF motion=OFF arc_ok=OFF ready=ON state=3 \
+         state_name=IDLE2"
+    );
+    assert_eq!(rig.cmd("LIMITS"), "OK amps=5..130 corner=50..100");
+    assert_eq!(rig.cmd("SET AMPS 100"), "OK amps=100");
+    let requests = rig.hpr_commands();
+    let set = requests.iter().position(|&id| id == 58).unwrap();
+    assert_eq!(requests[set - 1], 4, "REMOTE_MODE before the first setting");
+    assert_err(&rig.cmd("SET AMPS 131"), "ERR RANGE *131*5..130*");
+    assert_err(&rig.cmd("SET AMPS 45.5"), "ERR RANGE *45.5*");
+    assert_eq!(
+        rig.cmd("SET PROCESS CUT 45 AUTO"),
+        err(
+            ErrorCode::Unsupported,
+            UnsupportedText(unsupported::SET_PROCESS, Family::Hpr)
+        )
+    );
+    assert_eq!(
+        rig.cmd("SET MODE CUT"),
+        err(
+            ErrorCode::Unsupported,
+            UnsupportedText(unsupported::SET_MODE, Family::Hpr)
+        )
+    );
+    assert_eq!(
+        rig.cmd("SET PSI 60"),
+        err(
+            ErrorCode::Unsupported,
+            UnsupportedText(unsupported::SET_PSI, Family::Hpr)
+        )
+    );
+    assert_eq!(rig.cmd("GASES O2 AIR"), "OK plasma=O2 shield=AIR");
+    assert_eq!(rig.cmd("CORNER 80"), "OK corner=80");
+    assert_err(&rig.cmd("CORNER 40"), "ERR RANGE *50..100*");
+    assert_eq!(rig.cmd("CLEARWARN"), "OK clearwarn=done");
+    assert_eq!(rig.cmd("GASTEST ON"), "OK gastest=ON");
+    assert_eq!(rig.cmd("GASTEST OFF"), "OK gastest=OFF");
+    assert_err(&rig.cmd("RESET"), "ERR STATE *3*IDLE2*000*NO*ERROR*");
+    // Two errors come and go before the bridge polls: only the log keeps them.
+    rig.fault(20);
+    rig.fault(44);
+    rig.fault(0);
+    assert_eq!(rig.cmd("FAULTLOG"), "OK log=044,020");
+    rig.ps().hpr().set_counters(HprCounters {
+        arc_on: Accumulator::from_secs(3600),
+        system_on: Accumulator::from_secs(900 * 60),
+        starts: 420,
+        start_errors: 3,
+        rampdown_errors: 1,
+    });
+    assert!(rig.cmd("COUNTERS").starts_with(
+        "OK arc_s=3600 system_min=900 starts=420 start_errors=3 rampdown_errors=1 link_ok="
+    ));
+    assert_eq!(
+        rig.cmd("CARTRIDGE"),
+        err(
+            ErrorCode::Unsupported,
+            UnsupportedText(unsupported::CARTRIDGE, Family::Hpr)
+        )
+    );
+    assert_eq!(
+        rig.cmd("RESTART"),
+        err(
+            ErrorCode::Unsupported,
+            UnsupportedText(unsupported::RESTART, Family::Hpr)
+        )
+    );
+    assert_eq!(
+        rig.cmd("REMOTE OFF"),
+        err(
+            ErrorCode::Unsupported,
+            UnsupportedText(unsupported::REMOTE_OFF, Family::Hpr)
+        )
+    );
+    assert_eq!(rig.cmd("RAW >00292<"), "OK reply=>002000355<");
+    assert_err(&rig.cmd("RAW >12093<"), "ERR REFUSED *120*");
+    rig.fault(44);
+    rig.run(300);
+    assert_eq!(
+        rig.cmd("FAULT"),
+        "OK fault=044 action=required text=LOW PLASMA GAS PRESSURE"
+    );
+}
+
+#[test]
+fn maxpro200_commands_that_do_not_apply_say_why() {
+    let mut rig = Rig::hpr("maxpro200");
+    assert_eq!(rig.cmd("LIMITS"), "OK amps=5..200");
+    assert_eq!(rig.cmd("SET AMPS 200"), "OK amps=200");
+    assert_eq!(rig.cmd("GASES AIR AIR"), "OK plasma=AIR shield=AIR");
+    assert_eq!(
+        rig.cmd("CLEARWARN"),
+        err(
+            ErrorCode::Unsupported,
+            UnsupportedText(unsupported::CLEAR_WARN, Family::MaxPro200)
+        )
+    );
+    assert_eq!(
+        rig.cmd("FAULTLOG"),
+        err(
+            ErrorCode::Unsupported,
+            UnsupportedText(unsupported::FAULT_LOG, Family::MaxPro200)
+        )
+    );
+    assert_eq!(
+        rig.cmd("GASTEST ON"),
+        err(
+            ErrorCode::Unsupported,
+            UnsupportedText(unsupported::NOT_SUPPORTED, Family::MaxPro200)
+        )
+    );
+    assert!(
+        rig.cmd("STATUS")
+            .ends_with("ready=ON state=3 state_name=READY_FOR_START")
+    );
+}
+
+// ---------------------------------------------------------------------------------------
+// CONFIG
+
+#[test]
+fn config_get_set_and_save_round_trip_through_the_settings_record() {
+    let mut rig = Rig::sync65(Settings::default());
+    assert_eq!(
+        rig.cmd("CONFIG"),
+        "OK protocol=AUTO address=1 parity=EVEN stop_bits=1 timeout_ms=100 retries=2 \
+         poll_ms=100 interlock_fault=ON interlock_link=ON arc_ok_debounce_ms=2 \
+         transfer_timeout_ms=3000 transfer_timeout_drops_start=ON events=OFF hpr_id=0 \
+         phoenix_format=113 torch_on_active=LOW torch_on_debounce_ms=1 hold_active=LOW \
+         hold_debounce_ms=5 pierce_complete_active=LOW pierce_complete_debounce_ms=5 \
+         corner_current_active=LOW corner_current_debounce_ms=5 motion_active=LOW \
+         motion_debounce_ms=0 not_ready_active=LOW not_ready_debounce_ms=5 \
+         rampdown_error_active=LOW rampdown_error_debounce_ms=5 ps_hold_active=HIGH \
+         fault_active=HIGH cnc_address=1 cnc_baud=115200 cnc_parity=NONE \
+         cnc_stop_bits=1"
+    );
+    assert_eq!(rig.cmd("CONFIG timeout_ms"), "OK timeout_ms=100");
+    assert_err(&rig.cmd("CONFIG timeout_ms 30"), "ERR RANGE *30*60..1000*");
+    assert_err(&rig.cmd("CONFIG parity mark"), "ERR SYNTAX *NONE|EVEN|ODD*");
+    assert_err(&rig.cmd("CONFIG baud 9600"), "ERR SYNTAX *SAVE*CONFIG*");
+    assert_eq!(
+        rig.cmd("CONFIG timeout_ms 80"),
+        "OK timeout_ms=80 link=redetecting"
+    );
+    assert_eq!(
+        rig.bridge.link().config().response_timeout,
+        Duration::from_millis(80)
+    );
+    assert!(!rig.bridge.status().link_up, "the link detects again");
+    assert_eq!(rig.bridge.take_io_config_change(), None);
+    assert_eq!(
+        rig.cmd("CONFIG arc_ok_debounce_ms 5"),
+        "OK arc_ok_debounce_ms=5"
+    );
+    assert_eq!(
+        rig.bridge
+            .take_io_config_change()
+            .map(|c| c.arc_ok_debounce),
+        Some(Duration::from_millis(5))
+    );
+    assert_eq!(rig.cmd("CONFIG events on"), "OK events=ON");
+    // SAVE waits for the store; a line sent meanwhile waits behind it.
+    rig.save_result = None;
+    let tokens = rig.send_bytes(b"CONFIG SAVE\r\nCONFIG hpr_id\r\n", 0);
+    assert!(tokens.iter().all(|t| !is_reply(t)), "{tokens:?}");
+    let settings = rig.bridge.take_save_request().unwrap();
+    assert_eq!(rig.bridge.take_save_request(), None, "once");
+    let mut record = [0u8; 64];
+    let len = settings.encode(&mut record);
+    let restored = Settings::decode(&record[..len]).unwrap();
+    assert_eq!(restored, *rig.bridge.settings());
+    rig.bridge.save_finished(rig.now, Ok(()));
+    rig.collect();
+    let n = rig.received.len();
+    assert_eq!(rig.received[n - 2..], ["OK config=saved", "OK hpr_id=0"]);
+    // A failed store.
+    rig.save_result = Some(Err(SaveError::Flash));
+    assert_err(&rig.cmd("CONFIG SAVE"), "ERR STORAGE *");
+    // After a power cycle the bridge runs with what was saved.
+    let mut rig = Rig::new(restored, Some("sync65"));
+    assert_eq!(rig.cmd("CONFIG timeout_ms"), "OK timeout_ms=80");
+    assert_eq!(rig.cmd("CONFIG events"), "OK events=ON");
+}
+
+// ---------------------------------------------------------------------------------------
+// simulator commands
+
+#[test]
+fn torch_is_handed_to_the_simulator_driver() {
+    let mut rig = Rig::new(Settings::default(), None);
+    assert_eq!(
+        rig.cmd("TORCH ON"),
+        err(ErrorCode::Unsupported, texts::TORCH_SIMULATOR_ONLY)
+    );
+    assert_eq!(rig.bridge.poll_sim_command(), None);
+    rig.bridge.enable_sim_commands();
+    assert_eq!(rig.cmd("TORCH ON"), "OK torch=ON");
+    assert_eq!(rig.cmd("torch off"), "OK torch=OFF");
+    assert_eq!(rig.bridge.poll_sim_command(), Some(SimCommand::Torch(true)));
+    assert_eq!(
+        rig.bridge.poll_sim_command(),
+        Some(SimCommand::Torch(false))
+    );
+    assert_eq!(rig.bridge.poll_sim_command(), None);
+    assert!(
+        rig.cmd("HELP")
+            .ends_with("simulator_only=TORCH simulator=YES")
+    );
+}
+
+// ---------------------------------------------------------------------------------------
+// the remaining replies docs/cnc-protocol.md shows
+
+#[test]
+fn documented_replies_not_covered_above() {
+    let mut rig = Rig::sync65(Settings::default());
+    assert_err(
+        &rig.cmd("SET MODE PLASMA"),
+        "ERR SYNTAX *CUT|CPA|EXPANDED|GOUGE*",
+    );
+    assert_err(
+        &rig.cmd("GASES XENON AIR"),
+        "ERR SYNTAX *O2|CH4|H35|H5|AIR|N2|AR|N95|F5*",
+    );
+    assert_err(&rig.cmd("EVENTS MAYBE"), "ERR SYNTAX *EVENTS*ON|OFF*");
+    rig.fault(500);
+    rig.run(300);
+    assert_eq!(rig.cmd("RESTART"), "OK restart=done quiet_ms=2000");
+    assert!(
+        rig.cmd("SET AMPS 40")
+            .starts_with("ERR BUSY the unit restarts: quiet for another "),
+    );
+
+    let mut rig = Rig::hpr("hpr400xd");
+    // RESET only in a shutdown error (state 14, error above 79).
+    rig.fault(80);
+    rig.run(300);
+    assert_eq!(rig.cmd("RESET"), "OK reset=done");
+    assert!(rig.cmd("STATUS").contains(" model=HPR400XD family=HPR "));
+}

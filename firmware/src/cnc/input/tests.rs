@@ -1,0 +1,264 @@
+//! From CNC bytes to commands: Phoenix frames and ACK/NAK, bad input, the queue, and
+//! properties over random input, end to end on the rig.
+
+extern crate std;
+
+use std::string::String;
+use std::vec::Vec;
+
+use proptest::prelude::*;
+
+use crate::settings::Settings;
+use plasma_protocol::time::Duration;
+
+use crate::cnc::rig::*;
+use crate::cnc::texts::{self};
+use plasma_protocol::cnc::{ErrorCode, ParseError};
+
+// ---------------------------------------------------------------------------------------
+// Phoenix serial messaging
+
+#[test]
+fn phoenix_messages_are_acked_or_naked_then_answered() {
+    let mut rig = Rig::sync65(Settings::default());
+    let tokens = rig.send_bytes(&framed(113, b"FAULT"), 1);
+    assert_eq!(tokens, [ACK_TOKEN, "OK fault=none"]);
+    // A wrong check byte: NAK, and the line says why.
+    let mut bad = framed(113, b"FAULT");
+    *bad.last_mut().unwrap() ^= 0x01;
+    let tokens = rig.send_bytes(&bad, 1);
+    assert_eq!(tokens, [NAK_TOKEN, frame_err(0x4A, 0x4B).as_str()]);
+    // Intact but not a command: NAK too.
+    let tokens = rig.send_bytes(&framed(113, b"FLY"), 1);
+    assert_eq!(
+        tokens,
+        [NAK_TOKEN, parse_err(ParseError::UnknownCommand).as_str()]
+    );
+    // A command that waits for the unit: ACK at once, the reply after the read-back.
+    let tokens = rig.send_bytes(&framed(113, b"SET PROCESS CUT 45 AUTO"), 1);
+    assert_eq!(tokens, [ACK_TOKEN, "OK mode=CUT amps=45 psi=AUTO"]);
+    // Text lines still work around frames.
+    assert_eq!(rig.cmd("FAULT"), "OK fault=none");
+    // Another format, set by CONFIG.
+    assert_eq!(rig.cmd("CONFIG phoenix_format 48"), "OK phoenix_format=48");
+    let tokens = rig.send_bytes(&framed(48, b"FAULT"), 1);
+    assert_eq!(tokens, [ACK_TOKEN, "OK fault=none"]);
+    // Message type 22 as the part program writes it: `>22,33<FAULT` (STX, CR LF, ETX).
+    assert_eq!(rig.cmd("CONFIG phoenix_format 33"), "OK phoenix_format=33");
+    let tokens = rig.send_bytes(b"\x02FAULT\r\n\x03", 1);
+    assert_eq!(tokens, [ACK_TOKEN, "OK fault=none"]);
+    // A frame broken off by the next one.
+    let tokens = rig.send_bytes(b"\x02FAU\x02FAULT\r\n\x03", 2);
+    assert_eq!(
+        tokens,
+        [
+            NAK_TOKEN,
+            err(ErrorCode::Syntax, texts::PHOENIX_TRUNCATED).as_str(),
+            ACK_TOKEN,
+            "OK fault=none"
+        ]
+    );
+    assert_eq!(rig.bridge.session_stats().naks, 3);
+}
+
+// ---------------------------------------------------------------------------------------
+// bad input
+
+#[test]
+fn overlong_lines_binary_garbage_and_half_lines_get_an_error_and_the_session_goes_on() {
+    let mut rig = Rig::sync65(Settings::default());
+    let mut long = std::vec![b'A'; 200];
+    long.extend_from_slice(b"\r\nFAULT\r\n");
+    let tokens = rig.send_bytes(&long, 2);
+    assert_eq!(
+        tokens,
+        [parse_err(ParseError::TooLong).as_str(), "OK fault=none"]
+    );
+    let tokens = rig.send_bytes(b"\x80\xff\x00junk\x1b[A\r\nFAULT\n", 2);
+    assert_eq!(
+        tokens,
+        [parse_err(ParseError::Binary).as_str(), "OK fault=none"]
+    );
+    // A half line followed by a Phoenix frame.
+    let mut half = b"SET AMP".to_vec();
+    half.extend_from_slice(&framed(113, b"FAULT"));
+    let tokens = rig.send_bytes(&half, 2);
+    assert_eq!(
+        tokens,
+        [
+            err(ErrorCode::Syntax, texts::LINE_INTERRUPTED).as_str(),
+            ACK_TOKEN,
+            "OK fault=none"
+        ]
+    );
+    // A half line that goes on in the next chunk is one line.
+    assert!(rig.send_bytes(b"FAU", 0).is_empty());
+    assert_eq!(rig.send_bytes(b"LT\r", 1), ["OK fault=none"]);
+    // LF after CR is part of the same line end; blank lines get no reply.
+    assert_eq!(
+        rig.send_bytes(b"\n\r\n  \t\r\nFAULT\n", 1),
+        ["OK fault=none"]
+    );
+}
+
+#[test]
+fn lines_wait_while_a_command_is_in_progress_and_a_full_queue_says_busy() {
+    let mut rig = Rig::sync65(Settings::default());
+    let tokens = rig.send_bytes(
+        b"SET PROCESS CUT 45 AUTO\r\nFAULT\r\nLIMITS\r\nFLY\r\nEVENTS OFF\r\nFAULT\r\n",
+        6,
+    );
+    assert_eq!(
+        tokens,
+        [
+            err(ErrorCode::Busy, texts::QUEUE_FULL).as_str(),
+            "OK mode=CUT amps=45 psi=AUTO",
+            "OK fault=none",
+            "OK modes=CUT,EXPANDED amps=20..65 psi=58..78 scope=cartridge",
+            parse_err(ParseError::UnknownCommand).as_str(),
+            "OK events=OFF",
+        ]
+    );
+}
+
+// ---------------------------------------------------------------------------------------
+// properties
+
+/// Words commands are made of, so that random lines are often real commands.
+const WORDS: [&str; 22] = [
+    "HELP",
+    "ID",
+    "STATUS",
+    "LIMITS",
+    "FAULT",
+    "SET",
+    "MODE",
+    "AMPS",
+    "PSI",
+    "PROCESS",
+    "CUT",
+    "45",
+    "AUTO",
+    "EVENTS",
+    "ON",
+    "OFF",
+    "CONFIG",
+    "SAVE",
+    "timeout_ms",
+    "RAW",
+    "TORCH",
+    "GASES",
+];
+
+fn line_content() -> impl Strategy<Value = Vec<u8>> {
+    let word = prop_oneof![
+        proptest::sample::select(&WORDS[..]).prop_map(|w| w.as_bytes().to_vec()),
+        // Anything but the line ends and the Phoenix start bytes.
+        proptest::collection::vec(
+            any::<u8>().prop_filter("no CR, LF, SOH, STX", |b| {
+                !matches!(*b, b'\r' | b'\n' | 0x01 | 0x02)
+            }),
+            0..40
+        ),
+    ];
+    proptest::collection::vec(word, 0..8).prop_map(|words| words.join(&b' '))
+}
+
+const TERMINATORS: [&[u8]; 3] = [b"\r\n", b"\n", b"\r"];
+
+fn terminator() -> impl Strategy<Value = &'static [u8]> {
+    proptest::sample::select(&TERMINATORS[..])
+}
+
+/// Feed `bytes` in chunks of `chunk`, serving saves and collecting output after each.
+fn feed(rig: &mut Rig, bytes: &[u8], chunk: usize) {
+    for part in bytes.chunks(chunk.max(1)) {
+        rig.bridge.handle_cnc_rx(rig.now, part);
+        rig.now = rig.now + Duration::from_millis(1);
+        rig.run(2);
+    }
+    rig.run(100);
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(48))]
+
+    #[test]
+    fn every_complete_line_gets_exactly_one_reply(
+        lines in proptest::collection::vec((line_content(), terminator()), 1..12),
+        chunk in 1usize..48,
+    ) {
+        let mut rig = Rig::new(Settings::default(), None);
+        let mut bytes = Vec::new();
+        let mut expected = 0;
+        for (content, end) in &lines {
+            if content.iter().any(|b| *b != b' ' && *b != b'\t') {
+                expected += 1;
+            }
+            bytes.extend_from_slice(content);
+            bytes.extend_from_slice(end);
+        }
+        feed(&mut rig, &bytes, chunk);
+        let replies = rig.received.iter().filter(|t| is_reply(t)).count();
+        prop_assert_eq!(replies, expected, "{:?}", rig.received);
+    }
+
+    #[test]
+    fn random_bytes_never_panic_and_output_stays_well_formed(
+        bytes in proptest::collection::vec(any::<u8>(), 0..600),
+        chunk in 1usize..64,
+    ) {
+        let mut rig = Rig::sync65(Settings::default());
+        let before = rig.received.len();
+        feed(&mut rig, &bytes, chunk);
+        // `collect` checked every line ends with CR LF and holds printable ASCII only.
+        for token in &rig.received[before..] {
+            prop_assert!(
+                is_reply(token) || token.starts_with('!') || token == ACK_TOKEN
+                    || token == NAK_TOKEN,
+                "{:?}",
+                token
+            );
+        }
+        // The session still answers.
+        // End whatever half line the noise left (its reply, if any, is an ERR).
+        rig.send_bytes(b"\r\n", 0);
+        let reply = rig.cmd("FAULT");
+        prop_assert_eq!(reply.as_str(), "OK fault=none");
+    }
+}
+
+#[test]
+fn phoenix_framing_is_recognised_without_setting_phoenix_format() {
+    let mut rig = Rig::sync65(Settings::default());
+    // Default 113; the CNC sends 112 (no CR LF), 97 (no check byte), then 33 (STX only).
+    for format in [112, 97, 97, 33, 33, 113] {
+        let tokens = rig.send_bytes(&framed(format, b"FAULT"), 1);
+        assert_eq!(tokens, [ACK_TOKEN, "OK fault=none"], "format {format}");
+    }
+    // A frame no format takes is still refused.
+    let mut bad = framed(113, b"FAULT");
+    *bad.last_mut().unwrap() ^= 0x01;
+    let tokens = rig.send_bytes(&bad, 1);
+    assert_eq!(tokens[0], NAK_TOKEN, "{tokens:?}");
+    // Once recognised, a format is used at once: no wait for a check byte that never comes.
+    rig.send_bytes(&framed(97, b"FAULT"), 1);
+    let start = rig.now;
+    let tokens = rig.send_bytes(&framed(97, b"FAULT"), 1);
+    assert_eq!(tokens, [ACK_TOKEN, "OK fault=none"]);
+    assert_eq!(rig.now, start, "answered without waiting");
+    // The key stays an override: set, it is the format expected first again.
+    assert_eq!(
+        rig.cmd("CONFIG phoenix_format 113"),
+        "OK phoenix_format=113"
+    );
+    let tokens = rig.send_bytes(&framed(113, b"FAULT"), 1);
+    assert_eq!(tokens, [ACK_TOKEN, "OK fault=none"]);
+    let after = rig.received.len();
+    rig.run(200);
+    assert_eq!(
+        rig.received[after..],
+        [] as [String; 0],
+        "nothing left over"
+    );
+}
