@@ -10,11 +10,11 @@ use common::{
 };
 use host_tests::harness::{CncItem, World, WorldOptions};
 use plasma_firmware::io::{Input, Interlock, IoEvent, Output, Reason};
-use plasma_firmware::link::Family;
+use plasma_firmware::link::{Family, Refusal};
 use plasma_firmware::settings::{SaveError, Settings};
 use plasma_firmware::texts::{self, UnsupportedText, unsupported};
 use plasma_protocol::cnc::{ErrorCode, ParseError};
-use plasma_protocol::time::Duration;
+use plasma_protocol::time::{Duration, Instant};
 use plasma_sim::Model;
 use plasma_sim::hpr::Hpr;
 use plasma_sim::powermax::Powermax;
@@ -73,6 +73,13 @@ fn parse_err(error: ParseError) -> String {
 fn frame_err(expected: u8, found: u8) -> String {
     let error = plasma_protocol::Error::BadChecksum { expected, found };
     texts::frame_error(error).trim_end().to_string()
+}
+
+/// The `ERR` line of a command the link refused.
+fn refusal_line(refusal: &Refusal, family: Option<Family>) -> String {
+    let mut line = String::new();
+    texts::write_refusal(&mut line, refusal, family, Instant::ZERO).unwrap();
+    line.trim_end().to_string()
 }
 
 /// Run each (command, expected) pair; `*` in the expected text stands for any characters.
@@ -618,6 +625,7 @@ fn without_a_unit_commands_that_need_one_answer_err_link() {
     let mut w = World::with_bridge(Model::Sync65, WorldOptions::default(), Settings::default());
     w.power_off();
     w.run_for(ms(1_000));
+    let raw_refused = refusal_line(&Refusal::LinkNotUp, None);
     expect_all(
         &mut w,
         &[
@@ -629,20 +637,33 @@ fn without_a_unit_commands_that_need_one_answer_err_link() {
                 "STATUS",
                 "OK link=DOWN model=- family=- remote=OFF mode=- amps=- psi=- out_amps=- out_psi=- fault=none start=OFF motion=OFF arc_ok=OFF ready=OFF",
             ),
-            ("SET AMPS 45", err(ErrorCode::Link, texts::NO_LINK).as_str()),
-            (
-                "SET PROCESS CUT 45 AUTO",
-                err(ErrorCode::Link, texts::NO_LINK).as_str(),
-            ),
-            (
-                "GASES O2 AIR",
-                err(ErrorCode::Link, texts::NO_LINK).as_str(),
-            ),
-            ("RAW :0104301A0001B0", "ERR LINK *"),
-            ("FAULT", err(ErrorCode::Link, texts::NO_LINK).as_str()),
+            ("RAW :0104301A0001B0", raw_refused.as_str()),
+            // Without a unit, COUNTERS still has the link's own counters.
+            ("COUNTERS", "OK link_ok=0 link_failed=*"),
             ("TORCH ON", "OK torch=ON"),
         ],
     );
+    for line in [
+        "SET PROCESS CUT 45 AUTO",
+        "SET AMPS 45",
+        "REMOTE OFF",
+        "GASTEST ON",
+        "RESTART",
+        "GASES O2 AIR",
+        "CORNER 80",
+        "RESET",
+        "CLEARWARN",
+        "FAULT",
+        "FAULTLOG",
+        "LIMITS",
+        "CARTRIDGE",
+    ] {
+        assert_eq!(
+            w.cnc_line(line),
+            err(ErrorCode::Link, texts::NO_LINK),
+            "{line}"
+        );
+    }
     // The link is down: the interlocks refuse START.
     assert!(!w.io().outputs().start);
     assert!(w.io().outputs().fault);

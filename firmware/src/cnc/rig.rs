@@ -286,7 +286,7 @@ pub(crate) fn framed(format: u8, message: &[u8]) -> Vec<u8> {
 // take it from where the session writes it, so no wording is pinned here.
 
 use crate::cnc::texts::{self};
-use crate::link::{CommandFailure, Family, Refusal};
+use crate::link::CommandFailure;
 use plasma_protocol::cnc::{ErrorCode, ParseError};
 
 /// An `ERR` line with `code` and `text`.
@@ -303,13 +303,6 @@ pub(crate) fn parse_err(error: ParseError) -> String {
 pub(crate) fn frame_err(expected: u8, found: u8) -> String {
     let error = plasma_protocol::Error::BadChecksum { expected, found };
     texts::frame_error(error).trim_end().to_string()
-}
-
-/// The `ERR` line of a command the link refused.
-pub(crate) fn refusal_line(refusal: &Refusal, family: Option<Family>) -> String {
-    let mut line = super::ReplyLine::new();
-    let _ = super::texts::write_refusal(&mut line, refusal, family, Instant::ZERO);
-    line.trim_end().to_string()
 }
 
 /// The `ERR` line of a command that was sent and failed.

@@ -13,7 +13,7 @@ use plasma_sim::hpr::HprCounters;
 
 use crate::cnc::rig::*;
 use crate::cnc::texts::{self, UnsupportedText, unsupported};
-use crate::link::{CommandFailure, Family, Refusal, SettingsFailure, TransactionError};
+use crate::link::{CommandFailure, Family, SettingsFailure, TransactionError};
 use plasma_protocol::cnc::{ErrorCode, ParseError};
 
 // ---------------------------------------------------------------------------------------
@@ -234,43 +234,6 @@ fn raw_frames_are_forwarded_or_refused_by_the_allow_list() {
         parse_err(ParseError::MissingArgument { what: "frame" })
     );
     assert!(rig.writes().is_empty());
-}
-
-#[test]
-fn without_a_unit_commands_that_need_one_say_link() {
-    let mut rig = Rig::new(Settings::default(), None);
-    rig.run(50);
-    for line in [
-        "SET PROCESS CUT 45 AUTO",
-        "SET AMPS 45",
-        "REMOTE OFF",
-        "GASTEST ON",
-        "RESTART",
-        "GASES O2 AIR",
-        "CORNER 80",
-        "RESET",
-        "CLEARWARN",
-        "FAULT",
-        "FAULTLOG",
-        "LIMITS",
-        "CARTRIDGE",
-    ] {
-        assert_eq!(
-            rig.cmd(line),
-            err(ErrorCode::Link, texts::NO_LINK),
-            "{line}"
-        );
-    }
-    assert_eq!(
-        rig.cmd("RAW :0104301A0001B0"),
-        refusal_line(&Refusal::LinkNotUp, None)
-    );
-    assert_eq!(
-        rig.cmd("STATUS"),
-        "OK link=DOWN model=- family=- remote=OFF mode=- amps=- psi=- out_amps=- out_psi=- \
-         fault=none start=OFF motion=OFF arc_ok=OFF ready=OFF"
-    );
-    assert!(rig.cmd("COUNTERS").starts_with("OK link_ok=0 link_failed="));
 }
 
 // ---------------------------------------------------------------------------------------
