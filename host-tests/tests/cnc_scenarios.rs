@@ -207,10 +207,16 @@ fn an_hpr_session_sets_amps_gases_corner_and_cuts() {
 #[test]
 fn hold_from_the_cnc_keeps_the_hpr_in_preflow() {
     let mut w = ready_hpr(Model::Hpr130);
+    assert_eq!(w.cnc_line("EVENTS ON"), "OK events=ON");
     w.set_input(Input::Hold, true);
     assert_eq!(w.cnc_line("TORCH ON"), "OK torch=ON");
     w.run_for(ms(2_000));
     assert_eq!(w.sim_ref::<Hpr>().state_code(), 4, "held in preflow");
+    // One state change is reported, and no other event while the start is held.
+    assert_eq!(
+        w.cnc_events().collect::<Vec<_>>(),
+        ["!STATE 4 name=PREFLOW from=3"]
+    );
     assert!(!w.unit_ref().motion());
     w.set_input(Input::Hold, false);
     w.run_until(|w| w.io().outputs().arc_ok, Duration::from_secs(5))
@@ -568,7 +574,7 @@ fn maxpro200_commands_ok_and_err() {
             ),
             (
                 "STATUS",
-                "OK link=UP model=MaxPro200 family=MAXPRO200 *state=3 state_name=READY_FOR_START",
+                "OK link=UP model=MaxPro200 family=MAXPRO200 *ready=ON state=3 state_name=READY_FOR_START",
             ),
             ("LIMITS", "OK amps=5..200"),
             (
@@ -582,6 +588,7 @@ fn maxpro200_commands_ok_and_err() {
             ("COUNTERS", "OK link_ok=*"),
             ("SET AMPS 200", "OK amps=200"),
             ("SET AMPS 201", "ERR RANGE *201*5..200*"),
+            ("GASES AIR AIR", "OK plasma=AIR shield=AIR"),
             (
                 "SET MODE CUT",
                 err(

@@ -329,39 +329,6 @@ fn every_command_on_an_hpr() {
     );
 }
 
-#[test]
-fn maxpro200_commands_that_do_not_apply_say_why() {
-    let mut rig = Rig::hpr("maxpro200");
-    assert_eq!(rig.cmd("LIMITS"), "OK amps=5..200");
-    assert_eq!(rig.cmd("SET AMPS 200"), "OK amps=200");
-    assert_eq!(rig.cmd("GASES AIR AIR"), "OK plasma=AIR shield=AIR");
-    assert_eq!(
-        rig.cmd("CLEARWARN"),
-        err(
-            ErrorCode::Unsupported,
-            UnsupportedText(unsupported::CLEAR_WARN, Family::MaxPro200)
-        )
-    );
-    assert_eq!(
-        rig.cmd("FAULTLOG"),
-        err(
-            ErrorCode::Unsupported,
-            UnsupportedText(unsupported::FAULT_LOG, Family::MaxPro200)
-        )
-    );
-    assert_eq!(
-        rig.cmd("GASTEST ON"),
-        err(
-            ErrorCode::Unsupported,
-            UnsupportedText(unsupported::NOT_SUPPORTED, Family::MaxPro200)
-        )
-    );
-    assert!(
-        rig.cmd("STATUS")
-            .ends_with("ready=ON state=3 state_name=READY_FOR_START")
-    );
-}
-
 // ---------------------------------------------------------------------------------------
 // CONFIG
 

@@ -86,16 +86,3 @@ fn events_report_link_faults_settings_and_arc_when_on() {
         &rig.received[start..]
     );
 }
-
-#[test]
-fn hpr_state_changes_are_events() {
-    let mut rig = Rig::hpr("hpr260");
-    assert_eq!(rig.cmd("EVENTS ON"), "OK events=ON");
-    // A start held by HOLD: the unit stays in preflow.
-    let now = rig.now;
-    rig.ps().hpr().set_hold(now, true);
-    rig.ps().unit().set_start(now, true);
-    let start = rig.received.len();
-    rig.run(300);
-    assert_eq!(rig.received[start..], ["!STATE 4 name=PREFLOW from=3"]);
-}
