@@ -196,7 +196,7 @@ pub(super) fn fault(
     }
 }
 
-/// `CARTRIDGE` on a SYNC unit (the support table refuses it elsewhere).
+/// `CARTRIDGE` on a SYNC unit (the command table refuses it elsewhere).
 pub(super) fn cartridge(status: &UnitStatus) -> ReplyLine {
     match status.cartridge {
         None => err_line(ErrorCode::State, texts::CARTRIDGE_NOT_READ),
