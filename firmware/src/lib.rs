@@ -12,12 +12,10 @@
 //! - [`io`]: all of the torch-safe discrete I/O: the CNC's wiring (input polarity and
 //!   debounce, output levels), the START interlocks, ARC_OK, READY, FAULT, the board's
 //!   [`io::DiscreteIo`] and the independent [`io::SafetyMonitor`] used by every scenario test.
-//! - [`safe_state`], [`watchdog`], [`storage`]: the board's reset/panic policy, task-progress
-//!   watchdog feeding and power-cut-safe settings storage, as logic.
-//! - [`pins`]: the board's pin map, the one table every board layer and the QEMU harness
-//!   read.
-//! - [`runner`], [`supervisor`]: the async loops around the link and the bridge, over any
-//!   `embedded-io-async` UART and clock (the board and host tests run the same code).
+//! - [`storage`]: power-cut-safe settings storage, as logic.
+//! - [`platform`]: the async loops around the link and the bridge over any
+//!   `embedded-io-async` UART and clock ([`platform::PsEndpoint`] is what they drive), and the
+//!   board-facing policy: watchdog feeding, the reset/panic safe state, the pin map.
 #![cfg_attr(not(test), no_std)]
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
@@ -69,15 +67,11 @@ pub mod bridge;
 mod cnc;
 pub mod io;
 pub mod link;
-pub mod pins;
-pub mod runner;
-pub mod safe_state;
+pub mod platform;
 /// The CNC-visible texts of the ERR replies, written once: tests take them from here.
 pub use cnc::texts;
 pub mod settings;
 pub mod storage;
-pub mod supervisor;
-pub mod watchdog;
 
 #[cfg(test)]
 mod testing;

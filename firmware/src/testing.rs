@@ -11,7 +11,6 @@ extern crate std;
 use std::boxed::Box;
 use std::vec::Vec;
 
-use plasma_protocol::serial::PortConfig;
 use plasma_protocol::time::Instant;
 use plasma_sim::clock::earliest;
 use plasma_sim::hpr::Hpr;
@@ -19,60 +18,7 @@ use plasma_sim::line::{End, Line, Wiring};
 use plasma_sim::powermax::Powermax;
 use plasma_sim::{Model, SimOptions, SimulatedUnit};
 
-use crate::bridge::Bridge;
-use crate::link::PsLink;
-
-/// The power-supply side of whatever drives the UART: a bare link or the bridge. Time is
-/// the caller's: it polls the master and sleeps until the earlier of the master's `poll_at`
-/// and what [`SimPs::exchange`] returns.
-pub(crate) trait Master {
-    /// One whole frame to send now, if any.
-    fn transmit(&mut self, now: Instant) -> Option<&[u8]>;
-    /// The frame from `transmit` left the wire at `at` (the line model's end of it).
-    fn transmitted(&mut self, at: Instant);
-    /// Characters received.
-    fn receive(&mut self, now: Instant, bytes: &[u8]);
-    /// A character received with a parity or framing error.
-    fn receive_error(&mut self, now: Instant);
-    /// The UART settings in use.
-    fn port(&self) -> PortConfig;
-}
-
-impl Master for PsLink {
-    fn transmit(&mut self, now: Instant) -> Option<&[u8]> {
-        self.poll_transmit(now)
-    }
-    fn transmitted(&mut self, at: Instant) {
-        self.handle_transmitted(at);
-    }
-    fn receive(&mut self, now: Instant, bytes: &[u8]) {
-        self.handle_rx(now, bytes);
-    }
-    fn receive_error(&mut self, now: Instant) {
-        self.handle_rx_error(now);
-    }
-    fn port(&self) -> PortConfig {
-        self.port_config()
-    }
-}
-
-impl Master for Bridge {
-    fn transmit(&mut self, now: Instant) -> Option<&[u8]> {
-        self.poll_ps_transmit(now)
-    }
-    fn transmitted(&mut self, at: Instant) {
-        self.ps_transmitted(at);
-    }
-    fn receive(&mut self, now: Instant, bytes: &[u8]) {
-        self.handle_ps_rx(now, bytes);
-    }
-    fn receive_error(&mut self, now: Instant) {
-        self.handle_ps_rx_error(now);
-    }
-    fn port(&self) -> PortConfig {
-        self.ps_port_config()
-    }
-}
+use crate::platform::PsEndpoint;
 
 /// A simulated unit at the end of a serial line, every frame the master sent it and every
 /// character it heard back.
@@ -135,16 +81,21 @@ impl SimPs {
 
     /// Everything due at `now` on both sides: the master's frame onto the line, the
     /// characters that arrived at each end, the unit's timers and its reply. Returns the next
-    /// instant at which the line or the unit (not the master) needs attention.
-    pub(crate) fn exchange(&mut self, master: &mut dyn Master, now: Instant) -> Option<Instant> {
-        let port = master.port();
+    /// instant at which the line or the unit (not the master: the caller sleeps until the
+    /// earlier of this and the master's `poll_at`) needs attention.
+    pub(crate) fn exchange(
+        &mut self,
+        master: &mut dyn PsEndpoint,
+        now: Instant,
+    ) -> Option<Instant> {
+        let port = master.ps_port_config();
         if self.line.port(End::Master) != port {
             self.line.set_port(End::Master, port);
         }
-        while let Some(frame) = master.transmit(now) {
+        while let Some(frame) = master.poll_ps_transmit(now) {
             let frame = frame.to_vec();
             let end = self.line.transmit(End::Master, now, &frame);
-            master.transmitted(end);
+            master.ps_transmitted(end);
             self.sent.push((now, frame));
         }
         for b in self.line.receive(End::Unit, now) {
@@ -169,15 +120,15 @@ impl SimPs {
                 }
                 Some(_) => {
                     if !run.is_empty() {
-                        master.receive(now, &run);
+                        master.handle_ps_rx(now, &run);
                         run.clear();
                     }
-                    master.receive_error(now);
+                    master.handle_ps_rx_error(now);
                 }
             }
         }
         if !run.is_empty() {
-            master.receive(now, &run);
+            master.handle_ps_rx(now, &run);
         }
         earliest(self.line.next_delivery(), self.unit.next_wakeup())
     }

@@ -20,7 +20,7 @@ use host_tests::emu::log::LogLine;
 use host_tests::emu::safety::{GAP_TOLERANCE, START_GAP};
 use host_tests::emu::{Board, BoardOptions, TestHook, Wiring};
 use plasma_firmware::io::{Input, IoEvent, Output, Reason};
-use plasma_firmware::safe_state::ResetCause;
+use plasma_firmware::platform::safe_state::ResetCause;
 use plasma_sim::Model;
 
 #[test]

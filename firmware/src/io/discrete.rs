@@ -103,7 +103,7 @@ impl DiscreteIo {
     }
 
     /// The levels to hand a board that drives its pins from the pin table
-    /// ([`pins::output`](crate::pins::output)): [`outputs`](Self::outputs) with the inverted
+    /// ([`pins::output`](crate::platform::pins::output)): [`outputs`](Self::outputs) with the inverted
     /// ones flipped ([`OutputConfig::for_table`](super::OutputConfig::for_table)).
     pub fn table_outputs(&self) -> Outputs {
         self.interlocks.config().outputs.for_table(self.outputs())

@@ -21,7 +21,7 @@
 
 use super::input_config::Polarity;
 use super::signals::{Output, Outputs};
-use crate::pins;
+use crate::platform::pins;
 
 /// An output that must keep the pin table's polarity (see the module documentation).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -2,7 +2,7 @@
 
 use embedded_storage_async::nor_flash::NorFlash;
 use plasma_firmware::io::{Outputs, PinLevels};
-use plasma_firmware::runner::ConfigurablePort;
+use plasma_firmware::platform::runner::ConfigurablePort;
 
 /// The seven discrete inputs, owned by the I/O task. Their edges come through the EXTI
 /// lines the board arms with [`crate::edges::arm_inputs`].
@@ -13,7 +13,7 @@ pub trait InputPins {
 
 /// The seven discrete outputs, owned by the I/O task.
 pub trait OutputPins {
-    /// Sets every pin to `outputs` (logical levels; `plasma_firmware::pins` says which pin
+    /// Sets every pin to `outputs` (logical levels; `plasma_firmware::platform::pins` says which pin
     /// level each means). START first: it is the one whose latency matters.
     fn drive(&mut self, outputs: Outputs);
 }

@@ -3,7 +3,7 @@
 use core::fmt::Write;
 
 use heapless::String;
-use plasma_firmware::safe_state::BootReport;
+use plasma_firmware::platform::safe_state::BootReport;
 use plasma_firmware::storage::LoadOutcome;
 use static_cell::StaticCell;
 

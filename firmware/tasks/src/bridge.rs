@@ -1,11 +1,11 @@
-//! The bridge task (thread mode): `plasma_firmware::supervisor::Supervisor` around the
+//! The bridge task (thread mode): `plasma_firmware::platform::supervisor::Supervisor` around the
 //! `Bridge`, over the PS UART, the CNC UART, the I/O task and the settings task.
 
 use defmt::{debug, info, warn};
 use plasma_firmware::bridge::Bridge;
 use plasma_firmware::link::UnitStatus;
-use plasma_firmware::supervisor::{Supervisor, TurnError};
-use plasma_firmware::watchdog::TaskId;
+use plasma_firmware::platform::supervisor::{Supervisor, TurnError};
+use plasma_firmware::platform::watchdog::TaskId;
 use plasma_protocol::serial::PortConfig;
 
 use crate::Board;

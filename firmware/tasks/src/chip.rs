@@ -2,9 +2,9 @@
 //! emulated STM32L475VG (RM0351): the GPIO ports' mode and set/reset registers, for the safe
 //! state before any driver exists and in the fault handlers, RCC's clock enables, clock tree
 //! and reset flags, and the EXTI lines of the inputs (SYSCFG routing, edge triggers, mask, pending). Addresses of the GPIO ports come from the pin table
-//! (`plasma_firmware::pins::Port::register_block`).
+//! (`plasma_firmware::platform::pins::Port::register_block`).
 
-use plasma_firmware::pins::Pin;
+use plasma_firmware::platform::pins::Pin;
 
 use crate::clock_tree::RccSnapshot;
 
@@ -52,7 +52,7 @@ fn write(address: usize, value: u32) {
 }
 
 /// Turns on the clocks of the GPIO ports in `ports`, one bit per
-/// [`plasma_firmware::pins::Port::index`].
+/// [`plasma_firmware::platform::pins::Port::index`].
 pub fn enable_gpio_clocks(ports: u32) {
     write(RCC_AHB2ENR, read(RCC_AHB2ENR) | ports);
 }

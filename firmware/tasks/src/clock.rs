@@ -2,7 +2,7 @@
 
 use core::future::Future;
 
-use plasma_firmware::runner::Clock;
+use plasma_firmware::platform::runner::Clock;
 use plasma_protocol::time::Instant;
 
 /// Now, in the library's microseconds (embassy-time runs at 1 MHz: tick-hz-1_000_000).

@@ -5,7 +5,7 @@
 //! [`EDGES`] and reads the levels.
 
 use plasma_firmware::io::{EdgeLatch, Input};
-use plasma_firmware::pins;
+use plasma_firmware::platform::pins;
 
 use crate::chip;
 

@@ -21,8 +21,8 @@ use embassy_time::Timer;
 use plasma_firmware::io::{
     self, DiscreteIo, Inputs, IoConfig, IoEvent, Outputs, SupplyState, Transition,
 };
-use plasma_firmware::supervisor::IoExchange;
-use plasma_firmware::watchdog::TaskId;
+use plasma_firmware::platform::supervisor::IoExchange;
+use plasma_firmware::platform::watchdog::TaskId;
 use plasma_protocol::time::{Duration, Instant, div_rem_u16};
 
 use crate::board::{InputPins, OutputPins};

@@ -44,7 +44,7 @@ const IO_IRQ: Interrupt = Interrupt::UART4;
 /// The interrupts at [`SERIAL_PRIORITY`].
 const SERIAL_IRQS: [Interrupt; 3] = [Interrupt::USART1, Interrupt::USART2, Interrupt::FLASH];
 
-/// Progress deadlines (`plasma_firmware::watchdog::ProgressMonitor`), per task.
+/// Progress deadlines (`plasma_firmware::platform::watchdog::ProgressMonitor`), per task.
 pub const IO_DEADLINE: Duration = Duration::from_millis(200);
 /// The bridge task's.
 pub const BRIDGE_DEADLINE: Duration = Duration::from_millis(500);

@@ -14,7 +14,7 @@
 //! it links.
 //!
 //! No HAL code here, and register code only where both chips are the same ([`chip`]): the
-//! register-level safe state, from the pin table `plasma_firmware::pins`, and the reset cause.
+//! register-level safe state, from the pin table `plasma_firmware::platform::pins`, and the reset cause.
 //! docs/board.md says what each board puts behind the trait and why they differ.
 //!
 //! MCU only, but for [`clock_tree`] (pure arithmetic, tested on the host): on the host the

@@ -8,8 +8,8 @@
 use defmt::{Display2Format, Format, Formatter, write};
 use plasma_firmware::io::IoEvent;
 use plasma_firmware::link::{ActiveFault, Model};
-use plasma_firmware::runner::PortError;
-use plasma_firmware::supervisor::TurnError;
+use plasma_firmware::platform::runner::PortError;
+use plasma_firmware::platform::supervisor::TurnError;
 use plasma_protocol::hpr::SystemId;
 use plasma_protocol::serial::{Parity, PortConfig, StopBits};
 

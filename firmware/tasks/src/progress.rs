@@ -1,4 +1,4 @@
-//! Task progress for the watchdog (`plasma_firmware::watchdog::ProgressMonitor`), the stall
+//! Task progress for the watchdog (`plasma_firmware::platform::watchdog::ProgressMonitor`), the stall
 //! judge that feeds the board's watchdog while every task reports ([`judge`]), and the
 //! heartbeat LED.
 
@@ -8,7 +8,7 @@ use defmt::{error, warn};
 use embassy_sync::blocking_mutex::Mutex;
 use embassy_sync::blocking_mutex::raw::CriticalSectionRawMutex;
 use embassy_time::Timer;
-use plasma_firmware::watchdog::{ProgressMonitor, TaskId};
+use plasma_firmware::platform::watchdog::{ProgressMonitor, TaskId};
 use plasma_protocol::time::Duration;
 
 use crate::board::{Led, Watchdog};

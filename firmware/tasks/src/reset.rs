@@ -4,7 +4,7 @@
 
 use core::mem::MaybeUninit;
 
-use plasma_firmware::safe_state::{BootReport, PANIC_MARKER};
+use plasma_firmware::platform::safe_state::{BootReport, PANIC_MARKER};
 
 use crate::chip;
 

@@ -1,14 +1,14 @@
-//! The register-level safe state (`plasma_firmware::pins::SAFE_STATE`, from the one pin table):
+//! The register-level safe state (`plasma_firmware::platform::pins::SAFE_STATE`, from the one pin table):
 //! used before any driver exists and from the panic and fault handlers while tasks own the
 //! pins. The same on both boards.
 //!
-//! Also the fail-safe latch (`plasma_firmware::safe_state::FailSafe`): once a stalled task
+//! Also the fail-safe latch (`plasma_firmware::platform::safe_state::FailSafe`): once a stalled task
 //! made the outputs safe ([`trip_fail_safe`]), every later output write ([`drive_outputs`]) is
 //! refused until the reset.
 
 use plasma_firmware::io::Outputs;
-use plasma_firmware::pins;
-use plasma_firmware::safe_state::{FailSafe, FaultEntry};
+use plasma_firmware::platform::pins;
+use plasma_firmware::platform::safe_state::{FailSafe, FaultEntry};
 
 use crate::board::OutputPins;
 use crate::chip;

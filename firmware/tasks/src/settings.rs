@@ -11,11 +11,11 @@ use embassy_futures::select::{Either, select};
 use embassy_sync::blocking_mutex::raw::CriticalSectionRawMutex;
 use embassy_sync::signal::Signal;
 use embassy_time::Timer;
+use plasma_firmware::platform::supervisor::SettingsSaver;
+use plasma_firmware::platform::watchdog::TaskId;
 use plasma_firmware::settings::{SaveError, Settings};
 use plasma_firmware::storage::verified::VerifiedFlash;
 use plasma_firmware::storage::{LoadOutcome, LoadedSettings, SettingsStore};
-use plasma_firmware::supervisor::SettingsSaver;
-use plasma_firmware::watchdog::TaskId;
 
 use crate::Board;
 use crate::progress::report;

@@ -28,7 +28,7 @@ macro_rules! board_tasks {
             inputs: <$board as $crate::Board>::InputPins,
             outputs: <$board as $crate::Board>::OutputPins,
             config: ::plasma_firmware::io::IoConfig,
-            progress: ::plasma_firmware::watchdog::TaskId,
+            progress: ::plasma_firmware::platform::watchdog::TaskId,
         ) -> impl ::core::future::Future<Output = ()> {
             $crate::io::run(inputs, outputs, config, progress)
         }
@@ -40,7 +40,7 @@ macro_rules! board_tasks {
             ps: <$board as $crate::Board>::PsUart,
             cnc: <$board as $crate::Board>::CncUart,
             io: $crate::io::BoardIo,
-            progress: ::plasma_firmware::watchdog::TaskId,
+            progress: ::plasma_firmware::platform::watchdog::TaskId,
         ) -> impl ::core::future::Future<Output = ()> {
             $crate::bridge::run::<$board>(bridge, ps, cnc, io, progress)
         }
@@ -49,7 +49,7 @@ macro_rules! board_tasks {
         #[::embassy_executor::task]
         pub fn settings_task(
             store: ::core::option::Option<$crate::settings::Store<$board>>,
-            progress: ::plasma_firmware::watchdog::TaskId,
+            progress: ::plasma_firmware::platform::watchdog::TaskId,
         ) -> impl ::core::future::Future<Output = ()> {
             $crate::settings::run::<$board>(store, progress)
         }
@@ -58,7 +58,7 @@ macro_rules! board_tasks {
         #[::embassy_executor::task]
         pub fn heartbeat_task(
             led: <$board as $crate::Board>::Led,
-            progress: ::plasma_firmware::watchdog::TaskId,
+            progress: ::plasma_firmware::platform::watchdog::TaskId,
         ) -> impl ::core::future::Future<Output = ()> {
             $crate::progress::heartbeat(led, progress)
         }

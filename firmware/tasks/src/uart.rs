@@ -33,7 +33,7 @@ use crate::clock_tree::UsartClock;
 use embassy_sync::waitqueue::AtomicWaker;
 use embedded_io_async::{ErrorKind, ErrorType, Read, ReadReady, Write};
 use heapless::Deque;
-use plasma_firmware::runner::{ConfigurablePort, UnsupportedConfig};
+use plasma_firmware::platform::runner::{ConfigurablePort, UnsupportedConfig};
 use plasma_protocol::serial::{Parity, PortConfig, StopBits};
 use stm32_metapac::usart::Usart;
 use stm32_metapac::usart::vals::{M0, M1, Ps, Stop};
@@ -325,11 +325,11 @@ fn enable(regs: Usart, set: impl FnOnce(&mut stm32_metapac::usart::regs::Cr1)) {
     critical_section::with(|_| regs.cr1().modify(set));
 }
 
-/// The UARTs' pins of the one pin table (`plasma_firmware::pins::PS_UART`, `CNC_UART`) to
+/// The UARTs' pins of the one pin table (`plasma_firmware::platform::pins::PS_UART`, `CNC_UART`) to
 /// alternate function 7, receive pins pulled up (an idle line reads as mark also while a
 /// 2-wire transceiver's receiver is off). The GPIO clocks must be on.
 pub fn route_pins() {
-    use plasma_firmware::pins::{CNC_UART, PS_UART};
+    use plasma_firmware::platform::pins::{CNC_UART, PS_UART};
     use stm32_metapac::gpio::Gpio;
     use stm32_metapac::gpio::vals::{Moder, Pupdr};
     for uart in [PS_UART, CNC_UART] {

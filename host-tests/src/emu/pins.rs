@@ -1,10 +1,10 @@
 //! The emulated board's pins as QEMU sees them. Where each signal is and which level is active
-//! come from the firmware's one pin table (`plasma_firmware::pins`, docs/board.md); this module
+//! come from the firmware's one pin table (`plasma_firmware::platform::pins`, docs/board.md); this module
 //! adds only what is QEMU's: the ports' QOM paths and the data registers the harness reads.
 
 use plasma_firmware::io::{Input, Output};
-use plasma_firmware::pins::{self, input, output};
-pub use plasma_firmware::pins::{Pin, Port};
+use plasma_firmware::platform::pins::{self, input, output};
+pub use plasma_firmware::platform::pins::{Pin, Port};
 
 /// What the harness needs of a GPIO port under QEMU.
 pub trait QemuPort {

@@ -1,10 +1,10 @@
 //! The discrete pins by register: inputs with pull-ups on EXTI lines, push-pull outputs, the
-//! LED, all placed by the one pin table (`plasma_firmware::pins`, the Nucleo's). QEMU's GPIO,
+//! LED, all placed by the one pin table (`plasma_firmware::platform::pins`, the Nucleo's). QEMU's GPIO,
 //! SYSCFG and EXTI models carry an edge driven from its qtest socket to the EXTI interrupt.
 
 use cortex_m::peripheral::NVIC;
 use plasma_firmware::io::{self, Input, InputConfig, Outputs, PinLevels, Pull};
-use plasma_firmware::pins::{self, Pin, Port};
+use plasma_firmware::platform::pins::{self, Pin, Port};
 use stm32_metapac::gpio::Gpio;
 use stm32_metapac::gpio::vals::{Idr, Moder, Pupdr};
 use stm32_metapac::{GPIOA, GPIOB, GPIOC, Interrupt, interrupt};
@@ -181,7 +181,7 @@ impl plasma_tasks::board::OutputPins for OutputPins {
     }
 }
 
-/// The heartbeat LED (`plasma_firmware::pins::HEARTBEAT_LED`).
+/// The heartbeat LED (`plasma_firmware::platform::pins::HEARTBEAT_LED`).
 pub struct Led {
     on: bool,
 }

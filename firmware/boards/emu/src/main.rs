@@ -64,7 +64,7 @@ mod image {
     use embassy_executor::Spawner;
     use plasma_firmware::bridge::Bridge;
     use plasma_firmware::io::InputConfig;
-    use plasma_firmware::safe_state::BootReport;
+    use plasma_firmware::platform::safe_state::BootReport;
     use plasma_tasks::boot::boot_text;
     use plasma_tasks::clock::now;
     use plasma_tasks::clock_tree::UsartClock;

@@ -19,7 +19,7 @@ use core::cell::Cell;
 use critical_section::Mutex;
 use defmt::info;
 use embedded_io_async::{ErrorType, Read, ReadReady, Write};
-use plasma_firmware::runner::{ConfigurablePort, UnsupportedConfig};
+use plasma_firmware::platform::runner::{ConfigurablePort, UnsupportedConfig};
 use plasma_protocol::serial::PortConfig;
 use plasma_tasks::uart::{Uart, UartError};
 

@@ -13,7 +13,7 @@
 
 use core::mem::MaybeUninit;
 
-use plasma_firmware::safe_state::ResetFlags;
+use plasma_firmware::platform::safe_state::ResetFlags;
 
 /// The upper bytes of an armed word ("RST"); the flags are its low byte.
 const ARMED: u32 = 0x5253_5400;

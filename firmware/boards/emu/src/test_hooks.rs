@@ -2,7 +2,7 @@
 //! `cargo emu-fw` and the Nucleo image are built without it): ways to make the firmware fail
 //! on purpose, to test the watchdog's fail-safe and the fault path end to end.
 //!
-//! Each hook has a pin of the one pin table (`plasma_firmware::pins::TEST_HOOKS`); pulling it
+//! Each hook has a pin of the one pin table (`plasma_firmware::platform::pins::TEST_HOOKS`); pulling it
 //! low asks for its failure, in thread mode, where the tasks run:
 //!
 //! - `TEST_STALL` (PC13, the user button): thread mode spins for good. The bridge, settings
@@ -25,7 +25,9 @@
 use defmt::warn;
 use embassy_sync::blocking_mutex::raw::CriticalSectionRawMutex;
 use embassy_sync::signal::Signal;
-use plasma_firmware::pins::{Pin, TEST_HARD_FAULT, TEST_HOOKS, TEST_PANIC, TEST_STACK_OVERFLOW};
+use plasma_firmware::platform::pins::{
+    Pin, TEST_HARD_FAULT, TEST_HOOKS, TEST_PANIC, TEST_STACK_OVERFLOW,
+};
 use stm32_metapac::gpio::vals::{Idr, Moder, Pupdr};
 
 use crate::gpio::gpio;

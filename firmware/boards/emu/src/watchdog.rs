@@ -5,7 +5,7 @@
 
 use embassy_time::{Duration, Timer};
 
-use plasma_firmware::safe_state::ResetFlags;
+use plasma_firmware::platform::safe_state::ResetFlags;
 
 /// The IWDG time-out of the Nucleo image.
 const TIMEOUT: Duration = Duration::from_millis(1000);

@@ -4,7 +4,7 @@
 
 use defmt::debug;
 use embedded_io_async::{ErrorType, Read, ReadReady, Write};
-use plasma_firmware::runner::{ConfigurablePort, UnsupportedConfig};
+use plasma_firmware::platform::runner::{ConfigurablePort, UnsupportedConfig};
 use plasma_protocol::serial::PortConfig;
 use plasma_tasks::uart::{Uart, UartError};
 

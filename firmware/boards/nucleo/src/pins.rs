@@ -1,4 +1,4 @@
-//! The pins through the HAL, placed by the one pin table (`plasma_firmware::pins`): the
+//! The pins through the HAL, placed by the one pin table (`plasma_firmware::platform::pins`): the
 //! outputs and the EXTI inputs the I/O task owns, and the heartbeat LED.
 
 use embassy_stm32::Peri;
@@ -6,13 +6,13 @@ use embassy_stm32::gpio::{AnyPin, Level, Output, Pull, Speed};
 use embassy_stm32::interrupt;
 use embassy_stm32::interrupt::{InterruptExt, Priority};
 use plasma_firmware::io::{self, Input, InputConfig, Outputs, PinLevels};
-use plasma_firmware::pins::{self, Pin, Wiring};
-use plasma_firmware::safe_state::SAFE_OUTPUTS;
+use plasma_firmware::platform::pins::{self, Pin, Wiring};
+use plasma_firmware::platform::safe_state::SAFE_OUTPUTS;
 
 /// The HAL's handle on a pin of the table.
 ///
 /// Sound because every pin handed out here is one the table assigns to exactly one signal
-/// (`plasma_firmware::pins`' tests: no two signals, nor a signal and a UART, share a pin), each
+/// (`plasma_firmware::platform::pins`' tests: no two signals, nor a signal and a UART, share a pin), each
 /// is taken once (by [`OutputPins::new`], [`InputPins::new`] or [`led`]), and main.rs takes by name
 /// only the UARTs' pins, which it checks against the same table at compile time.
 pub fn table_pin(pin: Pin) -> Peri<'static, AnyPin> {

@@ -1,6 +1,6 @@
 use super::*;
 use crate::io::{Interlock, IoEvent, Output, Polarity, Reason};
-use crate::pins;
+use crate::platform::pins;
 use plasma_protocol::time::Duration;
 
 fn ms(v: u64) -> Instant {

@@ -13,7 +13,7 @@ use embassy_futures::block_on;
 use embedded_io_async::{ErrorKind, ErrorType, ReadReady, Write};
 
 use super::*;
-use crate::runner::UnsupportedConfig;
+use crate::platform::runner::UnsupportedConfig;
 use plasma_protocol::serial::{Parity, PortConfig, StopBits};
 
 /// The framing the fake CNC port is opened at.
@@ -231,7 +231,7 @@ impl PsEndpoint for FakeBridge {
     fn ps_port_config(&self) -> PortConfig {
         PortConfig::HPR
     }
-    fn ps_poll_at(&self) -> Option<Instant> {
+    fn poll_at(&self) -> Option<Instant> {
         None
     }
 }

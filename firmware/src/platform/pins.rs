@@ -5,7 +5,7 @@
 //!
 //! ```
 //! use plasma_firmware::io::Output;
-//! use plasma_firmware::pins::{Port, output};
+//! use plasma_firmware::platform::pins::{Port, output};
 //!
 //! let start = output(Output::Start);
 //! assert_eq!((start.pin.port, start.pin.number), (Port::B, 0));
@@ -16,7 +16,7 @@ use core::fmt;
 
 use crate::io::Polarity;
 use crate::io::{Input, Output};
-use crate::safe_state::SAFE_OUTPUTS;
+use crate::platform::safe_state::SAFE_OUTPUTS;
 
 /// A GPIO port the board uses. The STM32L476RG and the emulated STM32L475VG have the same
 /// ports at the same addresses.

@@ -8,7 +8,7 @@
 //!
 //! ```
 //! use plasma_protocol::time::{Duration, Instant};
-//! use plasma_firmware::watchdog::ProgressMonitor;
+//! use plasma_firmware::platform::watchdog::ProgressMonitor;
 //!
 //! let t0 = Instant::ZERO;
 //! let mut monitor = ProgressMonitor::<4>::new();

@@ -6,7 +6,7 @@
 //! cause the supervisor can report on the CNC port.
 //!
 //! ```
-//! use plasma_firmware::safe_state::{BootReport, ResetCause, PANIC_MARKER};
+//! use plasma_firmware::platform::safe_state::{BootReport, ResetCause, PANIC_MARKER};
 //!
 //! // RCC_CSR after an independent-watchdog reset: IWDGRSTF and PINRSTF (an internal reset also
 //! // pulls the NRST pin, so PINRSTF comes along with every cause).
@@ -22,7 +22,7 @@
 
 use core::sync::atomic::{AtomicBool, Ordering};
 
-/// The outputs are the I/O's; where each one is: [`crate::pins`].
+/// The outputs are the I/O's; where each one is: [`crate::platform::pins`].
 pub use crate::io::Output;
 
 const fn bit(output: Output) -> u8 {

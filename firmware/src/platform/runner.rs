@@ -31,6 +31,7 @@ use embassy_futures::select::{Either, select};
 use embedded_io_async::{Error as _, ErrorKind, Read, ReadReady, Write};
 use heapless::Vec;
 
+use crate::bridge::Bridge;
 use crate::link::PsLink;
 use crate::link::transaction::TX_CAPACITY;
 use plasma_protocol::serial::PortConfig;
@@ -55,7 +56,10 @@ pub trait ConfigurablePort: Read + ReadReady + Write {
     fn set_port_config(&mut self, config: PortConfig) -> Result<(), UnsupportedConfig>;
 }
 
-/// The power-supply side of a sans-IO endpoint: the link itself, or the bridge around it.
+/// What a driver of the power-supply port drives: the [`Bridge`] (the board's tasks, pbtool,
+/// the scenario harness, the fuzz target) or a bare [`PsLink`] (the link's own tests and
+/// scenarios). The one trait for it: a loop that moves bytes between a port (a UART, a
+/// simulated line) and an endpoint is written against this, whatever it runs on.
 pub trait PsEndpoint {
     /// Bytes received from the supply.
     fn handle_ps_rx(&mut self, now: Instant, bytes: &[u8]);
@@ -71,7 +75,7 @@ pub trait PsEndpoint {
     fn ps_port_config(&self) -> PortConfig;
     /// When the endpoint must be polled again at the latest (`None`: only received bytes
     /// matter).
-    fn ps_poll_at(&self) -> Option<Instant>;
+    fn poll_at(&self) -> Option<Instant>;
 }
 
 impl PsEndpoint for PsLink {
@@ -95,8 +99,34 @@ impl PsEndpoint for PsLink {
         self.port_config()
     }
 
-    fn ps_poll_at(&self) -> Option<Instant> {
-        self.poll_at()
+    fn poll_at(&self) -> Option<Instant> {
+        PsLink::poll_at(self)
+    }
+}
+
+impl PsEndpoint for Bridge {
+    fn handle_ps_rx(&mut self, now: Instant, bytes: &[u8]) {
+        Bridge::handle_ps_rx(self, now, bytes);
+    }
+
+    fn handle_ps_rx_error(&mut self, now: Instant) {
+        Bridge::handle_ps_rx_error(self, now);
+    }
+
+    fn poll_ps_transmit(&mut self, now: Instant) -> Option<&[u8]> {
+        Bridge::poll_ps_transmit(self, now)
+    }
+
+    fn ps_transmitted(&mut self, at: Instant) {
+        Bridge::ps_transmitted(self, at);
+    }
+
+    fn ps_port_config(&self) -> PortConfig {
+        Bridge::ps_port_config(self)
+    }
+
+    fn poll_at(&self) -> Option<Instant> {
+        Bridge::poll_at(self)
     }
 }
 
@@ -105,10 +135,10 @@ pub const MAX_WAIT: Duration = Duration::from_millis(100);
 
 /// Frames written in one turn at most. The link sends one and waits for its reply; the
 /// bound only keeps a misbehaving endpoint from starving the receiver.
-const MAX_FRAMES_PER_TURN: usize = 4;
+pub const MAX_FRAMES_PER_TURN: usize = 4;
 
-/// Bytes taken from the port per read.
-const RX_CHUNK: usize = 64;
+/// Bytes taken from the power-supply port per read.
+pub const PS_RX_CHUNK: usize = 64;
 
 /// What went wrong on the port.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -259,7 +289,7 @@ impl<P: ConfigurablePort> PsPort<P> {
         clock: &impl Clock,
     ) -> Result<usize, PortError<P::Error>> {
         let mut total = 0;
-        let mut buf = [0u8; RX_CHUNK];
+        let mut buf = [0u8; PS_RX_CHUNK];
         while self.port.read_ready().map_err(PortError::Read)? {
             let received = self.read(&mut buf).await;
             total += self.hand_over(endpoint, clock, received, &buf)?;
@@ -299,7 +329,7 @@ impl<P: ConfigurablePort> PsPort<P> {
         clock: &impl Clock,
         deadline: Instant,
     ) -> Result<usize, PortError<P::Error>> {
-        let mut buf = [0u8; RX_CHUNK];
+        let mut buf = [0u8; PS_RX_CHUNK];
         match select(self.read(&mut buf), clock.sleep_until(deadline)).await {
             Either::First(received) => self.hand_over(endpoint, clock, received, &buf),
             Either::Second(()) => Ok(0),
@@ -315,7 +345,7 @@ impl<P: ConfigurablePort> PsPort<P> {
     ) -> Result<Turn, PortError<P::Error>> {
         let (frames_sent, new_config) = self.transmit(endpoint, clock).await?;
         let latest = clock.now() + MAX_WAIT;
-        let deadline = endpoint.ps_poll_at().map_or(latest, |at| at.min(latest));
+        let deadline = endpoint.poll_at().map_or(latest, |at| at.min(latest));
         let bytes_received = self.receive_until(endpoint, clock, deadline).await?;
         Ok(Turn {
             frames_sent,

@@ -262,7 +262,7 @@ fn every_frame_goes_out_whole_with_the_settings_the_link_asked_for() {
         fn ps_port_config(&self) -> PortConfig {
             self.link.port_config()
         }
-        fn ps_poll_at(&self) -> Option<Instant> {
+        fn poll_at(&self) -> Option<Instant> {
             self.link.poll_at()
         }
     }
@@ -356,7 +356,7 @@ fn a_silent_endpoint_still_turns_every_max_wait() {
         fn ps_port_config(&self) -> PortConfig {
             PortConfig::HPR
         }
-        fn ps_poll_at(&self) -> Option<Instant> {
+        fn poll_at(&self) -> Option<Instant> {
             None
         }
     }
@@ -403,7 +403,7 @@ fn port_errors_are_reported_not_swallowed() {
                 ..PortConfig::HPR
             }
         }
-        fn ps_poll_at(&self) -> Option<Instant> {
+        fn poll_at(&self) -> Option<Instant> {
             None
         }
     }
@@ -450,7 +450,7 @@ fn a_character_received_in_error_reaches_the_link_in_its_place() {
         fn ps_port_config(&self) -> PortConfig {
             PortConfig::MODBUS_DEFAULT
         }
-        fn ps_poll_at(&self) -> Option<Instant> {
+        fn poll_at(&self) -> Option<Instant> {
             None
         }
     }

@@ -30,8 +30,9 @@ use embedded_io_async::Read;
 
 use crate::bridge::Bridge;
 use crate::io::{Inputs, IoConfig, IoEvent, Outputs, SupplyState};
-use crate::runner::{
-    Clock, ConfigurablePort, MAX_WAIT, PortError, PsEndpoint, PsPort, UnsupportedConfig,
+use crate::platform::runner::{
+    Clock, ConfigurablePort, MAX_WAIT, PS_RX_CHUNK, PortError, PsEndpoint, PsPort,
+    UnsupportedConfig,
 };
 use crate::settings::{SaveError, Settings};
 use plasma_protocol::serial::PortConfig;
@@ -64,27 +65,6 @@ pub trait BridgeEndpoint: PsEndpoint {
     fn take_save_request(&mut self) -> Option<Self::Settings>;
     /// How the store went.
     fn save_finished(&mut self, now: Instant, result: Result<(), Self::SaveError>);
-}
-
-impl PsEndpoint for Bridge {
-    fn handle_ps_rx(&mut self, now: Instant, bytes: &[u8]) {
-        Bridge::handle_ps_rx(self, now, bytes);
-    }
-    fn handle_ps_rx_error(&mut self, now: Instant) {
-        Bridge::handle_ps_rx_error(self, now);
-    }
-    fn poll_ps_transmit(&mut self, now: Instant) -> Option<&[u8]> {
-        Bridge::poll_ps_transmit(self, now)
-    }
-    fn ps_transmitted(&mut self, at: Instant) {
-        Bridge::ps_transmitted(self, at);
-    }
-    fn ps_port_config(&self) -> PortConfig {
-        Bridge::ps_port_config(self)
-    }
-    fn ps_poll_at(&self) -> Option<Instant> {
-        Bridge::poll_at(self)
-    }
 }
 
 impl BridgeEndpoint for Bridge {
@@ -163,9 +143,7 @@ pub enum TurnError<PsError, CncError> {
 }
 
 /// Bytes taken from the CNC port per read.
-const CNC_RX_CHUNK: usize = 64;
-/// Bytes taken from the PS port per read.
-const PS_RX_CHUNK: usize = 64;
+pub const CNC_RX_CHUNK: usize = 64;
 
 /// The loop around a bridge.
 pub struct Supervisor<P, C, I, V> {
@@ -346,7 +324,7 @@ where
     {
         let started = clock.now();
         let latest = started + MAX_WAIT;
-        let deadline = bridge.ps_poll_at().map_or(latest, |at| at.min(latest));
+        let deadline = bridge.poll_at().map_or(latest, |at| at.min(latest));
         let mut ps_buf = [0u8; PS_RX_CHUNK];
         let mut cnc_buf = [0u8; CNC_RX_CHUNK];
         let saving = self.saving;
