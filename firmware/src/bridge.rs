@@ -35,7 +35,7 @@
 //! ```
 
 use crate::cnc::{Context, Session, SessionStats};
-pub use crate::cnc::{MAX_REPLY_LEN, OUTPUT_CAPACITY, SimCommand};
+pub use crate::cnc::{FRAME_IDLE_TIMEOUT, MAX_REPLY_LEN, OUTPUT_CAPACITY, SimCommand};
 use crate::io::{Inputs, IoConfig, IoEvent, Outputs, SupplyState};
 use crate::link::{Diagnostics, PowermaxSettings, PsLink, UnitStatus};
 use crate::settings::{Process, SaveError, Settings};

@@ -40,8 +40,12 @@ use libfuzzer_sys::arbitrary::{self, Arbitrary};
 use libfuzzer_sys::fuzz_target;
 
 use plasma_firmware::bridge::Bridge;
-use plasma_firmware::bridge::{MAX_REPLY_LEN, OUTPUT_CAPACITY};
+use plasma_firmware::bridge::{FRAME_IDLE_TIMEOUT, MAX_REPLY_LEN, OUTPUT_CAPACITY};
 use plasma_firmware::io::{DiscreteIo, Input, InputConfig, PinLevels, SafetyMonitor, SupplyState};
+// The board's own figures: the supervisor's and the PS port's read sizes, frames per turn and
+// longest wait, so that the target turns as the board does.
+use plasma_firmware::platform::runner::{MAX_FRAMES_PER_TURN, MAX_WAIT, PS_RX_CHUNK};
+use plasma_firmware::platform::supervisor::CNC_RX_CHUNK;
 use plasma_firmware::settings::{SaveError, Settings};
 use plasma_firmware::storage::{MAX_PAYLOAD, Settings as _};
 use plasma_protocol::cnc::phoenix::{self, ACK, NAK};
@@ -55,22 +59,11 @@ use plasma_sim::{Model, SimOptions, SimulatedUnit};
 use cnc_master::{MasterRequest, Node, Pmx485};
 use supply_rules::Judge;
 
-/// Frames the board writes per turn at most (`runner::MAX_FRAMES_PER_TURN`).
-const FRAMES_PER_TURN: usize = 4;
-/// Bytes per CNC read on the board (`supervisor::CNC_RX_CHUNK`).
-const CNC_RX_CHUNK: usize = 64;
-/// Bytes per power-supply read on the board (`supervisor::PS_RX_CHUNK`).
-const PS_RX_CHUNK: usize = 64;
-/// The board's task waits at most this long (`runner::MAX_WAIT`).
-const MAX_WAIT: Duration = Duration::from_millis(100);
 /// Times one instant may be processed again because the bridge still asks for it, as the
 /// host harness allows; more is a busy loop on the board.
 const MAX_REPEATS_AT_ONE_INSTANT: u32 = 2;
 /// Pieces of CNC output one drain may take before it counts as never draining.
 const MAX_OUTPUT_PIECES: usize = 1024;
-/// A request or Phoenix frame that stops arriving is dropped after this long
-/// (docs/cnc-protocol.md sections 7 and 9; the session's `FRAME_IDLE_TIMEOUT`).
-const FRAME_IDLE: Duration = Duration::from_millis(50);
 
 /// Command words for [`Step::CncLine`]: a seed for the search, not a specification (the
 /// parser is the one source; a word missing here only costs coverage).
@@ -441,7 +434,7 @@ impl Board {
         while self.io.poll_transition().is_some() {}
 
         self.bridge.poll(now);
-        for _ in 0..FRAMES_PER_TURN {
+        for _ in 0..MAX_FRAMES_PER_TURN {
             let Some(frame) = self.bridge.poll_ps_transmit(now) else {
                 break;
             };
@@ -685,7 +678,7 @@ impl Board {
         if self.cnc_between_lines || !resync {
             return;
         }
-        self.wait(FRAME_IDLE);
+        self.wait(FRAME_IDLE_TIMEOUT);
         self.cnc_rx(b"\r\n");
         self.cnc_between_lines = true;
     }

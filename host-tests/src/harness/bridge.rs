@@ -1,4 +1,4 @@
-//! The whole bridge in the [`World`]: [`PsEndpoint`] for the firmware's
+//! The whole bridge in the [`World`]: [`WorldEndpoint`] for the firmware's
 //! [`Bridge`](plasma_firmware::bridge::Bridge), and [`BridgeEndpoint`], which adds what a
 //! board does around it: the CNC port (bytes in, lines/ACK/NAK out), the settings store for
 //! `CONFIG SAVE` (in memory, through the real record encoding), and the simulator-only
@@ -19,15 +19,16 @@ use std::collections::VecDeque;
 
 use plasma_firmware::bridge::Bridge;
 use plasma_firmware::bridge::SimCommand;
-use plasma_firmware::io::{Inputs, IoConfig, IoEvent, Outputs, SupplyState};
+use plasma_firmware::io::{Inputs, IoConfig, IoEvent, Outputs};
 use plasma_firmware::link::{Diagnostics, LinkEvent, UnitStatus};
+use plasma_firmware::platform::PsEndpoint;
 use plasma_firmware::settings::{SaveError, Settings};
 use plasma_firmware::storage::{MAX_PAYLOAD, Settings as _};
 use plasma_protocol::cnc::phoenix::{ACK, NAK};
 use plasma_protocol::serial::PortConfig;
 use plasma_protocol::time::{Duration, Instant};
 
-use super::endpoint::PsEndpoint;
+use super::endpoint::WorldEndpoint;
 use super::options::WorldOptions;
 use super::world::{Timeout, World};
 use plasma_sim::{Model, SimulatedUnit};
@@ -36,40 +37,12 @@ use plasma_sim::{Model, SimulatedUnit};
 /// takes (a settings write with retries, a restart's quiet time).
 pub const CNC_REPLY_TIMEOUT: Duration = Duration::from_secs(10);
 
-/// The bare bridge: forwards to the firmware's API. The bridge consumes the link's events
-/// itself (they become replies and `!` lines), so [`PsEndpoint::poll`] reports none. Its CNC
-/// output is left for the caller; [`BridgeEndpoint`] collects it.
-impl PsEndpoint for Bridge {
-    fn handle_ps_rx(&mut self, now: Instant, bytes: &[u8]) {
-        Bridge::handle_ps_rx(self, now, bytes);
-    }
-
-    fn handle_ps_rx_error(&mut self, now: Instant) {
-        Bridge::handle_ps_rx_error(self, now);
-    }
-
-    fn poll_ps_transmit(&mut self, now: Instant) -> Option<&[u8]> {
-        Bridge::poll_ps_transmit(self, now)
-    }
-
-    fn ps_transmitted(&mut self, at: Instant) {
-        Bridge::ps_transmitted(self, at);
-    }
-
-    fn ps_port_config(&self) -> PortConfig {
-        Bridge::ps_port_config(self)
-    }
-
+/// The bare bridge: its port side is the firmware's [`PsEndpoint`]. The bridge consumes the
+/// link's events itself (they become replies and `!` lines), so [`WorldEndpoint::poll`]
+/// reports none. Its CNC output is left for the caller; [`BridgeEndpoint`] collects it.
+impl WorldEndpoint for Bridge {
     fn poll(&mut self, now: Instant, _events: &mut Vec<LinkEvent>) {
         Bridge::poll(self, now);
-    }
-
-    fn poll_at(&self) -> Option<Instant> {
-        Bridge::poll_at(self)
-    }
-
-    fn supply_state(&self) -> SupplyState {
-        Bridge::supply_state(self)
     }
 
     fn status(&self) -> &UnitStatus {
@@ -292,6 +265,7 @@ impl BridgeEndpoint {
     }
 }
 
+/// The port side is the bridge's.
 impl PsEndpoint for BridgeEndpoint {
     fn handle_ps_rx(&mut self, now: Instant, bytes: &[u8]) {
         self.bridge.handle_ps_rx(now, bytes);
@@ -313,17 +287,15 @@ impl PsEndpoint for BridgeEndpoint {
         self.bridge.ps_port_config()
     }
 
-    fn poll(&mut self, now: Instant, _events: &mut Vec<LinkEvent>) {
-        self.bridge.poll(now);
-        self.collect(now);
-    }
-
     fn poll_at(&self) -> Option<Instant> {
         self.bridge.poll_at()
     }
+}
 
-    fn supply_state(&self) -> SupplyState {
-        self.bridge.supply_state()
+impl WorldEndpoint for BridgeEndpoint {
+    fn poll(&mut self, now: Instant, _events: &mut Vec<LinkEvent>) {
+        self.bridge.poll(now);
+        self.collect(now);
     }
 
     fn status(&self) -> &UnitStatus {

@@ -19,7 +19,9 @@
 //!    START and the blackout. A broken rule panics at once (with the last frames on the wire), so
 //!    every scenario enforces the safety rules.
 //!
-//! The endpoint is anything implementing [`PsEndpoint`]: a bare
+//! The endpoint is anything implementing [`WorldEndpoint`] (the firmware's
+//! [`PsEndpoint`](plasma_firmware::platform::PsEndpoint) for its port, plus what the world
+//! observes): a bare
 //! [`PsLink`](plasma_firmware::link::PsLink), the `Bridge` façade, or a [`BridgeEndpoint`]
 //! (the bridge with its CNC port, settings store and the simulator's TORCH_ON), whose world
 //! is driven from the CNC side (`World::cnc_line`, `World::power_cycle_bridge`).
@@ -48,7 +50,7 @@ mod trace;
 mod world;
 
 pub use bridge::{BridgeEndpoint, CNC_REPLY_TIMEOUT, CncItem, CncRecord};
-pub use endpoint::PsEndpoint;
+pub use endpoint::WorldEndpoint;
 pub use options::{RxErrors, WorldOptions};
 pub use trace::{Direction, TraceFrame, WireTrace};
 pub use world::{Timeout, World, WorldStats};

@@ -11,7 +11,7 @@ use plasma_firmware::link::{
 };
 use plasma_protocol::time::{Duration, Instant};
 
-use super::endpoint::PsEndpoint;
+use super::endpoint::WorldEndpoint;
 use super::options::{RxErrors, WorldOptions};
 use super::trace::{Direction, TraceFrame, WireTrace};
 use plasma_sim::hpr::Hpr;
@@ -61,7 +61,7 @@ pub struct WorldStats {
 }
 
 /// One simulated installation. See the [module docs](super).
-pub struct World<E: PsEndpoint = PsLink> {
+pub struct World<E: WorldEndpoint = PsLink> {
     now: Instant,
     endpoint: E,
     unit: Box<dyn SimulatedUnit>,
@@ -148,7 +148,7 @@ impl World<PsLink> {
     }
 }
 
-impl<E: PsEndpoint> World<E> {
+impl<E: WorldEndpoint> World<E> {
     /// Any endpoint against a simulator; the world starts at time zero.
     pub fn with_endpoint(endpoint: E, unit: Box<dyn SimulatedUnit>, options: WorldOptions) -> Self {
         let master_port = endpoint.ps_port_config();
@@ -696,7 +696,7 @@ impl<E: PsEndpoint> World<E> {
     }
 }
 
-impl<E: PsEndpoint> Drop for World<E> {
+impl<E: WorldEndpoint> Drop for World<E> {
     fn drop(&mut self) {
         if !std::thread::panicking() {
             self.assert_safe();

@@ -16,9 +16,10 @@ pub use console::{SETTLE_TIMEOUT, run_console};
 use std::io;
 use std::sync::mpsc::Receiver;
 
-use host_tests::harness::{BridgeEndpoint, PsEndpoint};
+use host_tests::harness::{BridgeEndpoint, WorldEndpoint};
 use plasma_firmware::bridge::Bridge;
 use plasma_firmware::io::{Inputs, Interlocks, SupplyState};
+use plasma_firmware::platform::PsEndpoint;
 use plasma_firmware::settings::Settings;
 use plasma_protocol::serial::PortConfig;
 use plasma_protocol::time::{Duration, Instant};
