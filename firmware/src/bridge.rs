@@ -51,8 +51,6 @@ pub struct Bridge {
     io: Option<(Inputs, Outputs)>,
     boot_report: Option<&'static str>,
     now: Instant,
-    /// The link may hold events that [`Bridge::poll`] has not moved yet.
-    dirty: bool,
 }
 
 /// A [`Context`] of `$bridge` at `$now` (a macro, so that the session can be borrowed at the
@@ -85,7 +83,6 @@ impl Bridge {
             io: None,
             boot_report: None,
             now,
-            dirty: false,
         }
     }
 
@@ -123,15 +120,14 @@ impl Bridge {
     /// `at`: its reply time-out runs from there.
     pub fn ps_transmitted(&mut self, at: Instant) {
         self.link.handle_transmitted(at);
-        self.dirty = true;
     }
 
     /// The next frame to transmit to the power supply, if any (write it completely, then
-    /// call again).
+    /// call again). The link's time-outs run here: when they raise events, [`Bridge::poll_at`]
+    /// asks for a [`Bridge::poll`] at once (the frame borrows the link, so the events cannot
+    /// be moved in the same call).
     pub fn poll_ps_transmit(&mut self, now: Instant) -> Option<&[u8]> {
         self.service(now);
-        // Time-outs handled inside may raise events: `poll_at` asks for a poll.
-        self.dirty = true;
         self.link.poll_transmit(now)
     }
 
@@ -173,9 +169,10 @@ impl Bridge {
         self.service(now);
     }
 
-    /// When [`Bridge::poll`] / [`Bridge::poll_ps_transmit`] need to be called next.
+    /// When [`Bridge::poll`] / [`Bridge::poll_ps_transmit`] need to be called next: at once
+    /// while the link holds events the session has not taken.
     pub fn poll_at(&self) -> Option<Instant> {
-        if self.dirty {
+        if self.link.has_events() {
             return Some(self.now);
         }
         match (self.link.poll_at(), self.session.poll_at()) {
@@ -191,7 +188,6 @@ impl Bridge {
         }
         self.session.poll(&mut ctx!(self, now));
         self.session.pump(&mut ctx!(self, now));
-        self.dirty = false;
     }
 
     // --- discrete I/O exchange ----------------------------------------------------------

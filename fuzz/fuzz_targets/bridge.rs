@@ -419,8 +419,8 @@ impl Board {
     }
 
     /// Everything due now: the unit hears and answers, then one supervisor turn (bytes in,
-    /// poll, frames out, poll, CNC output, exchange with the I/O task, save), then the I/O
-    /// task, then the monitor's sample.
+    /// frames out, a poll if the bridge asks, CNC output, exchange with the I/O task, save),
+    /// then the I/O task, then the monitor's sample.
     fn turn(&mut self) {
         let now = self.now;
         self.unit_side();
@@ -433,7 +433,6 @@ impl Board {
         }
         while self.io.poll_transition().is_some() {}
 
-        self.bridge.poll(now);
         for _ in 0..MAX_FRAMES_PER_TURN {
             let Some(frame) = self.bridge.poll_ps_transmit(now) else {
                 break;
@@ -453,7 +452,9 @@ impl Board {
                 }
             }
         }
-        self.bridge.poll(now);
+        if self.bridge.poll_at().is_some_and(|at| at <= now) {
+            self.bridge.poll(now);
+        }
         self.drain_cnc_output();
 
         // Supervisor: supply state and settings out, a save.

@@ -44,6 +44,11 @@ impl Core {
         self.events.pop()
     }
 
+    /// True while events are queued.
+    pub(crate) fn has_events(&self) -> bool {
+        !self.events.is_empty()
+    }
+
     /// The link went down: the active command (`active`, when there is one) and every queued
     /// one fail.
     pub(crate) fn fail_commands<J, const N: usize>(

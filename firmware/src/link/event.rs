@@ -233,6 +233,11 @@ impl EventQueue {
         self.events.pop_front()
     }
 
+    /// True when no event is queued.
+    pub(crate) fn is_empty(&self) -> bool {
+        self.events.is_empty()
+    }
+
     /// Number of queued events.
     #[cfg(test)]
     pub(crate) fn len(&self) -> usize {

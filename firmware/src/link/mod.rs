@@ -326,6 +326,11 @@ impl PsLink {
         self.core.pop_event()
     }
 
+    /// True while events wait for [`PsLink::poll_event`].
+    pub(crate) fn has_events(&self) -> bool {
+        self.core.has_events()
+    }
+
     /// Ask for an operation. Validates against the unit's limits BEFORE anything is sent;
     /// Err = refused with a precise reason, nothing sent.
     // Not inlined into its one caller in the image (the session): that costs ~300 B of flash.

@@ -7,8 +7,9 @@
 //! 1. takes the I/O task's latest levels and events and passes them to the bridge;
 //! 2. passes every byte already waiting in either port to the bridge (so a reply that came in
 //!    time is not taken for a time-out when the bridge is polled);
-//! 3. polls the bridge, transmits its power-supply frames ([`PsPort`]), polls it again (the
-//!    link's time-outs run while frames are asked for) and writes its CNC output; when the
+//! 3. transmits the bridge's power-supply frames ([`PsPort`]; asking for them polls it),
+//!    polls it again if it asks to (the link's time-outs run while frames are asked for, and
+//!    may raise events) and writes its CNC output; when the
 //!    CNC framing changed (`CONFIG cnc_baud|cnc_parity|cnc_stop_bits`), waits until that
 //!    output has left (the reply to the CONFIG goes out at the old framing) and switches the
 //!    CNC port;
@@ -51,7 +52,7 @@ pub trait BridgeEndpoint: PsEndpoint {
     fn poll_cnc_output(&mut self) -> Option<&[u8]>;
     /// The framing the CNC port must use.
     fn cnc_port_config(&self) -> PortConfig;
-    /// Let time pass.
+    /// Let time pass (asking for a frame, [`PsEndpoint::poll_ps_transmit`], does too).
     fn poll(&mut self, now: Instant);
     /// What the I/O task must know about the supply.
     fn supply_state(&self) -> SupplyState;
@@ -235,14 +236,17 @@ where
             .map_err(TurnError::Ps)?;
         self.drain_cnc(bridge, clock).await?;
 
-        bridge.poll(clock.now());
+        // Asking for frames polls the bridge; it also runs the link's time-outs, whose events
+        // the bridge moves into the session (replies, event lines) only when polled again: it
+        // asks for that poll through `poll_at`.
         self.ps
             .transmit(bridge, clock)
             .await
             .map_err(TurnError::Ps)?;
-        // Asking for frames also runs the link's time-outs, whose events the bridge moves
-        // into the session (replies, event lines) only when polled.
-        bridge.poll(clock.now());
+        let now = clock.now();
+        if bridge.poll_at().is_some_and(|at| at <= now) {
+            bridge.poll(now);
+        }
         while let Some(output) = bridge.poll_cnc_output() {
             for piece in output.chunks(self.cnc_piece) {
                 self.cnc.flush().await.map_err(TurnError::CncWrite)?;

@@ -9,6 +9,7 @@ use plasma_firmware::io::{
 use plasma_firmware::link::{
     CommandFailure, CommandOutput, LinkCommand, LinkEvent, PsLink, Refusal, Ticket,
 };
+use plasma_firmware::platform::runner::MAX_FRAMES_PER_TURN;
 use plasma_protocol::time::{Duration, Instant};
 
 use super::endpoint::WorldEndpoint;
@@ -561,8 +562,8 @@ impl<E: WorldEndpoint> World<E> {
             chunk.extend(byte);
         }
         self.hand_over(now, &mut chunk);
-        self.drain_endpoint();
-        for _ in 0..4 {
+        // Asking for a frame polls the endpoint; its events are drained after the frames.
+        for _ in 0..MAX_FRAMES_PER_TURN {
             self.apply_master_port();
             let Some(frame) = self.endpoint.poll_ps_transmit(now).map(<[u8]>::to_vec) else {
                 break;

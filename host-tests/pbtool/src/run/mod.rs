@@ -114,7 +114,8 @@ impl LineBridge {
     /// Everything due at `now`: link events into the session, frames to the unit (the port
     /// switched to the framing the link asks for first), the interlocks.
     pub fn service(&mut self, now: Instant) -> Result<(), SerialError> {
-        self.endpoint.poll(now, &mut Vec::new());
+        // Asking for a frame polls the bridge; the poll after the frames takes what they
+        // raised and the bridge's CNC output.
         while let Some(frame) = self.endpoint.poll_ps_transmit(now).map(<[u8]>::to_vec) {
             let config = self.endpoint.ps_port_config();
             self.ps.set_config(config)?;
