@@ -243,9 +243,8 @@ where
             .transmit(bridge, clock)
             .await
             .map_err(TurnError::Ps)?;
-        let now = clock.now();
-        if bridge.poll_at().is_some_and(|at| at <= now) {
-            bridge.poll(now);
+        if bridge.poll_at().is_some_and(|at| at <= clock.now()) {
+            bridge.poll(clock.now());
         }
         while let Some(output) = bridge.poll_cnc_output() {
             for piece in output.chunks(self.cnc_piece) {
