@@ -209,11 +209,6 @@ impl<P: ConfigurablePort> PsPort<P> {
         self.stats
     }
 
-    /// The port, e.g. to inspect a fake one in tests.
-    pub fn port(&mut self) -> &mut P {
-        &mut self.port
-    }
-
     fn apply(&mut self, config: PortConfig) -> Result<bool, PortError<P::Error>> {
         if self.applied == Some(config) {
             return Ok(false);

@@ -208,17 +208,20 @@ where
     }
 
     /// The I/O exchange.
-    pub fn io(&mut self) -> &mut I {
+    #[cfg(test)]
+    pub(crate) fn io(&mut self) -> &mut I {
         &mut self.io
     }
 
     /// The settings saver.
-    pub fn saver(&mut self) -> &mut V {
+    #[cfg(test)]
+    pub(crate) fn saver(&mut self) -> &mut V {
         &mut self.saver
     }
 
     /// True while a save is under way.
-    pub fn is_saving(&self) -> bool {
+    #[cfg(test)]
+    pub(crate) fn is_saving(&self) -> bool {
         self.saving
     }
 
