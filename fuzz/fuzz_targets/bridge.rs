@@ -419,7 +419,7 @@ impl Board {
     }
 
     /// Everything due now: the unit hears and answers, then one supervisor turn (bytes in,
-    /// frames out, a poll if the bridge asks, CNC output, exchange with the I/O task, save),
+    /// frames out (asking for them polls), poll, CNC output, exchange with the I/O task, save),
     /// then the I/O task, then the monitor's sample.
     fn turn(&mut self) {
         let now = self.now;
@@ -452,9 +452,7 @@ impl Board {
                 }
             }
         }
-        if self.bridge.poll_at().is_some_and(|at| at <= now) {
-            self.bridge.poll(now);
-        }
+        self.bridge.poll(now);
         self.drain_cnc_output();
 
         // Supervisor: supply state and settings out, a save.

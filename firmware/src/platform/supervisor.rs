@@ -8,8 +8,8 @@
 //! 2. passes every byte already waiting in either port to the bridge (so a reply that came in
 //!    time is not taken for a time-out when the bridge is polled);
 //! 3. transmits the bridge's power-supply frames ([`PsPort`]; asking for them polls it),
-//!    polls it again if it asks to (the link's time-outs run while frames are asked for, and
-//!    may raise events) and writes its CNC output; when the
+//!    polls it again (the link's time-outs run while frames are asked for, and may raise
+//!    events) and writes its CNC output; when the
 //!    CNC framing changed (`CONFIG cnc_baud|cnc_parity|cnc_stop_bits`), waits until that
 //!    output has left (the reply to the CONFIG goes out at the old framing) and switches the
 //!    CNC port;
@@ -240,15 +240,12 @@ where
         self.drain_cnc(bridge, clock).await?;
 
         // Asking for frames polls the bridge; it also runs the link's time-outs, whose events
-        // the bridge moves into the session (replies, event lines) only when polled again: it
-        // asks for that poll through `poll_at`.
+        // the bridge moves into the session (replies, event lines) only when polled again.
         self.ps
             .transmit(bridge, clock)
             .await
             .map_err(TurnError::Ps)?;
-        if bridge.poll_at().is_some_and(|at| at <= clock.now()) {
-            bridge.poll(clock.now());
-        }
+        bridge.poll(clock.now());
         while let Some(output) = bridge.poll_cnc_output() {
             for piece in output.chunks(self.cnc_piece) {
                 self.cnc.flush().await.map_err(TurnError::CncWrite)?;
