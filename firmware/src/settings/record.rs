@@ -1,0 +1,374 @@
+//! The settings record the store keeps: a fixed layout, version 2 (version 1 is its first 29
+//! bytes and still loads). Decoding is strict: a wrong length, an unknown code, a value out of
+//! range or a reserved bit set gives `None`, and the store falls back to the defaults.
+
+use plasma_protocol::cnc::phoenix::Format;
+use plasma_protocol::cnc::{Amps, Mode, Pressure};
+use plasma_protocol::serial::{Parity, PortConfig, StopBits};
+use plasma_protocol::time::Duration;
+
+use super::{CncPort, Process, Settings, ms, stop_bits_number, wiring};
+use crate::io::{IoConfig, MIN_START_GAP};
+use crate::link::{LinkConfig, ProtocolChoice};
+use crate::storage;
+
+/// Length of the version-1 record (no wiring, no CNC port block).
+pub const RECORD_V1_LEN: usize = 29;
+/// Length of the version-2 record: version 1, the CNC's wiring, then the CNC port block.
+pub const RECORD_LEN: usize = RECORD_V1_LEN + wiring::RECORD_LEN + CNC_BLOCK_LEN;
+/// Bytes of the CNC port block in the record: address, baud (LE u32), parity, stop bits.
+const CNC_BLOCK_LEN: usize = 7;
+
+// --- record layout, version 2 (version 1 is its first 29 bytes) ----------------------------
+// 0 protocol | 1 node address | 2 parity | 3 stop bits | 4-5 response time-out ms (LE)
+// 6 retries | 7-8 poll ms | 9-12 slow-data ms | 13 HPR id | 14 failures before down
+// 15-16 start gap ms | 17-18 ARC_OK debounce ms | 19-20 transfer time-out ms | 21 flags
+// 22 Phoenix format | 23 process present | 24 mode | 25-26 amps raw | 27-28 pressure raw
+// 29 active-high inputs (bit per input) | 30-36 input debounce ms | 37 inverted outputs
+// 38 CNC address | 39-42 CNC baud (LE) | 43 CNC parity | 44 CNC stop bits
+
+const FLAG_ARC_OK_REQUIRES_START: u8 = 1 << 0;
+const FLAG_DROP_START_ON_TRANSFER_TIMEOUT: u8 = 1 << 1;
+const FLAG_REFUSE_START_ON_FAULT: u8 = 1 << 2;
+const FLAG_LINK_REQUIRED: u8 = 1 << 3;
+const FLAG_EVENTS: u8 = 1 << 4;
+const FLAGS_KNOWN: u8 = 0x1F;
+
+const PROTOCOLS: [ProtocolChoice; 4] = [
+    ProtocolChoice::Auto,
+    ProtocolChoice::Sync,
+    ProtocolChoice::Legacy,
+    ProtocolChoice::Hpr,
+];
+const PARITIES: [Parity; 3] = [Parity::None, Parity::Even, Parity::Odd];
+
+fn index_of<T: PartialEq>(items: &[T], item: &T) -> u8 {
+    items.iter().position(|i| i == item).unwrap_or(0) as u8
+}
+
+fn u16_ms(d: Duration) -> [u8; 2] {
+    u16::try_from(d.as_millis())
+        .unwrap_or(u16::MAX)
+        .to_le_bytes()
+}
+
+fn stop_bits_from(number: u8) -> Option<StopBits> {
+    match number {
+        1 => Some(StopBits::One),
+        2 => Some(StopBits::Two),
+        _ => None,
+    }
+}
+
+impl CncPort {
+    fn encode(&self) -> [u8; CNC_BLOCK_LEN] {
+        let b = self.framing.baud.to_le_bytes();
+        [
+            self.address,
+            b[0],
+            b[1],
+            b[2],
+            b[3],
+            index_of(&PARITIES, &self.framing.parity),
+            stop_bits_number(self.framing.stop_bits),
+        ]
+    }
+
+    fn decode(r: &[u8]) -> Option<CncPort> {
+        let &[address, b0, b1, b2, b3, parity, stop] = r else {
+            return None;
+        };
+        let port = CncPort {
+            address,
+            framing: PortConfig {
+                baud: u32::from_le_bytes([b0, b1, b2, b3]),
+                parity: *PARITIES.get(usize::from(parity))?,
+                stop_bits: stop_bits_from(stop)?,
+            },
+        };
+        port.is_valid().then_some(port)
+    }
+}
+
+impl storage::Settings for Settings {
+    const VERSION: u8 = 2;
+
+    fn encode(&self, out: &mut [u8]) -> usize {
+        let mut r = [0u8; RECORD_LEN];
+        let link = &self.link;
+        let io = &self.io;
+        r[0] = index_of(&PROTOCOLS, &link.protocol);
+        r[1] = link.node_address;
+        r[2] = index_of(&PARITIES, &link.modbus_parity);
+        r[3] = stop_bits_number(link.modbus_stop_bits);
+        r[4..6].copy_from_slice(&u16_ms(link.response_timeout));
+        r[6] = link.retries;
+        r[7..9].copy_from_slice(&u16_ms(link.poll_interval));
+        r[9..13].copy_from_slice(&ms(link.slow_data_interval).to_le_bytes());
+        r[13] = link.hpr_id;
+        r[14] = link.failures_before_down;
+        r[15..17].copy_from_slice(&u16_ms(io.start_gap));
+        r[17..19].copy_from_slice(&u16_ms(io.arc_ok_debounce));
+        r[19..21].copy_from_slice(&u16_ms(io.transfer_timeout));
+        let flag = |on: bool, bit: u8| if on { bit } else { 0 };
+        r[21] = flag(io.arc_ok_requires_start, FLAG_ARC_OK_REQUIRES_START)
+            | flag(
+                io.drop_start_on_transfer_timeout,
+                FLAG_DROP_START_ON_TRANSFER_TIMEOUT,
+            )
+            | flag(io.refuse_start_on_fault, FLAG_REFUSE_START_ON_FAULT)
+            | flag(io.link_required, FLAG_LINK_REQUIRED)
+            | flag(self.events, FLAG_EVENTS);
+        r[22] = self.phoenix_format.value();
+        if let Some(process) = self.process {
+            r[23] = 1;
+            r[24] = index_of(&Mode::ALL, &process.mode);
+            r[25..27].copy_from_slice(&process.amps.raw().to_le_bytes());
+            r[27..29].copy_from_slice(&process.pressure.raw().to_le_bytes());
+        }
+        let (wiring_bytes, cnc) = r[RECORD_V1_LEN..].split_at_mut(wiring::RECORD_LEN);
+        wiring_bytes.copy_from_slice(&wiring::encode(io));
+        cnc.copy_from_slice(&self.cnc.encode());
+        match out.get_mut(..RECORD_LEN) {
+            Some(slot) => {
+                slot.copy_from_slice(&r);
+                RECORD_LEN
+            }
+            // Too small a buffer: report a length the store refuses.
+            None => out.len().saturating_add(1),
+        }
+    }
+
+    fn decode(payload: &[u8]) -> Option<Self> {
+        let (v1, rest) = payload.split_at_checked(RECORD_V1_LEN)?;
+        let (wiring_bytes, cnc) = rest.split_at_checked(wiring::RECORD_LEN)?;
+        let (inputs, outputs) = wiring::decode(wiring_bytes.try_into().ok()?)?;
+        let mut settings = Settings {
+            cnc: CncPort::decode(cnc)?,
+            ..decode_v1(v1)?
+        };
+        settings.io.inputs = inputs;
+        settings.io.outputs = outputs;
+        settings.is_valid().then_some(settings)
+    }
+
+    /// Version 1 had neither the wiring nor the CNC port block: both keep their defaults.
+    fn migrate(version: u8, payload: &[u8]) -> Option<Self> {
+        match version {
+            1 => decode_v1(payload),
+            _ => None,
+        }
+    }
+}
+
+/// The version-1 record (also the first part of version 2), the CNC port at its defaults.
+fn decode_v1(payload: &[u8]) -> Option<Settings> {
+    let r: &[u8; RECORD_V1_LEN] = payload.try_into().ok()?;
+    // Offsets are constants inside the fixed-length record.
+    let u16_at = |i: usize| {
+        r.get(i..i + 2)
+            .and_then(|b| b.try_into().ok())
+            .map_or(0, u16::from_le_bytes)
+    };
+    let millis = |i: usize| Duration::from_millis(u64::from(u16_at(i)));
+    let flags = r[21];
+    if flags & !FLAGS_KNOWN != 0 {
+        return None;
+    }
+    let link = LinkConfig {
+        protocol: *PROTOCOLS.get(usize::from(r[0]))?,
+        node_address: r[1],
+        modbus_parity: *PARITIES.get(usize::from(r[2]))?,
+        modbus_stop_bits: stop_bits_from(r[3])?,
+        response_timeout: millis(4),
+        retries: r[6],
+        poll_interval: millis(7),
+        slow_data_interval: Duration::from_millis(u64::from(u32::from_le_bytes([
+            r[9], r[10], r[11], r[12],
+        ]))),
+        hpr_id: r[13],
+        failures_before_down: r[14],
+    };
+    let io = IoConfig {
+        start_gap: millis(15).max(MIN_START_GAP),
+        arc_ok_debounce: millis(17),
+        arc_ok_requires_start: flags & FLAG_ARC_OK_REQUIRES_START != 0,
+        transfer_timeout: millis(19),
+        drop_start_on_transfer_timeout: flags & FLAG_DROP_START_ON_TRANSFER_TIMEOUT != 0,
+        refuse_start_on_fault: flags & FLAG_REFUSE_START_ON_FAULT != 0,
+        link_required: flags & FLAG_LINK_REQUIRED != 0,
+        // Version 1 has no wiring: the reference board's (version 2 overwrites it).
+        ..IoConfig::default()
+    };
+    let process = match r[23] {
+        0 if r[24..].iter().all(|&b| b == 0) => None,
+        1 => Some(Process {
+            mode: *Mode::ALL.get(usize::from(r[24]))?,
+            amps: Amps::from_raw(u16_at(25)),
+            pressure: Pressure::from_raw(u16_at(27)),
+        }),
+        _ => return None,
+    };
+    let settings = Settings {
+        link,
+        io,
+        events: flags & FLAG_EVENTS != 0,
+        phoenix_format: Format::from_value(r[22]).ok()?,
+        process,
+        cnc: CncPort::DEFAULT,
+    };
+    settings.is_valid().then_some(settings)
+}
+
+#[cfg(test)]
+mod tests {
+    use plasma_protocol::cnc::ConfigKey;
+
+    use super::*;
+    use crate::settings::ConfigValue;
+    use crate::storage::Settings as _;
+
+    fn round_trip(settings: &Settings) -> Option<Settings> {
+        let mut out = [0u8; storage::MAX_PAYLOAD];
+        let len = settings.encode(&mut out);
+        assert_eq!(len, RECORD_LEN);
+        Settings::decode(&out[..len])
+    }
+
+    #[test]
+    fn defaults_are_valid_and_round_trip() {
+        let defaults = Settings::default();
+        assert!(defaults.is_valid());
+        assert_eq!(round_trip(&defaults), Some(defaults));
+        assert_eq!(defaults.phoenix_format.value(), 113);
+        assert!(!defaults.events);
+    }
+
+    #[test]
+    fn every_field_round_trips() {
+        let mut s = Settings::default();
+        for (key, value) in [
+            (ConfigKey::Protocol, "hpr"),
+            (ConfigKey::Address, "17"),
+            (ConfigKey::Parity, "o"),
+            (ConfigKey::StopBits, "2"),
+            (ConfigKey::TimeoutMs, "250"),
+            (ConfigKey::Retries, "5"),
+            (ConfigKey::PollMs, "500"),
+            (ConfigKey::InterlockFault, "off"),
+            (ConfigKey::InterlockLink, "OFF"),
+            (ConfigKey::ArcOkDebounceMs, "10"),
+            (ConfigKey::TransferTimeoutMs, "5000"),
+            (ConfigKey::TransferTimeoutDropsStart, "off"),
+            (ConfigKey::Events, "on"),
+            (ConfigKey::HprId, "3"),
+            (ConfigKey::PhoenixFormat, "49"),
+            (ConfigKey::CncAddress, "7"),
+            (ConfigKey::CncBaud, "19200"),
+            (ConfigKey::CncParity, "even"),
+            (ConfigKey::CncStopBits, "2"),
+        ] {
+            s.set(key, value).unwrap();
+        }
+        s.process = Some(Process {
+            mode: Mode::Expanded,
+            amps: Amps::from_raw(45 * 64 + 32),
+            pressure: Pressure::Set(plasma_protocol::units::Psi::from_raw(70 * 128)),
+        });
+        let back = round_trip(&s).unwrap();
+        assert_eq!(back, s);
+        assert_eq!(back.get(ConfigKey::Parity), ConfigValue::Word("ODD"));
+        assert_eq!(back.get(ConfigKey::TimeoutMs), ConfigValue::Number(250));
+        assert_eq!(back.link.protocol, ProtocolChoice::Hpr);
+        assert!(!back.io.link_required);
+    }
+
+    #[test]
+    fn a_version_1_record_loads_with_the_default_cnc_port() {
+        let mut s = Settings::default();
+        s.set(ConfigKey::HprId, "2").unwrap();
+        s.set(ConfigKey::CncBaud, "19200").unwrap();
+        let mut out = [0u8; storage::MAX_PAYLOAD];
+        let len = s.encode(&mut out);
+        assert_eq!(len, RECORD_LEN);
+        let v1 = &out[..RECORD_V1_LEN];
+        assert_eq!(Settings::decode(v1), None, "a v1 record is not a v2 one");
+        let migrated = Settings::migrate(1, v1).unwrap();
+        assert_eq!(migrated.link.hpr_id, 2);
+        assert_eq!(migrated.cnc, crate::settings::CncPort::DEFAULT);
+        assert_eq!(Settings::migrate(3, v1), None);
+    }
+
+    #[test]
+    fn decode_is_strict() {
+        let mut out = [0u8; 64];
+        let len = Settings::default().encode(&mut out);
+        let good = out;
+        assert!(Settings::decode(&good[..len]).is_some());
+        assert_eq!(Settings::decode(&good[..len - 1]), None, "short");
+        assert_eq!(Settings::decode(&good[..len + 1]), None, "long");
+        let corrupt = |i: usize, v: u8| {
+            let mut r = good;
+            r[i] = v;
+            Settings::decode(&r[..len])
+        };
+        assert_eq!(corrupt(0, 4), None, "unknown protocol");
+        assert_eq!(corrupt(1, 0), None, "node address 0");
+        assert_eq!(corrupt(2, 3), None, "unknown parity");
+        assert_eq!(corrupt(3, 3), None, "three stop bits");
+        assert_eq!(corrupt(4, 10), None, "10 ms time-out");
+        assert_eq!(corrupt(6, 6), None, "six retries");
+        assert_eq!(corrupt(13, 4), None, "HPR id 4");
+        assert_eq!(corrupt(14, 0), None, "no failures before down");
+        assert_eq!(corrupt(21, 0x20), None, "reserved flag");
+        assert_eq!(corrupt(22, 17), None, "unframed Phoenix format");
+        assert_eq!(corrupt(22, 2), None, "no such Phoenix format");
+        assert_eq!(corrupt(23, 2), None, "bad process tag");
+        assert_eq!(corrupt(24, 1), None, "process bytes without a process");
+        assert_eq!(corrupt(29, 0x80), None, "an eighth input active high");
+        assert_eq!(corrupt(30, 101), None, "TORCH_ON debounce above 100 ms");
+        assert_eq!(corrupt(37, 1), None, "START inverted");
+        assert_eq!(corrupt(38, 0), None, "CNC node address 0 (broadcast)");
+        assert_eq!(corrupt(39, 0x81), None, "CNC baud not one of the five");
+        assert_eq!(corrupt(43, 3), None, "unknown CNC parity");
+        assert_eq!(corrupt(44, 3), None, "three CNC stop bits");
+        let with_process = Settings {
+            process: Some(Process {
+                mode: Mode::Cut,
+                amps: Amps::from_raw(45 * 64),
+                pressure: Pressure::Auto,
+            }),
+            ..Settings::default()
+        };
+        let len = with_process.encode(&mut out);
+        let mut r = out;
+        r[24] = 4;
+        assert_eq!(Settings::decode(&r[..len]), None, "unknown mode");
+        let mut r = out;
+        r[25..27].copy_from_slice(&(401u16 * 64).to_le_bytes());
+        assert_eq!(Settings::decode(&r[..len]), None, "amps above 400");
+    }
+
+    #[test]
+    fn a_version_1_record_still_loads_with_the_reference_wiring() {
+        let mut s = Settings::default();
+        s.set(ConfigKey::TimeoutMs, "250").unwrap();
+        s.set(ConfigKey::TorchOnActive, "HIGH").unwrap();
+        let mut out = [0u8; 64];
+        let len = s.encode(&mut out);
+        assert_eq!(len, RECORD_LEN);
+        // A version-1 record is the first 29 bytes of a version-2 one.
+        let v1 = &out[..RECORD_V1_LEN];
+        assert_eq!(Settings::decode(v1), None, "not a version-2 record");
+        let migrated = Settings::migrate(1, v1).unwrap();
+        assert_eq!(migrated.link, s.link);
+        assert_eq!(migrated.io.inputs, crate::io::InputConfig::default());
+        assert_eq!(
+            migrated.get(ConfigKey::TorchOnActive),
+            ConfigValue::Word("LOW")
+        );
+        assert_eq!(Settings::migrate(3, v1), None);
+        // And the wiring round-trips in version 2.
+        assert_eq!(Settings::decode(&out[..len]), Some(s));
+    }
+}
