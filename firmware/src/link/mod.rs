@@ -140,7 +140,7 @@ pub use transaction::TX_CAPACITY;
 use transaction::Transaction;
 
 use plasma_protocol::serial::PortConfig;
-use plasma_protocol::time::{Duration, Instant};
+use plasma_protocol::time::Instant;
 
 /// Which framing the receiver expects.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -174,40 +174,11 @@ pub struct PsLink {
     now: Instant,
 }
 
-/// Clamp every field of `config` into its valid range (used by [`PsLink::new`]).
-fn sanitize(config: LinkConfig) -> LinkConfig {
-    let clamp = |d: Duration, lo: Duration, hi: Duration| d.max(lo).min(hi);
-    LinkConfig {
-        node_address: config.node_address.max(1),
-        response_timeout: clamp(
-            config.response_timeout,
-            LinkConfig::MIN_RESPONSE_TIMEOUT,
-            LinkConfig::MAX_RESPONSE_TIMEOUT,
-        ),
-        retries: config.retries.min(LinkConfig::MAX_RETRIES),
-        poll_interval: clamp(
-            config.poll_interval,
-            LinkConfig::MIN_POLL_INTERVAL,
-            LinkConfig::MAX_POLL_INTERVAL,
-        ),
-        slow_data_interval: clamp(
-            config.slow_data_interval,
-            LinkConfig::MIN_SLOW_DATA_INTERVAL,
-            LinkConfig::MAX_SLOW_DATA_INTERVAL,
-        ),
-        hpr_id: config.hpr_id.min(LinkConfig::MAX_HPR_ID),
-        failures_before_down: config
-            .failures_before_down
-            .clamp(1, LinkConfig::MAX_FAILURES_BEFORE_DOWN),
-        ..config
-    }
-}
-
 impl PsLink {
     /// A link that starts detecting at `now`. Fields out of range are clamped into range;
     /// use [`PsLink::try_new`] to have them refused instead.
     pub fn new(config: LinkConfig, now: Instant) -> Self {
-        let config = sanitize(config);
+        let config = config.clamped();
         let mut link = PsLink {
             core: Core::new(config),
             phase: Phase::Detecting(Detector::searching(DetectStep::DeviceId, 0, now)),
@@ -380,7 +351,7 @@ impl PsLink {
     pub fn reconfigure(&mut self, now: Instant, config: LinkConfig) {
         self.now = now;
         let was_up = self.abort_unit();
-        let config = sanitize(config);
+        let config = config.clamped();
         let old = self.core.config;
         if (
             config.protocol,

@@ -9,7 +9,8 @@ use plasma_protocol::serial::{Parity, StopBits};
 use plasma_protocol::time::Duration;
 
 use super::{
-    ARC_OK_DEBOUNCE_MS, CNC_BAUDS, Settings, TRANSFER_TIMEOUT_MS, ms, stop_bits_number, wiring,
+    ARC_OK_DEBOUNCE_MS, CNC_BAUDS, CncPort, Settings, TRANSFER_TIMEOUT_MS, ms, stop_bits_number,
+    wiring,
 };
 use crate::link::{LinkConfig, ProtocolChoice};
 
@@ -201,9 +202,8 @@ fn parity_name(p: Parity) -> &'static str {
 }
 
 fn range_of(key: ConfigKey) -> (u32, u32) {
-    let ms = |d: Duration| u32::try_from(d.as_millis()).unwrap_or(u32::MAX);
     match key {
-        ConfigKey::Address => (1, 255),
+        ConfigKey::Address => (u32::from(LinkConfig::MIN_NODE_ADDRESS), u32::from(u8::MAX)),
         ConfigKey::TimeoutMs => (
             ms(LinkConfig::MIN_RESPONSE_TIMEOUT),
             ms(LinkConfig::MAX_RESPONSE_TIMEOUT),
@@ -216,8 +216,11 @@ fn range_of(key: ConfigKey) -> (u32, u32) {
         ConfigKey::ArcOkDebounceMs => ARC_OK_DEBOUNCE_MS,
         ConfigKey::TransferTimeoutMs => TRANSFER_TIMEOUT_MS,
         ConfigKey::HprId => (0, u32::from(LinkConfig::MAX_HPR_ID)),
-        ConfigKey::PhoenixFormat => (0, 255),
-        ConfigKey::CncAddress => (1, 247),
+        ConfigKey::PhoenixFormat => (0, u32::from(u8::MAX)),
+        ConfigKey::CncAddress => (
+            u32::from(CncPort::MIN_ADDRESS),
+            u32::from(CncPort::MAX_ADDRESS),
+        ),
         _ => (0, 0),
     }
 }
@@ -383,6 +386,26 @@ mod tests {
         assert_eq!(err.to_string(), "cnc_address 0 outside 1..247");
         assert!(s.set(ConfigKey::CncStopBits, "3").is_err());
         assert_eq!(s.cnc_port_config(), PortConfig::MODBUS_DEFAULT);
+    }
+
+    #[test]
+    fn the_accepted_words_are_exactly_what_set_takes() {
+        // `cnc_baud` and `phoenix_format` list their values as text beside the table that
+        // decides: the two must agree.
+        let words = |key| match Settings::accepted(key) {
+            Accepted::Words(w) => w.split('|').collect::<std::vec::Vec<_>>(),
+            Accepted::Range(..) => std::vec::Vec::new(),
+        };
+        let bauds: std::vec::Vec<u32> = words(ConfigKey::CncBaud)
+            .iter()
+            .map(|w| w.parse().unwrap())
+            .collect();
+        assert_eq!(bauds, CNC_BAUDS);
+        let taken: std::vec::Vec<std::string::String> = (0..=255u32)
+            .map(|v| v.to_string())
+            .filter(|v| Settings::default().set(ConfigKey::PhoenixFormat, v).is_ok())
+            .collect();
+        assert_eq!(words(ConfigKey::PhoenixFormat), taken);
     }
 
     #[test]

@@ -69,7 +69,8 @@ pub const CNC_BAUDS: [u32; 5] = [9_600, 19_200, 38_400, 57_600, 115_200];
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct CncPort {
-    /// Modbus node address the bridge answers at (1-247; 0 is the broadcast address).
+    /// Modbus node address the bridge answers at, [`CncPort::MIN_ADDRESS`] to
+    /// [`CncPort::MAX_ADDRESS`].
     pub address: u8,
     /// UART framing (8 data bits always).
     pub framing: PortConfig,
@@ -87,8 +88,14 @@ impl CncPort {
         },
     };
 
+    /// Lowest node address accepted (0 is the broadcast address).
+    pub const MIN_ADDRESS: u8 = 1;
+    /// Highest node address accepted (Modbus reserves 248-255).
+    pub const MAX_ADDRESS: u8 = 247;
+
     fn is_valid(&self) -> bool {
-        (1..=247).contains(&self.address) && CNC_BAUDS.contains(&self.framing.baud)
+        (Self::MIN_ADDRESS..=Self::MAX_ADDRESS).contains(&self.address)
+            && CNC_BAUDS.contains(&self.framing.baud)
     }
 }
 
