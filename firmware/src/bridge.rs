@@ -37,7 +37,7 @@
 use crate::cnc::{Context, Session, SessionStats};
 pub use crate::cnc::{FRAME_IDLE_TIMEOUT, MAX_REPLY_LEN, OUTPUT_CAPACITY, SimCommand};
 use crate::io::{Inputs, IoConfig, IoEvent, Outputs, SupplyState};
-use crate::link::{Diagnostics, PowermaxSettings, PsLink, UnitStatus};
+use crate::link::{Diagnostics, PowermaxProcess, PsLink, UnitStatus};
 use crate::settings::{Process, SaveError, Settings};
 use plasma_protocol::serial::PortConfig;
 use plasma_protocol::time::Instant;
@@ -74,7 +74,7 @@ impl Bridge {
     pub fn new(settings: Settings, now: Instant) -> Self {
         let mut link = PsLink::new(settings.link, now);
         if let Some(process) = settings.process {
-            link.restore(unit_settings(&process));
+            link.restore(unit_process(&process));
         }
         Bridge {
             link,
@@ -277,8 +277,8 @@ impl From<&UnitStatus> for SupplyState {
 }
 
 /// A persisted process in the unit's terms (`CPA` and `EXPANDED` are one mode).
-fn unit_settings(process: &Process) -> PowermaxSettings {
-    PowermaxSettings {
+fn unit_process(process: &Process) -> PowermaxProcess {
+    PowermaxProcess {
         mode: Some(crate::cnc::unit_mode(process.mode)),
         current: process.amps,
         pressure: process.pressure,

@@ -47,7 +47,7 @@ use plasma_firmware::io::{DiscreteIo, Input, InputConfig, PinLevels, SafetyMonit
 use plasma_firmware::platform::runner::{MAX_FRAMES_PER_TURN, MAX_WAIT, PS_RX_CHUNK};
 use plasma_firmware::platform::supervisor::CNC_RX_CHUNK;
 use plasma_firmware::settings::{SaveError, Settings};
-use plasma_firmware::storage::{MAX_PAYLOAD, Settings as _};
+use plasma_firmware::storage::{MAX_PAYLOAD, Persistent as _};
 use plasma_protocol::cnc::phoenix::{self, ACK, NAK};
 use plasma_protocol::cnc::{ConfigKey, Gas, Mode};
 use plasma_protocol::hpr;

@@ -4,12 +4,12 @@
 use host_tests::harness::{World, WorldOptions};
 use plasma_firmware::io::{Interlock, IoConfig};
 use plasma_firmware::link::{
-    ActiveFault, CommandOutput, Family, LinkCommand, LinkEvent, PowermaxSettings, Refusal,
+    ActiveFault, CommandOutput, Family, LinkCommand, LinkEvent, PowermaxProcess, Refusal,
 };
 use plasma_protocol::modbus_ascii;
 use plasma_protocol::powermax::{Amps, FaultCode, OperatingMode, Pressure, Psi};
 use plasma_protocol::time::{Duration, Instant};
-use plasma_sim::powermax::{Powermax, Settings, UndocumentedAddresses};
+use plasma_sim::powermax::{Powermax, Process, UndocumentedAddresses};
 use plasma_sim::sync::Cartridge;
 use plasma_sim::{Model, SimulatedUnit};
 
@@ -66,7 +66,7 @@ fn writes_since(world: &World, mark: usize) -> Vec<Vec<u8>> {
 }
 
 fn apply(mode: OperatingMode, current: u16, pressure: Pressure) -> LinkCommand<'static> {
-    LinkCommand::ApplySettings {
+    LinkCommand::ApplyProcess {
         mode,
         current: amps(current),
         pressure,
@@ -81,13 +81,13 @@ fn cut_at_63_a_with_automatic_pressure_puts_the_manuals_frame_on_the_wire() {
     // Read back: 0x3012 shows the pressure the unit chose for "automatic" (the cartridge's
     // automatic set point), which confirms an automatic-pressure request.
     let auto_psi = Psi::from_raw(world.sim::<Powermax>().limits().auto_pressure);
-    let read_back = PowermaxSettings {
+    let read_back = PowermaxProcess {
         mode: Some(OperatingMode::Cut),
         current: amps(63),
         pressure: Pressure::Set(auto_psi),
     };
-    assert_eq!(result, Ok(CommandOutput::Settings(read_back)));
-    let expected = PowermaxSettings {
+    assert_eq!(result, Ok(CommandOutput::Process(read_back)));
+    let expected = PowermaxProcess {
         pressure: Pressure::Auto,
         ..read_back
     };
@@ -113,7 +113,7 @@ fn cut_at_63_a_with_automatic_pressure_puts_the_manuals_frame_on_the_wire() {
     assert!(sim.in_remote_mode());
     assert_eq!(
         sim.settings(),
-        Settings {
+        Process {
             mode: 1,
             current: 0x0FC0,
             pressure: 0
@@ -121,7 +121,7 @@ fn cut_at_63_a_with_automatic_pressure_puts_the_manuals_frame_on_the_wire() {
     );
     let events: Vec<_> = world.events().iter().map(|(_, e)| *e).collect();
     assert!(events.contains(&LinkEvent::RemoteModeChanged { remote: true }));
-    assert!(events.contains(&LinkEvent::SettingsApplied {
+    assert!(events.contains(&LinkEvent::ProcessApplied {
         settings: read_back,
         reapplied: false
     }));
@@ -142,7 +142,7 @@ fn legacy_settings_are_written_to_the_force_registers_in_order() {
     let mark = world.trace().len();
     let result = world.command(apply(OperatingMode::Cut, 63, Pressure::Auto), secs(2));
     assert!(
-        matches!(result, Ok(CommandOutput::Settings(_))),
+        matches!(result, Ok(CommandOutput::Process(_))),
         "{result:?}"
     );
     // Mode, current, a permitted pressure (the guide's "non-zero"), then 0 = automatic.
@@ -160,7 +160,7 @@ fn legacy_settings_are_written_to_the_force_registers_in_order() {
     assert!(sim.in_remote_mode());
     assert_eq!(
         sim.settings(),
-        Settings {
+        Process {
             mode: 1,
             current: 0x0FC0,
             pressure: 0
@@ -226,7 +226,7 @@ fn settings_outside_the_limits_are_refused_before_anything_is_sent() {
         let mark = world.trace().len();
         let too_high = Amps::from_raw(limits.current.1 + 64);
         assert_eq!(
-            world.submit(LinkCommand::ApplySettings {
+            world.submit(LinkCommand::ApplyProcess {
                 mode: OperatingMode::Cut,
                 current: too_high,
                 pressure: Pressure::Auto
@@ -240,7 +240,7 @@ fn settings_outside_the_limits_are_refused_before_anything_is_sent() {
         );
         let too_low = Amps::from_raw(limits.current.0 - 64);
         assert_eq!(
-            world.submit(LinkCommand::ApplySettings {
+            world.submit(LinkCommand::ApplyProcess {
                 mode: OperatingMode::Cut,
                 current: too_low,
                 pressure: Pressure::Auto
@@ -253,7 +253,7 @@ fn settings_outside_the_limits_are_refused_before_anything_is_sent() {
             "{model}"
         );
         assert_eq!(
-            world.submit(LinkCommand::ApplySettings {
+            world.submit(LinkCommand::ApplyProcess {
                 mode: OperatingMode::Cut,
                 current: max,
                 pressure: Pressure::Set(psi(95))
@@ -269,7 +269,7 @@ fn settings_outside_the_limits_are_refused_before_anything_is_sent() {
             // A cut cartridge on a Powermax45 SYNC permits cutting only.
             assert!(
                 matches!(
-                    world.submit(LinkCommand::ApplySettings {
+                    world.submit(LinkCommand::ApplyProcess {
                         mode: OperatingMode::Gouge,
                         current: max,
                         pressure: Pressure::Auto
@@ -507,9 +507,9 @@ fn quick_restart_is_refused_for_other_faults_and_on_legacy_units() {
 }
 
 /// Power off long enough for link-down, then on: the link comes back and re-applies.
-fn power_cycle_reapplies(model: Model, pressure: Pressure, expected_sim: Settings) {
+fn power_cycle_reapplies(model: Model, pressure: Pressure, expected_sim: Process) {
     let mut world = ready(model, WorldOptions::default());
-    let desired = PowermaxSettings {
+    let desired = PowermaxProcess {
         mode: Some(OperatingMode::Cut),
         current: amps(45),
         pressure,
@@ -536,7 +536,7 @@ fn power_cycle_reapplies(model: Model, pressure: Pressure, expected_sim: Setting
             |e| {
                 matches!(
                     e,
-                    LinkEvent::SettingsApplied {
+                    LinkEvent::ProcessApplied {
                         reapplied: true,
                         ..
                     }
@@ -554,7 +554,7 @@ fn power_cycle_reapplies(model: Model, pressure: Pressure, expected_sim: Setting
         .filter_map(|e| match e {
             LinkEvent::LinkDown { .. } => Some("down"),
             LinkEvent::LinkUp { .. } => Some("up"),
-            LinkEvent::SettingsApplied { .. } => Some("applied"),
+            LinkEvent::ProcessApplied { .. } => Some("applied"),
             _ => None,
         })
         .collect();
@@ -575,7 +575,7 @@ fn after_a_power_cycle_the_link_returns_and_sync_settings_are_reapplied() {
     power_cycle_reapplies(
         Model::Sync65,
         Pressure::Set(psi(70)),
-        Settings {
+        Process {
             mode: 1,
             current: 45 * 64,
             pressure: 70 * 128,
@@ -588,7 +588,7 @@ fn after_a_power_cycle_the_link_returns_and_legacy_settings_are_reapplied() {
     power_cycle_reapplies(
         Model::Pm85,
         Pressure::Auto,
-        Settings {
+        Process {
             mode: 1,
             current: 45 * 64,
             pressure: 0,
@@ -612,7 +612,7 @@ fn a_power_blip_shorter_than_link_down_is_noticed_and_settings_reapplied() {
             |e| {
                 matches!(
                     e,
-                    LinkEvent::SettingsApplied {
+                    LinkEvent::ProcessApplied {
                         reapplied: true,
                         ..
                     }
@@ -729,7 +729,7 @@ fn legacy_block_read_refused_falls_back_to_the_documented_parts_and_remembers() 
     // Settings still work and are confirmed through the parts.
     let result = world.command(apply(OperatingMode::Cut, 100, Pressure::Auto), secs(2));
     assert!(
-        matches!(result, Ok(CommandOutput::Settings(_))),
+        matches!(result, Ok(CommandOutput::Process(_))),
         "{result:?}"
     );
     world.run_for(ms(500));

@@ -144,7 +144,7 @@ fn corrupted_powermax_session_with(
         .run_until(|w| w.link().status().limits.is_some(), secs(5))
         .expect("limits");
     let result = world.command(
-        LinkCommand::ApplySettings {
+        LinkCommand::ApplyProcess {
             mode: OperatingMode::Cut,
             current: Amps::from_whole(45).unwrap(),
             pressure: Pressure::Set(Psi::from_whole(70).unwrap()),
@@ -152,7 +152,7 @@ fn corrupted_powermax_session_with(
         secs(5),
     );
     assert!(
-        matches!(result, Ok(CommandOutput::Settings(_))),
+        matches!(result, Ok(CommandOutput::Process(_))),
         "{seed}: {result:?}"
     );
     let none = [None];
@@ -592,7 +592,7 @@ fn two_wire(model: Model, master_echo: bool) -> World {
     assert!(world.link().status().settings.is_some());
     assert_eq!(world.link().diagnostics().link_downs, 0);
     let result = world.command(
-        LinkCommand::ApplySettings {
+        LinkCommand::ApplyProcess {
             mode: OperatingMode::Cut,
             current: Amps::from_whole(60).unwrap(),
             pressure: Pressure::Auto,

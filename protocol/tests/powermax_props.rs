@@ -151,7 +151,7 @@ fn check_decoders(regs: Registers<'_>) {
     let n = regs.len();
     expect(sync::Identification::decode(regs), 1, n);
     expect(sync::PermittedSettings::decode(regs), 5, n);
-    expect(sync::Settings::decode(regs), 3, n);
+    expect(sync::Process::decode(regs), 3, n);
     expect(sync::ActualOutputs::decode(regs), 2, n);
     expect(sync::decode_active_fault(regs), 1, n);
     expect(sync::StatusBlock::decode(regs), 11, n);

@@ -108,7 +108,7 @@ impl Session {
                 None => return Some(err_line(ErrorCode::State, texts::SETTINGS_UNKNOWN)),
             },
         };
-        let command = LinkCommand::ApplySettings {
+        let command = LinkCommand::ApplyProcess {
             mode: unit_mode(process.mode),
             current: process.amps,
             pressure: process.pressure,
@@ -203,7 +203,7 @@ impl Session {
         result: &Result<CommandOutput, CommandFailure>,
     ) {
         match (awaiting, result) {
-            (Awaiting::Settings(process), Ok(CommandOutput::Settings(_))) => {
+            (Awaiting::Settings(process), Ok(CommandOutput::Process(_))) => {
                 ctx.settings.process = Some(process);
             }
             (Awaiting::RemoteOff, Ok(_)) => ctx.settings.process = None,

@@ -9,7 +9,7 @@ use plasma_protocol::powermax::sync::Identification;
 use plasma_protocol::powermax::{FaultCode, OperatingMode, PowerSupplyModel};
 
 use crate::link::{
-    ActiveFault, Family, Model, PowermaxSettings, SettingsFailure, TransactionError, UnitStatus,
+    ActiveFault, Family, Model, PowermaxProcess, ProcessFailure, TransactionError, UnitStatus,
 };
 
 /// The family as one word: `SYNC`, `LEGACY`, `HPR`, `MAXPRO200`.
@@ -175,11 +175,11 @@ pub const fn transaction_word(error: TransactionError) -> &'static str {
 }
 
 /// `mode=CUT amps=45 psi=AUTO` of settings as the unit reports them.
-pub struct SettingsText<'a>(pub &'a PowermaxSettings, pub Option<Family>);
+pub struct ProcessText<'a>(pub &'a PowermaxProcess, pub Option<Family>);
 
-impl Display for SettingsText<'_> {
+impl Display for ProcessText<'_> {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let SettingsText(s, family) = self;
+        let ProcessText(s, family) = self;
         write!(
             f,
             "mode={} amps={} psi={}",
@@ -191,13 +191,13 @@ impl Display for SettingsText<'_> {
 }
 
 /// One word for why settings failed (`!SETTINGS failed reason=...`).
-pub fn settings_failure_word(reason: &SettingsFailure) -> &'static str {
+pub fn process_failure_word(reason: &ProcessFailure) -> &'static str {
     match reason {
-        SettingsFailure::Transaction(_) => "no_reply",
-        SettingsFailure::ReadBackDiffers { .. } => "read_back_differs",
-        SettingsFailure::RejectedByUnit { .. } => "rejected_by_unit",
-        SettingsFailure::OutsideLimits => "outside_limits",
-        SettingsFailure::NotAccepted => "not_accepted",
+        ProcessFailure::Transaction(_) => "no_reply",
+        ProcessFailure::ReadBackDiffers { .. } => "read_back_differs",
+        ProcessFailure::RejectedByUnit { .. } => "rejected_by_unit",
+        ProcessFailure::OutsideLimits => "outside_limits",
+        ProcessFailure::NotAccepted => "not_accepted",
     }
 }
 

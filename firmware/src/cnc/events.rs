@@ -6,8 +6,8 @@ use core::fmt::{self, Write};
 use plasma_protocol::cnc::reply::ReplyWriter;
 
 use super::describe::{
-    FaultId, ModelName, OrDash, SettingsText, Text, Uid, family_word, fault_text, on_off,
-    settings_failure_word, state_name, transaction_word,
+    FaultId, ModelName, OrDash, ProcessText, Text, Uid, family_word, fault_text, on_off,
+    process_failure_word, state_name, transaction_word,
 };
 use super::replies::complete;
 use super::texts::RefusalText;
@@ -116,20 +116,20 @@ fn write_link_event(l: &mut ReplyLine, event: &LinkEvent, status: &UnitStatus) -
             w.field("code", FaultId(code))?;
             w.finish().map(|_| ())
         }
-        LinkEvent::SettingsApplied {
+        LinkEvent::ProcessApplied {
             settings,
             reapplied,
         } => {
-            write!(l, "!SETTINGS applied {}", SettingsText(&settings, family))?;
+            write!(l, "!SETTINGS applied {}", ProcessText(&settings, family))?;
             if reapplied {
                 l.write_str(" reapplied=YES")?;
             }
             l.write_str("\r\n")
         }
-        LinkEvent::SettingsFailed { reason } => {
+        LinkEvent::ProcessFailed { reason } => {
             let mut w = ReplyWriter::event(l, "SETTINGS")?;
             w.word("failed")?;
-            w.field("reason", settings_failure_word(&reason))?;
+            w.field("reason", process_failure_word(&reason))?;
             w.finish().map(|_| ())
         }
         // The persisted process, refused before sending.

@@ -257,7 +257,7 @@ pub(super) fn complete(
         Ok(output) => *output,
     };
     match awaiting {
-        Awaiting::Settings(process) => settings_done(process, output, family),
+        Awaiting::Settings(process) => process_done(process, output, family),
         Awaiting::RemoteOff => ok_line(|w| w.field("remote", "OFF")),
         Awaiting::GasTest(on) => ok_line(|w| w.field("gastest", on_off(on))),
         Awaiting::Restart => restart_done(ctx),
@@ -282,8 +282,8 @@ pub(super) fn complete(
 }
 
 /// `SET ...` confirmed: the settings as the unit reads them back.
-fn settings_done(process: Process, output: CommandOutput, family: Option<Family>) -> ReplyLine {
-    let CommandOutput::Settings(read) = output else {
+fn process_done(process: Process, output: CommandOutput, family: Option<Family>) -> ReplyLine {
+    let CommandOutput::Process(read) = output else {
         return ok_line(|w| w.field("mode", mode_word(unit_mode(process.mode), family)));
     };
     // The unit's word for the mode read back (SYNC: EXPANDED, legacy: CPA).

@@ -15,11 +15,11 @@ use plasma_protocol::modbus_ascii::{self, Request};
 use crate::bridge::Bridge;
 use crate::link::ProtocolChoice;
 use crate::settings::{SaveError, Settings};
-use crate::storage::Settings as _;
+use crate::storage::Persistent as _;
 use crate::testing::SimPs;
 use plasma_protocol::time::{Duration, Instant};
 use plasma_sim::clock::{Accumulator, earliest};
-use plasma_sim::powermax::{Counters, Settings as PanelSettings};
+use plasma_sim::powermax::{Counters, Process as PanelProcess};
 
 /// A Modbus ASCII frame for node 1 (LRC computed by the encoder).
 pub(crate) fn mb(pdu: &[u8]) -> Vec<u8> {
@@ -72,7 +72,7 @@ impl Rig {
     pub(crate) fn sync65(settings: Settings) -> Self {
         let mut rig = Rig::new(settings, Some("sync65"));
         let unit = rig.ps().powermax();
-        unit.set_panel(PanelSettings {
+        unit.set_panel(PanelProcess {
             mode: 1,
             current: 45 * 64,
             pressure: 76 * 128,

@@ -35,7 +35,7 @@ pub(super) enum Route<'a> {
     /// Sent to the link as this request.
     Send(LinkCommand<'a>, Awaiting),
     /// A Powermax `SET`: the values not given come from the process asked for last (or the
-    /// unit's), then all three are sent as one `ApplySettings`.
+    /// unit's), then all three are sent as one `ApplyProcess`.
     Settings {
         mode: Option<Mode>,
         amps: Option<Amps>,

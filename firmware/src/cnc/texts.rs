@@ -16,9 +16,9 @@ use plasma_protocol::modbus_ascii::ExceptionCode;
 use plasma_protocol::powermax::OperatingMode;
 use plasma_protocol::time::{Decimal, Instant};
 
-use super::describe::{OrDash, SettingsText, mode_word, powermax_fault_text, state_name};
+use super::describe::{OrDash, ProcessText, mode_word, powermax_fault_text, state_name};
 use super::{ReplyLine, err_line};
-use crate::link::{CommandFailure, Family, Refusal, SettingsFailure, TransactionError};
+use crate::link::{CommandFailure, Family, ProcessFailure, Refusal, TransactionError};
 use crate::settings::SaveError;
 
 /// No unit on the line.
@@ -343,22 +343,20 @@ pub fn write_failure<W: Write>(
 ) -> fmt::Result {
     match failure {
         CommandFailure::Transaction(e) => write_error(out, ErrorCode::Link, TransactionText(*e)),
-        CommandFailure::Settings(SettingsFailure::Transaction(e)) => write_error(
+        CommandFailure::Process(ProcessFailure::Transaction(e)) => write_error(
             out,
             ErrorCode::Link,
             format_args!("settings not applied: {}", TransactionText(*e)),
         ),
-        CommandFailure::Settings(SettingsFailure::ReadBackDiffers { read_back, .. }) => {
-            write_error(
-                out,
-                ErrorCode::Link,
-                format_args!(
-                    "settings not confirmed: the unit reads back {}",
-                    SettingsText(read_back, family)
-                ),
-            )
-        }
-        CommandFailure::Settings(SettingsFailure::RejectedByUnit { fault }) => write_error(
+        CommandFailure::Process(ProcessFailure::ReadBackDiffers { read_back, .. }) => write_error(
+            out,
+            ErrorCode::Link,
+            format_args!(
+                "settings not confirmed: the unit reads back {}",
+                ProcessText(read_back, family)
+            ),
+        ),
+        CommandFailure::Process(ProcessFailure::RejectedByUnit { fault }) => write_error(
             out,
             ErrorCode::Refused,
             format_args!(
@@ -366,12 +364,12 @@ pub fn write_failure<W: Write>(
                 powermax_fault_text(*fault, family).unwrap_or("unknown fault")
             ),
         ),
-        CommandFailure::Settings(SettingsFailure::OutsideLimits) => write_error(
+        CommandFailure::Process(ProcessFailure::OutsideLimits) => write_error(
             out,
             ErrorCode::Range,
             "settings outside the unit's permitted limits",
         ),
-        CommandFailure::Settings(SettingsFailure::NotAccepted) | CommandFailure::NotAccepted => {
+        CommandFailure::Process(ProcessFailure::NotAccepted) | CommandFailure::NotAccepted => {
             write_error(
                 out,
                 ErrorCode::Refused,

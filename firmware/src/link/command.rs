@@ -21,7 +21,7 @@ pub enum LinkCommand<'a> {
     /// Powermax: enter remote control with these settings. Checked against the permitted
     /// limits first; written in one request (SYNC) or as the legacy guide requires, read back,
     /// then kept and re-applied after a power cycle or a link return.
-    ApplySettings {
+    ApplyProcess {
         /// Operating mode.
         mode: OperatingMode,
         /// Output current.
@@ -80,7 +80,7 @@ impl LinkCommand<'_> {
     pub const fn runs_on(&self, family: Family) -> bool {
         let powermax = family.is_modbus();
         match self {
-            LinkCommand::ApplySettings { .. }
+            LinkCommand::ApplyProcess { .. }
             | LinkCommand::ExitRemote
             | LinkCommand::GasTest { .. } => powermax,
             // Quick restart (clears 0-50-0) exists on SYNC units only.
@@ -234,7 +234,7 @@ mod tests {
         assert!(LinkCommand::RefreshSlowData.runs_on(PowermaxLegacy));
         assert!(LinkCommand::RefreshSlowData.runs_on(MaxPro200));
         assert!(LinkCommand::RefreshSlowData.runs_on(Hpr));
-        let settings = LinkCommand::ApplySettings {
+        let settings = LinkCommand::ApplyProcess {
             mode: OperatingMode::Cut,
             current: Amps::from_raw(45 * Amps::STEPS_PER_UNIT),
             pressure: Pressure::Auto,

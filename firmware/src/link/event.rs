@@ -6,7 +6,7 @@ use plasma_protocol::powermax::FaultCode;
 
 use crate::link::command::Refusal;
 use crate::link::diagnostics::Diagnostics;
-use crate::link::status::{ActiveFault, Family, Model, PowermaxSettings};
+use crate::link::status::{ActiveFault, Family, Model, PowermaxProcess};
 use crate::link::transaction::TransactionError;
 
 /// Identifies one submitted [`LinkCommand`](crate::link::LinkCommand); returned by `submit` and
@@ -33,15 +33,15 @@ pub enum LinkDownReason {
 /// Why settings could not be applied (also after a power cycle).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub enum SettingsFailure {
+pub enum ProcessFailure {
     /// The write (or the read-back) failed on the line.
     Transaction(TransactionError),
     /// The unit took the write but reads back other values.
     ReadBackDiffers {
         /// What was written.
-        written: PowermaxSettings,
+        written: PowermaxProcess,
         /// What the unit reports.
-        read_back: PowermaxSettings,
+        read_back: PowermaxProcess,
     },
     /// The unit reports a 0-11-n fault (setting not permitted) after the write.
     RejectedByUnit {
@@ -63,7 +63,7 @@ pub enum CommandOutput {
     Done,
     /// Settings written and confirmed; the values read back (legacy units: as written and
     /// free of 0-11-n faults).
-    Settings(PowermaxSettings),
+    Process(PowermaxProcess),
     /// A numeric answer (HPR: amps actually set, corner-current percent achieved).
     Value(u16),
     /// HPR error log, most recent first.
@@ -83,7 +83,7 @@ pub enum CommandFailure {
     /// The request failed on the line (after its retries).
     Transaction(TransactionError),
     /// Settings were not confirmed.
-    Settings(SettingsFailure),
+    Process(ProcessFailure),
     /// An HPR unit answered "not accepted" (0) or "invalid" (2).
     NotAccepted,
     /// The link went down before the command completed.
@@ -119,16 +119,16 @@ pub enum LinkEvent {
         code: ActiveFault,
     },
     /// Settings were written and confirmed (after a command or a re-apply).
-    SettingsApplied {
+    ProcessApplied {
         /// The settings as confirmed.
-        settings: PowermaxSettings,
+        settings: PowermaxProcess,
         /// True when this re-applied kept settings after a power cycle or link return.
         reapplied: bool,
     },
     /// Settings could not be applied.
-    SettingsFailed {
+    ProcessFailed {
         /// Why.
-        reason: SettingsFailure,
+        reason: ProcessFailure,
     },
     /// The persisted process ([`PsLink::restore`](crate::link::PsLink::restore)) was refused before
     /// sending (outside the unit's limits); it is dropped.
@@ -172,7 +172,7 @@ impl LinkEvent {
                 | LinkEvent::LinkDown { .. }
                 | LinkEvent::FaultRaised { .. }
                 | LinkEvent::FaultCleared { .. }
-                | LinkEvent::SettingsFailed { .. }
+                | LinkEvent::ProcessFailed { .. }
                 | LinkEvent::RestoreRefused { .. }
                 | LinkEvent::CommandDone { .. }
         )

@@ -20,15 +20,15 @@
 use plasma_protocol::hpr::Request;
 
 use crate::link::hpr::kept::HprKept;
-use crate::link::status::PowermaxSettings;
+use crate::link::status::PowermaxProcess;
 
 /// The settings the link re-applies. See the module docs.
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
 pub struct Kept {
     /// Powermax: the settings the unit confirmed last (`None` after `ExitRemote`).
-    powermax: Option<PowermaxSettings>,
+    powermax: Option<PowermaxProcess>,
     /// Powermax: the persisted process to apply once after the bridge started.
-    restore: Option<PowermaxSettings>,
+    restore: Option<PowermaxProcess>,
     /// HPR / MaxPro200: the setting requests the unit confirmed.
     pub(crate) hpr: HprKept,
 }
@@ -37,15 +37,15 @@ pub struct Kept {
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) enum Reapply {
     /// Confirmed settings again, after a link return or a power cycle of the unit.
-    Kept(PowermaxSettings),
+    Kept(PowermaxProcess),
     /// The persisted process, once after the bridge started.
-    Restore(PowermaxSettings),
+    Restore(PowermaxProcess),
 }
 
 impl Kept {
     /// The Powermax settings the unit confirmed last: re-applied after it returns or
     /// power-cycles.
-    pub fn powermax(&self) -> Option<PowermaxSettings> {
+    pub fn powermax(&self) -> Option<PowermaxProcess> {
         self.powermax
     }
 
@@ -66,7 +66,7 @@ impl Kept {
     }
 
     /// Apply `settings` once when a Powermax answers (see the module docs).
-    pub(crate) fn restore(&mut self, settings: PowermaxSettings) {
+    pub(crate) fn restore(&mut self, settings: PowermaxProcess) {
         self.restore = Some(settings);
     }
 
@@ -77,7 +77,7 @@ impl Kept {
 
     /// The unit confirmed `settings`: they are what is re-applied from now on (a restore not
     /// yet done is superseded).
-    pub(crate) fn confirmed(&mut self, settings: PowermaxSettings) {
+    pub(crate) fn confirmed(&mut self, settings: PowermaxProcess) {
         self.powermax = Some(settings);
         self.restore = None;
     }

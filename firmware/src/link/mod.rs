@@ -47,13 +47,13 @@
 //! the persisted process, [`PsLink::restore`]); HPR / MaxPro200 nominal current, corner
 //! current, process and inlet gases ([`Kept::hpr_requests`], a later setting replacing what
 //! it sets again), re-applied after 004 REMOTE_MODE once the unit is in state 2 or 3
-//! (another HPR model on the line does not get them: `SettingsFailed { OutsideLimits }`).
+//! (another HPR model on the line does not get them: `ProcessFailed { OutsideLimits }`).
 //! An HPR setting counts as done only when the unit's answer shows the value asked for;
 //! otherwise 004 is sent again and the setting once more (the unit may have restarted and
 //! left remote mode), then it fails `NotAccepted`. An HPR that shows a restart the link did
 //! not see as a link-down (a power blip: its state back to power-up, or a set point other than
 //! the kept one) has remote mode entered again and its settings re-applied. A re-apply that
-//! fails reports `SettingsFailed` and is tried again after a back-off: a setting is never
+//! fails reports `ProcessFailed` and is tried again after a back-off: a setting is never
 //! silently lost.
 //!
 //! # Scheduling
@@ -124,10 +124,8 @@ use plasma_protocol::modbus_ascii;
 pub use command::{HprValue, LinkCommand, RAW_CAPACITY, Refusal};
 pub use config::{ConfigError, LinkConfig, ProtocolChoice};
 pub use diagnostics::Diagnostics;
-pub use event::{
-    CommandFailure, CommandOutput, LinkDownReason, LinkEvent, SettingsFailure, Ticket,
-};
-pub use status::{ActiveFault, Family, Limits, Model, PowermaxSettings, UnitStatus};
+pub use event::{CommandFailure, CommandOutput, LinkDownReason, LinkEvent, ProcessFailure, Ticket};
+pub use status::{ActiveFault, Family, Limits, Model, PowermaxProcess, UnitStatus};
 pub use transaction::TransactionError;
 
 use self::core::Core;
@@ -336,7 +334,7 @@ impl PsLink {
     /// Apply `settings` (the persisted process) once a Powermax with known limits answers,
     /// unless the CNC sets a process first. Refused settings are reported with
     /// [`LinkEvent::RestoreRefused`] and dropped.
-    pub fn restore(&mut self, settings: PowermaxSettings) {
+    pub fn restore(&mut self, settings: PowermaxProcess) {
         self.core.kept.restore(settings);
     }
 

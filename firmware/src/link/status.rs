@@ -80,7 +80,7 @@ impl ActiveFault {
 /// Mode, current and pressure of a Powermax, as written or as read back.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct PowermaxSettings {
+pub struct PowermaxProcess {
     /// Operating mode; `None` when the unit reports 0 or an unknown value.
     pub mode: Option<OperatingMode>,
     /// Output current.
@@ -141,7 +141,7 @@ pub struct UnitStatus {
     pub remote: bool,
     /// Settings as the unit reports them (SYNC 0x3010-0x3012, legacy force registers read
     /// back when the unit allows it).
-    pub settings: Option<PowermaxSettings>,
+    pub settings: Option<PowermaxProcess>,
     /// Actual output current (SYNC).
     pub actual_current: Option<Amps>,
     /// Actual gas pressure (SYNC).

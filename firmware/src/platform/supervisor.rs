@@ -43,7 +43,7 @@ use plasma_protocol::time::Instant;
 /// its API).
 pub trait BridgeEndpoint: PsEndpoint {
     /// The settings a save request carries.
-    type Settings;
+    type Saved;
     /// Why a save failed.
     type SaveError;
     /// Bytes from the CNC.
@@ -63,13 +63,13 @@ pub trait BridgeEndpoint: PsEndpoint {
     /// An event from the I/O task.
     fn on_io_event(&mut self, now: Instant, event: IoEvent);
     /// Settings to store, after a CONFIG SAVE.
-    fn take_save_request(&mut self) -> Option<Self::Settings>;
+    fn take_save_request(&mut self) -> Option<Self::Saved>;
     /// How the store went.
     fn save_finished(&mut self, now: Instant, result: Result<(), Self::SaveError>);
 }
 
 impl BridgeEndpoint for Bridge {
-    type Settings = Settings;
+    type Saved = Settings;
     type SaveError = SaveError;
 
     fn handle_cnc_rx(&mut self, now: Instant, bytes: &[u8]) {
@@ -229,7 +229,7 @@ where
     pub async fn turn<B, K>(&mut self, bridge: &mut B, clock: &K) -> TurnResult<(), P, C>
     where
         B: BridgeEndpoint,
-        V: SettingsSaver<B::Settings, B::SaveError>,
+        V: SettingsSaver<B::Saved, B::SaveError>,
         K: Clock,
     {
         self.exchange_in(bridge);
@@ -322,7 +322,7 @@ where
     async fn wait<B, K>(&mut self, bridge: &mut B, clock: &K) -> TurnResult<(), P, C>
     where
         B: BridgeEndpoint,
-        V: SettingsSaver<B::Settings, B::SaveError>,
+        V: SettingsSaver<B::Saved, B::SaveError>,
         K: Clock,
     {
         let started = clock.now();

@@ -4,13 +4,13 @@
 //! options (events, Phoenix framing) and the last process the CNC asked for, so that it can be
 //! applied again after power-up. The `CONFIG` keys that show and change it are in `config`
 //! ([`Settings::get`], [`Settings::set`], [`Settings::accepted`]); the record the store keeps
-//! is in `record`: it implements [`storage::Settings`] with a fixed-layout, versioned binary
+//! is in `record`: it implements [`storage::Persistent`] with a fixed-layout, versioned binary
 //! record; decoding is strict (wrong length, an unknown code, a value out of range, a reserved
 //! bit set: `None`, and the store falls back to the defaults).
 //!
 //! ```
 //! use plasma_firmware::settings::Settings;
-//! use plasma_firmware::storage::Settings as _;
+//! use plasma_firmware::storage::Persistent as _;
 //! use plasma_protocol::cnc::ConfigKey;
 //!
 //! let mut settings = Settings::default();
@@ -197,7 +197,7 @@ impl Settings {
 
     /// True when every field is one this firmware accepts (what [`decode`] insists on).
     ///
-    /// [`decode`]: storage::Settings::decode
+    /// [`decode`]: storage::Persistent::decode
     pub fn is_valid(&self) -> bool {
         let within = |d: Duration, (min, max): (u32, u32)| {
             d.as_millis() >= u64::from(min) && d.as_millis() <= u64::from(max)

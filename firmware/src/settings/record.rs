@@ -90,7 +90,7 @@ impl CncPort {
     }
 }
 
-impl storage::Settings for Settings {
+impl storage::Persistent for Settings {
     const VERSION: u8 = 2;
 
     fn encode(&self, out: &mut [u8]) -> usize {
@@ -226,7 +226,7 @@ mod tests {
 
     use super::*;
     use crate::settings::ConfigValue;
-    use crate::storage::Settings as _;
+    use crate::storage::Persistent as _;
 
     fn round_trip(settings: &Settings) -> Option<Settings> {
         let mut out = [0u8; storage::MAX_PAYLOAD];

@@ -12,19 +12,19 @@
 //! holds the old settings or the other holds the new ones (tested with [`ram_flash`] and a cut
 //! at every step).
 //!
-//! What the settings *are* is not decided here: a type implementing [`Settings`] encodes
+//! What the settings *are* is not decided here: a type implementing [`Persistent`] encodes
 //! itself into the payload, names its version, and may migrate older versions. Loading never
 //! fails; it returns the settings to run with and a [`LoadOutcome`] saying whether they came
 //! from flash or are the defaults, and why, so the supervisor can report it.
 //!
 //! ```
 //! use embassy_futures::block_on;
-//! use plasma_firmware::storage::{LoadOutcome, Settings, SettingsStore, ram_flash::RamFlash};
+//! use plasma_firmware::storage::{LoadOutcome, Persistent, SettingsStore, ram_flash::RamFlash};
 //!
 //! #[derive(Debug, Default, PartialEq)]
 //! struct Config { node_address: u8 }
 //!
-//! impl Settings for Config {
+//! impl Persistent for Config {
 //!     const VERSION: u8 = 1;
 //!     fn encode(&self, out: &mut [u8]) -> usize {
 //!         out[0] = self.node_address;
@@ -76,7 +76,7 @@ pub const SETTINGS_KEY: u8 = 1;
 const WORK_BUFFER: usize = (1 + record::MAX_RECORD).next_multiple_of(32);
 
 /// A settings encoding, defined by whoever owns the configuration.
-pub trait Settings: Default + Sized {
+pub trait Persistent: Default + Sized {
     /// The version of this encoding. Change it whenever the payload layout changes.
     const VERSION: u8;
 
@@ -369,7 +369,7 @@ impl<F: NorFlash> SettingsStore<F> {
     }
 
     /// Loads settings of type `S`, falling back to `S::default()` and saying why.
-    pub async fn load_settings<S: Settings>(&mut self) -> LoadedSettings<S> {
+    pub async fn load_settings<S: Persistent>(&mut self) -> LoadedSettings<S> {
         let (settings, outcome) = match self.load().await {
             Ok(None) => (None, LoadOutcome::Empty),
             Ok(Some(record)) if record.version == S::VERSION => {
@@ -406,7 +406,7 @@ impl<F: NorFlash> SettingsStore<F> {
     }
 
     /// Saves `settings` with its version.
-    pub async fn save_settings<S: Settings>(
+    pub async fn save_settings<S: Persistent>(
         &mut self,
         settings: &S,
     ) -> Result<(), StoreError<F::Error>> {

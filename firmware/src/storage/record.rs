@@ -3,9 +3,9 @@
 //! ```text
 //! offset  size  field
 //! 0       1     record format (RECORD_FORMAT): the layout of this envelope
-//! 1       1     settings version: which `Settings` encoding the payload uses
+//! 1       1     settings version: which `Persistent` encoding the payload uses
 //! 2       4     sequence number, little endian: +1 per save, the higher copy wins
-//! 6       n     payload, 0..=MAX_PAYLOAD bytes, written by `Settings::encode`
+//! 6       n     payload, 0..=MAX_PAYLOAD bytes, written by `Persistent::encode`
 //! ```
 //!
 //! There is no checksum here: sequential-storage already protects every item's length with a

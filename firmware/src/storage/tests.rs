@@ -31,7 +31,7 @@ impl TestConfig {
     }
 }
 
-impl Settings for TestConfig {
+impl Persistent for TestConfig {
     const VERSION: u8 = 2;
 
     fn encode(&self, out: &mut [u8]) -> usize {

@@ -23,7 +23,7 @@ use plasma_firmware::io::{Inputs, IoConfig, IoEvent, Outputs};
 use plasma_firmware::link::{Diagnostics, LinkEvent, UnitStatus};
 use plasma_firmware::platform::PsEndpoint;
 use plasma_firmware::settings::{SaveError, Settings};
-use plasma_firmware::storage::{MAX_PAYLOAD, Settings as _};
+use plasma_firmware::storage::{MAX_PAYLOAD, Persistent as _};
 use plasma_protocol::cnc::phoenix::{ACK, NAK};
 use plasma_protocol::serial::PortConfig;
 use plasma_protocol::time::{Duration, Instant};

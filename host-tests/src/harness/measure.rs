@@ -124,7 +124,7 @@ impl Setup {
     pub fn command_stream(self) -> [LinkCommand<'static>; 3] {
         let apply = |amps| match self.model().family() {
             Family::Hpr => LinkCommand::HprSetNominalAmps { amps },
-            _ => LinkCommand::ApplySettings {
+            _ => LinkCommand::ApplyProcess {
                 mode: OperatingMode::Cut,
                 current: Amps::from_whole(amps).expect("40 A and 45 A are currents"),
                 pressure: Pressure::Auto,

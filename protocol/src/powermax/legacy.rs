@@ -280,7 +280,7 @@ impl LegacyStatus {
 /// The force registers read back (0x2093, 0x2094, 0x2096).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct LegacySettings {
+pub struct LegacyProcess {
     /// Mode; `None` for 0 (not in remote control) or an unlisted value.
     pub mode: Option<OperatingMode>,
     /// Current.
@@ -294,7 +294,7 @@ pub struct LegacySettings {
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct LegacyFullStatus {
     /// 0x2093-0x2096.
-    pub settings: LegacySettings,
+    pub settings: LegacyProcess,
     /// 0x2098-0x209F.
     pub status: LegacyStatus,
 }
@@ -308,7 +308,7 @@ impl LegacyFullStatus {
             *slot = word(&registers, STATUS_OFFSET + i)?;
         }
         Ok(LegacyFullStatus {
-            settings: LegacySettings {
+            settings: LegacyProcess {
                 mode: OperatingMode::from_legacy(word(&registers, 0)?),
                 current: Amps::from_raw(word(&registers, 1)?),
                 pressure: Pressure::from_raw(word(&registers, 3)?),

@@ -393,7 +393,7 @@ impl PermittedSettings {
 /// 0x3010-0x3012: the settings in use.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct Settings {
+pub struct Process {
     /// Mode; `None` when the register holds a value the guide does not list.
     pub mode: Option<OperatingMode>,
     /// Current setting.
@@ -402,11 +402,11 @@ pub struct Settings {
     pub pressure: Pressure,
 }
 
-impl Settings {
+impl Process {
     /// Decodes 3 registers.
     pub fn decode(registers: Registers<'_>) -> Result<Self> {
         need(&registers, 3)?;
-        Ok(Settings {
+        Ok(Process {
             mode: OperatingMode::from_sync(word(&registers, 0)?),
             current: Amps::from_raw(word(&registers, 1)?),
             pressure: Pressure::from_raw(word(&registers, 2)?),
@@ -445,7 +445,7 @@ pub fn decode_active_fault(registers: Registers<'_>) -> Result<FaultCode> {
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct StatusBlock {
     /// 0x3010-0x3012.
-    pub settings: Settings,
+    pub settings: Process,
     /// 0x3018-0x3019.
     pub actual: ActualOutputs,
     /// 0x301A.
@@ -457,7 +457,7 @@ impl StatusBlock {
     pub fn decode(registers: Registers<'_>) -> Result<Self> {
         need(&registers, STATUS_BLOCK.len())?;
         Ok(StatusBlock {
-            settings: Settings::decode(registers)?,
+            settings: Process::decode(registers)?,
             actual: ActualOutputs {
                 current: Amps::from_raw(word(&registers, 8)?),
                 pressure: Psi::from_raw(word(&registers, 9)?),
@@ -813,11 +813,11 @@ mod tests {
     fn settings_example() {
         // :01040600011A40260074 -> cut, 105 A, 76 psi.
         let s =
-            Settings::decode(Registers::BigEndian(&[0x00, 0x01, 0x1A, 0x40, 0x26, 0x00])).unwrap();
+            Process::decode(Registers::BigEndian(&[0x00, 0x01, 0x1A, 0x40, 0x26, 0x00])).unwrap();
         assert_eq!(s.mode, Some(OperatingMode::Cut));
         assert_eq!(s.current, Amps::from_whole(105).unwrap());
         assert_eq!(s.pressure, Pressure::Set(Psi::from_whole(76).unwrap()));
-        let auto = Settings::decode(Registers::Words(&[0, 0, 0])).unwrap();
+        let auto = Process::decode(Registers::Words(&[0, 0, 0])).unwrap();
         assert_eq!(auto.mode, None);
         assert_eq!(auto.pressure, Pressure::Auto);
     }

@@ -6,14 +6,14 @@ extern crate std;
 use crate::cnc::SimCommand;
 use crate::io::{Inputs, Outputs};
 use crate::settings::{Process, SaveError, Settings};
-use crate::storage::Settings as _;
+use crate::storage::Persistent as _;
 use plasma_protocol::time::Duration;
 use plasma_sim::clock::Accumulator;
 use plasma_sim::hpr::HprCounters;
 
 use crate::cnc::rig::*;
 use crate::cnc::texts::{self, UnsupportedText, unsupported};
-use crate::link::{CommandFailure, Family, SettingsFailure, TransactionError};
+use crate::link::{CommandFailure, Family, ProcessFailure, TransactionError};
 use plasma_protocol::cnc::{ErrorCode, ParseError};
 
 // ---------------------------------------------------------------------------------------
@@ -114,7 +114,7 @@ fn settings_that_do_not_read_back_are_an_error_with_the_read_back_values() {
     rig.unplug(true);
     assert_eq!(
         rig.cmd("SET PROCESS CUT 50 AUTO"),
-        failure_line(&CommandFailure::Settings(SettingsFailure::Transaction(
+        failure_line(&CommandFailure::Process(ProcessFailure::Transaction(
             TransactionError::Timeout
         )))
     );

@@ -39,7 +39,7 @@ use plasma_protocol::time::Instant;
 use super::Context;
 use super::describe::cnc_mode;
 use crate::link::{
-    CommandOutput, Family, LinkCommand, LinkEvent, Model, Refusal, SettingsFailure, Ticket,
+    CommandOutput, Family, LinkCommand, LinkEvent, Model, ProcessFailure, Refusal, Ticket,
 };
 use crate::settings::Process;
 use group::is_force_register;
@@ -161,15 +161,15 @@ impl PowermaxPort {
                 }
                 self.applying = None;
                 match (result, process) {
-                    (Ok(CommandOutput::Settings(_)), Keep::Process(p)) => {
+                    (Ok(CommandOutput::Process(_)), Keep::Process(p)) => {
                         ctx.settings.process = Some(p);
                     }
                     (Ok(_), Keep::Forget) => ctx.settings.process = None,
                     (Ok(_), _) => {}
                     (
-                        Err(crate::link::CommandFailure::Settings(
-                            SettingsFailure::RejectedByUnit { fault },
-                        )),
+                        Err(crate::link::CommandFailure::Process(ProcessFailure::RejectedByUnit {
+                            fault,
+                        })),
                         _,
                     ) => self.refused = Some(*fault),
                     (Err(crate::link::CommandFailure::NotAccepted), _) => {
@@ -184,7 +184,7 @@ impl PowermaxPort {
             }
             // Settings applied by a text command (or re-applied): the force registers read
             // them from now on, not what the Modbus master wrote before.
-            LinkEvent::SettingsApplied { .. } if self.applying.is_none() => {
+            LinkEvent::ProcessApplied { .. } if self.applying.is_none() => {
                 self.combiner.forget_written();
             }
             _ => {}
@@ -380,7 +380,7 @@ impl PowermaxPort {
                     self.refused = None;
                     return None;
                 }
-                let command = LinkCommand::ApplySettings {
+                let command = LinkCommand::ApplyProcess {
                     mode,
                     current,
                     pressure,

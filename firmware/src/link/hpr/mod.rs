@@ -21,7 +21,7 @@ use heapless::{Deque, Vec};
 use plasma_protocol::hpr::{self, Request, StateCode, SystemId};
 
 use crate::link::core::Core;
-use crate::link::event::{LinkEvent, SettingsFailure, Ticket};
+use crate::link::event::{LinkEvent, ProcessFailure, Ticket};
 use crate::link::slow::SlowData;
 use crate::link::status::Family;
 use plasma_protocol::time::{Duration, Instant};
@@ -148,8 +148,8 @@ impl HprDriver {
         if !core.kept.hpr.is_empty() && core.kept.hpr.system() != Some(system) {
             // Another unit is on the line: the kept settings were meant for the one before.
             core.kept.hpr.clear();
-            core.emit(LinkEvent::SettingsFailed {
-                reason: SettingsFailure::OutsideLimits,
+            core.emit(LinkEvent::ProcessFailed {
+                reason: ProcessFailure::OutsideLimits,
             });
         }
         HprDriver {

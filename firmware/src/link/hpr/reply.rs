@@ -11,7 +11,7 @@ use super::{
     SLOW_TIMERS, is_pilot_arc, is_power_up,
 };
 use crate::link::core::Core;
-use crate::link::event::{CommandFailure, CommandOutput, LinkEvent, SettingsFailure};
+use crate::link::event::{CommandFailure, CommandOutput, LinkEvent, ProcessFailure};
 use crate::link::status::ActiveFault;
 use crate::link::transaction::TransactionError;
 
@@ -38,7 +38,7 @@ impl HprDriver {
         now: Instant,
         job: ActiveJob,
         failure: CommandFailure,
-        reason: SettingsFailure,
+        reason: ProcessFailure,
         core: &mut Core,
     ) {
         match job.ticket {
@@ -47,7 +47,7 @@ impl HprDriver {
                 result: Err(failure),
             }),
             None => {
-                core.emit(LinkEvent::SettingsFailed { reason });
+                core.emit(LinkEvent::ProcessFailed { reason });
                 self.reapply.clear();
                 self.reapply_pending = true;
                 self.reapply_not_before = now + REAPPLY_BACKOFF;
@@ -132,7 +132,7 @@ impl HprDriver {
                 now,
                 job,
                 CommandFailure::NotAccepted,
-                SettingsFailure::NotAccepted,
+                ProcessFailure::NotAccepted,
                 core,
             );
         }
@@ -169,7 +169,7 @@ impl HprDriver {
                 now,
                 active,
                 CommandFailure::NotAccepted,
-                SettingsFailure::NotAccepted,
+                ProcessFailure::NotAccepted,
                 core,
             );
         }
@@ -268,7 +268,7 @@ impl HprDriver {
                         now,
                         job,
                         CommandFailure::Transaction(error),
-                        SettingsFailure::Transaction(error),
+                        ProcessFailure::Transaction(error),
                         core,
                     );
                 }

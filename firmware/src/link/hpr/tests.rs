@@ -9,7 +9,7 @@ use plasma_protocol::time::Duration;
 use crate::link::test_support::*;
 use crate::link::{
     ActiveFault, CommandFailure, CommandOutput, Family, HprValue, LinkCommand, LinkConfig,
-    LinkEvent, ProtocolChoice, Refusal, SettingsFailure,
+    LinkEvent, ProcessFailure, ProtocolChoice, Refusal,
 };
 
 fn hpr_bench(system: &str) -> Bench {
@@ -329,7 +329,7 @@ fn kept_hpr_settings_are_not_given_to_another_model() {
     bench.rx(3, &hf(0, "HYPERFORMANCE260AUTO"));
     assert!(bench.link.status().link_up);
     assert!(bench.link.kept().hpr_requests().is_empty());
-    assert!(bench.events().contains(&LinkEvent::SettingsFailed {
-        reason: SettingsFailure::OutsideLimits
+    assert!(bench.events().contains(&LinkEvent::ProcessFailed {
+        reason: ProcessFailure::OutsideLimits
     }));
 }

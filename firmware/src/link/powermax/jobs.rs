@@ -4,10 +4,10 @@
 use plasma_protocol::modbus_ascii::Response;
 use plasma_protocol::time::Instant;
 
-use super::settings::legacy_writes;
+use super::process::legacy_writes;
 use super::{Active, Job, MbPurpose, PowermaxDriver, REAPPLY_BACKOFF, Variant};
 use crate::link::core::Core;
-use crate::link::event::{CommandFailure, CommandOutput, LinkEvent, SettingsFailure};
+use crate::link::event::{CommandFailure, CommandOutput, LinkEvent, ProcessFailure};
 use crate::link::powermax::legacy;
 use crate::link::powermax::modbus::MbRequest;
 use crate::link::powermax::sync;
@@ -143,13 +143,13 @@ impl PowermaxDriver {
         };
         let failure = match active.job {
             Job::Apply(_) => {
-                let reason = SettingsFailure::Transaction(error);
-                core.emit(LinkEvent::SettingsFailed { reason });
+                let reason = ProcessFailure::Transaction(error);
+                core.emit(LinkEvent::ProcessFailed { reason });
                 if active.ticket.is_none() && !active.restoring {
                     self.reapply_pending = true;
                     self.reapply_not_before = now + REAPPLY_BACKOFF;
                 }
-                CommandFailure::Settings(reason)
+                CommandFailure::Process(reason)
             }
             Job::QuickRestart => {
                 // The unit may be restarting without answering: stay quiet anyway.

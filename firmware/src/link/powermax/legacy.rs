@@ -14,7 +14,7 @@ use plasma_protocol::powermax::legacy::{
 use plasma_protocol::powermax::{Amps, FaultCode, OperatingMode, Pressure};
 
 use crate::link::powermax::modbus::{BlockPoller, MbRequest};
-use crate::link::status::{Limits, PowermaxSettings};
+use crate::link::status::{Limits, PowermaxProcess};
 
 /// The poll: 0x2093-0x209F in one request (force registers read back, fault, limits, arc
 /// time), falling back to its documented parts on exception 02; a part the unit refuses
@@ -33,7 +33,7 @@ const STATUS_OFFSET: usize = 5;
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) struct PollData {
     /// Force registers as read back, when the unit allows reading them.
-    pub settings: Option<PowermaxSettings>,
+    pub settings: Option<PowermaxProcess>,
     /// Active fault.
     pub fault: FaultCode,
     /// Limits.
@@ -65,9 +65,9 @@ pub(crate) fn decode_poll(poller: &BlockPoller) -> Option<PollData> {
     Some(from_parts(settings, status))
 }
 
-fn from_parts(settings: Option<legacy::LegacySettings>, status: LegacyStatus) -> PollData {
+fn from_parts(settings: Option<legacy::LegacyProcess>, status: LegacyStatus) -> PollData {
     PollData {
-        settings: settings.map(|s| PowermaxSettings {
+        settings: settings.map(|s| PowermaxProcess {
             mode: s.mode,
             current: s.current,
             pressure: s.pressure,

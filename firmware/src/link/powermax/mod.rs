@@ -12,8 +12,8 @@
 mod jobs;
 pub(crate) mod legacy;
 pub(crate) mod modbus;
+mod process;
 mod reply;
-mod settings;
 mod submit;
 pub(crate) mod sync;
 
@@ -29,7 +29,7 @@ use modbus::{BlockPart, BlockPoller, MbRequest};
 use plasma_protocol::time::{Duration, Instant};
 use sync::SlowItem;
 
-use settings::Desired;
+use process::DesiredProcess;
 
 /// Silence after a quick restart (SYNC guide: "wait 2 seconds before you send a new read or
 /// write request").
@@ -91,7 +91,7 @@ enum Turn {
 
 #[derive(Debug, Clone, PartialEq, Eq)]
 enum Job {
-    Apply(Desired),
+    Apply(DesiredProcess),
     Exit,
     GasTest(bool),
     QuickRestart,

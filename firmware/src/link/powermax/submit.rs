@@ -5,7 +5,7 @@ use plasma_protocol::modbus_ascii::{self, Request};
 use plasma_protocol::powermax::FaultCode;
 use plasma_protocol::time::Instant;
 
-use super::settings::{Desired, validate_settings};
+use super::process::{DesiredProcess, validate_process};
 use super::{Job, PowermaxDriver, Variant};
 use crate::link::command::{LinkCommand, Refusal};
 use crate::link::core::Core;
@@ -32,15 +32,15 @@ impl PowermaxDriver {
             return Err(Refusal::NotSupported { family });
         }
         let job = match command {
-            LinkCommand::ApplySettings {
+            LinkCommand::ApplyProcess {
                 mode,
                 current,
                 pressure,
             } => {
                 let limits = core.status.limits;
-                validate_settings(limits.as_ref(), *mode, *current, *pressure)?;
+                validate_process(limits.as_ref(), *mode, *current, *pressure)?;
                 let limits = limits.ok_or(Refusal::LimitsUnknown)?;
-                Job::Apply(Desired {
+                Job::Apply(DesiredProcess {
                     mode: *mode,
                     current: *current,
                     pressure: *pressure,

@@ -9,7 +9,7 @@ use plasma_protocol::powermax::sync::{
 use plasma_protocol::powermax::{Amps, FaultCode, Pressure, Psi, RegisterSpan};
 
 use crate::link::powermax::modbus::MbRequest;
-use crate::link::status::{Limits, PowermaxSettings};
+use crate::link::status::{Limits, PowermaxProcess};
 
 /// The poll: 0x3010-0x301A in one function-04 request (fallback: 0x3010-0x3012 and
 /// 0x3018-0x301A).
@@ -19,7 +19,7 @@ pub(crate) const POLL_PLAN: plasma_protocol::powermax::BlockRead = sync::STATUS_
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) struct PollData {
     /// Settings as the unit reports them.
-    pub settings: PowermaxSettings,
+    pub settings: PowermaxProcess,
     /// Actual output current.
     pub actual_current: Amps,
     /// Actual gas pressure.
@@ -32,7 +32,7 @@ pub(crate) struct PollData {
 pub(crate) fn decode_poll(registers: Registers<'_>) -> Option<PollData> {
     let block = StatusBlock::decode(registers).ok()?;
     Some(PollData {
-        settings: PowermaxSettings {
+        settings: PowermaxProcess {
             mode: block.settings.mode,
             current: block.settings.current,
             pressure: block.settings.pressure,
@@ -149,9 +149,9 @@ pub(crate) fn read_back() -> MbRequest {
 }
 
 /// Decode a settings read-back.
-pub(crate) fn decode_settings(registers: Registers<'_>) -> Option<PowermaxSettings> {
-    let s = sync::Settings::decode(registers).ok()?;
-    Some(PowermaxSettings {
+pub(crate) fn decode_process(registers: Registers<'_>) -> Option<PowermaxProcess> {
+    let s = sync::Process::decode(registers).ok()?;
+    Some(PowermaxProcess {
         mode: s.mode,
         current: s.current,
         pressure: s.pressure,

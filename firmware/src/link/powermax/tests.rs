@@ -121,7 +121,7 @@ fn a_stream_of_commands_starves_neither_the_fault_checks_nor_the_slow_data() {
             .link
             .submit(
                 bench.now,
-                LinkCommand::ApplySettings {
+                LinkCommand::ApplyProcess {
                     mode: OperatingMode::Cut,
                     current: amps(40 + (applied % 2) as u16 * 5),
                     pressure: Pressure::Auto,

@@ -78,7 +78,7 @@ fn a_reply_equal_to_its_request_is_told_from_the_echo_once_the_line_is_known_to_
         .link
         .submit(
             bench.now,
-            LinkCommand::ApplySettings {
+            LinkCommand::ApplyProcess {
                 mode: OperatingMode::Cut,
                 current: amps(45),
                 pressure: Pressure::Auto,
@@ -93,5 +93,5 @@ fn a_reply_equal_to_its_request_is_told_from_the_echo_once_the_line_is_known_to_
     let d = bench.link.diagnostics();
     assert_eq!(d.echoes as usize, bench.sent.len());
     assert_eq!(d.transactions_failed, 0);
-    assert!(bench.events().iter().any(|e| matches!(e, LinkEvent::CommandDone { ticket: t, result: Ok(CommandOutput::Settings(_)) } if *t == ticket)));
+    assert!(bench.events().iter().any(|e| matches!(e, LinkEvent::CommandDone { ticket: t, result: Ok(CommandOutput::Process(_)) } if *t == ticket)));
 }

@@ -237,7 +237,7 @@ impl PsEndpoint for FakeBridge {
 }
 
 impl BridgeEndpoint for FakeBridge {
-    type Settings = u32;
+    type Saved = u32;
     type SaveError = ();
 
     fn handle_cnc_rx(&mut self, _: Instant, bytes: &[u8]) {

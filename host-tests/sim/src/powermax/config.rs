@@ -137,7 +137,7 @@ impl PowermaxConfig {
 
 /// Operating settings: mode, current (amps x 64), pressure (psi x 128, 0 = automatic).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub struct Settings {
+pub struct Process {
     /// Operating mode (SYNC: 1 cut, 2 expanded metal, 3 gouge; legacy: 1 normal, 2 CPA,
     /// 3 gouge).
     pub mode: u16,

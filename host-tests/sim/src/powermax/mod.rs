@@ -52,7 +52,7 @@ mod remote;
 mod server;
 
 pub use config::{
-    ArcState, ArcTimings, Counters, DeviceIdSupport, Limits, OutOfRange, PowermaxConfig, Settings,
+    ArcState, ArcTimings, Counters, DeviceIdSupport, Limits, OutOfRange, PowermaxConfig, Process,
     UndocumentedAddresses,
 };
 pub(crate) use server::Cell;
@@ -75,8 +75,8 @@ pub struct Powermax {
     fault: u16,
     counters: Counters,
     cartridge: Option<Cartridge>,
-    panel: Settings,
-    force: Settings,
+    panel: Process,
+    force: Process,
     force_written: [bool; 3],
     remote: bool,
     requests: u64,
@@ -102,15 +102,15 @@ impl Powermax {
             fault: 0,
             counters: Counters::default(),
             cartridge,
-            panel: Settings::default(),
-            force: Settings::default(),
+            panel: Process::default(),
+            force: Process::default(),
             force_written: [false; 3],
             remote: false,
             requests: 0,
             config,
         };
         let limits = unit.limits();
-        unit.panel = Settings {
+        unit.panel = Process {
             mode: limits.modes.0,
             current: limits.current.1,
             pressure: 0,
@@ -142,14 +142,14 @@ impl Powermax {
     }
 
     /// The settings the unit cuts with now (remote if in remote mode, else the front panel).
-    pub fn settings(&self) -> Settings {
+    pub fn settings(&self) -> Process {
         if !self.remote || !self.config.remote_settings_apply {
             return self.panel;
         }
         // On the way back to manual (legacy: one force register at a time), a register already
         // set to zero no longer overrides the panel.
         let or_panel = |forced: u16, panel: u16| if forced != 0 { forced } else { panel };
-        Settings {
+        Process {
             mode: or_panel(self.force.mode, self.panel.mode),
             current: or_panel(self.force.current, self.panel.current),
             pressure: self.force.pressure,
@@ -157,7 +157,7 @@ impl Powermax {
     }
 
     /// The force registers as written (0x3080-0x3082 / 0x2093, 0x2094, 0x2096).
-    pub fn force_registers(&self) -> Settings {
+    pub fn force_registers(&self) -> Process {
         self.force
     }
 
@@ -167,7 +167,7 @@ impl Powermax {
     }
 
     /// Sets the front-panel settings (used outside remote mode).
-    pub fn set_panel(&mut self, settings: Settings) {
+    pub fn set_panel(&mut self, settings: Process) {
         self.panel = settings;
     }
 

@@ -5,12 +5,12 @@ use plasma_protocol::modbus_ascii::ExceptionCode;
 use plasma_protocol::time::Instant;
 
 use super::arc::{fault_allows_start, is_setting_fault};
-use super::{ArcState, OutOfRange, Powermax, Settings};
+use super::{ArcState, OutOfRange, Powermax, Process};
 
 impl Powermax {
     pub(super) fn exit_remote(&mut self) {
         self.remote = false;
-        self.force = Settings::default();
+        self.force = Process::default();
         self.force_written = [false; 3];
         if is_setting_fault(self.fault) {
             self.fault = 0;
@@ -71,7 +71,7 @@ impl Powermax {
             *self.force_value_mut(i) = v;
             self.force_written[i] = true;
         }
-        if self.force == Settings::default() {
+        if self.force == Process::default() {
             self.exit_remote();
             return Ok(());
         }
@@ -86,7 +86,7 @@ impl Powermax {
                 if one_request_enters {
                     let missing = (0..3).find(|&i| !covered(i)).unwrap_or(0);
                     self.raise(Self::setting_fault(missing));
-                    self.force = Settings::default();
+                    self.force = Process::default();
                     self.force_written = [false; 3];
                 }
                 return Ok(());
@@ -96,7 +96,7 @@ impl Powermax {
                 self.raise(Self::setting_fault(bad));
                 if one_request_enters {
                     // The request as a whole did not take.
-                    self.force = Settings::default();
+                    self.force = Process::default();
                     self.force_written = [false; 3];
                 } else {
                     // The registers keep what was written; the bad one must be written again.

@@ -50,7 +50,7 @@ fn legacy_settings_use_the_three_force_registers() {
         .link
         .submit(
             bench.now,
-            LinkCommand::ApplySettings {
+            LinkCommand::ApplyProcess {
                 mode: OperatingMode::Cut,
                 current: amps(65),
                 pressure: Pressure::Set(Psi::from_whole(70).unwrap()),
@@ -76,7 +76,7 @@ fn legacy_settings_use_the_three_force_registers() {
             b":01062096230020\r\n"
         ]
     );
-    assert!(bench.events().iter().any(|e| matches!(e, LinkEvent::CommandDone { ticket: t, result: Ok(CommandOutput::Settings(_)) } if *t == ticket)));
+    assert!(bench.events().iter().any(|e| matches!(e, LinkEvent::CommandDone { ticket: t, result: Ok(CommandOutput::Process(_)) } if *t == ticket)));
     let mark = bench.sent.len();
     bench
         .link

@@ -6,8 +6,8 @@ use plasma_protocol::time::Duration;
 
 use crate::link::test_support::*;
 use crate::link::{
-    CommandFailure, CommandOutput, LinkCommand, LinkConfig, LinkEvent, PowermaxSettings, Refusal,
-    SettingsFailure,
+    CommandFailure, CommandOutput, LinkCommand, LinkConfig, LinkEvent, PowermaxProcess,
+    ProcessFailure, Refusal,
 };
 
 #[test]
@@ -23,7 +23,7 @@ fn settings_outside_the_limits_are_refused_before_anything_is_sent() {
     let refuse = |bench: &mut Bench, mode, current, pressure| {
         bench.link.submit(
             now,
-            LinkCommand::ApplySettings {
+            LinkCommand::ApplyProcess {
                 mode,
                 current,
                 pressure,
@@ -81,7 +81,7 @@ fn cut_at_63_a_with_automatic_pressure_is_the_guides_frame_and_is_read_back() {
         .link
         .submit(
             bench.now,
-            LinkCommand::ApplySettings {
+            LinkCommand::ApplyProcess {
                 mode: OperatingMode::Cut,
                 current: amps(63),
                 pressure: Pressure::Auto,
@@ -104,24 +104,24 @@ fn cut_at_63_a_with_automatic_pressure_is_the_guides_frame_and_is_read_back() {
     assert_eq!(read_back, b":010430100003B8\r\n");
     bench.run(bench.now + Duration::from_millis(100));
     let events = bench.events();
-    let applied = PowermaxSettings {
+    let applied = PowermaxProcess {
         mode: Some(OperatingMode::Cut),
         current: amps(63),
         pressure: Pressure::Auto,
     };
     // What the unit reads back: in automatic pressure, the pressure it picked.
-    let read_back = PowermaxSettings {
+    let read_back = PowermaxProcess {
         pressure: Pressure::Set(Psi::from_whole(72).unwrap()),
         ..applied
     };
     assert!(events.contains(&LinkEvent::RemoteModeChanged { remote: true }));
-    assert!(events.contains(&LinkEvent::SettingsApplied {
+    assert!(events.contains(&LinkEvent::ProcessApplied {
         settings: read_back,
         reapplied: false
     }));
     assert!(events.contains(&LinkEvent::CommandDone {
         ticket,
-        result: Ok(CommandOutput::Settings(read_back))
+        result: Ok(CommandOutput::Process(read_back))
     }));
     assert_eq!(bench.link.kept().powermax(), Some(applied));
     assert!(bench.link.status().remote);
@@ -136,7 +136,7 @@ fn a_read_back_that_differs_fails_the_command() {
         .link
         .submit(
             bench.now,
-            LinkCommand::ApplySettings {
+            LinkCommand::ApplyProcess {
                 mode: OperatingMode::Cut,
                 current: amps(63),
                 pressure: Pressure::Auto,
@@ -151,7 +151,7 @@ fn a_read_back_that_differs_fails_the_command() {
     let events = bench.events();
     assert!(events.iter().any(|e| matches!(
         e,
-        LinkEvent::CommandDone { ticket: t, result: Err(CommandFailure::Settings(SettingsFailure::ReadBackDiffers { .. })) } if *t == ticket
+        LinkEvent::CommandDone { ticket: t, result: Err(CommandFailure::Process(ProcessFailure::ReadBackDiffers { .. })) } if *t == ticket
     )));
     assert_eq!(bench.link.kept().powermax(), None);
 }
@@ -181,7 +181,7 @@ fn kept_settings_are_reapplied_when_the_unit_reverts_after_a_power_cycle() {
         .link
         .submit(
             bench.now,
-            LinkCommand::ApplySettings {
+            LinkCommand::ApplyProcess {
                 mode: OperatingMode::Cut,
                 current: amps(63),
                 pressure: Pressure::Auto,
@@ -201,7 +201,7 @@ fn kept_settings_are_reapplied_when_the_unit_reverts_after_a_power_cycle() {
     assert!(events.contains(&LinkEvent::RemoteModeChanged { remote: false }));
     assert!(events.iter().any(|e| matches!(
         e,
-        LinkEvent::SettingsApplied {
+        LinkEvent::ProcessApplied {
             reapplied: true,
             ..
         }
@@ -220,7 +220,7 @@ fn kept_settings_are_reapplied_when_the_link_returns() {
         .link
         .submit(
             bench.now,
-            LinkCommand::ApplySettings {
+            LinkCommand::ApplyProcess {
                 mode: OperatingMode::Cut,
                 current: amps(63),
                 pressure: Pressure::Auto,
@@ -252,7 +252,7 @@ fn a_reapply_waiting_for_limits_does_not_make_poll_at_spin() {
         .link
         .submit(
             bench.now,
-            LinkCommand::ApplySettings {
+            LinkCommand::ApplyProcess {
                 mode: OperatingMode::Cut,
                 current: amps(63),
                 pressure: Pressure::Auto,

@@ -9,17 +9,17 @@ use plasma_protocol::time::Instant;
 use super::{Active, Job, PowermaxDriver, REAPPLY_BACKOFF, Variant};
 use crate::link::command::Refusal;
 use crate::link::core::Core;
-use crate::link::event::{CommandFailure, CommandOutput, LinkEvent, SettingsFailure};
+use crate::link::event::{CommandFailure, CommandOutput, LinkEvent, ProcessFailure};
 use crate::link::kept::Reapply;
 use crate::link::powermax::legacy;
 use crate::link::powermax::modbus::{MbRequest, read_values};
 use crate::link::powermax::sync;
-use crate::link::status::{Limits, PowermaxSettings};
+use crate::link::status::{Limits, PowermaxProcess};
 use crate::link::transaction::TransactionError;
 
 /// Settings the CNC asked for, validated.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(super) struct Desired {
+pub(super) struct DesiredProcess {
     pub(super) mode: OperatingMode,
     pub(super) current: Amps,
     pub(super) pressure: Pressure,
@@ -27,17 +27,17 @@ pub(super) struct Desired {
     pub(super) legacy_first_pressure: Psi,
 }
 
-impl Desired {
-    fn as_settings(&self) -> PowermaxSettings {
-        PowermaxSettings {
+impl DesiredProcess {
+    fn as_process(&self) -> PowermaxProcess {
+        PowermaxProcess {
             mode: Some(self.mode),
             current: self.current,
             pressure: self.pressure,
         }
     }
 
-    fn from_settings(settings: &PowermaxSettings, limits: &Limits) -> Option<Self> {
-        Some(Desired {
+    fn from_process(settings: &PowermaxProcess, limits: &Limits) -> Option<Self> {
+        Some(DesiredProcess {
             mode: settings.mode?,
             current: settings.current,
             pressure: settings.pressure,
@@ -47,7 +47,7 @@ impl Desired {
 
     /// True when `read` shows these settings (automatic pressure reads back as whatever the
     /// unit chose).
-    fn matches(&self, read: &PowermaxSettings) -> bool {
+    fn matches(&self, read: &PowermaxProcess) -> bool {
         let pressure_ok = match self.pressure {
             Pressure::Auto => true,
             Pressure::Set(_) => read.pressure == self.pressure,
@@ -57,7 +57,7 @@ impl Desired {
 }
 
 /// Check settings against the permitted limits (nothing is sent when this fails).
-pub(super) fn validate_settings(
+pub(super) fn validate_process(
     limits: Option<&Limits>,
     mode: OperatingMode,
     current: Amps,
@@ -110,7 +110,7 @@ impl PowermaxDriver {
             // One attempt, like a command: refused or started, it is not tried again.
             core.kept.restore_done();
         }
-        let checked = validate_settings(Some(&limits), mode, settings.current, settings.pressure);
+        let checked = validate_process(Some(&limits), mode, settings.current, settings.pressure);
         if let (Err(refusal), true) = (checked, restoring) {
             core.emit(LinkEvent::RestoreRefused { refusal });
             return;
@@ -118,12 +118,12 @@ impl PowermaxDriver {
         if checked.is_err() {
             self.reapply_not_before = now + REAPPLY_BACKOFF;
             self.reapply_pending = true;
-            core.emit(LinkEvent::SettingsFailed {
-                reason: SettingsFailure::OutsideLimits,
+            core.emit(LinkEvent::ProcessFailed {
+                reason: ProcessFailure::OutsideLimits,
             });
             return;
         }
-        if let Some(desired) = Desired::from_settings(&settings, &limits) {
+        if let Some(desired) = DesiredProcess::from_process(&settings, &limits) {
             self.active = Some(Active {
                 ticket: None,
                 restoring,
@@ -135,7 +135,7 @@ impl PowermaxDriver {
 
     /// Settings differ from the kept ones while the bridge holds remote control: the unit
     /// was power-cycled (or someone took over); re-apply.
-    pub(super) fn check_revert(&mut self, now: Instant, read: &PowermaxSettings, core: &mut Core) {
+    pub(super) fn check_revert(&mut self, now: Instant, read: &PowermaxProcess, core: &mut Core) {
         if self.active.is_some() || self.reapply_pending || !core.status.remote {
             return;
         }
@@ -145,7 +145,7 @@ impl PowermaxDriver {
         let Some(limits) = core.status.limits else {
             return;
         };
-        let Some(desired) = Desired::from_settings(&desired, &limits) else {
+        let Some(desired) = DesiredProcess::from_process(&desired, &limits) else {
             return;
         };
         if !desired.matches(read) {
@@ -160,60 +160,60 @@ impl PowermaxDriver {
     pub(super) fn confirm_settings(
         &mut self,
         now: Instant,
-        desired: &Desired,
+        desired: &DesiredProcess,
         response: &Response<'_>,
         reapplied: bool,
         core: &mut Core,
     ) -> Result<CommandOutput, CommandFailure> {
         let values = read_values(response);
-        let verdict: Result<PowermaxSettings, SettingsFailure> = match self.variant {
-            Variant::Sync => match values.and_then(sync::decode_settings) {
+        let verdict: Result<PowermaxProcess, ProcessFailure> = match self.variant {
+            Variant::Sync => match values.and_then(sync::decode_process) {
                 Some(read_back) if desired.matches(&read_back) => Ok(read_back),
-                Some(read_back) => Err(SettingsFailure::ReadBackDiffers {
-                    written: desired.as_settings(),
+                Some(read_back) => Err(ProcessFailure::ReadBackDiffers {
+                    written: desired.as_process(),
                     read_back,
                 }),
-                None => Err(SettingsFailure::Transaction(TransactionError::Malformed)),
+                None => Err(ProcessFailure::Transaction(TransactionError::Malformed)),
             },
             Variant::Legacy => match values.and_then(|v| v.get(0)).map(FaultCode) {
                 Some(fault) => {
                     self.update_fault(now, fault, core);
                     if legacy::is_setting_fault(fault) {
-                        Err(SettingsFailure::RejectedByUnit { fault })
+                        Err(ProcessFailure::RejectedByUnit { fault })
                     } else {
-                        Ok(desired.as_settings())
+                        Ok(desired.as_process())
                     }
                 }
-                None => Err(SettingsFailure::Transaction(TransactionError::Malformed)),
+                None => Err(ProcessFailure::Transaction(TransactionError::Malformed)),
             },
         };
         match verdict {
             Ok(read_back) => {
-                core.kept.confirmed(desired.as_settings());
+                core.kept.confirmed(desired.as_process());
                 core.status.settings = Some(read_back);
                 if !core.status.remote {
                     core.status.remote = true;
                     core.emit(LinkEvent::RemoteModeChanged { remote: true });
                 }
-                core.emit(LinkEvent::SettingsApplied {
+                core.emit(LinkEvent::ProcessApplied {
                     settings: read_back,
                     reapplied,
                 });
-                Ok(CommandOutput::Settings(read_back))
+                Ok(CommandOutput::Process(read_back))
             }
             Err(reason) => {
-                core.emit(LinkEvent::SettingsFailed { reason });
+                core.emit(LinkEvent::ProcessFailed { reason });
                 if reapplied {
                     self.reapply_pending = true;
                     self.reapply_not_before = now + REAPPLY_BACKOFF;
                 }
-                Err(CommandFailure::Settings(reason))
+                Err(CommandFailure::Process(reason))
             }
         }
     }
 }
 
-pub(super) fn legacy_writes(desired: &Desired) -> heapless::Vec<MbRequest, 4> {
+pub(super) fn legacy_writes(desired: &DesiredProcess) -> heapless::Vec<MbRequest, 4> {
     let limits = Limits {
         modes: None,
         min_current: desired.current,
