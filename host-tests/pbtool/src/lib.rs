@@ -5,6 +5,7 @@
 //!   harness of host-tests, in real or virtual time) with the CNC protocol on stdin/stdout.
 //! - [`emu`]: `pbtool emu`, the firmware image on the emulated board (the QEMU harness of
 //!   host-tests) with its CNC port on stdin/stdout, and `--measure`.
+//! - [`monitor`]: `pbtool monitor`, the live dashboard of a bridge over its CNC text protocol.
 //! - [`config`]: `pbtool config`, the board's CNC-port framing set from the PC, both ends in step.
 #![warn(missing_docs)]
 
@@ -12,6 +13,7 @@ pub mod config;
 pub mod decode;
 pub mod emu;
 pub mod framer;
+pub mod monitor;
 pub mod probe;
 pub mod realtime;
 pub mod run;

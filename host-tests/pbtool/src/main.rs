@@ -7,6 +7,7 @@
 //! simulated unit, with the CNC port on stdin/stdout (see `pbtool::emu::console`);
 //! `pbtool emu --measure` reports the image's latency and idle figures.
 //! `pbtool run` runs the bridge where it can: the board, the emulated board or the simulator.
+//! `pbtool monitor --sim sync65` shows a live dashboard of a bridge (see `pbtool::monitor`).
 //! `pbtool config --port DEV --cnc-framing 19200:8E1 --save` sets the board's CNC framing.
 
 use std::process::ExitCode;
@@ -91,6 +92,15 @@ enum Command {
     /// pmx485. Exit status 0 when done, 1 when no board answered or it refused, 2 on a port
     /// error.
     Config(cli::config::ConfigArgs),
+    /// A live dashboard of a bridge: unit and link, process set and actual, the signals as
+    /// lamps, the active fault and its steps, events, and a plot of current and pressure.
+    ///
+    /// Attaches through the CNC text protocol to a board's CNC port (`--port DEV`), the
+    /// emulated board (`--emu`) or the simulator (`--sim MODEL`), and keeps reconnecting when
+    /// the port goes away or the child exits. Keys: g gas test on/off, r remote off, c clear
+    /// warnings, q quit. `--snapshot` prints one frame to stdout instead (for docs and bug
+    /// reports).
+    Monitor(cli::monitor::MonitorArgs),
 }
 
 fn main() -> ExitCode {
@@ -104,5 +114,6 @@ fn main() -> ExitCode {
         Command::Sniff(args) => cli::sniff::sniff(&args),
         Command::Probe(args) => cli::probe::probe_command(&args),
         Command::Config(args) => cli::config::config(&args),
+        Command::Monitor(args) => cli::monitor::monitor(&args),
     }
 }

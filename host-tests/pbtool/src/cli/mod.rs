@@ -4,6 +4,7 @@ pub mod config;
 pub mod decode;
 pub mod emu;
 mod line;
+pub mod monitor;
 pub mod probe;
 pub mod run;
 pub mod sim;

@@ -1,0 +1,335 @@
+//! The dashboard drawn with ratatui: a full layout from 80x24 up, a compact one below.
+
+use std::time::Duration;
+
+use ratatui::Frame;
+use ratatui::layout::{Constraint, Layout, Rect};
+use ratatui::style::{Color, Modifier, Style};
+use ratatui::symbols::Marker;
+use ratatui::text::{Line, Span};
+use ratatui::widgets::{Axis, Block, Chart, Dataset, Gauge, GraphType, Paragraph, Wrap};
+
+use super::state::{Connection, Consumables, Dashboard, PLOT_WINDOW};
+
+/// The smallest area that gets the full layout.
+pub const FULL_WIDTH: u16 = 80;
+/// See [`FULL_WIDTH`].
+pub const FULL_HEIGHT: u16 = 24;
+
+/// The keys, as the screen shows them.
+pub const KEYS: &str = "g gas test on/off | r remote off | c clear warnings | q quit";
+
+/// Draws `dash` as at `now` on the whole frame.
+pub fn render(frame: &mut Frame, dash: &Dashboard, now: Duration) {
+    let area = frame.area();
+    if area.width >= FULL_WIDTH && area.height >= FULL_HEIGHT {
+        full(frame, dash, now, area);
+    } else {
+        compact(frame, dash, area);
+    }
+}
+
+fn full(frame: &mut Frame, dash: &Dashboard, now: Duration, area: Rect) {
+    let [top, middle, bottom, keys] = Layout::vertical([
+        Constraint::Length(6),
+        Constraint::Length(6),
+        Constraint::Min(6),
+        Constraint::Length(2),
+    ])
+    .areas(area);
+    let [unit, process, lamps] = Layout::horizontal([
+        Constraint::Percentage(40),
+        Constraint::Percentage(30),
+        Constraint::Percentage(30),
+    ])
+    .areas(top);
+    frame.render_widget(
+        Paragraph::new(unit_lines(dash)).block(Block::bordered().title(" Unit and link ")),
+        unit,
+    );
+    frame.render_widget(
+        Paragraph::new(process_lines(dash)).block(Block::bordered().title(" Process ")),
+        process,
+    );
+    frame.render_widget(
+        Paragraph::new(lamp_lines(dash)).block(Block::bordered().title(" Signals ")),
+        lamps,
+    );
+
+    let [fault, consumables] =
+        Layout::horizontal([Constraint::Percentage(65), Constraint::Percentage(35)]).areas(middle);
+    frame.render_widget(
+        Paragraph::new(fault_lines(dash))
+            .wrap(Wrap { trim: true })
+            .block(Block::bordered().title(" Fault ")),
+        fault,
+    );
+    consumables_panel(frame, dash, consumables);
+
+    let [plot, events] =
+        Layout::horizontal([Constraint::Percentage(55), Constraint::Percentage(45)]).areas(bottom);
+    chart(frame, dash, now, plot);
+    let shown = usize::from(events.height.saturating_sub(2));
+    let event_lines: Vec<Line> = dash
+        .events
+        .iter()
+        .rev()
+        .take(shown)
+        .map(|(at, text)| Line::from(format!("{} {text}", time_of_day(dash, *at))))
+        .collect();
+    frame.render_widget(
+        Paragraph::new(event_lines).block(Block::bordered().title(" Events (newest first) ")),
+        events,
+    );
+    frame.render_widget(Paragraph::new(key_lines(dash)), keys);
+}
+
+fn compact(frame: &mut Frame, dash: &Dashboard, area: Rect) {
+    let mut lines = unit_lines(dash);
+    lines.truncate(2);
+    lines.extend(process_lines(dash).into_iter().take(2));
+    lines.push(lamp_row(dash));
+    lines.extend(fault_lines(dash).into_iter().take(2));
+    lines.extend(key_lines(dash));
+    frame.render_widget(Paragraph::new(lines).wrap(Wrap { trim: true }), area);
+}
+
+fn field<'a>(dash: &'a Dashboard, key: &str) -> &'a str {
+    dash.status.as_ref().and_then(|s| s.get(key)).unwrap_or("-")
+}
+
+fn unit_lines(dash: &Dashboard) -> Vec<Line<'static>> {
+    let connection = match &dash.connection {
+        Connection::Connecting => Span::styled("connecting", Style::new().fg(Color::Yellow)),
+        Connection::Up => Span::styled("connected", Style::new().fg(Color::Green)),
+        Connection::Lost { reason, .. } => Span::styled(
+            format!("LOST ({reason}), reconnecting"),
+            Style::new().fg(Color::Red).add_modifier(Modifier::BOLD),
+        ),
+    };
+    let link = field(dash, "link");
+    let link_style = match link {
+        "UP" => Style::new().fg(Color::Green),
+        "DOWN" => Style::new().fg(Color::Red),
+        _ => Style::new(),
+    };
+    let errors = dash
+        .errors_per_minute()
+        .map_or("-".to_string(), |e| format!("{e:.1}"));
+    let mut lines = vec![
+        Line::from(vec![Span::raw(format!("{}: ", dash.source)), connection]),
+        Line::from(format!(
+            "model {}  family {}",
+            field(dash, "model"),
+            field(dash, "family")
+        )),
+        Line::from(vec![
+            Span::raw("unit link "),
+            Span::styled(link.to_string(), link_style),
+            Span::raw(format!("  errors/min {errors}")),
+        ]),
+    ];
+    if let Some(framing) = &dash.framing {
+        lines.push(Line::from(format!("framing {framing}")));
+    }
+    lines
+}
+
+fn process_lines(dash: &Dashboard) -> Vec<Line<'static>> {
+    let mut lines = vec![
+        Line::from(format!(
+            "set    {} A  {} psi  {}",
+            field(dash, "amps"),
+            field(dash, "psi"),
+            field(dash, "mode")
+        )),
+        Line::from(format!(
+            "actual {} A  {} psi",
+            field(dash, "out_amps"),
+            field(dash, "out_psi")
+        )),
+        Line::from(format!(
+            "remote {}  gas test {}",
+            field(dash, "remote"),
+            if dash.gas_test { "ON" } else { "OFF" }
+        )),
+    ];
+    if let Some(state) = dash.status.as_ref().and_then(|s| s.get("state_name")) {
+        lines.push(Line::from(format!("state {state}")));
+    }
+    lines
+}
+
+fn lamp(name: &str, on: Option<bool>, on_color: Color) -> Span<'static> {
+    let (mark, style) = match on {
+        Some(true) => ("●", Style::new().fg(on_color).add_modifier(Modifier::BOLD)),
+        Some(false) => ("○", Style::new().fg(Color::DarkGray)),
+        None => ("?", Style::new().fg(Color::DarkGray)),
+    };
+    Span::styled(format!("{mark} {name}  "), style)
+}
+
+/// The lamps, unknown (`?`) without a fresh STATUS over a live connection.
+fn lamps(dash: &Dashboard) -> [Span<'static>; 5] {
+    let known = dash.connection == Connection::Up && dash.status.is_some();
+    let on = |key: &str| known.then(|| field(dash, key) == "ON");
+    let fault = known.then(|| field(dash, "fault") != "none");
+    [
+        lamp("START", on("start"), Color::Green),
+        lamp("ARC_OK", on("arc_ok"), Color::Green),
+        lamp("READY", on("ready"), Color::Green),
+        lamp("FAULT", fault, Color::Red),
+        lamp("MOTION", on("motion"), Color::Green),
+    ]
+}
+
+fn lamp_lines(dash: &Dashboard) -> Vec<Line<'static>> {
+    let [start, arc_ok, ready, fault, motion] = lamps(dash);
+    vec![
+        Line::from(vec![start, arc_ok]),
+        Line::from(vec![ready, fault]),
+        Line::from(vec![motion]),
+    ]
+}
+
+fn lamp_row(dash: &Dashboard) -> Line<'static> {
+    Line::from(Vec::from(lamps(dash)))
+}
+
+fn fault_lines(dash: &Dashboard) -> Vec<Line<'static>> {
+    match &dash.fault {
+        None if dash.status.is_some() => vec![Line::from("no fault")],
+        None => vec![Line::from("-")],
+        Some(fault) => {
+            let steps = match fault.action.as_str() {
+                "required" => "steps required",
+                "recommended" => "steps recommended",
+                "none" => "no steps needed",
+                _ => "steps: asking",
+            };
+            vec![
+                Line::from(Span::styled(
+                    format!("FAULT {} ({steps})", fault.code),
+                    Style::new().fg(Color::Red).add_modifier(Modifier::BOLD),
+                )),
+                Line::from(fault.text.clone()),
+            ]
+        }
+    }
+}
+
+fn consumables_panel(frame: &mut Frame, dash: &Dashboard, area: Rect) {
+    let block = Block::bordered().title(" Consumables ");
+    match &dash.consumables {
+        Consumables::Unknown => frame.render_widget(Paragraph::new("-").block(block), area),
+        Consumables::NotReported => frame.render_widget(
+            Paragraph::new("not reported by this bridge")
+                .wrap(Wrap { trim: true })
+                .block(block),
+            area,
+        ),
+        Consumables::Reported(fields) => {
+            // The share of life used, where the reply gives one as a percentage.
+            let used = fields.iter().find_map(|(key, value)| {
+                (key.contains("used"))
+                    .then(|| value.trim_end_matches('%').parse::<f64>().ok())
+                    .flatten()
+            });
+            match used {
+                Some(percent) => frame.render_widget(
+                    Gauge::default()
+                        .block(block)
+                        .gauge_style(Style::new().fg(if percent >= 90.0 {
+                            Color::Red
+                        } else {
+                            Color::Green
+                        }))
+                        .ratio((percent / 100.0).clamp(0.0, 1.0))
+                        .label(format!("{percent:.0} % used")),
+                    area,
+                ),
+                None => {
+                    let words: Vec<String> =
+                        fields.iter().map(|(k, v)| format!("{k}={v}")).collect();
+                    frame.render_widget(
+                        Paragraph::new(words.join(" "))
+                            .wrap(Wrap { trim: true })
+                            .block(block),
+                        area,
+                    );
+                }
+            }
+        }
+    }
+}
+
+fn chart(frame: &mut Frame, dash: &Dashboard, now: Duration, area: Rect) {
+    let ago = |at: Duration| -(now.saturating_sub(at).as_secs_f64());
+    let amps: Vec<(f64, f64)> = dash
+        .samples
+        .iter()
+        .filter_map(|s| Some((ago(s.at), s.amps?)))
+        .collect();
+    let psi: Vec<(f64, f64)> = dash
+        .samples
+        .iter()
+        .filter_map(|s| Some((ago(s.at), s.psi?)))
+        .collect();
+    let top = amps
+        .iter()
+        .chain(&psi)
+        .map(|&(_, v)| v)
+        .fold(10.0_f64, f64::max)
+        .ceil();
+    let window = PLOT_WINDOW.as_secs_f64();
+    let datasets = vec![
+        Dataset::default()
+            .name("out_amps")
+            .marker(Marker::Braille)
+            .graph_type(GraphType::Line)
+            .style(Style::new().fg(Color::Yellow))
+            .data(&amps),
+        Dataset::default()
+            .name("out_psi")
+            .marker(Marker::Braille)
+            .graph_type(GraphType::Line)
+            .style(Style::new().fg(Color::Cyan))
+            .data(&psi),
+    ];
+    let chart = Chart::new(datasets)
+        .block(Block::bordered().title(" Actual current (A) and pressure (psi) "))
+        .hidden_legend_constraints((Constraint::Ratio(1, 2), Constraint::Ratio(1, 2)))
+        .x_axis(
+            Axis::default()
+                .bounds([-window, 0.0])
+                .labels([format!("-{:.0} min", window / 60.0), "now".to_string()]),
+        )
+        .y_axis(
+            Axis::default()
+                .bounds([0.0, top])
+                .labels(["0".to_string(), format!("{top:.0}")]),
+        );
+    frame.render_widget(chart, area);
+}
+
+fn key_lines(dash: &Dashboard) -> Vec<Line<'static>> {
+    let mut lines = vec![Line::from(Span::styled(
+        KEYS,
+        Style::new().add_modifier(Modifier::REVERSED),
+    ))];
+    if let Some(action) = &dash.last_action {
+        lines.push(Line::from(action.clone()));
+    }
+    lines
+}
+
+/// `HH:MM:SS` (UTC) of a time since the monitor started.
+fn time_of_day(dash: &Dashboard, at: Duration) -> String {
+    let seconds = (dash.wall_origin_s + at.as_secs()) % 86_400;
+    format!(
+        "{:02}:{:02}:{:02}",
+        seconds / 3600,
+        seconds / 60 % 60,
+        seconds % 60
+    )
+}
