@@ -46,10 +46,10 @@ impl Source {
     pub fn label(&self) -> String {
         match self {
             Source::Port { device, .. } => device.clone(),
-            // `sim sync65`, `emu hpr130 fault 044`: the subcommand and the values.
+            // `sim sync65`, `emu hpr130 --fault 044`.
             Source::Child { args } => args
                 .iter()
-                .filter(|a| !a.starts_with("--"))
+                .filter(|a| !matches!(a.as_str(), "--ps" | "--events"))
                 .cloned()
                 .collect::<Vec<_>>()
                 .join(" "),

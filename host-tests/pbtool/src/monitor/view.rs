@@ -31,7 +31,7 @@ pub fn render(frame: &mut Frame, dash: &Dashboard, now: Duration) {
 
 fn full(frame: &mut Frame, dash: &Dashboard, now: Duration, area: Rect) {
     let [top, middle, bottom, keys] = Layout::vertical([
-        Constraint::Length(6),
+        Constraint::Length(7),
         Constraint::Length(6),
         Constraint::Min(6),
         Constraint::Length(2),
@@ -44,7 +44,9 @@ fn full(frame: &mut Frame, dash: &Dashboard, now: Duration, area: Rect) {
     ])
     .areas(top);
     frame.render_widget(
-        Paragraph::new(unit_lines(dash)).block(Block::bordered().title(" Unit and link ")),
+        Paragraph::new(unit_lines(dash))
+            .wrap(Wrap { trim: true })
+            .block(Block::bordered().title(" Unit and link ")),
         unit,
     );
     frame.render_widget(
@@ -67,7 +69,7 @@ fn full(frame: &mut Frame, dash: &Dashboard, now: Duration, area: Rect) {
     consumables_panel(frame, dash, consumables);
 
     let [plot, events] =
-        Layout::horizontal([Constraint::Percentage(55), Constraint::Percentage(45)]).areas(bottom);
+        Layout::horizontal([Constraint::Percentage(50), Constraint::Percentage(50)]).areas(bottom);
     chart(frame, dash, now, plot);
     let shown = usize::from(events.height.saturating_sub(2));
     let event_lines: Vec<Line> = dash
@@ -86,7 +88,6 @@ fn full(frame: &mut Frame, dash: &Dashboard, now: Duration, area: Rect) {
 
 fn compact(frame: &mut Frame, dash: &Dashboard, area: Rect) {
     let mut lines = unit_lines(dash);
-    lines.truncate(2);
     lines.extend(process_lines(dash).into_iter().take(2));
     lines.push(lamp_row(dash));
     lines.extend(fault_lines(dash).into_iter().take(2));
@@ -94,8 +95,14 @@ fn compact(frame: &mut Frame, dash: &Dashboard, area: Rect) {
     frame.render_widget(Paragraph::new(lines).wrap(Wrap { trim: true }), area);
 }
 
+/// A STATUS field; `-` while not connected, as the last reply may no longer hold.
 fn field<'a>(dash: &'a Dashboard, key: &str) -> &'a str {
-    dash.status.as_ref().and_then(|s| s.get(key)).unwrap_or("-")
+    let live = dash.connection == Connection::Up;
+    dash.status
+        .as_ref()
+        .filter(|_| live)
+        .and_then(|s| s.get(key))
+        .unwrap_or("-")
 }
 
 fn unit_lines(dash: &Dashboard) -> Vec<Line<'static>> {
@@ -197,6 +204,9 @@ fn lamp_row(dash: &Dashboard) -> Line<'static> {
 }
 
 fn fault_lines(dash: &Dashboard) -> Vec<Line<'static>> {
+    if dash.connection != Connection::Up {
+        return vec![Line::from("unknown: not connected")];
+    }
     match &dash.fault {
         None if dash.status.is_some() => vec![Line::from("no fault")],
         None => vec![Line::from("-")],

@@ -1,0 +1,222 @@
+//! `pbtool monitor`: the screen drawn on ratatui's test backend from reply lines, the real
+//! `pbtool sim` child through the monitor's transport, and `--snapshot`.
+
+use std::path::Path;
+use std::process::Command;
+use std::time::{Duration, Instant};
+
+use pbtool::monitor::transport::Source;
+use pbtool::monitor::{Dashboard, Session, screen_text};
+
+const S: Duration = Duration::from_secs(1);
+
+// What `pbtool sim --ps sync65 --fault 0-50-0 --events` answers (10:00:00 UTC is the start).
+const STATUS_FAULT: &str = "OK link=UP model=Powermax65 family=SYNC remote=OFF mode=CUT amps=65 psi=72 out_amps=0 out_psi=0 fault=0-50-0 start=OFF motion=OFF arc_ok=OFF ready=OFF";
+const FAULT: &str = "OK fault=0-50-0 action=required text=The cartridge is off, the torch was disconnected when you set the plasma power supply to ON (I), or the torch was in the yellow lock (X) position during a restart.";
+const TEN_O_CLOCK: u64 = 10 * 3600;
+
+/// A dashboard connected to the simulator, its first replies (events on, no CONSUMABLES) in.
+fn connected() -> Dashboard {
+    let mut dash = Dashboard::new("sim sync65", None, TEN_O_CLOCK);
+    dash.connected(Duration::ZERO);
+    dash.apply_line(Duration::ZERO, "OK events=ON");
+    dash.apply_line(Duration::ZERO, "ERR SYNTAX unknown command");
+    dash
+}
+
+fn with_fault() -> Dashboard {
+    let mut dash = connected();
+    dash.apply_line(S, "!LINK UP model=Powermax65/85/105 SYNC");
+    dash.poll(S);
+    dash.apply_line(S, STATUS_FAULT);
+    dash.apply_line(S, "OK link_ok=21 link_failed=0");
+    dash.poll(2 * S);
+    dash.apply_line(2 * S, STATUS_FAULT);
+    dash.apply_line(2 * S, FAULT);
+    dash
+}
+
+#[test]
+fn the_screen_for_a_fault() {
+    let screen = screen_text(&with_fault(), 2 * S, 100, 30);
+    for wanted in [
+        "model Powermax65  family SYNC",
+        "unit link UP",
+        "set    65 A  72 psi  CUT",
+        "actual 0 A  0 psi",
+        "● FAULT",
+        "○ READY",
+        "○ START",
+        "FAULT 0-50-0 (steps required)",
+        "The cartridge is off",
+        "not reported by this bridge",
+        "10:00:01 LINK UP model=Powermax65",
+        "g gas test on/off | r remote off | c clear warnings | q quit",
+        "Actual current (A) and pressure (psi)",
+    ] {
+        assert!(screen.contains(wanted), "{wanted:?} missing:\n{screen}");
+    }
+}
+
+#[test]
+fn the_screen_for_a_lost_connection() {
+    let mut dash = with_fault();
+    dash.lost(3 * S, "the child exited");
+    let screen = screen_text(&dash, 4 * S, 100, 30);
+    assert!(
+        screen.contains("sim sync65: LOST (the child exited),"),
+        "{screen}"
+    );
+    assert!(
+        screen.contains("10:00:03 connection lost: the child exited"),
+        "{screen}"
+    );
+    // Nothing is known while the connection is lost: the lamps say so.
+    assert!(screen.contains("reconnecting"), "{screen}");
+    assert!(screen.contains("unit link -"), "{screen}");
+    assert!(screen.contains("unknown: not connected"), "{screen}");
+    assert!(screen.contains("? FAULT"), "{screen}");
+    assert!(!screen.contains("● FAULT"), "{screen}");
+}
+
+#[test]
+fn the_screen_for_the_unit_link_down() {
+    let mut dash = connected();
+    dash.poll(S);
+    dash.apply_line(S, "!LINK DOWN reason=no_answer failures=3 last=timeout");
+    dash.apply_line(S, "OK link=DOWN model=- family=- remote=OFF mode=- amps=- psi=- out_amps=- out_psi=- fault=none start=OFF motion=OFF arc_ok=OFF ready=OFF");
+    let screen = screen_text(&dash, S, 100, 30);
+    assert!(screen.contains("unit link DOWN"), "{screen}");
+    assert!(screen.contains("LINK DOWN reason=no_answer"), "{screen}");
+}
+
+#[test]
+fn a_small_terminal_gets_the_compact_layout() {
+    let screen = screen_text(&with_fault(), 2 * S, 60, 12);
+    for wanted in [
+        "unit link UP",
+        "● FAULT",
+        "FAULT 0-50-0 (steps required)",
+        "g gas test on/off",
+    ] {
+        assert!(screen.contains(wanted), "{wanted:?} missing:\n{screen}");
+    }
+    assert!(!screen.contains("┌"), "no panels when small:\n{screen}");
+}
+
+#[test]
+fn any_size_draws_without_a_panic() {
+    let dash = with_fault();
+    for (width, height) in [
+        (0, 0),
+        (1, 1),
+        (10, 3),
+        (79, 24),
+        (80, 23),
+        (80, 24),
+        (250, 80),
+    ] {
+        let screen = screen_text(&dash, 2 * S, width, height);
+        assert_eq!(screen.lines().count(), usize::from(height));
+    }
+}
+
+fn pbtool_exe() -> &'static Path {
+    Path::new(env!("CARGO_BIN_EXE_pbtool"))
+}
+
+/// Steps `session` until `done`, for at most a minute (the child starts in real time).
+fn step_until(session: &mut Session, done: impl Fn(&Dashboard) -> bool) {
+    let deadline = Instant::now() + Duration::from_secs(60);
+    while !done(&session.dashboard) {
+        assert!(
+            Instant::now() < deadline,
+            "no such picture within a minute:\n{}",
+            screen_text(&session.dashboard, session.now(), 100, 30)
+        );
+        session.step(Duration::from_millis(50));
+    }
+}
+
+#[test]
+fn the_real_simulator_through_the_transport() {
+    let source = Source::child("sim", "sync65", Some("0-50-0"));
+    let mut session = Session::new(source, pbtool_exe(), None);
+    step_until(&mut session, |dash| {
+        dash.fault.as_ref().is_some_and(|f| f.action == "required")
+            && dash.status.is_some()
+            && dash.errors_per_minute().is_some()
+    });
+    let dash = &session.dashboard;
+    let status = dash.status.as_ref().expect("STATUS");
+    assert_eq!(status.get("model"), Some("Powermax65"));
+    assert_eq!(status.get("link"), Some("UP"));
+    assert_eq!(dash.errors_per_minute(), Some(0.0));
+    let fault = dash.fault.as_ref().expect("fault");
+    assert_eq!(fault.code, "0-50-0");
+    assert!(fault.text.starts_with("The cartridge is off"), "{fault:?}");
+    assert_eq!(
+        dash.consumables,
+        pbtool::monitor::state::Consumables::NotReported
+    );
+    assert!(
+        dash.events.iter().any(|(_, e)| e.starts_with("LINK UP ")),
+        "{:?}",
+        dash.events
+    );
+    // A key's command goes out and its reply comes back on screen.
+    assert!(session.key('c'));
+    step_until(&mut session, |dash| {
+        dash.last_action
+            .as_deref()
+            .is_some_and(|a| a.starts_with("CLEARWARN: ERR UNSUPPORTED"))
+    });
+}
+
+#[test]
+fn a_child_that_cannot_start_is_shown_and_retried() {
+    let source = Source::child("sim", "sync65", None);
+    let mut session = Session::new(source, Path::new("/nonexistent/pbtool"), None);
+    session.step(Duration::ZERO);
+    let screen = screen_text(&session.dashboard, session.now(), 100, 30);
+    assert!(
+        screen.contains("sim sync65: LOST (cannot start"),
+        "{screen}"
+    );
+    assert!(screen.contains("connection lost: cannot start"), "{screen}");
+    // No second attempt within the reconnect interval: one note only.
+    session.step(Duration::ZERO);
+    let attempts = session
+        .dashboard
+        .events
+        .iter()
+        .filter(|(_, e)| e.starts_with("connection lost"))
+        .count();
+    assert_eq!(attempts, 1);
+}
+
+#[test]
+fn snapshot_prints_one_frame() {
+    let output = Command::new(pbtool_exe())
+        .args([
+            "monitor",
+            "--sim",
+            "pm65",
+            "--fault",
+            "0-50-0",
+            "--snapshot",
+            "--size",
+            "100x30",
+        ])
+        .output()
+        .expect("pbtool runs");
+    assert!(output.status.success(), "{output:?}");
+    let screen = String::from_utf8(output.stdout).expect("UTF-8");
+    assert_eq!(screen.lines().count(), 30, "{screen}");
+    assert!(
+        screen.contains("sim pm65 --fault 0-50-0: connected"),
+        "{screen}"
+    );
+    assert!(screen.contains("FAULT 0-50-0"), "{screen}");
+    assert!(screen.contains("not reported by this bridge"), "{screen}");
+}
