@@ -52,7 +52,7 @@ fn the_screen_for_a_fault() {
         "not reported by this bridge",
         "10:00:01 LINK UP model=Powermax65",
         "g gas test on/off | r remote off | c clear warnings | q quit",
-        "Actual current (A) and pressure (psi)",
+        "Actual current A and pressure psi",
     ] {
         assert!(screen.contains(wanted), "{wanted:?} missing:\n{screen}");
     }
@@ -219,4 +219,97 @@ fn snapshot_prints_one_frame() {
     );
     assert!(screen.contains("FAULT 0-50-0"), "{screen}");
     assert!(screen.contains("not reported by this bridge"), "{screen}");
+}
+
+#[test]
+fn a_child_that_exits_is_restarted() {
+    // `pbtool decode` without frames exits at once: the monitor restarts it every second.
+    let source = Source::Child {
+        args: vec!["decode".to_string()],
+    };
+    let mut session = Session::new(source, pbtool_exe(), None);
+    let connections = |dash: &Dashboard| {
+        dash.events
+            .iter()
+            .filter(|(_, e)| e.starts_with("connected to decode"))
+            .count()
+    };
+    step_until(&mut session, |dash| connections(dash) >= 2);
+    let times: Vec<Duration> = session
+        .dashboard
+        .events
+        .iter()
+        .filter(|(_, e)| e.starts_with("connected to"))
+        .map(|(at, _)| *at)
+        .collect();
+    assert!(
+        times[1] - times[0] >= pbtool::monitor::RECONNECT_EVERY,
+        "{times:?}"
+    );
+    assert!(
+        session
+            .dashboard
+            .events
+            .iter()
+            .any(|(_, e)| e.starts_with("connection lost: ")),
+        "{:?}",
+        session.dashboard.events
+    );
+}
+
+/// Two minutes of cutting at 45 A on a SYNC unit, then the gas pressure drops: the README's
+/// screen.
+fn readme_dashboard() -> (Dashboard, Duration) {
+    let mut dash = connected();
+    dash.apply_line(S, "!LINK UP model=Powermax65/85/105 SYNC");
+    dash.apply_line(S, "!REMOTE ON");
+    dash.apply_line(S, "!SETTINGS applied mode=CUT amps=45 psi=72");
+    let mut now = S;
+    for second in 2..150u32 {
+        now = second * S;
+        let cutting = (second / 20) % 2 == 1 && second < 140;
+        if second % 20 == 0 && second < 140 {
+            dash.apply_line(now, "!ARC ON");
+        } else if second % 20 == 19 && second < 140 {
+            dash.apply_line(now, "!ARC OFF");
+        }
+        let (on, amps, psi) = if cutting {
+            ("ON", "44.5", "71")
+        } else {
+            ("OFF", "0", "72")
+        };
+        let fault = if second >= 145 { "0-20-0" } else { "none" };
+        for command in dash.poll(now) {
+            let reply = match command {
+                pbtool::monitor::state::Command::Status => format!(
+                    "OK link=UP model=Powermax65 family=SYNC remote=ON mode=CUT amps=45 psi=72 out_amps={amps} out_psi={psi} fault={fault} start={on} motion={on} arc_ok={on} ready=ON"
+                ),
+                pbtool::monitor::state::Command::Fault => "OK fault=0-20-0 action=recommended text=The gas pressure is lower than the minimum pressure for the selected process, operating mode, torch, lead length, and cartridge type.".to_string(),
+                _ => format!("OK link_ok={} link_failed={}", second * 20, second / 30),
+            };
+            dash.apply_line(now, &reply);
+        }
+        if second == 145 {
+            dash.apply_line(now, "!FAULT 0-20-0 The gas pressure is lower than the minimum pressure for the selected process, operating mode, torch, lead length, and cartridge type.");
+        }
+    }
+    (dash, now)
+}
+
+#[test]
+fn the_readme_shows_the_screen_as_drawn() {
+    let (dash, now) = readme_dashboard();
+    let screen = screen_text(&dash, now, 100, 30);
+    let readme = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../../README.md"))
+        .expect("README.md");
+    let start = "<!-- monitor screen: tests/pbtool_monitor.rs -->\n```text\n";
+    let shown = readme
+        .split_once(start)
+        .and_then(|(_, rest)| rest.split_once("```\n"))
+        .map(|(block, _)| block)
+        .expect("the README's monitor screen block");
+    assert_eq!(
+        shown, screen,
+        "the README's screen differs from the drawn one:\n{screen}"
+    );
 }

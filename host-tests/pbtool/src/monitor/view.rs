@@ -307,8 +307,15 @@ fn chart(frame: &mut Frame, dash: &Dashboard, now: Duration, area: Rect) {
             .data(&psi),
     ];
     let chart = Chart::new(datasets)
-        .block(Block::bordered().title(" Actual current (A) and pressure (psi) "))
-        .hidden_legend_constraints((Constraint::Ratio(1, 2), Constraint::Ratio(1, 2)))
+        // The colours say which line is which: a legend box would hide the newest points.
+        .block(Block::bordered().title(Line::from(vec![
+            Span::raw(" Actual "),
+            Span::styled("current A", Style::new().fg(Color::Yellow)),
+            Span::raw(" and "),
+            Span::styled("pressure psi", Style::new().fg(Color::Cyan)),
+            Span::raw(" "),
+        ])))
+        .hidden_legend_constraints((Constraint::Length(0), Constraint::Length(0)))
         .x_axis(
             Axis::default()
                 .bounds([-window, 0.0])
