@@ -64,7 +64,7 @@ fn the_screen_for_a_lost_connection() {
     dash.lost(3 * S, "the child exited");
     let screen = screen_text(&dash, 4 * S, 100, 30);
     assert!(
-        screen.contains("sim sync65: LOST (the child exited),"),
+        screen.contains("sim sync65: LOST, reconnecting"),
         "{screen}"
     );
     assert!(
@@ -180,7 +180,11 @@ fn a_child_that_cannot_start_is_shown_and_retried() {
     session.step(Duration::ZERO);
     let screen = screen_text(&session.dashboard, session.now(), 100, 30);
     assert!(
-        screen.contains("sim sync65: LOST (cannot start"),
+        screen.contains("sim sync65: LOST, reconnecting"),
+        "{screen}"
+    );
+    assert!(
+        screen.contains("│cannot start /nonexistent/pbtool"),
         "{screen}"
     );
     assert!(screen.contains("connection lost: cannot start"), "{screen}");
@@ -311,5 +315,26 @@ fn the_readme_shows_the_screen_as_drawn() {
     assert_eq!(
         shown, screen,
         "the README's screen differs from the drawn one:\n{screen}"
+    );
+}
+
+#[test]
+fn a_port_that_is_not_there_is_shown() {
+    let framing = plasma_protocol::serial::PortConfig::MODBUS_DEFAULT;
+    let source = Source::Port {
+        device: "/dev/nonexistent-pbtool-monitor".to_string(),
+        framing,
+    };
+    let mut session = Session::new(source, pbtool_exe(), Some("19200 8E1".to_string()));
+    session.step(Duration::ZERO);
+    let screen = screen_text(&session.dashboard, session.now(), 100, 30);
+    assert!(
+        screen.contains("/dev/nonexistent-pbtool-monitor: LOST,"),
+        "{screen}"
+    );
+    assert!(screen.contains("framing 19200 8E1"), "{screen}");
+    assert!(
+        screen.contains("connection lost: serial port"),
+        "the port's error:\n{screen}"
     );
 }

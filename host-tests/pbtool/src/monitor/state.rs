@@ -238,7 +238,17 @@ impl Dashboard {
             Line::Event(event) => self.event(now, event),
             Line::Other(_) => {}
             reply => {
-                if let Some(command) = self.pending.pop_front() {
+                // Replies come in order. One that names its command drops the commands
+                // before it (their replies were lost), and one that names a command not
+                // awaited is a late reply to one given up on: the pairing recovers either way.
+                let command = match answered_by(&reply) {
+                    Some(named) => match self.pending.iter().position(|&p| p == named) {
+                        Some(at) => self.pending.drain(..=at).last(),
+                        None => None,
+                    },
+                    None => self.pending.pop_front(),
+                };
+                if let Some(command) = command {
                     self.pending_since = now;
                     self.reply(now, command, reply);
                 }
@@ -365,6 +375,22 @@ impl Dashboard {
     }
 }
 
+/// The command an `OK` reply answers, where its first field says so.
+fn answered_by(reply: &Line) -> Option<Command> {
+    let Line::Ok(fields) = reply else {
+        return None;
+    };
+    let (first, value) = fields.iter().next()?;
+    match first {
+        "link" => Some(Command::Status),
+        "fault" => Some(Command::Fault),
+        "events" => Some(Command::EventsOn),
+        "gastest" => Some(Command::GasTest(value == "ON")),
+        _ if fields.get("link_ok").is_some() => Some(Command::Counters),
+        _ => None,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -420,6 +446,36 @@ mod tests {
         assert!(!dash.poll(S).is_empty());
         assert_eq!(dash.poll(S + REPLY_TIMEOUT - Duration::from_millis(1)), []);
         assert_eq!(dash.poll(S + REPLY_TIMEOUT), [Command::Status]);
+    }
+
+    #[test]
+    fn late_replies_pair_again() {
+        let mut dash = Dashboard::new("emu sync65", None, 0);
+        dash.connected(Duration::ZERO);
+        // The board is slow to come up: the first commands time out.
+        assert_eq!(
+            dash.poll(REPLY_TIMEOUT),
+            [Command::Status, Command::Counters]
+        );
+        // Their late replies come, then the STATUS reply.
+        dash.apply_line(4 * S, "OK events=ON");
+        dash.apply_line(4 * S, "ERR SYNTAX unknown command");
+        dash.apply_line(
+            4 * S,
+            "OK link=UP model=Powermax65 fault=none out_amps=0 out_psi=0",
+        );
+        dash.apply_line(4 * S, "OK link_ok=3 link_failed=0");
+        // At most a round is lost: the next STATUS pairs.
+        assert_eq!(dash.poll(5 * S), [Command::Status]);
+        dash.apply_line(
+            5 * S,
+            "OK link=UP model=Powermax65 fault=none out_amps=0 out_psi=0",
+        );
+        assert_eq!(
+            dash.status.as_ref().and_then(|s| s.get("model")),
+            Some("Powermax65")
+        );
+        assert_eq!(dash.poll(6 * S), [Command::Status]);
     }
 
     #[test]

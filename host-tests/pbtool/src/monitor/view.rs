@@ -109,8 +109,8 @@ fn unit_lines(dash: &Dashboard) -> Vec<Line<'static>> {
     let connection = match &dash.connection {
         Connection::Connecting => Span::styled("connecting", Style::new().fg(Color::Yellow)),
         Connection::Up => Span::styled("connected", Style::new().fg(Color::Green)),
-        Connection::Lost { reason, .. } => Span::styled(
-            format!("LOST ({reason}), reconnecting"),
+        Connection::Lost { .. } => Span::styled(
+            "LOST, reconnecting",
             Style::new().fg(Color::Red).add_modifier(Modifier::BOLD),
         ),
     };
@@ -138,6 +138,13 @@ fn unit_lines(dash: &Dashboard) -> Vec<Line<'static>> {
     ];
     if let Some(framing) = &dash.framing {
         lines.push(Line::from(format!("framing {framing}")));
+    }
+    // Last, as it may be long (a port's error says what to check) and is cut where it must.
+    if let Connection::Lost { reason, .. } = &dash.connection {
+        lines.push(Line::from(Span::styled(
+            reason.clone(),
+            Style::new().fg(Color::Red),
+        )));
     }
     lines
 }
