@@ -243,7 +243,7 @@ impl Dashboard {
                 // awaited is a late reply to one given up on: the pairing recovers either way.
                 let command = match answered_by(&reply) {
                     Some(named) => match self.pending.iter().position(|&p| p == named) {
-                        Some(at) => self.pending.drain(..=at).last(),
+                        Some(at) => self.pending.drain(..=at).next_back(),
                         None => None,
                     },
                     None => self.pending.pop_front(),
