@@ -39,7 +39,8 @@ pub struct MonitorArgs {
     /// With --emu or --sim: start the unit with this fault (`0-50-0`, HPR `044`).
     #[arg(long, value_name = "CODE", conflicts_with = "port")]
     pub fault: Option<String>,
-    /// Print one frame to stdout once the picture is complete (or after 20 s), and exit.
+    /// Print one frame to stdout once the picture is complete, and exit; after 20 s without
+    /// one, the frame as it is and exit status 1.
     #[arg(long)]
     pub snapshot: bool,
     /// With --snapshot: the frame's size, WIDTHxHEIGHT.
@@ -84,9 +85,14 @@ pub fn monitor(args: &MonitorArgs) -> ExitCode {
     let mut session = Session::new(source, &exe, framing);
     if args.snapshot {
         let (width, height) = args.size;
-        let text = snapshot(&mut session, width, height, Duration::from_secs(20));
+        let (text, complete) = snapshot(&mut session, width, height, Duration::from_secs(20));
         let _ = io::stdout().lock().write_all(text.as_bytes());
-        return ExitCode::SUCCESS;
+        // A frame of a bridge that did not answer is still printed: it says what is wrong.
+        return if complete {
+            ExitCode::SUCCESS
+        } else {
+            ExitCode::FAILURE
+        };
     }
     let mut terminal = ratatui::init();
     let result = run(&mut terminal, &mut session);

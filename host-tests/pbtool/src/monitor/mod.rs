@@ -182,13 +182,14 @@ where
 }
 
 /// Connects, waits (up to `limit`) until the dashboard has a complete picture, and returns
-/// one frame of `width` x `height` as text.
-pub fn snapshot(session: &mut Session, width: u16, height: u16, limit: Duration) -> String {
+/// one frame of `width` x `height` as text, and whether the picture was complete.
+pub fn snapshot(session: &mut Session, width: u16, height: u16, limit: Duration) -> (String, bool) {
     let deadline = Instant::now() + limit;
     while !session.settled() && Instant::now() < deadline {
         session.step(TICK);
     }
-    screen_text(&session.dashboard, session.now(), width, height)
+    let text = screen_text(&session.dashboard, session.now(), width, height);
+    (text, session.settled())
 }
 
 /// `dash` drawn at `now` on a `width` x `height` screen, as lines of text (trailing blanks
