@@ -58,6 +58,7 @@
 
 pub mod ram_flash;
 mod record;
+pub mod history;
 pub mod verified;
 
 use core::ops::Range;
