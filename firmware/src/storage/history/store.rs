@@ -168,27 +168,27 @@ impl<F: NorFlash> HistoryStore<F> {
         (self.region.start..self.region.end).step_by(F::ERASE_SIZE)
     }
 
-    /// Erases every page whose two page-state words are both a mix of bits: what an erase
+    /// Empties every page whose two page-state words are both a mix of bits: what an erase
     /// torn by a power cut leaves of a closed page (a torn marker program changes one word,
     /// which sequential-storage itself reads correctly). Returns how many.
     async fn erase_torn_pages(&mut self) -> Result<u32, StoreError<F::Error>> {
         let mut erased = 0;
         for page in self.pages() {
             if self.page_markers(page).await? == [false, false] {
-                self.erase_page(page).await?;
+                self.empty_page(page).await?;
                 erased += 1;
             }
         }
         Ok(erased)
     }
 
-    /// After sequential-storage reported corruption it could not repair: erases the first
+    /// After sequential-storage reported corruption it could not repair: empties the first
     /// page with a mixed page-state word, or else the first page in use.
     async fn erase_a_damaged_page(&mut self) -> Result<(), StoreError<F::Error>> {
         let mut first_used = None;
         for page in self.pages() {
             if self.page_markers(page).await? != [true, true] {
-                return self.erase_page(page).await;
+                return self.empty_page(page).await;
             }
             let mut word = [0u8; 8];
             self.flash
@@ -199,7 +199,21 @@ impl<F: NorFlash> HistoryStore<F> {
                 first_used = Some(page);
             }
         }
-        self.erase_page(first_used.unwrap_or(self.region.start)).await
+        self.empty_page(first_used.unwrap_or(self.region.start))
+            .await
+    }
+
+    /// Erases `page` and marks it closed: an empty page in the middle of the queue. A page
+    /// that is only erased would read as the free page after the newest, and the queue would
+    /// lose its pages after it (and count sequence numbers again from before them).
+    async fn empty_page(&mut self, page: u32) -> Result<(), StoreError<F::Error>> {
+        self.erase_page(page).await?;
+        let zeros = [0u8; 32];
+        let word = zeros.get(..F::WRITE_SIZE).ok_or(StoreError::Internal)?;
+        for at in [page, page + F::ERASE_SIZE as u32 - word.len() as u32] {
+            self.flash.write(at, word).await.map_err(StoreError::Flash)?;
+        }
+        Ok(())
     }
 
     async fn erase_page(&mut self, page: u32) -> Result<(), StoreError<F::Error>> {
