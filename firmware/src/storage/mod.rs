@@ -56,9 +56,9 @@
     reason = "indices are the two copy slots (0 or 1) and lengths that `emit` wrote into the same buffer"
 )]
 
+pub mod history;
 pub mod ram_flash;
 mod record;
-pub mod history;
 pub mod verified;
 
 use core::ops::Range;

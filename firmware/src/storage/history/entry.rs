@@ -228,7 +228,9 @@ fn fault_fields(fault: ActiveFault) -> [u8; 3] {
 
 fn fault_from(fields: &[u8]) -> Result<ActiveFault, EntryError> {
     match fields {
-        [0, lo, hi, ..] => Ok(ActiveFault::Powermax(FaultCode(u16::from_le_bytes([*lo, *hi])))),
+        [0, lo, hi, ..] => Ok(ActiveFault::Powermax(FaultCode(u16::from_le_bytes([
+            *lo, *hi,
+        ])))),
         [1, lo, hi, ..] => Ok(ActiveFault::Hpr(ErrorCode(u16::from_le_bytes([*lo, *hi])))),
         [other, _, _, ..] => Err(EntryError::UnknownKind(*other)),
         _ => Err(EntryError::Truncated),
