@@ -15,8 +15,9 @@
 //! 8-byte item header, padded to 8-byte words: 40 bytes. A 2 KiB page holds 50 entries after
 //! its two page-state words, so the proposed region of 8 pages (16 KiB, in bank 2 just below
 //! the settings) keeps at least the newest 350 entries (one page is erased to make room).
-//! RAM: the store holds a 32-byte read buffer; a [`Pending`] of `N` drafts takes about
-//! `N * 24` bytes.
+//! RAM: the store takes at most 64 bytes beside its flash driver (a 32-byte read buffer,
+//! the region and the counters); a [`Pending`] of `N` drafts at most `N * 24` bytes plus 8
+//! (both tied by a test).
 //!
 //! ```
 //! use embassy_futures::block_on;

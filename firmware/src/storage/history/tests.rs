@@ -331,3 +331,9 @@ fn a_storm_through_the_pending_queue_is_recorded_with_its_loss() {
     assert_eq!(newest.entries[0].event, draft(50).event);
     assert_eq!(newest.entries[1].event, Event::EntriesDropped { count: 42 });
 }
+
+#[test]
+fn the_ram_figures_in_the_module_docs_hold() {
+    assert!(core::mem::size_of::<Draft>() <= 24);
+    assert!(core::mem::size_of::<Store>() - core::mem::size_of::<Flash>() <= 64);
+}
