@@ -513,6 +513,46 @@ mod tests {
         assert_eq!(Entry::parse(&[]), Err(EntryError::Truncated));
     }
 
+    /// The code tables list every variant, in a fixed order: a new variant fails to compile
+    /// here until it has a code (appended, so stored codes keep their meaning).
+    #[test]
+    fn the_code_tables_cover_every_variant_in_order() {
+        for (code, cause) in RESET_CAUSES.iter().enumerate() {
+            let expected = match cause {
+                ResetCause::Panic => 0,
+                ResetCause::IndependentWatchdog => 1,
+                ResetCause::WindowWatchdog => 2,
+                ResetCause::LowPower => 3,
+                ResetCause::Firewall => 4,
+                ResetCause::Software => 5,
+                ResetCause::OptionByteLoad => 6,
+                ResetCause::PowerOn => 7,
+                ResetCause::Pin => 8,
+                ResetCause::Unknown => 9,
+            };
+            assert_eq!(code, expected);
+        }
+        for (code, interlock) in INTERLOCKS.iter().enumerate() {
+            let expected = match interlock {
+                Interlock::TorchOnAtPowerUp => 0,
+                Interlock::TorchOnAtWiringChange => 1,
+                Interlock::LinkDown => 2,
+                Interlock::RestartBlackout => 3,
+                Interlock::FaultRequiresAction => 4,
+                Interlock::TransferTimeout => 5,
+            };
+            assert_eq!(code, expected);
+        }
+        for (code, steps) in STEPS.iter().enumerate() {
+            let expected = match steps {
+                StepsRequired::Yes => 0,
+                StepsRequired::Recommended => 1,
+                StepsRequired::No => 2,
+            };
+            assert_eq!(code, expected);
+        }
+    }
+
     #[test]
     fn too_small_a_buffer_is_an_error() {
         let mut out = [0u8; 10];

@@ -337,3 +337,15 @@ fn the_ram_figures_in_the_module_docs_hold() {
     assert!(core::mem::size_of::<Draft>() <= 24);
     assert!(core::mem::size_of::<Store>() - core::mem::size_of::<Flash>() <= 64);
 }
+
+#[test]
+fn a_region_of_less_than_two_whole_pages_is_refused() {
+    let page = PAGE_SIZE as u32;
+    for region in [0..page, 0..page + 8, 8..2 * page + 8, page..0] {
+        assert!(matches!(
+            HistoryStore::new(Flash::new(), region.clone()),
+            Err(crate::storage::StoreError::BadRegion)
+        ));
+    }
+    assert!(HistoryStore::new(Flash::new(), page..3 * page).is_ok());
+}
