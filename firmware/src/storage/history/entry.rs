@@ -24,7 +24,7 @@ use plasma_protocol::units::Psi;
 
 use crate::io::Interlock;
 use crate::link::{ActiveFault, Family};
-use crate::safe_state::ResetCause;
+use crate::platform::safe_state::ResetCause;
 
 /// The encoding version this firmware writes and reads.
 pub const ENTRY_VERSION: u8 = 1;
