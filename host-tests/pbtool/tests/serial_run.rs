@@ -4,6 +4,8 @@
 
 mod common;
 
+use std::io::Write;
+
 use common::{Cable, Pbtool};
 
 struct Family {
@@ -147,4 +149,38 @@ fn with_no_unit_on_the_line_the_console_says_so_and_goes_on() {
     run.expect_stderr("no power supply answered on the PS port within 15 s");
     run.close_stdin();
     assert!(run.wait().success(), "{}", run.transcript());
+}
+
+#[test]
+fn at_a_terminal_commands_are_answered_while_detection_runs() {
+    // A person typing gets `link=DOWN` at once, as from the board, not 15 s of silence; and
+    // Ctrl-D ends the run without waiting for detection.
+    let cable = Cable::new();
+    let (mut run, mut keyboard) = Pbtool::spawn_on_terminal(&["run", "--ps-port", &cable.a]);
+    run.expect_stderr("commands are answered meanwhile");
+    keyboard.write_all(b"ID\n").expect("typed");
+    let id = run.expect_prefix("OK bridge=");
+    assert!(id.contains(" link=DOWN "), "{id}");
+    keyboard.write_all(b"\x04").expect("Ctrl-D typed");
+    assert!(run.wait().success(), "{}", run.transcript());
+    // The settle time-out's message comes only from a console that held the command back.
+    assert!(
+        !run.stderr().contains("no power supply answered"),
+        "{}",
+        run.transcript()
+    );
+}
+
+#[test]
+fn an_input_that_ends_before_any_command_ends_the_run_without_waiting_for_detection() {
+    let cable = Cable::new();
+    let mut run = Pbtool::spawn(&["run", "--ps-port", &cable.a]);
+    run.expect_stderr("the first command waits for it");
+    run.close_stdin();
+    assert!(run.wait().success(), "{}", run.transcript());
+    assert!(
+        !run.stderr().contains("no power supply answered"),
+        "{}",
+        run.transcript()
+    );
 }

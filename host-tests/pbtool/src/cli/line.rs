@@ -4,7 +4,7 @@ use std::io::{self, IsTerminal};
 use std::process::ExitCode;
 
 use pbtool::realtime::{Clock, spawn_reader, spawn_stdin};
-use pbtool::run::{LineBridge, Stop, run_cnc_port, run_console};
+use pbtool::run::{FirstCommand, LineBridge, Stop, run_cnc_port, run_console};
 use pbtool::serial::{Port, SerialError, describe};
 use plasma_firmware::settings::Settings;
 use plasma_protocol::serial::PortConfig;
@@ -47,7 +47,8 @@ pub fn run_on_ports(
             run_cnc_port(&mut bridge, &arrivals, cnc)
         }
         None => {
-            if io::stdin().is_terminal() {
+            let interactive = io::stdin().is_terminal();
+            if interactive {
                 eprintln!(
                     "pbtool run: the bridge on {ps_port} (from {framing}, following the unit); \
                      CNC protocol on stdin/stdout. HELP lists the commands, end of input \
@@ -55,7 +56,18 @@ pub fn run_on_ports(
                 );
             }
             spawn_stdin(inbox);
-            run_console(&mut bridge, &arrivals, &mut io::stdout(), &mut io::stderr())
+            let first = if interactive {
+                FirstCommand::AtOnce
+            } else {
+                FirstCommand::AfterDetection
+            };
+            run_console(
+                &mut bridge,
+                &arrivals,
+                first,
+                &mut io::stdout(),
+                &mut io::stderr(),
+            )
         }
     };
     match result {

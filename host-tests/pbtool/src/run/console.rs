@@ -45,23 +45,47 @@ struct Console<'a> {
     done_since: Option<Instant>,
 }
 
+/// How the console treats commands typed before the link is up.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FirstCommand {
+    /// A person at a terminal: answered at once, as the board answers (`link=DOWN` while
+    /// detection runs), never a silent wait of up to [`SETTLE_TIMEOUT`].
+    AtOnce,
+    /// A script on a pipe: the first command waits for the link (or [`SETTLE_TIMEOUT`]), so
+    /// that its replies describe the unit, as `pbtool sim`'s do.
+    AfterDetection,
+}
+
 /// The CNC protocol on a console: `inbox` brings the PS port's characters and stdin's lines.
-/// As `pbtool sim`: the first command once the link is up (or a warning after
-/// [`SETTLE_TIMEOUT`]), one command at a time, every line the bridge writes printed as it
-/// comes (ACK/NAK as `<ACK>`/`<NAK>`); returns after the last reply once input has ended.
+/// One command at a time, every line the bridge writes printed as it comes (ACK/NAK as
+/// `<ACK>`/`<NAK>`); the first command as `first` says; returns after the last reply once
+/// input has ended (at once when input ends with nothing sent, detection or not).
 pub fn run_console(
     bridge: &mut LineBridge,
     inbox: &Receiver<Arrival>,
+    first: FirstCommand,
     out: &mut dyn Write,
     err: &mut dyn Write,
 ) -> Result<(), Stop> {
     let started = bridge.now();
+    writeln!(
+        err,
+        "pbtool run: detecting the power supply (every framing in turn, up to {} s); {}",
+        SETTLE_TIMEOUT.as_millis() / 1000,
+        match first {
+            FirstCommand::AtOnce => "commands are answered meanwhile (link=DOWN until it answers)",
+            FirstCommand::AfterDetection => "the first command waits for it",
+        }
+    )?;
     let mut console = Console {
         bridge,
         out,
         err,
         started,
-        settle: Settle::Waiting(None),
+        settle: match first {
+            FirstCommand::AtOnce => Settle::Ready,
+            FirstCommand::AfterDetection => Settle::Waiting(None),
+        },
         printed: 0,
         lines: VecDeque::new(),
         pacer: Pacer::default(),
@@ -176,10 +200,8 @@ impl Console<'_> {
 
     /// True once input has ended, everything is answered and [`LINGER`] has passed.
     fn finished(&mut self, now: Instant) -> bool {
-        let idle = self.ended
-            && self.settle == Settle::Ready
-            && self.lines.is_empty()
-            && self.waiting.is_none();
+        // With no line left, detection has nothing to hold back: Ctrl-D never waits for it.
+        let idle = self.ended && self.lines.is_empty() && self.waiting.is_none();
         match (idle, self.done_since) {
             (false, _) => self.done_since = None,
             (true, None) => self.done_since = Some(now),

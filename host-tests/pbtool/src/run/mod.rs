@@ -11,7 +11,7 @@
 
 mod console;
 
-pub use console::{SETTLE_TIMEOUT, run_console};
+pub use console::{FirstCommand, SETTLE_TIMEOUT, run_console};
 
 use std::io;
 use std::sync::mpsc::Receiver;

@@ -150,9 +150,14 @@ fn relay(
 
 /// `pbtool ARGS` started with its standard streams piped.
 fn spawn_piped(args: &[&str]) -> Child {
+    spawn_with_stdin(args, Stdio::piped())
+}
+
+/// `pbtool ARGS` started with `stdin`, stdout and stderr piped.
+fn spawn_with_stdin(args: &[&str], stdin: Stdio) -> Child {
     Command::new(env!("CARGO_BIN_EXE_pbtool"))
         .args(args)
-        .stdin(Stdio::piped())
+        .stdin(stdin)
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .spawn()
@@ -185,7 +190,37 @@ pub struct Pbtool {
 impl Pbtool {
     /// Starts `pbtool ARGS`.
     pub fn spawn(args: &[&str]) -> Pbtool {
-        let mut child = spawn_piped(args);
+        Pbtool::from_child(spawn_piped(args), args)
+    }
+
+    /// Starts `pbtool ARGS` with a terminal as its stdin, as a person runs it; the returned
+    /// port is the terminal's other end: what is written there is typed (end a line with
+    /// `\n`; `\x04` at the start of a line is Ctrl-D). [`Pbtool::send`] is not available.
+    pub fn spawn_on_terminal(args: &[&str]) -> (Pbtool, TTYPort) {
+        let (keyboard, terminal) = TTYPort::pair().expect("a pty pair");
+        close_on_exec(&keyboard);
+        use std::os::fd::{AsRawFd, FromRawFd, IntoRawFd, OwnedFd};
+        // The pair comes in raw mode; a person's terminal is line by line, with Ctrl-D as end
+        // of input.
+        // SAFETY: tcgetattr/tcsetattr on a descriptor the pair owns, into a zeroed termios.
+        unsafe {
+            let mut modes: libc::termios = std::mem::zeroed();
+            assert_eq!(libc::tcgetattr(terminal.as_raw_fd(), &mut modes), 0);
+            modes.c_lflag |= libc::ICANON;
+            modes.c_cc[libc::VEOF] = 0x04;
+            assert_eq!(
+                libc::tcsetattr(terminal.as_raw_fd(), libc::TCSANOW, &modes),
+                0
+            );
+        }
+        // SAFETY: the descriptor comes from `into_raw_fd`, so it is open and owned by no one else.
+        let stdin = unsafe { OwnedFd::from_raw_fd(terminal.into_raw_fd()) };
+        let mut pbtool = Pbtool::from_child(spawn_with_stdin(args, Stdio::from(stdin)), args);
+        pbtool.stdin = None;
+        (pbtool, keyboard)
+    }
+
+    fn from_child(mut child: Child, args: &[&str]) -> Pbtool {
         let stdout = child.stdout.take().expect("piped");
         let mut stderr_pipe = child.stderr.take().expect("piped");
         let (tx, lines) = channel();
