@@ -125,12 +125,12 @@ impl View<'_> {
         (x64(MIN_AMPS), x64(max))
     }
 
-    /// Arc-on time in seconds: legacy 0x209E-F; SYNC: the transferred-arc time; HPR/MaxPro200:
-    /// the arc-on timer (125).
+    /// Arc time in seconds: legacy 0x209E-F; SYNC: the pilot arc time (0x302A-B), the register
+    /// the manual gives 0x209E-F as the old address of; HPR/MaxPro200: the arc-on timer (125).
     fn arc_seconds(&self) -> u32 {
         let status = self.status;
         match status.family {
-            Some(Family::PowermaxSync) => status.ps_counters.map_or(0, |c| c.transfer_seconds),
+            Some(Family::PowermaxSync) => status.ps_counters.map_or(0, |c| c.pilot_arc_seconds),
             Some(Family::Hpr | Family::MaxPro200) => {
                 status.hpr.timers.map_or(0, |t| t.arc_on_seconds)
             }
@@ -145,6 +145,7 @@ mod tests {
     use crate::link::Limits;
     use crate::link::status::HprStatus;
     use plasma_protocol::hpr::{ErrorCode, TimerCounter};
+    use plasma_protocol::powermax::sync::PsCounters;
     use plasma_protocol::powermax::{Amps, Psi};
 
     fn view(status: &UnitStatus) -> View<'_> {
@@ -223,5 +224,35 @@ mod tests {
             "the unit's error wins over a refused setting"
         );
         assert_eq!((v.read(0x209E), v.read(0x209F)), (4464, 1), "70000 s");
+    }
+
+    /// SYNC manual (000_dd931256418ae627.txt) lines 480-481: 0x302A/0x302B, cumulative pilot arc
+    /// time (bytes 1 and 0, bytes 3 and 2), have the old address 0x209E/0x209F.
+    #[test]
+    fn a_sync_units_old_arc_time_is_its_pilot_arc_time() {
+        let status = UnitStatus {
+            family: Some(Family::PowermaxSync),
+            link_up: true,
+            ps_counters: Some(PsCounters {
+                starts: 7,
+                pilot_arc_seconds: 0x0002_0003,
+                transfers: 5,
+                transfer_seconds: 0x0004_0009,
+            }),
+            ..UnitStatus::default()
+        };
+        let v = view(&status);
+        let read = |a| v.read(a);
+        assert_eq!([0x302A, 0x302B].map(read), [3, 2]);
+        assert_eq!(
+            [0x209E, 0x209F].map(read),
+            [0x302A, 0x302B].map(read),
+            "the old address reads the SYNC register it names"
+        );
+        assert_eq!(
+            [0x302E, 0x302F].map(read),
+            [9, 4],
+            "transfer time stays at 0x302E-F"
+        );
     }
 }
