@@ -2,9 +2,12 @@
 //! the unit behind the bridge, from what the link holds (never a request to the unit).
 //!
 //! - Legacy map (0x2093-0x209F, 0x204C) for every family.
-//! - SYNC map (0x3001-0x301A, 0x3028-0x302F, 0x3080-0x3082) only while a SYNC unit is behind.
-//! - Gaps inside a served block (0x2095, 0x2097, 0x209B) read 0, as the legacy unit's own
-//!   13-register block read does; an address outside every served block is exception 02.
+//! - SYNC map (0x3000-0x301A, 0x3028-0x304D, 0x3080-0x3082) only while a SYNC unit is behind:
+//!   identification, settings, counters, and the installed cartridge (UID, part number, rating,
+//!   counters, fault log, name) as the link last read them.
+//! - Gaps inside a served block (0x2095, 0x2097, 0x209B, 0x303D-0x303F) read 0, as the legacy
+//!   unit's own 13-register block read does; an address outside every served block is
+//!   exception 02.
 
 use plasma_protocol::hpr::{MAX_MAXPRO_AMPS, MIN_AMPS, SystemId};
 use plasma_protocol::powermax::{FaultCode, legacy, sync};
@@ -16,8 +19,8 @@ use crate::link::{ActiveFault, Family, Model, UnitStatus};
 const LEGACY_BLOCK: (u16, u16) = (legacy::MODE_FORCE, legacy::ARC_TIME_HIGH);
 /// SYNC registers served while a SYNC unit is behind.
 const SYNC_BLOCKS: [(u16, u16); 3] = [
-    (sync::PERMITTED_MODES, sync::ACTIVE_FAULT),
-    (sync::PS_STARTS_LOW, sync::PS_TRANSFER_TIME_HIGH),
+    (sync::IDENTIFICATION, sync::ACTIVE_FAULT),
+    (sync::PS_STARTS_LOW, sync::CARTRIDGE_NAME_END),
     (sync::REMOTE_MODE, sync::REMOTE_PRESSURE),
 ];
 
@@ -98,6 +101,41 @@ impl View<'_> {
                     hi(value)
                 }
             }
+            sync::IDENTIFICATION => status.identification.map_or(0, |i| i.raw),
+            sync::CARTRIDGE_UID..=sync::FAULT_LOG_3 => self.cartridge(address),
+            sync::CARTRIDGE_NAME..=sync::CARTRIDGE_NAME_END => status
+                .cartridge_name
+                .map_or(0, |n| text_word(&n.0, address - sync::CARTRIDGE_NAME)),
+            _ => 0,
+        }
+    }
+
+    /// 0x3030-0x3047: the installed cartridge as the link last read it (0 until it has).
+    fn cartridge(&self, address: u16) -> u16 {
+        let status = self.status;
+        if (sync::FAULT_LOG_0..=sync::FAULT_LOG_3).contains(&address) {
+            let entry = usize::from(address - sync::FAULT_LOG_0);
+            return status
+                .fault_log
+                .and_then(|log| log.0.get(entry).copied())
+                .map_or(0, |code| code.0);
+        }
+        let Some(c) = status.cartridge else {
+            return 0;
+        };
+        match address {
+            sync::CARTRIDGE_UID..=sync::CARTRIDGE_UID_END => {
+                text_word(&c.uid.0, address - sync::CARTRIDGE_UID)
+            }
+            sync::CARTRIDGE_PART_NUMBER..=sync::CARTRIDGE_PART_NUMBER_END => {
+                text_word(&c.part_number.0, address - sync::CARTRIDGE_PART_NUMBER)
+            }
+            sync::CARTRIDGE_REVISION => c.revision,
+            sync::CARTRIDGE_NOMINAL_CURRENT => c.nominal_current_raw,
+            sync::CARTRIDGE_STARTS => c.counters.starts,
+            sync::CARTRIDGE_PILOT_ARC_TIME => c.counters.pilot_arc_seconds,
+            sync::CARTRIDGE_TRANSFERS => c.counters.transfers,
+            sync::CARTRIDGE_TRANSFER_TIME => c.counters.transfer_time_counts,
             _ => 0,
         }
     }
@@ -137,6 +175,14 @@ impl View<'_> {
             _ => status.arc_seconds.unwrap_or(0),
         }
     }
+}
+
+/// Register `index` of a text the unit sends two bytes a register, the first byte high (UID,
+/// part number, name: "bytes 0 and 1" in one register).
+fn text_word(text: &[u8], index: u16) -> u16 {
+    let at = usize::from(index) * 2;
+    let byte = |i: usize| text.get(i).copied().unwrap_or(0);
+    u16::from_be_bytes([byte(at), byte(at + 1)])
 }
 
 #[cfg(test)]

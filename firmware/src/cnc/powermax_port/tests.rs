@@ -425,3 +425,56 @@ fn a_colon_inside_a_refused_line_is_text() {
     );
     assert_eq!(read(&mut rig, 0x2098), 0);
 }
+
+/// Reads `quantity` registers from `start` in one function 04 request.
+fn read_block(rig: &mut Rig, start: u16, quantity: u16) -> Vec<u16> {
+    let [hi, lo] = start.to_be_bytes();
+    let [qh, ql] = quantity.to_be_bytes();
+    let reply = ask(rig, &mb(&[0x04, hi, lo, qh, ql])).expect("a reply");
+    assert_eq!(&reply[..5], ":0104", "{reply}");
+    let words = &reply[7..reply.len() - 2];
+    (0..usize::from(quantity))
+        .map(|i| u16::from_str_radix(&words[i * 4..i * 4 + 4], 16).unwrap())
+        .collect()
+}
+
+/// SYNC manual (000_dd931256418ae627.txt) lines 454-533: 0x3000 identification, 0x3030-0x3037
+/// UID, 0x3038-0x303B part number and revision, 0x303C nominal current, 0x3040-0x3043 cartridge
+/// counters, 0x3044-0x3047 fault log, 0x3048-0x304D name. A SYNC-aware CNC reads them through
+/// the bridge as from the unit.
+#[test]
+fn a_sync_units_identification_and_cartridge_read_through_the_bridge() {
+    let mut rig = Rig::sync65(Settings::default());
+    let (uid, revision) = {
+        let cartridge = rig.ps().powermax().cartridge().expect("a cartridge");
+        (cartridge.uid, cartridge.revision)
+    };
+    let status = rig.bridge.link().status().clone();
+    let identification = status.identification.expect("the link read 0x3000").raw;
+    assert_eq!(read(&mut rig, 0x3000), identification);
+    let block = read_block(&mut rig, 0x3030, 30);
+    let text = |words: &[u16]| -> Vec<u8> { words.iter().flat_map(|w| w.to_be_bytes()).collect() };
+    assert_eq!(text(&block[..8]), uid, "UID, bytes 0 and 1 first");
+    assert_eq!(block[11], revision);
+    assert_eq!(
+        &block[13..16],
+        &[0, 0, 0],
+        "0x303D-0x303F lie between documented registers"
+    );
+    assert_eq!(
+        &block[16..20],
+        &[17, 40, 15, 20],
+        "starts, pilot s, transfers, 2 s counts"
+    );
+    assert_eq!(&block[20..24], &[200, 500, 0, 0], "fault log, newest first");
+    let cartridge = status.cartridge.expect("the link read the cartridge");
+    assert_eq!(text(&block[8..11]), cartridge.part_number.0);
+    assert_eq!(block[12], cartridge.nominal_current_raw);
+    let name = status.cartridge_name.expect("the link read the name");
+    assert_eq!(text(&block[24..30]), name.0);
+    assert_eq!(
+        ask(&mut rig, &mb(&[0x04, 0x30, 0x4E, 0x00, 0x01])),
+        Some(line(mb(&[0x84, 0x02]))),
+        "0x304E is past the map"
+    );
+}
