@@ -3,6 +3,7 @@
 
 use core::fmt::{self, Display, Write};
 
+use plasma_protocol::cnc::command::{COMMAND_WORDS, SET_WORDS};
 use plasma_protocol::cnc::reply::ReplyWriter;
 use plasma_protocol::cnc::{ErrorCode, Pressure};
 use plasma_protocol::hpr;
@@ -23,12 +24,11 @@ use plasma_protocol::powermax::{FaultCode, StepsRequired};
 
 pub(super) fn help(sim: bool) -> ReplyLine {
     ok_line(|w| {
-        w.field(
-            "commands",
-            "HELP,ID,STATUS,LIMITS,FAULT,FAULTLOG,COUNTERS,CARTRIDGE,SET_MODE,SET_AMPS,SET_PSI,\
-             SET_PROCESS,REMOTE_OFF,GASTEST,RESTART,GASES,CORNER,RESET,CLEARWARN,EVENTS,CONFIG,\
-             CONFIG_SAVE,RAW",
-        )?;
+        // Only words a person can type: a two-word command's second words under its first.
+        w.field("commands", List(COMMAND_WORDS.iter()))?;
+        w.field("set", List(SET_WORDS.iter()))?;
+        w.field("remote", "OFF")?;
+        w.field("config", "SAVE")?;
         w.field("simulator_only", "TORCH")?;
         w.field("simulator", if sim { "YES" } else { "NO" })
     })

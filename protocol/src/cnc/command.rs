@@ -517,16 +517,17 @@ fn corner(args: &mut Args<'_>) -> Result<u8, ParseError> {
 fn set(args: &mut Args<'_>) -> Result<Command<'static>, ParseError> {
     const WHAT: &str = "SET parameter";
     const EXPECTED: &str = "MODE|AMPS|PSI|PROCESS";
+    let [mode_word, amps_word, psi_word, process_word] = SET_WORDS;
     let word = args
         .next()
         .ok_or(ParseError::MissingArgument { what: WHAT })?;
-    let command = if is(word, "MODE") {
+    let command = if is(word, mode_word) {
         Command::SetMode(mode(args)?)
-    } else if is(word, "AMPS") {
+    } else if is(word, amps_word) {
         Command::SetAmps(amps(args)?)
-    } else if is(word, "PSI") {
+    } else if is(word, psi_word) {
         Command::SetPsi(pressure(args)?)
-    } else if is(word, "PROCESS") {
+    } else if is(word, process_word) {
         Command::SetProcess {
             mode: mode(args)?,
             amps: amps(args)?,
@@ -557,6 +558,33 @@ fn config<'a>(args: &mut Args<'a>) -> Result<ConfigCommand<'a>, ParseError> {
         Some(value) => ConfigCommand::Set { key, value },
     })
 }
+
+/// The first word of every command a CNC program may send, in the order HELP lists them
+/// (`TORCH`, which only the simulator runs, is listed apart by HELP).
+pub const COMMAND_WORDS: [&str; 19] = [
+    "HELP",
+    "ID",
+    "STATUS",
+    "LIMITS",
+    "FAULT",
+    "FAULTLOG",
+    "COUNTERS",
+    "CARTRIDGE",
+    "SET",
+    "REMOTE",
+    "GASTEST",
+    "RESTART",
+    "GASES",
+    "CORNER",
+    "RESET",
+    "CLEARWARN",
+    "EVENTS",
+    "CONFIG",
+    "RAW",
+];
+
+/// The words that may follow `SET`.
+pub const SET_WORDS: [&str; 4] = ["MODE", "AMPS", "PSI", "PROCESS"];
 
 /// Commands that take no argument.
 const PLAIN_COMMANDS: [(&str, Command<'static>); 11] = [
@@ -699,7 +727,61 @@ mod tests {
         assert_eq!(err("   "), ParseError::Empty);
         assert_eq!(err(""), ParseError::Empty);
         assert_eq!(err("\u{e9}tat"), ParseError::UnknownCommand);
-        assert_eq!(text(err("FLY")), "SYNTAX unknown command");
+        assert_eq!(
+            text(err("FLY")),
+            "SYNTAX unknown command (HELP lists the commands)"
+        );
+    }
+
+    #[test]
+    fn help_lists_words_a_person_can_type() {
+        for word in COMMAND_WORDS {
+            assert_ne!(
+                Command::parse(word),
+                Err(ParseError::UnknownCommand),
+                "{word}"
+            );
+        }
+        for word in SET_WORDS {
+            let mut line = heapless::String::<16>::new();
+            write!(line, "SET {word}").unwrap();
+            assert!(
+                !matches!(Command::parse(&line), Err(ParseError::BadKeyword { .. })),
+                "{line}"
+            );
+        }
+        // Every line that parses starts with a listed word (TORCH is listed apart).
+        let lines = [
+            "HELP",
+            "ID",
+            "STATUS",
+            "LIMITS",
+            "FAULT",
+            "FAULTLOG",
+            "COUNTERS",
+            "CARTRIDGE",
+            "SET MODE CUT",
+            "SET AMPS 45",
+            "SET PSI AUTO",
+            "SET PROCESS CUT 45 AUTO",
+            "REMOTE OFF",
+            "GASTEST ON",
+            "RESTART",
+            "GASES AIR AIR",
+            "CORNER 50",
+            "RESET",
+            "CLEARWARN",
+            "EVENTS ON",
+            "CONFIG",
+            "CONFIG SAVE",
+            "RAW 01030000",
+            "TORCH ON",
+        ];
+        for line in lines {
+            assert!(Command::parse(line).is_ok(), "{line}");
+            let first = line.split(' ').next().unwrap_or(line);
+            assert!(COMMAND_WORDS.contains(&first) || first == "TORCH", "{line}");
+        }
     }
 
     #[test]

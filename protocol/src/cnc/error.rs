@@ -149,7 +149,7 @@ impl fmt::Display for ParseError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             ParseError::Empty => f.write_str("empty line"),
-            ParseError::UnknownCommand => f.write_str("unknown command"),
+            ParseError::UnknownCommand => f.write_str("unknown command (HELP lists the commands)"),
             ParseError::MissingArgument { what } => write!(f, "missing {what}"),
             ParseError::UnexpectedArgument => f.write_str("too many arguments"),
             ParseError::BadKeyword { what, expected } => write!(f, "{what}: expected {expected}"),

@@ -125,9 +125,9 @@ fn every_command_on_a_sync_unit() {
     let mut rig = Rig::sync65(Settings::default());
     assert_eq!(
         rig.cmd("HELP"),
-        "OK commands=HELP,ID,STATUS,LIMITS,FAULT,FAULTLOG,COUNTERS,CARTRIDGE,SET_MODE,\
-         SET_AMPS,SET_PSI,SET_PROCESS,REMOTE_OFF,GASTEST,RESTART,GASES,CORNER,RESET,CLEARWARN,\
-         EVENTS,CONFIG,CONFIG_SAVE,RAW simulator_only=TORCH simulator=NO"
+        "OK commands=HELP,ID,STATUS,LIMITS,FAULT,FAULTLOG,COUNTERS,CARTRIDGE,SET,REMOTE,\
+         GASTEST,RESTART,GASES,CORNER,RESET,CLEARWARN,EVENTS,CONFIG,RAW \
+         set=MODE,AMPS,PSI,PROCESS remote=OFF config=SAVE simulator_only=TORCH simulator=NO"
     );
     assert_eq!(
         rig.cmd("ID"),
