@@ -20,7 +20,10 @@ fn connected() -> Dashboard {
     let mut dash = Dashboard::new("sim sync65", None, TEN_O_CLOCK);
     dash.connected(Duration::ZERO);
     dash.apply_line(Duration::ZERO, "OK events=ON");
-    dash.apply_line(Duration::ZERO, "ERR SYNTAX unknown command");
+    dash.apply_line(
+        Duration::ZERO,
+        "ERR SYNTAX unknown command (HELP lists the commands)",
+    );
     dash
 }
 

@@ -115,7 +115,7 @@ mod tests {
     const EVENTS_ON: &str = "OK events=ON";
     const STATUS: &str = "OK link=UP model=Powermax65 family=SYNC remote=OFF mode=CUT amps=65 psi=72 out_amps=0 out_psi=0 fault=0-50-0 start=OFF motion=OFF arc_ok=OFF ready=OFF";
     const FAULT: &str = "OK fault=0-50-0 action=required text=The cartridge is off, the torch was disconnected when you set the plasma power supply to ON (I), or the torch was in the yellow lock (X) position during a restart.";
-    const UNKNOWN: &str = "ERR SYNTAX unknown command";
+    const UNKNOWN: &str = "ERR SYNTAX unknown command (HELP lists the commands)";
     const COUNTERS: &str = "OK starts=0 pilot_arc_s=0 transfers=0 transfer_s=0 link_ok=21 link_failed=0 retries=0 timeouts=0 bad_checksums=0 link_downs=0";
 
     #[test]
@@ -168,7 +168,7 @@ mod tests {
     fn other_kinds() {
         assert_eq!(
             Line::parse(UNKNOWN),
-            Line::Err("SYNTAX unknown command".into())
+            Line::Err("SYNTAX unknown command (HELP lists the commands)".into())
         );
         assert_eq!(
             Line::parse("!FAULT CLEARED code=0-50-0\r"),

@@ -404,7 +404,10 @@ mod tests {
             [Command::EventsOn, Command::Consumables]
         );
         dash.apply_line(Duration::ZERO, "OK events=ON");
-        dash.apply_line(Duration::ZERO, "ERR SYNTAX unknown command");
+        dash.apply_line(
+            Duration::ZERO,
+            "ERR SYNTAX unknown command (HELP lists the commands)",
+        );
         dash
     }
 
@@ -459,7 +462,10 @@ mod tests {
         );
         // Their late replies come, then the STATUS reply.
         dash.apply_line(4 * S, "OK events=ON");
-        dash.apply_line(4 * S, "ERR SYNTAX unknown command");
+        dash.apply_line(
+            4 * S,
+            "ERR SYNTAX unknown command (HELP lists the commands)",
+        );
         dash.apply_line(
             4 * S,
             "OK link=UP model=Powermax65 fault=none out_amps=0 out_psi=0",
