@@ -5,7 +5,7 @@ mod common;
 
 use std::process::Output;
 
-use common::pbtool_with_input as pbtool;
+use common::{Pbtool, pbtool_with_input as pbtool};
 
 fn lines(output: &Output) -> Vec<String> {
     String::from_utf8_lossy(&output.stdout)
@@ -16,49 +16,50 @@ fn lines(output: &Output) -> Vec<String> {
 
 #[test]
 fn emu_gives_the_cnc_console_of_the_emulated_board() {
-    let output = pbtool(
-        &["emu", "--ps", "sync65", "--events", "--log"],
-        "ID\nTORCH ON\nSTATUS\nTORCH OFF\nSTATUS\nHELP\n",
-    );
-    let stderr = String::from_utf8_lossy(&output.stderr);
-    assert!(output.status.success(), "{stderr}");
-    let lines = lines(&output);
-    let replies: Vec<&String> = lines.iter().filter(|l| !l.starts_with('!')).collect();
-    assert_eq!(replies.len(), 6, "{lines:#?}\n{stderr}");
-    // --events: on before the link came up, as its help says.
+    // Line by line, each after the condition it depends on: TORCH OFF sent right after TORCH
+    // ON can reach the board within the start gap (which counts from the boot), and START
+    // then never comes on.
+    let mut emu = Pbtool::spawn(&["emu", "--ps", "sync65", "--events", "--log"]);
+    emu.send("ID");
+    let id = emu.expect_prefix("OK bridge=");
     assert!(
-        lines.iter().any(|l| l.starts_with("!LINK UP ")),
-        "{lines:#?}"
+        id.starts_with("OK bridge=plasma-bridge version=0.1.0 reset=power-on"),
+        "{id}"
     );
+    assert!(id.contains(" link=UP "), "{id}");
+    emu.send("TORCH ON");
+    emu.expect("OK torch=ON", |l| l == "OK torch=ON");
+    // "torch-on from CNC", or "torch-on held through the gap between starts" when TORCH ON
+    // came within the first 50 ms of guest time.
+    emu.expect_stderr("START on: torch-on ");
+    emu.send("STATUS");
+    emu.expect_prefix("OK link=UP ");
+    emu.send("TORCH OFF");
+    emu.expect("OK torch=OFF", |l| l == "OK torch=OFF");
+    let stderr = emu.expect_stderr("START off: torch-on released");
     assert!(
-        replies[0].starts_with("OK bridge=plasma-bridge version=0.1.0 reset=power-on"),
-        "{lines:#?}"
-    );
-    assert!(replies[0].contains(" link=UP "), "{lines:#?}");
-    assert_eq!(replies[1], "OK torch=ON");
-    assert!(replies[2].starts_with("OK link=UP "), "{lines:#?}");
-    assert_eq!(replies[3], "OK torch=OFF");
-    assert!(replies[4].starts_with("OK link=UP "), "{lines:#?}");
-    // The board is no simulator, and TORCH worked: pbtool says whose TORCH it is.
-    assert!(replies[5].ends_with(" simulator=NO"), "{lines:#?}");
-    assert!(
-        stderr.contains("TORCH ON|OFF also work here: pbtool, not the board"),
+        stderr.find("START on: torch-on ") < stderr.find("START off: torch-on released"),
         "{stderr}"
     );
-    // (STATUS shows the bridge's last view of the outputs, which a loaded host may deliver
-    // a little after the pin changed: the firmware's log says what START did.)
+    emu.send("STATUS");
+    emu.expect_prefix("OK link=UP ");
+    // The board is no simulator, and TORCH worked: pbtool says whose TORCH it is.
+    emu.send("HELP");
+    emu.expect("HELP's reply", |l| l.ends_with(" simulator=NO"));
+    emu.close_stdin();
+    assert!(emu.wait().success(), "{}", emu.transcript());
+    let transcript = emu.transcript();
+    // --events: on before the link came up, as its help says.
+    assert!(transcript.contains("\n!LINK UP "), "{transcript}");
+    assert!(
+        transcript.contains("TORCH ON|OFF also work here: pbtool, not the board"),
+        "{transcript}"
+    );
     // --log: the firmware's own log on stderr, decoded.
     assert!(
-        stderr.contains("INFO  plasma-bridge 0.1.0 on the emulated STM32L475VG"),
-        "{stderr}"
+        transcript.contains("INFO  plasma-bridge 0.1.0 on the emulated STM32L475VG"),
+        "{transcript}"
     );
-    // "torch-on from CNC", or "torch-on held through the gap between starts" when TORCH ON
-    // came within the first 50 ms of guest time (the start gap counts from the boot).
-    let on = stderr.find("START on: torch-on ").expect("START on logged");
-    let off = stderr
-        .find("START off: torch-on released")
-        .expect("START off logged");
-    assert!(on < off, "{stderr}");
 }
 
 #[test]

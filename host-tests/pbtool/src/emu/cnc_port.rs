@@ -146,8 +146,8 @@ fn relay(
     forward_device(reader, relay_tx.clone());
     forward_board(board.cnc().tap(), relay_tx);
     let mut printed = 0;
-    // The last look at USART2 (did the board run the CNC's framing?), and the last that saw it.
-    let mut matched = true;
+    // The last look at USART2 (what the board ran), and the last that saw the CNC's framing.
+    let mut board_ran = Some(options.framing);
     let mut matched_at = Instant::now();
     loop {
         if options.log {
@@ -157,8 +157,7 @@ fn relay(
         let arrival = match inbox.recv_timeout(TICK) {
             Ok(arrival) => arrival,
             Err(RecvTimeoutError::Timeout) => {
-                matched = look(&board, options.framing, matched, err)?;
-                if matched {
+                if look(&board, options.framing, &mut board_ran, err)? {
                     matched_at = Instant::now();
                 }
                 continue;
@@ -180,8 +179,7 @@ fn relay(
             Relay::CncFailed(e) => return Err(e.into()),
             Relay::BoardClosed => return Err(board_closed()),
         };
-        matched = look(&board, options.framing, matched, err)?;
-        let passes = if matched {
+        let passes = if look(&board, options.framing, &mut board_ran, err)? {
             matched_at = Instant::now();
             true
         } else {
@@ -256,18 +254,20 @@ fn set_cnc_framing(board: &mut Board, framing: PortConfig) -> Result<(), RelayEr
     }
 }
 
-/// Whether the board's CNC UART runs `cnc` now; a change from `matched` (the last look) is
-/// noted on `err`.
+/// Whether the board's CNC UART runs `cnc` now. Each change from `board_ran` (the last look)
+/// is noted on `err`: a CONFIG passes through "nothing" (the UART off while it is set up), so
+/// the framing it ends at gets its own note.
 fn look(
     board: &Board,
     cnc: PortConfig,
-    matched: bool,
+    board_ran: &mut Option<PortConfig>,
     err: &mut dyn Write,
 ) -> Result<bool, RelayError> {
     let board_runs = board.cnc_framing(cnc.baud)?;
     let now = board_runs == Some(cnc);
-    if now != matched {
+    if board_runs != *board_ran {
         note(err, &mismatch_note(now, board_runs, cnc));
+        *board_ran = board_runs;
     }
     Ok(now)
 }
