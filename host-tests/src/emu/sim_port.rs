@@ -41,10 +41,6 @@ const MIN_SLEEP: Duration = Duration::from_micros(50);
 /// A pause in the firmware's transmission longer than this starts a new frame (whose framing
 /// is read again from the USART registers).
 const FRAME_GAP: Duration = Duration::from_millis(2);
-/// In the trace, pieces of one frame (the firmware's writes reach the socket when QEMU runs,
-/// a few ms apart on a loaded host) are joined until the frame's end (`\n` or `<`), unless
-/// this much time passes between two pieces.
-const PIECES_OF_A_FRAME: Duration = Duration::from_millis(50);
 /// How long a write to the socket may block (QEMU stops reading while the guest does not).
 const WRITE_TIMEOUT: std::time::Duration = std::time::Duration::from_secs(2);
 
@@ -427,8 +423,10 @@ impl Station {
         }
     }
 
-    /// Adds a transmission to the trace, extending the last frame when it continues it (see
-    /// [`PIECES_OF_A_FRAME`]).
+    /// Adds a transmission to the trace, extending the last frame when it continues it: the
+    /// firmware's writes reach the socket in pieces whenever QEMU runs, any time apart on a
+    /// loaded host, so pieces are joined until the frame's end (`\n` or `<`) or a piece that
+    /// starts a frame (`:` or `>`, after a frame the firmware cut short).
     fn record(
         &self,
         direction: Direction,
@@ -440,7 +438,7 @@ impl Station {
         let mut published = lock(&self.published);
         if let Some(last) = published.trace.last_mut()
             && last.direction == direction
-            && start.saturating_since(last.end) <= PIECES_OF_A_FRAME
+            && !matches!(bytes.first(), Some(b':' | b'>'))
             && !last.bytes.ends_with(b"\n")
             && !last.bytes.ends_with(b"<")
         {
@@ -496,10 +494,10 @@ mod tests {
     fn a_request_in_pieces_is_one_frame() {
         let (mut firmware, theirs) = UnixStream::pair().unwrap();
         let port = SimPort::start(theirs, SimPortOptions::new(Model::Sync65)).unwrap();
-        // A loaded host: the pieces come 5 ms apart.
-        for piece in [&b":0104300"[..], b"00001CA", b"\r\n"] {
+        // A loaded host: the pieces come any time apart (here 5 ms and 120 ms).
+        for (piece, after_ms) in [(&b":0104300"[..], 5), (b"00001CA", 120), (b"\r\n", 0)] {
             firmware.write_all(piece).unwrap();
-            std::thread::sleep(std::time::Duration::from_millis(5));
+            std::thread::sleep(std::time::Duration::from_millis(after_ms));
         }
         let (reply, _) = read_until(&mut firmware, b"\r\n");
         assert_eq!(reply, b":0104020400F5\r\n");
