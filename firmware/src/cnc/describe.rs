@@ -6,7 +6,7 @@ use core::fmt::{self, Display, Write};
 use plasma_protocol::cnc::Mode;
 use plasma_protocol::hpr::{StateCode, SystemId};
 use plasma_protocol::powermax::sync::Identification;
-use plasma_protocol::powermax::{FaultCode, OperatingMode, PowerSupplyModel};
+use plasma_protocol::powermax::{FaultCode, OperatingMode, PowerSupplyModel, StepsRequired};
 
 use crate::link::{
     ActiveFault, Family, Model, PowermaxProcess, ProcessFailure, TransactionError, UnitStatus,
@@ -103,6 +103,26 @@ impl<T: Display> Display for OrDash<T> {
 /// `ON` / `OFF`.
 pub const fn on_off(on: bool) -> &'static str {
     if on { "ON" } else { "OFF" }
+}
+
+/// `action=` of `FAULT` and `!FAULT`: a Powermax fault's "Steps Required to Remove?" (SYNC
+/// Table 6: Yes / No, but recommended / No, with the protocol crate's choice for codes the
+/// table does not list); an HPR error is `required` unless it is a warning.
+pub struct ActionWord(pub ActiveFault);
+
+impl Display for ActionWord {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let word = match self.0 {
+            ActiveFault::Powermax(code) => match code.steps_required() {
+                StepsRequired::Yes => "required",
+                StepsRequired::Recommended => "recommended",
+                StepsRequired::No => "none",
+            },
+            fault @ ActiveFault::Hpr(_) if fault.action_required() => "required",
+            ActiveFault::Hpr(_) => "none",
+        };
+        f.write_str(word)
+    }
 }
 
 /// A fault code as the unit shows it: `0-20-0` (Powermax) or `023` (HPR).

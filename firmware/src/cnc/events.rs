@@ -6,8 +6,8 @@ use core::fmt::{self, Write};
 use plasma_protocol::cnc::reply::ReplyWriter;
 
 use super::describe::{
-    FaultId, ModelName, OrDash, ProcessText, Text, Uid, family_word, fault_text, on_off,
-    process_failure_word, state_name, transaction_word,
+    ActionWord, FaultId, ModelName, OrDash, ProcessText, Text, Uid, family_word, fault_text,
+    on_off, process_failure_word, state_name, transaction_word,
 };
 use super::replies::complete;
 use super::texts::RefusalText;
@@ -104,10 +104,12 @@ fn write_link_event(l: &mut ReplyLine, event: &LinkEvent, status: &UnitStatus) -
             w.finish().map(|_| ())
         }
         LinkEvent::LinkDown { reason } => write_link_down(l, reason),
+        // As `FAULT` answers it; `text=` is the last field and runs to the end of the line.
         LinkEvent::FaultRaised { code, .. } => write!(
             l,
-            "!FAULT {} {}\r\n",
+            "!FAULT {} action={} text={}\r\n",
             FaultId(code),
+            ActionWord(code),
             Text(fault_text(code, family))
         ),
         LinkEvent::FaultCleared { code } => {

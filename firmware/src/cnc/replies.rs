@@ -8,8 +8,8 @@ use plasma_protocol::cnc::{ErrorCode, Pressure};
 use plasma_protocol::hpr;
 
 use super::describe::{
-    FaultId, ModelName, OrDash, Text, Uid, family_word, fault_text, mode_word, on_off, state_name,
-    unit_mode,
+    ActionWord, FaultId, ModelName, OrDash, Text, Uid, family_word, fault_text, mode_word, on_off,
+    state_name, unit_mode,
 };
 use super::table::Awaiting;
 use super::texts::{self, write_failure};
@@ -19,7 +19,7 @@ use crate::link::{
     ActiveFault, CommandFailure, CommandOutput, Family, Limits, Model, PsLink, UnitStatus,
 };
 use crate::settings::Process;
-use plasma_protocol::powermax::{FaultCode, StepsRequired};
+use plasma_protocol::powermax::FaultCode;
 
 /// The parser's [`COMMAND_WORDS`](plasma_protocol::cnc::command::COMMAND_WORDS) as HELP
 /// writes them (one literal: the list joined at run time cost 180 B of flash);
@@ -165,21 +165,6 @@ fn powermax_limits(limits: &Limits, family: Family) -> ReplyLine {
     })
 }
 
-/// `action=`: a Powermax fault's "Steps Required to Remove?" (SYNC Table 6: Yes / No, but
-/// recommended / No, with the protocol crate's choice for codes the table does not list); an
-/// HPR error is `required` unless it is a warning.
-fn action_word(fault: ActiveFault) -> &'static str {
-    match fault {
-        ActiveFault::Powermax(code) => match code.steps_required() {
-            StepsRequired::Yes => "required",
-            StepsRequired::Recommended => "recommended",
-            StepsRequired::No => "none",
-        },
-        ActiveFault::Hpr(_) if fault.action_required() => "required",
-        ActiveFault::Hpr(_) => "none",
-    }
-}
-
 pub(super) fn fault(
     status: &UnitStatus,
     family: Option<Family>,
@@ -196,7 +181,7 @@ pub(super) fn fault(
                 l,
                 "OK fault={} action={} text={}\r\n",
                 FaultId(fault),
-                action_word(fault),
+                ActionWord(fault),
                 Text(fault_text(fault, family))
             )
         }),

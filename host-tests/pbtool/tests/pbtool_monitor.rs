@@ -297,7 +297,7 @@ fn readme_dashboard() -> (Dashboard, Duration) {
             dash.apply_line(now, &reply);
         }
         if second == 145 {
-            dash.apply_line(now, "!FAULT 0-20-0 The gas pressure is lower than the minimum pressure for the selected process, operating mode, torch, lead length, and cartridge type.");
+            dash.apply_line(now, "!FAULT 0-20-0 action=recommended text=The gas pressure is lower than the minimum pressure for the selected process, operating mode, torch, lead length, and cartridge type.");
         }
     }
     (dash, now)

@@ -11,6 +11,40 @@ use crate::cnc::rig::*;
 // ---------------------------------------------------------------------------------------
 // events
 
+/// `!FAULT` carries the same `action=` as the FAULT reply: SYNC manual
+/// (000_dd931256418ae627.txt) Table 6, line 967 (0-50-0: "Yes") and line 945 (0-12-1: "No, but
+/// recommended").
+#[test]
+fn fault_events_say_what_action_the_fault_needs() {
+    let mut rig = Rig::new(events_on(), Some("sync65"));
+    rig.run(600);
+    for (code, word) in [(500, "required"), (121, "recommended")] {
+        rig.fault(code);
+        let start = rig.received.len();
+        rig.run(300);
+        let event = rig.received[start..]
+            .iter()
+            .find(|l| l.starts_with("!FAULT 0-"))
+            .cloned()
+            .unwrap_or_default();
+        let reply = rig.cmd("FAULT");
+        let action = |line: &str| {
+            line.split(' ')
+                .find(|w| w.starts_with("action="))
+                .map(ToString::to_string)
+        };
+        assert_eq!(
+            action(&event),
+            Some(std::format!("action={word}")),
+            "{event}"
+        );
+        assert_eq!(action(&event), action(&reply), "{reply}");
+        assert!(event.contains(" text="), "{event}");
+        rig.fault(0);
+        rig.run(300);
+    }
+}
+
 #[test]
 fn events_report_link_faults_settings_and_arc_when_on() {
     let mut rig = Rig::new(events_on(), Some("sync65"));
@@ -34,11 +68,14 @@ fn events_report_link_faults_settings_and_arc_when_on() {
     rig.fault(200);
     let start = rig.received.len();
     rig.run(300);
+    // SYNC manual (000_dd931256418ae627.txt) line 952: 0-20-0, steps required "No, but
+    // recommended".
     assert_eq!(
         rig.received[start..],
         [
-            "!FAULT 0-20-0 The gas pressure is lower than the minimum pressure for the selected \
-          process, operating mode, torch, lead length, and cartridge type."
+            "!FAULT 0-20-0 action=recommended text=The gas pressure is lower than the minimum \
+          pressure for the selected process, operating mode, torch, lead length, and cartridge \
+          type."
         ]
     );
     rig.fault(0);

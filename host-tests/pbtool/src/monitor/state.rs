@@ -326,11 +326,16 @@ impl Dashboard {
                 self.fault = None;
             }
         } else if let Some(rest) = event.strip_prefix("FAULT ") {
-            let (code, text) = rest.split_once(' ').unwrap_or((rest, ""));
+            // `!FAULT <code> action=<a> text=<text>`: as FAULT answers it.
+            let (code, rest) = rest.split_once(' ').unwrap_or((rest, ""));
+            let (action, text) = match rest.strip_prefix("action=") {
+                Some(fields) => fields.split_once(' ').unwrap_or((fields, "")),
+                None => ("-", rest),
+            };
             self.fault = Some(ActiveFault {
                 code: code.to_string(),
-                action: "-".to_string(),
-                text: text.to_string(),
+                action: action.to_string(),
+                text: text.strip_prefix("text=").unwrap_or(text).to_string(),
             });
         }
         self.note(now, event);
@@ -440,6 +445,24 @@ mod tests {
         assert_eq!(
             dash.events.back(),
             Some(&(4 * S, "FAULT CLEARED code=0-50-0".to_string()))
+        );
+    }
+
+    #[test]
+    fn a_fault_event_gives_the_action_and_text() {
+        let mut dash = up();
+        dash.apply_line(
+            S,
+            "!FAULT 0-12-1 action=recommended text=The gas pressure output is low.",
+        );
+        let fault = dash.fault.clone().expect("fault");
+        assert_eq!(
+            (
+                fault.code.as_str(),
+                fault.action.as_str(),
+                fault.text.as_str()
+            ),
+            ("0-12-1", "recommended", "The gas pressure output is low.")
         );
     }
 
