@@ -69,6 +69,11 @@ pub static DEVICE_IDENTIFICATIONS: [(&str, PowerSupplyModel, AddressingSystem); 
 /// Device Identification object id of the product code.
 pub const PRODUCT_CODE_OBJECT: u8 = 0x01;
 
+/// The conformity level a Powermax gives in its reply: 0x81 in the guide's sample
+/// (`:012B0E0481000101010630383133333504`), which the Modbus specification reads as "basic
+/// identification, stream and individual access".
+pub const CONFORMITY_LEVEL: u8 = 0x81;
+
 impl PowerSupplyModel {
     /// The product code Table 2 lists.
     pub fn product_code(self) -> &'static str {

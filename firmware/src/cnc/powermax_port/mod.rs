@@ -4,9 +4,10 @@
 //! - Node: `cnc_address` (CONFIG, default 1). Requests for another node are ignored; a
 //!   broadcast (node 0) is carried out and never answered.
 //! - Functions 03 and 04 read the [register map](map); 06 and 0x10 write the force registers
-//!   (0x2093/0x2094/0x2096, and 0x3080-0x3082 behind a SYNC unit); 0x2B/0x0E identifies the
-//!   unit as the SYNC model behind the bridge, and is exception 01 otherwise (as a legacy
-//!   Powermax answers it), which is how a SYNC-aware CNC picks its register set. Exceptions:
+//!   (0x2093/0x2094/0x2096, and 0x3080-0x3082 behind a SYNC unit); 0x2B/0x0E gives the Table 2
+//!   product code of the Powermax behind the bridge (SYNC or legacy), which is how a SYNC-aware
+//!   CNC picks its register set, and is exception 01 for a unit without one (an HPR, a
+//!   Powermax that did not identify itself). Exceptions:
 //!   01 for another function, 02 for an address outside the map (coils included), 03 for a
 //!   quantity or value no setting can have.
 //! - Writes are echoed at once and gathered by the [combiner](group): a complete group
@@ -32,7 +33,9 @@ use plasma_protocol::modbus_ascii::{
     DeviceIdCode, ExceptionCode, FunctionCode, MAX_FRAME_CHARS, Registers, Request, Response,
     encode_response,
 };
-use plasma_protocol::powermax::device_id::PRODUCT_CODE_OBJECT;
+use plasma_protocol::powermax::device_id::{
+    AddressingSystem, CONFORMITY_LEVEL, PRODUCT_CODE_OBJECT,
+};
 use plasma_protocol::powermax::{FaultCode, OperatingMode, legacy, sync};
 use plasma_protocol::time::Instant;
 
@@ -261,13 +264,13 @@ impl PowermaxPort {
                     }
                 }
             }
-            Request::ReadDeviceIdentification { code, .. } => {
-                match identification(ctx, code, &mut ident) {
-                    Some(len) => {
+            Request::ReadDeviceIdentification { code, object_id } => {
+                match identification(ctx, code, object_id, &mut ident) {
+                    Ok(len) => {
                         let pdu = ident.get(..len).unwrap_or_default();
                         return self.answer_pdu(broadcast, address, pdu, refused);
                     }
-                    None => exception(function, ExceptionCode::IllegalFunction),
+                    Err(code) => exception(function, code),
                 }
             }
             Request::ReadCoils { .. } | Request::WriteSingleCoil { .. } => {
@@ -449,18 +452,40 @@ fn exception(function: u8, code: ExceptionCode) -> Response<'static> {
     }
 }
 
-/// The reply PDU to Read Device Identification: the SYNC unit's product code; `None` (so
-/// exception 01, as a legacy Powermax answers) for any other unit.
-fn identification(ctx: &Context<'_>, code: DeviceIdCode, out: &mut [u8]) -> Option<usize> {
+/// The reply PDU to Read Device Identification, as the unit behind the bridge gives it: its
+/// Table 2 product code (object 0x01), the only object the bridge holds, with the unit's
+/// conformity level. Individual access (code 04) to object 0x01 is the guide's sample reply
+/// (next object id 0x01 as there); another object is exception 02. Stream access (codes
+/// 01-03) lists the objects from the one asked for, an object not held restarting at the
+/// first (the Modbus rule), so it is the product code in one reply (no more follows).
+/// `Err(01)`, as a unit without identification answers, when no Table 2 unit is behind or its
+/// addressing system is not the map the bridge serves (a SYNC unit run on the legacy map).
+fn identification(
+    ctx: &Context<'_>,
+    code: DeviceIdCode,
+    object_id: u8,
+    out: &mut [u8],
+) -> Result<usize, ExceptionCode> {
     let status = ctx.link.status();
-    let Some(Model::Powermax(model)) = status.model else {
-        return None;
+    let model = match (status.model, status.family) {
+        (Some(Model::Powermax(model)), Some(family))
+            if (model.addressing() == AddressingSystem::Sync)
+                == (family == Family::PowermaxSync) =>
+        {
+            model
+        }
+        _ => return Err(ExceptionCode::IllegalFunction),
     };
-    if status.family != Some(Family::PowermaxSync) {
-        return None;
-    }
     let objects: [(u8, &[u8]); 1] = [(PRODUCT_CODE_OBJECT, model.product_code().as_bytes())];
-    DeviceIdentification::emit_objects(code, code as u8, false, 0, &objects, out).ok()
+    let next_object_id = match code {
+        DeviceIdCode::Specific if object_id != PRODUCT_CODE_OBJECT => {
+            return Err(ExceptionCode::IllegalDataAddress);
+        }
+        DeviceIdCode::Specific => object_id,
+        _ => 0,
+    };
+    DeviceIdentification::emit_objects(code, CONFORMITY_LEVEL, false, next_object_id, &objects, out)
+        .map_err(|_| ExceptionCode::ServerDeviceFailure)
 }
 
 /// What a complete group of force-register writes becomes on `family`.

@@ -297,14 +297,67 @@ fn the_sync_map_is_served_only_behind_a_sync_unit() {
     );
 }
 
+/// The bytes of a hex string as the manual prints them (`303831333335`).
+fn hex_bytes(hex: &str) -> Vec<u8> {
+    (0..hex.len())
+        .step_by(2)
+        .map(|i| u8::from_str_radix(&hex[i..i + 2], 16).unwrap())
+        .collect()
+}
+
+/// SYNC manual (000_dd931256418ae627.txt) lines 572 and 587: the request and the reply, byte
+/// for byte, of a Powermax65/85/105 SYNC (line 564: 081335).
 #[test]
-fn identification_names_a_sync_unit_and_is_exception_01_otherwise() {
+fn identification_is_the_manuals_sample_behind_a_sync_unit() {
     let mut rig = Rig::sync65(Settings::default());
-    let reply = ask(&mut rig, b":012B0E0401C1\r\n").unwrap();
-    let product = plasma_protocol::powermax::PowerSupplyModel::Powermax65_85_105Sync.product_code();
-    let hex: String = product.bytes().map(|b| std::format!("{b:02X}")).collect();
-    assert!(reply.starts_with(":012B0E04"), "{reply}");
-    assert!(reply.contains(&hex), "{reply}");
+    assert_eq!(
+        ask(&mut rig, b":012B0E0401C1\r\n").as_deref(),
+        Some(":012B0E0481000101010630383133333504")
+    );
+    // Only object 0x01 is held: another one asked for individually is exception 02.
+    assert_eq!(
+        ask(&mut rig, &mb(&[0x2B, 0x0E, 0x04, 0x00])),
+        Some(line(mb(&[0xAB, 0x02])))
+    );
+    // Stream access (basic, regular, extended) from any object: the product code in one
+    // reply, the code asked for echoed, no more follows, next object id 0.
+    for (code, object) in [(0x01, 0x00), (0x01, 0x02), (0x02, 0x00), (0x03, 0x80)] {
+        let mut reply = std::vec![0x2B, 0x0E, code, 0x81, 0x00, 0x00, 0x01, 0x01, 0x06];
+        reply.extend(hex_bytes("303831333335"));
+        assert_eq!(
+            ask(&mut rig, &mb(&[0x2B, 0x0E, code, object])),
+            Some(line(mb(&reply))),
+            "code {code:02X} object {object:02X}"
+        );
+    }
+    // An access code Modbus does not define: exception 03.
+    assert_eq!(
+        ask(&mut rig, &mb(&[0x2B, 0x0E, 0x05, 0x01])),
+        Some(line(mb(&[0xAB, 0x03])))
+    );
+}
+
+/// A legacy unit behind the bridge is identified with the product code SYNC manual
+/// (000_dd931256418ae627.txt) Table 2 lists for it (lines 561-563), in the sample's header
+/// (line 587), so a SYNC-aware CNC picks the 0x2xxx map; an HPR has none: exception 01.
+#[test]
+fn identification_of_legacy_units_and_none_for_an_hpr() {
+    for (model, hex) in [
+        ("pm45xp", "303831323838"),
+        ("pm65", "303831323233"),
+        ("pm125", "303831323531"),
+    ] {
+        let mut rig = Rig::new(Settings::default(), Some(model));
+        rig.run(600);
+        assert!(rig.bridge.status().link_up, "{model}");
+        let mut reply = std::vec![0x2B, 0x0E, 0x04, 0x81, 0x00, 0x01, 0x01, 0x01, 0x06];
+        reply.extend(hex_bytes(hex));
+        assert_eq!(
+            ask(&mut rig, b":012B0E0401C1\r\n"),
+            Some(line(mb(&reply))),
+            "{model}"
+        );
+    }
     let mut hpr = Rig::hpr("hpr130");
     assert_eq!(
         ask(&mut hpr, b":012B0E0401C1\r\n"),

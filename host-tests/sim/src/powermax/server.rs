@@ -147,7 +147,7 @@ impl Powermax {
                     // next object id 0x01.
                     Some(Reply::DeviceIdentification {
                         code,
-                        conformity: 0x81,
+                        conformity: plasma_protocol::powermax::device_id::CONFORMITY_LEVEL,
                         next_object_id: 0x01,
                         objects: vec![(0x01, product.as_bytes().to_vec())],
                     })
