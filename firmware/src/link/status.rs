@@ -5,7 +5,8 @@ use plasma_protocol::powermax::sync::{
     Cartridge, FaultLog, Identification, PermittedModes, PsCounters,
 };
 use plasma_protocol::powermax::{
-    Amps, CartridgeName, FaultCode, OperatingMode, PowerSupplyModel, Pressure, Psi, StepsRequired,
+    Amps, CartridgeName, FaultCode, LeadLength, OperatingMode, PowerSupplyModel, Pressure, Psi,
+    StepsRequired,
 };
 
 use plasma_protocol::time::Instant;
@@ -152,6 +153,9 @@ pub struct UnitStatus {
     pub limits: Option<Limits>,
     /// SYNC 0x3000: torch and power-supply type.
     pub identification: Option<Identification>,
+    /// Legacy torch-lead coils 0x0808/0x0809 (slow data); a SYNC unit has its lead in
+    /// [`UnitStatus::identification`].
+    pub legacy_lead: Option<LeadLength>,
     /// SYNC power-supply counters (0x3028-0x302F).
     pub ps_counters: Option<PsCounters>,
     /// Legacy arc-on time in seconds (0x209E-0x209F).

@@ -124,6 +124,14 @@ pub(crate) fn read_fault() -> MbRequest {
     }
 }
 
+/// The torch-lead coils 0x0808-0x0809 (slow data).
+pub(crate) fn read_torch_lead() -> MbRequest {
+    MbRequest::ReadCoils {
+        start: legacy::TORCH_LEAD_BIT0_COIL,
+        quantity: 2,
+    }
+}
+
 /// Gas test coil 0x0832 (SYNC guide Table 1).
 pub(crate) fn gas_test(on: bool) -> MbRequest {
     MbRequest::WriteCoil {

@@ -152,7 +152,7 @@ impl PowermaxDriver {
             slow: SlowData::new(
                 match variant {
                     Variant::Sync => SlowItem::ALL_ITEMS,
-                    Variant::Legacy => 0,
+                    Variant::Legacy => SlowItem::LEGACY_ITEMS,
                 },
                 now,
                 core.config.slow_data_interval,
@@ -381,11 +381,14 @@ impl PowermaxDriver {
                     self.slow.request(SlowItem::ALL_ITEMS);
                     return self.slow_request();
                 }
-                Variant::Legacy if self.wants_identify(core) => {
-                    return MbRequest::from_request(&device_id::read_product_code())
-                        .map(|request| (MbPurpose::Identify, request, None));
+                Variant::Legacy => {
+                    self.slow.request(SlowItem::LEGACY_ITEMS);
+                    if self.wants_identify(core) {
+                        return MbRequest::from_request(&device_id::read_product_code())
+                            .map(|request| (MbPurpose::Identify, request, None));
+                    }
+                    return self.slow_request();
                 }
-                Variant::Legacy => {}
             }
         }
         None
@@ -404,6 +407,9 @@ impl PowermaxDriver {
         let item = SlowItem::ALL
             .into_iter()
             .find(|item| self.slow.pending() & item.bit() != 0)?;
+        if item == SlowItem::TorchLead {
+            return Some((MbPurpose::Slow(item), legacy::read_torch_lead(), None));
+        }
         match item.span() {
             Some(span) => Some((MbPurpose::Slow(item), sync::read(span), None)),
             None => {

@@ -4,7 +4,7 @@
 
 use plasma_protocol::modbus_ascii::{Registers, Response};
 use plasma_protocol::powermax::sync::{Cartridge, FaultLog, Identification, PsCounters};
-use plasma_protocol::powermax::{CartridgeName, CartridgeUid, FaultCode};
+use plasma_protocol::powermax::{CartridgeName, CartridgeUid, FaultCode, LeadLength};
 use plasma_protocol::time::Instant;
 
 use super::{FAULT_CHECK_INTERVAL, MbPurpose, PowermaxDriver, Variant};
@@ -37,6 +37,17 @@ impl PowermaxDriver {
                 }
                 None => self.on_failed(now, purpose, TransactionError::Mismatch, core),
             },
+            MbPurpose::Slow(SlowItem::TorchLead) => {
+                let error = match response {
+                    // Bits 11 are not listed (legacy guide): the lead stays unknown.
+                    Response::ReadCoils { bits } => {
+                        core.status.legacy_lead = LeadLength::from_legacy_coils(bits).ok();
+                        None
+                    }
+                    _ => Some(TransactionError::Mismatch),
+                };
+                self.slow_done(now, SlowItem::TorchLead, error, core);
+            }
             MbPurpose::Slow(item) => {
                 let error = read_values(response).and_then(|values| store_slow(item, values, core));
                 self.slow_done(now, item, error, core);
@@ -202,7 +213,7 @@ fn store_slow(item: SlowItem, values: Registers<'_>, core: &mut Core) -> Option<
         SlowItem::CartridgeName => {
             core.status.cartridge_name = CartridgeName::decode(values).ok();
         }
-        SlowItem::Cartridge => {}
+        SlowItem::Cartridge | SlowItem::TorchLead => {}
     }
     None
 }

@@ -51,8 +51,8 @@ pub(crate) fn read(span: RegisterSpan) -> MbRequest {
     }
 }
 
-/// Slow-data items of a SYNC unit, in the order they are read (limits first: settings
-/// commands need them).
+/// Slow-data items, in the order they are read (limits first: settings commands need them):
+/// a SYNC unit's registers, and a legacy unit's torch-lead coils.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) enum SlowItem {
     /// 0x3001-0x3005.
@@ -67,17 +67,20 @@ pub(crate) enum SlowItem {
     FaultLog,
     /// 0x3048-0x304D.
     CartridgeName,
+    /// Legacy: the torch-lead coils 0x0808-0x0809 (a SYNC unit has its lead in 0x3000).
+    TorchLead,
 }
 
 impl SlowItem {
     /// Every item, in reading order.
-    pub(crate) const ALL: [SlowItem; 6] = [
+    pub(crate) const ALL: [SlowItem; 7] = [
         SlowItem::Permitted,
         SlowItem::Identification,
         SlowItem::PsCounters,
         SlowItem::Cartridge,
         SlowItem::FaultLog,
         SlowItem::CartridgeName,
+        SlowItem::TorchLead,
     ];
 
     /// Bit in a pending-set.
@@ -89,6 +92,7 @@ impl SlowItem {
             SlowItem::Cartridge => 8,
             SlowItem::FaultLog => 16,
             SlowItem::CartridgeName => 32,
+            SlowItem::TorchLead => 64,
         }
     }
 
@@ -98,16 +102,20 @@ impl SlowItem {
         | SlowItem::FaultLog.bit()
         | SlowItem::CartridgeName.bit();
 
-    /// Every item.
+    /// Every item of a SYNC unit.
     pub(crate) const ALL_ITEMS: u8 = 0x3F;
 
-    /// The single-span read for this item (the cartridge block is read by its poller).
+    /// Every item of a legacy unit (the poll reads its registers).
+    pub(crate) const LEGACY_ITEMS: u8 = SlowItem::TorchLead.bit();
+
+    /// The single-span register read for this item (the cartridge block is read by its
+    /// poller, the torch lead is coils).
     pub(crate) fn span(self) -> Option<RegisterSpan> {
         match self {
             SlowItem::Permitted => Some(PERMITTED_SETTINGS_SPAN),
             SlowItem::Identification => Some(IDENTIFICATION_SPAN),
             SlowItem::PsCounters => Some(PS_COUNTERS_SPAN),
-            SlowItem::Cartridge => None,
+            SlowItem::Cartridge | SlowItem::TorchLead => None,
             SlowItem::FaultLog => Some(FAULT_LOG_SPAN),
             SlowItem::CartridgeName => Some(CARTRIDGE_NAME_SPAN),
         }

@@ -261,3 +261,22 @@ fn gas_test_writes_the_coil() {
             .any(|w| w == b":01053180FF004A\r\n")
     );
 }
+
+/// A legacy unit's torch lead comes from its torch-lead coils, read as slow data: Powermax65/85
+/// protocol (001_0bf4bbd6620a48c8.txt) lines 258-271: read 2 coils from 0x0808, the reply's
+/// last 2 bits the lead length, `:01010101FC` 35-50 ft.
+#[test]
+fn a_legacy_units_torch_lead_is_read_from_its_coils() {
+    use plasma_protocol::powermax::LeadLength;
+    let mut bench = Bench::with_unit(LinkConfig::default(), "pm65");
+    bench.ps().powermax().config_mut().torch_id = 0x05;
+    bench.run(bench.now + Duration::from_millis(1500));
+    assert!(bench.link.status().link_up);
+    let read = mb(&[0x01, 0x08, 0x08, 0x00, 0x02]);
+    assert!(
+        bench.sent.iter().any(|(_, f)| *f == read),
+        "the coils were read"
+    );
+    assert!(bench.heard().windows(13).any(|w| w == b":01010101FC\r\n"));
+    assert_eq!(bench.link.status().legacy_lead, Some(LeadLength::Upto15m));
+}
