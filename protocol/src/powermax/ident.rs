@@ -28,6 +28,25 @@ impl LeadLength {
             _ => Err(Error::Malformed),
         }
     }
+
+    /// The two `torch_index` coils as a legacy unit answers them: bit 0 is 0x0808, bit 1 is
+    /// 0x0809 (the inverse of [`LeadLength::from_legacy_coils`]).
+    pub const fn legacy_coils(self) -> u8 {
+        match self {
+            LeadLength::Upto7m6 => 0b00,
+            LeadLength::Upto15m => 0b01,
+            LeadLength::Upto23m => 0b10,
+        }
+    }
+
+    /// The longest lead of the class, in feet (25, 50, 75): what a cut chart is chosen by.
+    pub const fn max_feet(self) -> u8 {
+        match self {
+            LeadLength::Upto7m6 => 25,
+            LeadLength::Upto15m => 50,
+            LeadLength::Upto23m => 75,
+        }
+    }
 }
 
 /// Hand or machine torch.
@@ -343,6 +362,26 @@ mod tests {
         assert_eq!(
             LeadLength::from_legacy_coils(&[0xFC]),
             Ok(LeadLength::Upto7m6)
+        );
+        for lead in [
+            LeadLength::Upto7m6,
+            LeadLength::Upto15m,
+            LeadLength::Upto23m,
+        ] {
+            assert_eq!(
+                LeadLength::from_legacy_coils(&[lead.legacy_coils()]),
+                Ok(lead)
+            );
+        }
+        // The classes' longest leads, in feet, as both guides name them.
+        assert_eq!(
+            [
+                LeadLength::Upto7m6,
+                LeadLength::Upto15m,
+                LeadLength::Upto23m
+            ]
+            .map(LeadLength::max_feet),
+            [25, 50, 75]
         );
     }
 }

@@ -4,12 +4,14 @@
 //! - Node: `cnc_address` (CONFIG, default 1). Requests for another node are ignored; a
 //!   broadcast (node 0) is carried out and never answered.
 //! - Functions 03 and 04 read the [register map](map); 06 and 0x10 write the force registers
-//!   (0x2093/0x2094/0x2096, and 0x3080-0x3082 behind a SYNC unit); 0x2B/0x0E gives the Table 2
-//!   product code of the Powermax behind the bridge (SYNC or legacy), which is how a SYNC-aware
-//!   CNC picks its register set, and is exception 01 for a unit without one (an HPR, a
-//!   Powermax that did not identify itself). Exceptions:
-//!   01 for another function, 02 for an address outside the map (coils included), 03 for a
-//!   quantity or value no setting can have.
+//!   (0x2093/0x2094/0x2096, and 0x3080-0x3082 behind a SYNC unit); 0x10 to 0x308E/0x308F
+//!   (SYNC) is the quick restart that stops 0-50-0, handed to the link; 01 reads and 05
+//!   writes the [coils](coils) (Start, Motion, torch lead; the gas test). 0x2B/0x0E gives the
+//!   Table 2 product code of the Powermax behind the bridge (SYNC or legacy), which is how a
+//!   SYNC-aware CNC picks its register set, and is exception 01 for a unit without one (an
+//!   HPR, a Powermax that did not identify itself). Exceptions: 01 for another function, 02
+//!   for an address outside the map, 03 for a quantity or value no setting can have, 04 / 06
+//!   for a gas test or restart the link cannot take (06 while it is busy).
 //! - Writes are echoed at once and gathered by the [combiner](group): a complete group
 //!   becomes one link command (SYNC one 0x10 write, legacy the force registers, HPR/MaxPro200
 //!   the current), never a partial one. A value the unit refuses reads as its 0-11-x fault in
@@ -18,6 +20,7 @@
 //! - The unit's link lost (or not up yet): no reply at all, as a Powermax with its cable cut,
 //!   so a Powermax CNC reports a communication error instead of stale values.
 
+mod coils;
 mod group;
 mod map;
 #[cfg(test)]
@@ -45,6 +48,7 @@ use crate::link::{
     CommandOutput, Family, LinkCommand, LinkEvent, Model, ProcessFailure, Refusal, Ticket,
 };
 use crate::settings::Process;
+use coils::Coils;
 use group::is_force_register;
 use map::{View, served};
 
@@ -220,6 +224,7 @@ impl PowermaxPort {
         let mut refused = None;
         let function = request.function() as u8;
         let mut words = [0u16; MAX_READ_REGISTERS as usize];
+        let mut bits = [0u8; coils::MAX_COIL_BYTES];
         let mut ident = [0u8; 64];
         let response = match request {
             Request::ReadHoldingRegisters { start, quantity }
@@ -233,6 +238,12 @@ impl PowermaxPort {
                     }
                     Ok(values) => Response::ReadInputRegisters { values },
                 }
+            }
+            // The quick restart takes both registers in one 0x10 request.
+            Request::WriteSingleRegister { address: reg, .. }
+                if is_quick_restart(reg, 1, family) =>
+            {
+                exception(function, ExceptionCode::IllegalDataValue)
             }
             Request::WriteSingleRegister {
                 address: reg,
@@ -249,6 +260,22 @@ impl PowermaxPort {
                 let n = values.len();
                 for (slot, v) in buf.iter_mut().zip(values.iter()) {
                     *slot = v;
+                }
+                if is_quick_restart(start, n, family) {
+                    refused = self.complete_group(ctx);
+                    let result = match buf.get(..n) {
+                        Some(values) => quick_restart(ctx, start, values),
+                        None => Err(ExceptionCode::IllegalDataValue),
+                    };
+                    let response = match result {
+                        Ok(()) => Response::WriteMultipleRegisters {
+                            start,
+                            quantity: n as u16,
+                        },
+                        Err(code) => exception(function, code),
+                    };
+                    let step = self.answer(broadcast, address, &response);
+                    return refused.map_or(step, Step::Refused);
                 }
                 // More than the three force registers: an address outside the map.
                 match buf.get(..n).map(|v| self.write(ctx, family, start, v)) {
@@ -273,8 +300,33 @@ impl PowermaxPort {
                     Err(code) => exception(function, code),
                 }
             }
-            Request::ReadCoils { .. } | Request::WriteSingleCoil { .. } => {
-                exception(function, ExceptionCode::IllegalDataAddress)
+            Request::ReadCoils { start, quantity } => {
+                refused = self.complete_group(ctx);
+                let coils = Coils {
+                    status: ctx.link.status(),
+                    io: ctx.io,
+                };
+                match coils.read_many(start, quantity, &mut bits) {
+                    Ok(len) => Response::ReadCoils {
+                        bits: bits.get(..len).unwrap_or_default(),
+                    },
+                    Err(code) => exception(function, code),
+                }
+            }
+            Request::WriteSingleCoil { address: coil, on } => {
+                refused = self.complete_group(ctx);
+                let coils = Coils {
+                    status: ctx.link.status(),
+                    io: ctx.io,
+                };
+                if !coils.is_gas_test(coil) {
+                    exception(function, ExceptionCode::IllegalDataAddress)
+                } else {
+                    match ctx.link.submit(ctx.now, LinkCommand::GasTest { on }) {
+                        Ok(_) => Response::WriteSingleCoil { address: coil, on },
+                        Err(refusal) => exception(function, refusal_exception(&refusal)),
+                    }
+                }
             }
         };
         let step = self.answer(broadcast, address, &response);
@@ -486,6 +538,42 @@ fn identification(
     };
     DeviceIdentification::emit_objects(code, CONFORMITY_LEVEL, false, next_object_id, &objects, out)
         .map_err(|_| ExceptionCode::ServerDeviceFailure)
+}
+
+/// True when a write of `n` registers from `start` touches the quick restart registers
+/// (0x308E/0x308F) of a SYNC unit.
+fn is_quick_restart(start: u16, n: usize, family: Family) -> bool {
+    let end = usize::from(start) + n;
+    family == Family::PowermaxSync
+        && usize::from(start) <= usize::from(sync::QUICK_RESTART_APPROVAL)
+        && end > usize::from(sync::QUICK_RESTART_COMMAND)
+}
+
+/// The special quick restart that stops fault 0-50-0 (SYNC manual: 0x0404 to 0x308E and 0x0618
+/// to 0x308F in one 0x10 request), handed to the link. Anything else written there is
+/// exception 03. The unit's restart stops 0-50-0 only, so without 0-50-0 active the link
+/// sends nothing and the write is still echoed: it stops no fault, as on the unit.
+fn quick_restart(ctx: &mut Context<'_>, start: u16, values: &[u16]) -> Result<(), ExceptionCode> {
+    let words = [
+        sync::QUICK_RESTART_COMMAND_VALUE,
+        sync::QUICK_RESTART_APPROVAL_VALUE,
+    ];
+    if start != sync::QUICK_RESTART_COMMAND || values != words {
+        return Err(ExceptionCode::IllegalDataValue);
+    }
+    match ctx.link.submit(ctx.now, LinkCommand::QuickRestart) {
+        Ok(_) | Err(Refusal::QuickRestartNeeds050 { .. }) => Ok(()),
+        Err(refusal) => Err(refusal_exception(&refusal)),
+    }
+}
+
+/// The exception for a command the link does not take now: 06 (busy) while commands queue or
+/// the unit restarts, 04 otherwise.
+fn refusal_exception(refusal: &Refusal) -> ExceptionCode {
+    match refusal {
+        Refusal::QueueFull | Refusal::Blackout { .. } => ExceptionCode::ServerDeviceBusy,
+        _ => ExceptionCode::ServerDeviceFailure,
+    }
 }
 
 /// What a complete group of force-register writes becomes on `family`.

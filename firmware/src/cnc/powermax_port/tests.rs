@@ -278,12 +278,141 @@ fn exceptions_as_a_unit_gives_them() {
         );
     }
     assert_eq!(
-        ask(&mut rig, &mb(&[0x05, 0x08, 0x32, 0xFF, 0x00])),
+        ask(&mut rig, &mb(&[0x05, 0x31, 0x00, 0xFF, 0x00])),
         Some(line(mb(&[0x85, 0x02]))),
-        "coils are not served"
+        "the Start coil is read only: Modbus never starts the torch"
     );
     rig.run(300);
     assert!(rig.writes().is_empty());
+}
+
+/// SYNC manual (000_dd931256418ae627.txt) lines 1700-1744: the Start and Motion coils read one
+/// (`:010131000001CC` -> `:01010100FD`, both off) and both at once (`:010131000002CB` ->
+/// `:01010103FA`, both on); Table 1 (lines 452-453): 0x0810/0x0811 are their old addresses.
+#[test]
+fn the_start_and_motion_coils_are_the_manuals_samples() {
+    use crate::io::{Inputs, Outputs};
+    let mut rig = Rig::sync65(Settings::default());
+    rig.bridge.set_io_snapshot(Inputs::NONE, Outputs::OFF);
+    assert_eq!(
+        ask(&mut rig, b":010131000001CC\r\n").as_deref(),
+        Some(":01010100FD")
+    );
+    // The unit's Start input is the bridge's START output; its Motion output the MOTION input.
+    let motion = Inputs {
+        motion: true,
+        ..Inputs::NONE
+    };
+    let start = Outputs {
+        start: true,
+        ..Outputs::OFF
+    };
+    rig.bridge.set_io_snapshot(motion, start);
+    assert_eq!(
+        ask(&mut rig, b":010131000002CB\r\n").as_deref(),
+        Some(":01010103FA")
+    );
+    assert_eq!(
+        ask(&mut rig, &mb(&[0x01, 0x08, 0x10, 0x00, 0x02])),
+        Some(line(mb(&[0x01, 0x01, 0x03])))
+    );
+    assert_eq!(
+        ask(&mut rig, &mb(&[0x01, 0x31, 0x00, 0x00, 0x03])),
+        Some(line(mb(&[0x81, 0x02]))),
+        "0x3102 is not a coil"
+    );
+}
+
+/// The torch-lead coils (Powermax65/85 protocol, 001_0bf4bbd6620a48c8.txt lines 258-271: read 2
+/// coils from 0x0808, `:01010101FC` for a 35-50 ft lead): a legacy unit's own, read by the
+/// link; a SYNC unit's from 0x3000 (SYNC manual, 000_dd931256418ae627.txt, line 618: 0x04 is a
+/// machine torch with a 15-25 ft lead, coils 00).
+#[test]
+fn the_torch_lead_coils_behind_legacy_and_sync_units() {
+    let mut legacy = Rig::new(Settings::default(), Some("pm65"));
+    legacy.ps().powermax().config_mut().torch_id = 0x05;
+    legacy.run(1500);
+    assert_eq!(
+        ask(&mut legacy, &mb(&[0x01, 0x08, 0x08, 0x00, 0x02])).as_deref(),
+        Some(":01010101FC")
+    );
+    assert_eq!(
+        ask(&mut legacy, &mb(&[0x01, 0x31, 0x00, 0x00, 0x01])),
+        Some(line(mb(&[0x81, 0x02]))),
+        "the SYNC coils only behind a SYNC unit"
+    );
+    let mut sync = Rig::sync65(Settings::default());
+    assert_eq!(
+        ask(&mut sync, &mb(&[0x01, 0x08, 0x08, 0x00, 0x02])).as_deref(),
+        Some(":01010100FD")
+    );
+    let mut hpr = Rig::hpr("hpr130");
+    assert_eq!(
+        ask(&mut hpr, &mb(&[0x01, 0x08, 0x08, 0x00, 0x02])),
+        Some(line(mb(&[0x81, 0x02])))
+    );
+}
+
+/// SYNC manual (000_dd931256418ae627.txt) lines 1038-1077: `:01053180FF004A` starts a gas test,
+/// `:01053180000049` stops it, each echoed; Table 1 (line 454): 0x0832 is the old address.
+#[test]
+fn the_gas_test_coil_starts_and_stops_a_gas_test() {
+    let mut rig = Rig::sync65(Settings::default());
+    for frame in [":01053180FF004A", ":01053180000049"] {
+        let request = std::format!("{frame}\r\n");
+        assert_eq!(ask(&mut rig, request.as_bytes()).as_deref(), Some(frame));
+        rig.run(300);
+    }
+    assert_eq!(
+        rig.writes(),
+        [(0x3180, std::vec![1]), (0x3180, std::vec![0])],
+        "the link wrote the unit's coil"
+    );
+    let mut legacy = Rig::new(Settings::default(), Some("pm65"));
+    legacy.run(1500);
+    let on = mb(&[0x05, 0x08, 0x32, 0xFF, 0x00]);
+    assert_eq!(ask(&mut legacy, &on), Some(line(on.clone())));
+    assert_eq!(
+        ask(&mut legacy, b":01053180FF004A\r\n"),
+        Some(line(mb(&[0x85, 0x02])))
+    );
+    legacy.run(300);
+    assert_eq!(legacy.writes(), [(0x0832, std::vec![1])]);
+}
+
+/// SYNC manual (000_dd931256418ae627.txt) lines 1114 and 1130: the quick restart request and
+/// its echo; line 1101: it stops 0-50-0 only.
+#[test]
+fn the_quick_restart_registers_restart_a_sync_unit_in_0_50_0() {
+    let mut rig = Rig::sync65(Settings::default());
+    let restart = b":0110308E0002040404061805\r\n";
+    // No 0-50-0: echoed, and nothing is sent (it would stop no fault).
+    assert_eq!(ask(&mut rig, restart).as_deref(), Some(":0110308E00022F"));
+    rig.run(300);
+    assert!(rig.writes().is_empty(), "{:?}", rig.writes());
+    rig.fault(500);
+    rig.run(300);
+    assert_eq!(ask(&mut rig, restart).as_deref(), Some(":0110308E00022F"));
+    rig.run(300);
+    assert_eq!(rig.writes(), [(0x308E, std::vec![0x0404, 0x0618])]);
+    // Other values, one register alone, or function 06: exception 03.
+    let cases: [&[u8]; 3] = [
+        &[0x10, 0x30, 0x8E, 0x00, 0x02, 0x04, 0x04, 0x04, 0x06, 0x19],
+        &[0x10, 0x30, 0x8E, 0x00, 0x01, 0x02, 0x04, 0x04],
+        &[0x06, 0x30, 0x8F, 0x06, 0x18],
+    ];
+    for request in cases {
+        let reply = ask(&mut rig, &mb(request)).unwrap();
+        assert_eq!(
+            reply,
+            line(mb(&[request[0] | 0x80, 0x03])),
+            "{request:02X?}"
+        );
+    }
+    // Not served behind a legacy unit.
+    let mut legacy = Rig::new(Settings::default(), Some("pm65"));
+    legacy.run(1500);
+    assert_eq!(ask(&mut legacy, restart), Some(line(mb(&[0x90, 0x02]))));
 }
 
 #[test]
