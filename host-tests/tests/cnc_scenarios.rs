@@ -236,7 +236,7 @@ fn sync_commands_ok_and_err() {
             ("help", "OK commands=HELP,ID,STATUS,*"),
             (
                 "ID",
-                "OK bridge=plasma-bridge version=0.1.0 reset=unknown link=UP model=Powermax65 family=SYNC product=081335",
+                "OK bridge=plasma-bridge version=0.1.0 reset=unknown link=UP model=Powermax65 family=SYNC product=081335 torch=MACHINE lead_ft=25",
             ),
             ("ID now", parse_err(ParseError::UnexpectedArgument).as_str()),
             (

@@ -51,7 +51,7 @@ fn a_powermax_sync_unit_is_detected() {
         "{id}"
     );
     assert!(
-        id.ends_with("model=Powermax65 family=SYNC product=081335"),
+        id.ends_with("model=Powermax65 family=SYNC product=081335 torch=MACHINE lead_ft=25"),
         "{id}"
     );
 }

@@ -6,7 +6,9 @@ use core::fmt::{self, Display, Write};
 use plasma_protocol::cnc::Mode;
 use plasma_protocol::hpr::{StateCode, SystemId};
 use plasma_protocol::powermax::sync::Identification;
-use plasma_protocol::powermax::{FaultCode, OperatingMode, PowerSupplyModel, StepsRequired};
+use plasma_protocol::powermax::{
+    FaultCode, OperatingMode, PowerSupplyModel, StepsRequired, TorchKind,
+};
 
 use crate::link::{
     ActiveFault, Family, Model, PowermaxProcess, ProcessFailure, TransactionError, UnitStatus,
@@ -97,6 +99,14 @@ impl<T: Display> Display for OrDash<T> {
             Some(v) => v.fmt(f),
             None => f.write_str("-"),
         }
+    }
+}
+
+/// The torch kind as one word: `HAND`, `MACHINE`.
+pub const fn torch_word(kind: TorchKind) -> &'static str {
+    match kind {
+        TorchKind::Hand => "HAND",
+        TorchKind::Machine => "MACHINE",
     }
 }
 

@@ -9,7 +9,7 @@ use plasma_protocol::hpr;
 
 use super::describe::{
     ActionWord, FaultId, ModelName, OrDash, Text, Uid, family_word, fault_text, mode_word, on_off,
-    state_name, unit_mode,
+    state_name, torch_word, unit_mode,
 };
 use super::table::Awaiting;
 use super::texts::{self, write_failure};
@@ -56,6 +56,13 @@ pub(super) fn id(ctx: &Context<'_>) -> ReplyLine {
         w.field("family", OrDash(status.family.map(family_word)))?;
         if let Some(Model::Powermax(model)) = status.model {
             w.field("product", model.product_code())?;
+        }
+        // The torch and its lead choose the cut chart: a SYNC unit's 0x3000, a legacy unit's
+        // lead coils (which say nothing of the torch).
+        if status.family.is_some_and(Family::is_modbus) {
+            let torch = status.identification.and_then(|i| i.torch);
+            w.field("torch", OrDash(torch.map(|t| torch_word(t.kind))))?;
+            w.field("lead_ft", OrDash(status.torch_lead().map(|l| l.max_feet())))?;
         }
         Ok(())
     })

@@ -182,6 +182,14 @@ impl UnitStatus {
         *self = UnitStatus::default();
     }
 
+    /// The torch lead: a SYNC unit's from 0x3000 (Table 3), a legacy unit's from its coils.
+    pub fn torch_lead(&self) -> Option<LeadLength> {
+        match self.family {
+            Some(Family::PowermaxSync) => self.identification.and_then(|i| i.torch).map(|t| t.lead),
+            _ => self.legacy_lead,
+        }
+    }
+
     /// Recompute [`UnitStatus::ready`] for time `now`.
     pub(crate) fn update_ready(&mut self, now: Instant) {
         let blackout = self.restart_blackout_until.is_some_and(|until| now < until);

@@ -35,7 +35,7 @@ fn a_piped_script_gets_one_reply_per_command() {
     assert!(lines.iter().all(|l| l.starts_with("OK")), "{lines:?}");
     assert_eq!(
         lines[0],
-        "OK bridge=plasma-bridge version=0.1.0 reset=unknown link=UP model=Powermax65 family=SYNC product=081335"
+        "OK bridge=plasma-bridge version=0.1.0 reset=unknown link=UP model=Powermax65 family=SYNC product=081335 torch=MACHINE lead_ft=25"
     );
     assert!(lines[1].starts_with("OK link=UP model=Powermax65 family=SYNC "));
     assert!(output.stderr.is_empty(), "quiet from a pipe");
@@ -178,7 +178,7 @@ fn run_without_a_probe_runs_the_simulator() {
     assert_eq!(
         stdout_lines(&forced),
         [
-            "OK bridge=plasma-bridge version=0.1.0 reset=unknown link=UP model=Powermax65 family=SYNC product=081335"
+            "OK bridge=plasma-bridge version=0.1.0 reset=unknown link=UP model=Powermax65 family=SYNC product=081335 torch=MACHINE lead_ft=25"
         ]
     );
     let probed = pbtool("run", &["--fast", "--ps", "pm85"], "ID\n");

@@ -120,6 +120,33 @@ fn settings_that_do_not_read_back_are_an_error_with_the_read_back_values() {
     );
 }
 
+/// ID names the torch and its lead, so a CNC loads the cut chart for them: a SYNC unit's from
+/// 0x3000 (SYNC manual, 000_dd931256418ae627.txt, lines 618-620: 0x04 machine torch 15-25 ft,
+/// 0x06 75 ft), a legacy unit's lead from its coils (Powermax65/85 protocol,
+/// 001_0bf4bbd6620a48c8.txt, lines 258-271: 01 is 35-50 ft), which say nothing of the torch.
+#[test]
+fn id_names_the_torch_and_its_lead() {
+    let mut sync = Rig::new(Settings::default(), Some("sync85"));
+    sync.ps().powermax().config_mut().torch_id = 0x06;
+    sync.run(1500);
+    let id = sync.cmd("ID");
+    assert!(
+        id.ends_with(" family=SYNC product=081335 torch=MACHINE lead_ft=75"),
+        "{id}"
+    );
+    let mut legacy = Rig::new(Settings::default(), Some("pm65"));
+    legacy.ps().powermax().config_mut().torch_id = 0x05;
+    legacy.run(1500);
+    let id = legacy.cmd("ID");
+    assert!(
+        id.ends_with(" family=LEGACY product=081223 torch=- lead_ft=50"),
+        "{id}"
+    );
+    let mut hpr = Rig::hpr("hpr130");
+    let id = hpr.cmd("ID");
+    assert!(!id.contains("torch=") && !id.contains("lead_ft="), "{id}");
+}
+
 #[test]
 fn every_command_on_a_sync_unit() {
     let mut rig = Rig::sync65(Settings::default());
@@ -132,7 +159,7 @@ fn every_command_on_a_sync_unit() {
     assert_eq!(
         rig.cmd("ID"),
         "OK bridge=plasma-bridge version=0.1.0 reset=unknown link=UP model=Powermax65 \
-         family=SYNC product=081335"
+         family=SYNC product=081335 torch=MACHINE lead_ft=25"
     );
     assert_eq!(rig.cmd("FAULT"), "OK fault=none");
     assert_eq!(rig.cmd("FAULTLOG"), "OK log=0-20-0,0-50-0");

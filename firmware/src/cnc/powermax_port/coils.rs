@@ -14,7 +14,7 @@
 //! unit answers), so a CNC never loads the cut chart of a lead it was not told.
 
 use plasma_protocol::modbus_ascii::ExceptionCode;
-use plasma_protocol::powermax::{LeadLength, legacy, sync};
+use plasma_protocol::powermax::{legacy, sync};
 
 use crate::io::{Inputs, Outputs};
 use crate::link::{Family, UnitStatus};
@@ -44,7 +44,11 @@ impl Coils<'_> {
         let family = self.family()?;
         let sync_unit = family == Family::PowermaxSync;
         let (inputs, outputs) = self.io.unwrap_or((Inputs::NONE, Outputs::OFF));
-        let lead_bit = |bit: u8| self.lead().map(|l| l.legacy_coils() >> bit & 1 == 1);
+        let lead_bit = |bit: u8| {
+            self.status
+                .torch_lead()
+                .map(|l| l.legacy_coils() >> bit & 1 == 1)
+        };
         match address {
             legacy::TORCH_LEAD_BIT0_COIL => lead_bit(0),
             legacy::TORCH_LEAD_BIT1_COIL => lead_bit(1),
@@ -89,18 +93,6 @@ impl Coils<'_> {
             }
             Some(_) => address == legacy::GAS_TEST_COIL,
             None => false,
-        }
-    }
-
-    /// The torch lead: a SYNC unit's from 0x3000, a legacy unit's from its coils.
-    fn lead(&self) -> Option<LeadLength> {
-        match self.status.family {
-            Some(Family::PowermaxSync) => self
-                .status
-                .identification
-                .and_then(|i| i.torch)
-                .map(|t| t.lead),
-            _ => self.status.legacy_lead,
         }
     }
 }
