@@ -426,11 +426,11 @@ fn garbage_on_the_line_never_panics_and_the_link_recovers_when_it_stops() {
     }
 }
 
-/// True for a request the link may send without being asked to: reads, detection, line
-/// control, polls (no write of any kind).
+/// True for a request the link may send without being asked to: reads (the legacy torch-lead
+/// coils among them), detection, line control, polls (no write of any kind).
 fn request_is_harmless(f: &host_tests::harness::TraceFrame) -> bool {
     if f.is_modbus() {
-        return matches!(f.modbus_function(), Some(0x03 | 0x04 | 0x2B));
+        return matches!(f.modbus_function(), Some(0x01 | 0x03 | 0x04 | 0x2B));
     }
     match f.hpr_id() {
         Some(id) => hpr::is_allowed(id) && matches!(id, 0 | 2 | 79 | 85 | 86 | 125 | 134),

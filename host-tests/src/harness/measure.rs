@@ -200,6 +200,9 @@ pub fn bus_efficiency(setup: Setup, poll_interval: Duration, window: Duration) -
         .collect();
     let mut cycles = 0usize;
     let mut poll_requests = 0usize;
+    // Poll requests before the last cycle began: whole cycles only, so a cycle cut off by the
+    // end of the window does not count as a shorter one.
+    let mut whole_cycle_requests = 0usize;
     let mut other_us = 0u64;
     let mut fault_check_us = 0u64;
     let mut char_time_us = 0.0;
@@ -224,6 +227,7 @@ pub fn bus_efficiency(setup: Setup, poll_interval: Duration, window: Duration) -
             let first = *marker.get_or_insert(&frame.bytes);
             if frame.bytes == first {
                 cycles += 1;
+                whole_cycle_requests = poll_requests;
             }
             poll_requests += 1;
             let at = match kinds.iter().position(|(k, _)| *k == &frame.bytes[..]) {
@@ -265,7 +269,11 @@ pub fn bus_efficiency(setup: Setup, poll_interval: Duration, window: Duration) -
     BusEfficiency {
         setup,
         poll_interval,
-        requests_per_cycle: poll_requests as f64 / cycles_f,
+        requests_per_cycle: if cycles > 1 {
+            whole_cycle_requests as f64 / (cycles - 1) as f64
+        } else {
+            poll_requests as f64
+        },
         chars_per_cycle,
         char_time_us,
         wire_max_per_s,
