@@ -255,7 +255,6 @@ pub fn bus_efficiency(setup: Setup, poll_interval: Duration, window: Duration) -
         .map(|f| f.end.saturating_since(f.start).as_micros())
         .sum();
     let secs = to.saturating_since(from).as_micros() as f64 / 1e6;
-    let cycles_f = cycles.max(1) as f64;
     let chars_per_cycle: f64 = kinds
         .iter()
         .map(|(request, replies)| {
