@@ -271,7 +271,7 @@ impl From<&UnitStatus> for SupplyState {
             fault_requires_action: status.active_fault.is_some_and(|f| f.action_required()),
             fault_active: status.active_fault.is_some(),
             restart_blackout_until: status.restart_blackout_until,
-            unit_ready: status.ready,
+            unit_ready: status.link_up && status.state_ready(),
         }
     }
 }
@@ -349,7 +349,8 @@ mod tests {
         rig.fault(500);
         rig.run(300);
         let state = rig.bridge.supply_state();
-        assert!(state.fault_active && state.fault_requires_action && !state.unit_ready);
+        // The fault is its own field: a Powermax has no ready state besides its faults.
+        assert!(state.fault_active && state.fault_requires_action && state.unit_ready);
         assert_eq!(rig.cmd("RESTART"), "OK restart=done quiet_ms=2000");
         let until = rig.bridge.supply_state().restart_blackout_until.unwrap();
         assert!(until > rig.now);

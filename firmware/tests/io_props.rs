@@ -36,9 +36,10 @@ fn any_config() -> impl Strategy<Value = IoConfig> {
         any::<bool>(),
         any::<bool>(),
         any::<bool>(),
+        any::<bool>(),
     )
         .prop_map(
-            |(gap, debounce, requires_start, timeout, drop, refuse_fault, link)| IoConfig {
+            |(gap, debounce, requires_start, timeout, drop, refuse_fault, link, ready)| IoConfig {
                 start_gap: Duration::from_millis(gap),
                 arc_ok_debounce: Duration::from_millis(debounce),
                 arc_ok_requires_start: requires_start,
@@ -46,6 +47,7 @@ fn any_config() -> impl Strategy<Value = IoConfig> {
                 drop_start_on_transfer_timeout: drop,
                 refuse_start_on_fault: refuse_fault,
                 link_required: link,
+                ready_required: ready,
                 ..IoConfig::default()
             },
         )
@@ -113,9 +115,12 @@ struct Run {
 impl Run {
     fn new(config: IoConfig, inputs: Inputs) -> Self {
         let io = Interlocks::new(config, Instant::ZERO, inputs);
+        let mut monitor = SafetyMonitor::new(inputs.torch_on);
+        monitor.ready_interlock(config.ready_required);
+        monitor.input(Input::NotReady, inputs.not_ready);
         let mut run = Run {
             io,
-            monitor: SafetyMonitor::new(inputs.torch_on),
+            monitor,
             now: Instant::ZERO,
             inputs,
             supply: SupplyState::default(),
@@ -146,6 +151,7 @@ impl Run {
                     self.latest_blackout = self.latest_blackout.max(until);
                 }
                 self.supply = supply;
+                self.monitor.link_reports(supply.link_up, supply.unit_ready);
                 self.io.on_supply(self.now, supply);
                 self.check(false);
             }

@@ -46,6 +46,8 @@ const LINES: &[&str] = &[
     "CONFIG interlock_fault OFF",
     "CONFIG interlock_fault ON",
     "CONFIG interlock_link OFF",
+    "CONFIG interlock_ready OFF",
+    "CONFIG interlock_ready ON",
     "CONFIG transfer_timeout_ms 100",
     "CONFIG transfer_timeout_drops_start OFF",
     "CONFIG poll_ms 20",

@@ -194,6 +194,7 @@ fn interlock_word(interlock: Interlock) -> &'static str {
         Interlock::RestartBlackout => "restart_blackout",
         Interlock::FaultRequiresAction => "fault",
         Interlock::TransferTimeout => "transfer_timeout",
+        Interlock::NotReady => "not_ready",
     }
 }
 

@@ -31,6 +31,10 @@ pub struct IoConfig {
     /// down, hold READY off and FAULT on while it is down. Clear it only for a discrete-only
     /// installation.
     pub link_required: bool,
+    /// Refuse START while the unit is not ready for a start (HPR / MaxPro200 outside state
+    /// 03, or the NOT_READY signal active). Refuses only: a unit leaves its ready state once
+    /// it takes a start, so this never drops a START that is on.
+    pub ready_required: bool,
     /// Active level and debounce of every input (the CNC's wiring).
     pub inputs: InputConfig,
     /// Active level of the outputs a table may need inverted.
@@ -67,6 +71,7 @@ impl Default for IoConfig {
             drop_start_on_transfer_timeout: true,
             refuse_start_on_fault: true,
             link_required: true,
+            ready_required: true,
             inputs: InputConfig::default(),
             outputs: OutputConfig::default(),
         }

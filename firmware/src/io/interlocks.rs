@@ -242,6 +242,18 @@ impl Interlocks {
         Ok(())
     }
 
+    /// Whether the unit takes a start now, asked only before START rises: an HPR leaves
+    /// IDLE2 for PREFLOW as soon as it sees START, so a START that is on is never dropped
+    /// for it. The link's report counts only while the link is up (with it down the link
+    /// interlock decides); the NOT_READY signal counts always.
+    fn ready_for_start(&self) -> Result<(), Interlock> {
+        let link_says_not_ready = self.supply.link_up && !self.supply.unit_ready;
+        if self.config.ready_required && (link_says_not_ready || self.inputs.not_ready) {
+            return Err(Interlock::NotReady);
+        }
+        Ok(())
+    }
+
     /// Recompute every output at `now` (`now` already advanced).
     fn step(&mut self, now: Instant) {
         let motion_changed = match self.motion.poll(now, self.config.arc_ok_debounce) {
@@ -322,7 +334,7 @@ impl Interlocks {
             return Reason::TorchOff;
         }
         match self.phase {
-            StartPhase::Idle => match self.interlock(now) {
+            StartPhase::Idle => match self.interlock(now).and_then(|()| self.ready_for_start()) {
                 Err(interlock) => self.refuse(interlock),
                 Ok(()) => {
                     let until = self.last_start_fall + self.config.effective_start_gap();
@@ -334,15 +346,17 @@ impl Interlocks {
                     Reason::TorchOn
                 }
             },
-            StartPhase::Delayed { until } => match self.interlock(now) {
-                Err(interlock) => self.refuse(interlock),
-                Ok(()) => {
-                    if now >= until {
-                        return self.start_on(now, Reason::StartGapElapsed);
+            StartPhase::Delayed { until } => {
+                match self.interlock(now).and_then(|()| self.ready_for_start()) {
+                    Err(interlock) => self.refuse(interlock),
+                    Ok(()) => {
+                        if now >= until {
+                            return self.start_on(now, Reason::StartGapElapsed);
+                        }
+                        Reason::StartGapElapsed
                     }
-                    Reason::StartGapElapsed
                 }
-            },
+            }
             StartPhase::On {
                 since,
                 transferred,

@@ -13,6 +13,11 @@
 //! the new meaning ([`SafetyMonitor::torch_on_redefined`]), an observed command like an edge,
 //! never the interlocks' view. A change then counts like power-up: a TORCH_ON active under the
 //! new setting must be seen inactive before START.
+//!
+//! The unit's readiness comes the same way: its NOT_READY signal as an input edge, the link's
+//! report of the unit's state ([`SafetyMonitor::link_reports`], like the blackout), and the
+//! operator's `CONFIG interlock_ready` ([`SafetyMonitor::ready_interlock`]); the rule is in
+//! force from power-up, as the default is.
 
 use core::fmt;
 
@@ -25,6 +30,11 @@ use super::signals::Input;
 /// The manuals' least delay between Start signals. Deliberately its own constant rather than
 /// the controller's setting, so a wrong setting is caught.
 const START_GAP: Duration = Duration::from_millis(50);
+
+/// How long NOT_READY may be active at the pin before a START rising anyway is a violation:
+/// the longest debounce a setting may give an input, so a START that rose while the filter
+/// still waited is not one. Its own constant, like [`START_GAP`].
+const NOT_READY_GRACE: Duration = Duration::from_millis(100);
 
 /// How many violations are kept (the count goes on beyond).
 const KEPT: usize = 16;
@@ -47,6 +57,9 @@ pub enum ViolationKind {
     /// START on while a TORCH_ON active at power-up (or when its wiring setting changed) has
     /// not yet been seen inactive.
     StartFromTorchOnAtPowerUp,
+    /// START rose while the unit said it was not ready for a start (its NOT_READY signal, or
+    /// the link's report of its state) and the ready interlock was on.
+    StartWhileNotReady,
 }
 
 impl fmt::Display for ViolationKind {
@@ -61,6 +74,7 @@ impl fmt::Display for ViolationKind {
             ViolationKind::StartFromTorchOnAtPowerUp => {
                 f.write_str("START from a TORCH_ON stuck since power-up")
             }
+            ViolationKind::StartWhileNotReady => f.write_str("START while the unit is not ready"),
         }
     }
 }
@@ -90,6 +104,14 @@ pub struct SafetyMonitor {
     start: bool,
     last_start_fall: Option<Instant>,
     torch_stuck_since_power_up: bool,
+    /// `CONFIG interlock_ready` as the operator last set it.
+    ready_interlock: bool,
+    /// NOT_READY at the pin, from the edges fed.
+    not_ready_signal: bool,
+    /// The first sample that saw NOT_READY active, while it stays active.
+    not_ready_since: Option<Instant>,
+    /// The link is up and reports the unit's state as not ready.
+    link_says_not_ready: bool,
     violations: Vec<Violation, KEPT>,
     count: u32,
 }
@@ -104,20 +126,45 @@ impl SafetyMonitor {
             start: false,
             last_start_fall: None,
             torch_stuck_since_power_up: torch_on_at_power_up,
+            ready_interlock: true,
+            not_ready_signal: false,
+            not_ready_since: None,
+            link_says_not_ready: false,
             violations: Vec::new(),
             count: 0,
         }
     }
 
-    /// An input edge as it arrives at the board (only TORCH_ON bears on the rules). Feed it
-    /// before the sample of the step that delivers it.
+    /// An input edge as it arrives at the board (TORCH_ON and NOT_READY bear on the rules).
+    /// Feed it before the sample of the step that delivers it.
     pub fn input(&mut self, input: Input, active: bool) {
-        if input == Input::TorchOn {
-            self.torch_on = active;
-            if !active {
-                self.torch_stuck_since_power_up = false;
+        match input {
+            Input::TorchOn => {
+                self.torch_on = active;
+                if !active {
+                    self.torch_stuck_since_power_up = false;
+                }
             }
+            Input::NotReady => {
+                self.not_ready_signal = active;
+                if !active {
+                    self.not_ready_since = None;
+                }
+            }
+            _ => {}
         }
+    }
+
+    /// The link's report of the unit: whether the link is up and the unit's own state allows a
+    /// start ([`SupplyState`](super::SupplyState)'s `link_up` and `unit_ready`). With the link
+    /// down its state is unknown and the rule does not judge it.
+    pub fn link_reports(&mut self, link_up: bool, unit_ready: bool) {
+        self.link_says_not_ready = link_up && !unit_ready;
+    }
+
+    /// The operator set `CONFIG interlock_ready` (on at power-up, the default).
+    pub fn ready_interlock(&mut self, on: bool) {
+        self.ready_interlock = on;
     }
 
     /// TORCH_ON's meaning at the pin changed: the operator set its active level or debounce
@@ -162,6 +209,15 @@ impl SafetyMonitor {
         }
         if start && self.torch_stuck_since_power_up {
             self.record(now, ViolationKind::StartFromTorchOnAtPowerUp);
+        }
+        if self.not_ready_signal && self.not_ready_since.is_none() {
+            self.not_ready_since = Some(now);
+        }
+        let signal_says_not_ready = self
+            .not_ready_since
+            .is_some_and(|since| now.saturating_since(since) >= NOT_READY_GRACE);
+        if rose && self.ready_interlock && (self.link_says_not_ready || signal_says_not_ready) {
+            self.record(now, ViolationKind::StartWhileNotReady);
         }
     }
 
@@ -277,6 +333,52 @@ mod tests {
         // Released, then pressed again: now it is a real request.
         step(&mut m, ms(200), false, false, None);
         step(&mut m, ms(300), true, true, None);
+        assert_eq!(m.count(), 1);
+    }
+
+    #[test]
+    fn start_rising_while_the_unit_is_not_ready_is_caught() {
+        let mut m = SafetyMonitor::new(false);
+        step(&mut m, ms(0), false, false, None);
+        m.link_reports(true, false);
+        step(&mut m, ms(100), true, true, None);
+        assert_eq!(kinds(&m), [ViolationKind::StartWhileNotReady]);
+        // A START already on when the unit leaves its ready state is its cut (PREFLOW).
+        step(&mut m, ms(200), false, false, None);
+        m.link_reports(true, true);
+        step(&mut m, ms(300), true, true, None);
+        m.link_reports(true, false);
+        step(&mut m, ms(400), true, true, None);
+        assert_eq!(m.count(), 1);
+        // The link down says nothing about the unit's state.
+        step(&mut m, ms(500), false, false, None);
+        m.link_reports(false, false);
+        step(&mut m, ms(600), true, true, None);
+        assert_eq!(m.count(), 1);
+        // With the interlock off, the operator allowed it.
+        step(&mut m, ms(700), false, false, None);
+        m.link_reports(true, false);
+        m.ready_interlock(false);
+        step(&mut m, ms(800), true, true, None);
+        assert_eq!(m.count(), 1);
+    }
+
+    #[test]
+    fn the_not_ready_signal_counts_once_any_debounce_is_over() {
+        let mut m = SafetyMonitor::new(false);
+        step(&mut m, ms(0), false, false, None);
+        m.input(Input::NotReady, true);
+        m.check(ms(10), false, None);
+        // Inside the longest debounce the filter may still be waiting.
+        step(&mut m, ms(109), true, true, None);
+        assert!(m.is_clean());
+        step(&mut m, ms(200), false, false, None);
+        step(&mut m, ms(250), true, true, None);
+        assert_eq!(kinds(&m), [ViolationKind::StartWhileNotReady]);
+        // Released: fine again.
+        step(&mut m, ms(300), false, false, None);
+        m.input(Input::NotReady, false);
+        step(&mut m, ms(400), true, true, None);
         assert_eq!(m.count(), 1);
     }
 

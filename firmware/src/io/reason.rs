@@ -24,6 +24,10 @@ pub enum Interlock {
     FaultRequiresAction,
     /// The arc did not transfer within the configured time after START.
     TransferTimeout,
+    /// The unit is not ready for a start: an HPR or MaxPro200 outside state 03 (IDLE2 /
+    /// READY FOR START: purging, gas test, powering up) or its NOT_READY signal active. Only
+    /// refuses: once START is on the unit leaves that state by design (PREFLOW and on).
+    NotReady,
 }
 
 log_texts!(Interlock {
@@ -33,6 +37,7 @@ log_texts!(Interlock {
     Interlock::RestartBlackout => "quick-restart blackout",
     Interlock::FaultRequiresAction => "power supply fault requires action",
     Interlock::TransferTimeout => "arc did not transfer in time",
+    Interlock::NotReady => "power supply not ready for start",
 });
 
 impl fmt::Display for Interlock {

@@ -244,7 +244,10 @@ pub struct SupplyState {
     pub fault_active: bool,
     /// After a SYNC quick restart: no request and no Start before this instant.
     pub restart_blackout_until: Option<Instant>,
-    /// The supply reports that it is ready to cut.
+    /// The unit's own readiness for a start, as the link last read it: an HPR or MaxPro200
+    /// in state 03 (IDLE2 / READY FOR START); a Powermax has no such state (its faults say
+    /// why it cannot cut), so it is ready while the link is up. False with the link down.
+    /// Faults and the blackout are the fields above, not part of this one.
     pub unit_ready: bool,
 }
 

@@ -190,17 +190,19 @@ impl UnitStatus {
         }
     }
 
+    /// The unit's own state allows a start: an HPR or MaxPro200 in state 03 (Table V: IDLE2 /
+    /// READY FOR START); a Powermax reports no such state, so always.
+    pub fn state_ready(&self) -> bool {
+        match self.family {
+            Some(Family::Hpr) | Some(Family::MaxPro200) => self.hpr.state == Some(StateCode(3)),
+            _ => true,
+        }
+    }
+
     /// Recompute [`UnitStatus::ready`] for time `now`.
     pub(crate) fn update_ready(&mut self, now: Instant) {
         let blackout = self.restart_blackout_until.is_some_and(|until| now < until);
         let fault_blocks = self.active_fault.is_some_and(|f| f.action_required());
-        let state_ready = match self.family {
-            Some(Family::Hpr) | Some(Family::MaxPro200) => {
-                // Table V: 3 = IDLE2 (HPR) / READY FOR START (MaxPro200).
-                self.hpr.state == Some(StateCode(3))
-            }
-            _ => true,
-        };
-        self.ready = self.link_up && !blackout && !fault_blocks && state_ready;
+        self.ready = self.link_up && !blackout && !fault_blocks && self.state_ready();
     }
 }

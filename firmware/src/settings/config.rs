@@ -243,6 +243,7 @@ impl Settings {
             ConfigKey::PollMs => ConfigValue::Number(ms(link.poll_interval)),
             ConfigKey::InterlockFault => on_off(io.refuse_start_on_fault),
             ConfigKey::InterlockLink => on_off(io.link_required),
+            ConfigKey::InterlockReady => on_off(io.ready_required),
             ConfigKey::ArcOkDebounceMs => ConfigValue::Number(ms(io.arc_ok_debounce)),
             ConfigKey::TransferTimeoutMs => ConfigValue::Number(ms(io.transfer_timeout)),
             ConfigKey::TransferTimeoutDropsStart => on_off(io.drop_start_on_transfer_timeout),
@@ -269,6 +270,7 @@ impl Settings {
             ConfigKey::CncBaud => Accepted::Words(CNC_BAUD_WORDS),
             ConfigKey::InterlockFault
             | ConfigKey::InterlockLink
+            | ConfigKey::InterlockReady
             | ConfigKey::TransferTimeoutDropsStart
             | ConfigKey::Events => Accepted::Words(ON_OFF),
             ConfigKey::PhoenixFormat => Accepted::Words("32|33|48|49|64|65|80|81|96|97|112|113"),
@@ -309,6 +311,7 @@ impl Settings {
             ConfigKey::PollMs => link.poll_interval = millis(text)?,
             ConfigKey::InterlockFault => io.refuse_start_on_fault = parse_on_off(key, text)?,
             ConfigKey::InterlockLink => io.link_required = parse_on_off(key, text)?,
+            ConfigKey::InterlockReady => io.ready_required = parse_on_off(key, text)?,
             ConfigKey::ArcOkDebounceMs => io.arc_ok_debounce = millis(text)?,
             ConfigKey::TransferTimeoutMs => io.transfer_timeout = millis(text)?,
             ConfigKey::TransferTimeoutDropsStart => {

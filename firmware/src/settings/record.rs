@@ -32,7 +32,10 @@ const FLAG_DROP_START_ON_TRANSFER_TIMEOUT: u8 = 1 << 1;
 const FLAG_REFUSE_START_ON_FAULT: u8 = 1 << 2;
 const FLAG_LINK_REQUIRED: u8 = 1 << 3;
 const FLAG_EVENTS: u8 = 1 << 4;
-const FLAGS_KNOWN: u8 = 0x1F;
+/// Set when the ready interlock is off: a record saved before the interlock existed has the
+/// bit clear and loads with it on, the default.
+const FLAG_READY_NOT_REQUIRED: u8 = 1 << 5;
+const FLAGS_KNOWN: u8 = 0x3F;
 
 const PROTOCOLS: [ProtocolChoice; 4] = [
     ProtocolChoice::Auto,
@@ -118,7 +121,8 @@ impl storage::Persistent for Settings {
             )
             | flag(io.refuse_start_on_fault, FLAG_REFUSE_START_ON_FAULT)
             | flag(io.link_required, FLAG_LINK_REQUIRED)
-            | flag(self.events, FLAG_EVENTS);
+            | flag(self.events, FLAG_EVENTS)
+            | flag(!io.ready_required, FLAG_READY_NOT_REQUIRED);
         r[22] = self.phoenix_format.value();
         if let Some(process) = self.process {
             r[23] = 1;
@@ -197,6 +201,7 @@ fn decode_v1(payload: &[u8]) -> Option<Settings> {
         drop_start_on_transfer_timeout: flags & FLAG_DROP_START_ON_TRANSFER_TIMEOUT != 0,
         refuse_start_on_fault: flags & FLAG_REFUSE_START_ON_FAULT != 0,
         link_required: flags & FLAG_LINK_REQUIRED != 0,
+        ready_required: flags & FLAG_READY_NOT_REQUIRED == 0,
         // Version 1 has no wiring: the reference board's (version 2 overwrites it).
         ..IoConfig::default()
     };
@@ -257,6 +262,7 @@ mod tests {
             (ConfigKey::PollMs, "500"),
             (ConfigKey::InterlockFault, "off"),
             (ConfigKey::InterlockLink, "OFF"),
+            (ConfigKey::InterlockReady, "off"),
             (ConfigKey::ArcOkDebounceMs, "10"),
             (ConfigKey::TransferTimeoutMs, "5000"),
             (ConfigKey::TransferTimeoutDropsStart, "off"),
@@ -281,6 +287,21 @@ mod tests {
         assert_eq!(back.get(ConfigKey::TimeoutMs), ConfigValue::Number(250));
         assert_eq!(back.link.protocol, ProtocolChoice::Hpr);
         assert!(!back.io.link_required);
+        assert!(!back.io.ready_required);
+    }
+
+    #[test]
+    fn a_record_saved_before_the_ready_interlock_loads_with_it_on() {
+        let mut s = Settings::default();
+        s.set(ConfigKey::InterlockReady, "OFF").unwrap();
+        let mut out = [0u8; storage::MAX_PAYLOAD];
+        let len = s.encode(&mut out);
+        assert_eq!(out[21] & FLAG_READY_NOT_REQUIRED, FLAG_READY_NOT_REQUIRED);
+        // Older firmware never set the bit: its records take the safe default.
+        out[21] &= !FLAG_READY_NOT_REQUIRED;
+        let old = Settings::decode(&out[..len]).unwrap();
+        assert!(old.io.ready_required);
+        assert_eq!(old.get(ConfigKey::InterlockReady), ConfigValue::Word("ON"));
     }
 
     #[test]
@@ -320,7 +341,7 @@ mod tests {
         assert_eq!(corrupt(6, 6), None, "six retries");
         assert_eq!(corrupt(13, 4), None, "HPR id 4");
         assert_eq!(corrupt(14, 0), None, "no failures before down");
-        assert_eq!(corrupt(21, 0x20), None, "reserved flag");
+        assert_eq!(corrupt(21, 0x40), None, "reserved flag");
         assert_eq!(corrupt(22, 17), None, "unframed Phoenix format");
         assert_eq!(corrupt(22, 2), None, "no such Phoenix format");
         assert_eq!(corrupt(23, 2), None, "bad process tag");

@@ -167,7 +167,7 @@ impl<E: WorldEndpoint> World<E> {
             line,
             io,
             pins_in: Inputs::NONE,
-            monitor: SafetyMonitor::new(false),
+            monitor: power_up_monitor(&options.io, Inputs::NONE),
             reset_monitor: None,
             rx_errors: options.rx_errors,
             events: Vec::new(),
@@ -255,7 +255,7 @@ impl<E: WorldEndpoint> World<E> {
         }
         self.io = Interlocks::new(io, now, self.pins_in);
         self.last_supply = SupplyState::default();
-        self.reset_monitor = Some(SafetyMonitor::new(self.pins_in.torch_on));
+        self.reset_monitor = Some(power_up_monitor(&io, self.pins_in));
         self.process();
     }
 
@@ -593,11 +593,19 @@ impl<E: WorldEndpoint> World<E> {
                     monitor.torch_on_redefined(self.pins_in.torch_on);
                 }
             }
+            self.monitor.ready_interlock(config.ready_required);
+            if let Some(monitor) = &mut self.reset_monitor {
+                monitor.ready_interlock(config.ready_required);
+            }
             self.io.set_config(now, config);
         }
 
         // The discrete I/O, from the link's view at this instant.
         let supply = self.endpoint.supply_state();
+        self.monitor.link_reports(supply.link_up, supply.unit_ready);
+        if let Some(monitor) = &mut self.reset_monitor {
+            monitor.link_reports(supply.link_up, supply.unit_ready);
+        }
         if supply != self.last_supply {
             self.io.on_supply(now, supply);
             self.last_supply = supply;
@@ -695,6 +703,15 @@ impl<E: WorldEndpoint> World<E> {
         }
         self.hpr_inputs_given = levels;
     }
+}
+
+/// A monitor watching from a power-up with these settings and input levels: the operator's
+/// ready interlock as saved, NOT_READY as it reads at the pin.
+fn power_up_monitor(io: &IoConfig, pins_in: Inputs) -> SafetyMonitor {
+    let mut monitor = SafetyMonitor::new(pins_in.torch_on);
+    monitor.ready_interlock(io.ready_required);
+    monitor.input(Input::NotReady, pins_in.not_ready);
+    monitor
 }
 
 impl<E: WorldEndpoint> Drop for World<E> {

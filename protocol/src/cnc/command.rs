@@ -154,6 +154,7 @@ pub enum ConfigKey {
     PollMs,
     InterlockFault,
     InterlockLink,
+    InterlockReady,
     ArcOkDebounceMs,
     TransferTimeoutMs,
     TransferTimeoutDropsStart,
@@ -186,7 +187,7 @@ pub enum ConfigKey {
 
 impl ConfigKey {
     /// Every key, in the order `CONFIG` lists them.
-    pub const ALL: [ConfigKey; 35] = [
+    pub const ALL: [ConfigKey; 36] = [
         ConfigKey::Protocol,
         ConfigKey::Address,
         ConfigKey::Parity,
@@ -196,6 +197,7 @@ impl ConfigKey {
         ConfigKey::PollMs,
         ConfigKey::InterlockFault,
         ConfigKey::InterlockLink,
+        ConfigKey::InterlockReady,
         ConfigKey::ArcOkDebounceMs,
         ConfigKey::TransferTimeoutMs,
         ConfigKey::TransferTimeoutDropsStart,
@@ -236,6 +238,7 @@ impl ConfigKey {
             ConfigKey::PollMs => "poll_ms",
             ConfigKey::InterlockFault => "interlock_fault",
             ConfigKey::InterlockLink => "interlock_link",
+            ConfigKey::InterlockReady => "interlock_ready",
             ConfigKey::ArcOkDebounceMs => "arc_ok_debounce_ms",
             ConfigKey::TransferTimeoutMs => "transfer_timeout_ms",
             ConfigKey::TransferTimeoutDropsStart => "transfer_timeout_drops_start",

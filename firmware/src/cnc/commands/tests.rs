@@ -365,9 +365,10 @@ fn config_get_set_and_save_round_trip_through_the_settings_record() {
     assert_eq!(
         rig.cmd("CONFIG"),
         "OK protocol=AUTO address=1 parity=EVEN stop_bits=1 timeout_ms=100 retries=2 \
-         poll_ms=100 interlock_fault=ON interlock_link=ON arc_ok_debounce_ms=2 \
-         transfer_timeout_ms=3000 transfer_timeout_drops_start=ON events=OFF hpr_id=0 \
-         phoenix_format=113 torch_on_active=LOW torch_on_debounce_ms=1 hold_active=LOW \
+         poll_ms=100 interlock_fault=ON interlock_link=ON interlock_ready=ON \
+         arc_ok_debounce_ms=2 transfer_timeout_ms=3000 transfer_timeout_drops_start=ON \
+         events=OFF hpr_id=0 phoenix_format=113 torch_on_active=LOW torch_on_debounce_ms=1 \
+         hold_active=LOW \
          hold_debounce_ms=5 pierce_complete_active=LOW pierce_complete_debounce_ms=5 \
          corner_current_active=LOW corner_current_debounce_ms=5 motion_active=LOW \
          motion_debounce_ms=0 not_ready_active=LOW not_ready_debounce_ms=5 \

@@ -28,10 +28,13 @@ struct Rig {
 impl Rig {
     fn new(config: IoConfig, inputs: Inputs) -> Self {
         let io = Interlocks::new(config, ms(0), inputs);
+        let mut monitor = SafetyMonitor::new(inputs.torch_on);
+        monitor.ready_interlock(config.ready_required);
+        monitor.input(Input::NotReady, inputs.not_ready);
         let mut rig = Rig {
             io,
             supply: SupplyState::default(),
-            monitor: SafetyMonitor::new(inputs.torch_on),
+            monitor,
             transitions: Vec::new(),
             events: Vec::new(),
         };
@@ -86,6 +89,7 @@ impl Rig {
 
     fn supply(&mut self, now: Instant, supply: SupplyState) {
         self.supply = supply;
+        self.monitor.link_reports(supply.link_up, supply.unit_ready);
         self.io.on_supply(now, supply);
         self.after(now);
     }
@@ -753,9 +757,106 @@ fn ready_comes_back_when_the_blackout_ends() {
     assert_eq!(rig.io.poll_at(), None);
 }
 
+// A unit that is not ready for a start: HPR manual (002_72b43a5685974c77.txt) line 55, the
+// NOT_READY signal ("not ready for a plasma start signal ... purging or in test gas mode"),
+// and the state codes at lines 456-470 (03 IDLE2 / READY FOR START; a start takes it to 04
+// PREFLOW and on, so readiness is asked before START rises, never while it is on).
+
+fn unit_not_ready() -> SupplyState {
+    SupplyState {
+        unit_ready: false,
+        ..SupplyState::HEALTHY
+    }
+}
+
 #[test]
-fn hpr_not_ready_clears_ready_but_does_not_refuse_start() {
+fn a_unit_not_ready_refuses_start_and_becoming_ready_does_not_fire() {
     let mut rig = Rig::healthy();
+    rig.supply(ms(10), unit_not_ready()); // an HPR in PURGE (state 02)
+    rig.torch(ms(100), true);
+    assert!(!rig.start());
+    assert_eq!(rig.io.start_locked_by(), Some(Interlock::NotReady));
+    assert_eq!(
+        rig.events,
+        [IoEvent::StartRefused {
+            reason: Interlock::NotReady
+        }]
+    );
+    rig.supply(ms(200), SupplyState::HEALTHY);
+    assert!(
+        !rig.start(),
+        "the refusal latches until TORCH_ON is released"
+    );
+    rig.torch(ms(300), false);
+    rig.torch(ms(400), true);
+    assert!(rig.start());
+}
+
+#[test]
+fn the_not_ready_signal_refuses_start() {
+    let mut rig = Rig::healthy();
+    rig.input(ms(100), Input::NotReady, true);
+    rig.torch(ms(200), true);
+    assert!(!rig.start());
+    assert_eq!(rig.io.start_locked_by(), Some(Interlock::NotReady));
+    rig.input(ms(300), Input::NotReady, false);
+    rig.torch(ms(400), false);
+    rig.torch(ms(500), true);
+    assert!(rig.start());
+}
+
+#[test]
+fn a_unit_leaving_its_ready_state_during_a_cut_keeps_start() {
+    let mut rig = Rig::healthy();
+    rig.torch(ms(100), true);
+    assert!(rig.start());
+    // The HPR took the start: PREFLOW, and its NOT_READY signal on.
+    rig.supply(ms(150), unit_not_ready());
+    rig.input(ms(160), Input::NotReady, true);
+    rig.poll(ms(500));
+    assert!(
+        rig.start(),
+        "readiness is asked before START rises, never during a cut"
+    );
+    assert!(
+        rig.events
+            .iter()
+            .all(|e| !matches!(e, IoEvent::StartDropped { .. }))
+    );
+}
+
+#[test]
+fn a_unit_not_ready_refuses_start_also_at_the_end_of_the_start_gap() {
+    let mut rig = Rig::healthy();
+    rig.torch(ms(100), true);
+    rig.torch(ms(110), false);
+    rig.torch(ms(120), true); // inside the 50 ms gap: delayed to 160 ms
+    assert!(!rig.start());
+    rig.supply(ms(130), unit_not_ready());
+    rig.poll(ms(160));
+    assert!(!rig.start());
+    assert_eq!(rig.io.start_locked_by(), Some(Interlock::NotReady));
+}
+
+#[test]
+fn with_the_link_down_only_the_link_interlock_judges_the_units_state() {
+    let config = IoConfig {
+        link_required: false,
+        ..IoConfig::default()
+    };
+    let mut rig = Rig::healthy_with(config);
+    rig.supply(ms(10), SupplyState::default()); // link down: its state is unknown
+    rig.torch(ms(100), true);
+    assert!(rig.start(), "discrete-only wiring fires on TORCH_ON alone");
+}
+
+#[test]
+fn with_the_ready_interlock_off_not_ready_only_clears_ready() {
+    let config = IoConfig {
+        ready_required: false,
+        ..IoConfig::default()
+    };
+    let mut rig = Rig::healthy_with(config);
     rig.input(ms(100), Input::NotReady, true);
     assert_eq!(
         rig.log(Output::Ready),

@@ -190,13 +190,14 @@ const RESET_CAUSES: [ResetCause; 10] = [
     ResetCause::Unknown,
 ];
 
-const INTERLOCKS: [Interlock; 6] = [
+const INTERLOCKS: [Interlock; 7] = [
     Interlock::TorchOnAtPowerUp,
     Interlock::TorchOnAtWiringChange,
     Interlock::LinkDown,
     Interlock::RestartBlackout,
     Interlock::FaultRequiresAction,
     Interlock::TransferTimeout,
+    Interlock::NotReady,
 ];
 
 const CHANGED_BY: [ChangedBy; 3] = [ChangedBy::Text, ChangedBy::Phoenix, ChangedBy::ModbusCnc];
@@ -540,6 +541,7 @@ mod tests {
                 Interlock::RestartBlackout => 3,
                 Interlock::FaultRequiresAction => 4,
                 Interlock::TransferTimeout => 5,
+                Interlock::NotReady => 6,
             };
             assert_eq!(code, expected);
         }
