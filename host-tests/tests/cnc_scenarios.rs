@@ -778,6 +778,50 @@ fn events_report_link_fault_remote_and_arc() {
     assert_eq!(field(&w.cnc_line("STATUS"), "fault"), Some("0-20-0"));
 }
 
+// HPR manual (002_72b43a5685974c77.txt) line 55: NOT READY FOR START, "purging or in test gas
+// mode"; lines 456-459: state 02 PURGE, 03 IDLE2 (ready for start).
+#[test]
+fn an_hpr_still_purging_refuses_start_as_not_ready_and_a_fresh_press_fires_once_ready() {
+    let mut w = bridge_world(Model::Hpr130);
+    w.cnc_line("EVENTS ON");
+    w.run_until(
+        |w| w.bridge().status().hpr.state == Some(plasma_protocol::hpr::StateCode(2)),
+        Duration::from_secs(5),
+    )
+    .expect("the link sees the purge");
+    let status = w.cnc_line("STATUS");
+    assert_eq!(field(&status, "ready"), Some("OFF"), "{status}");
+    w.set_torch(true);
+    w.run_until(
+        |w| {
+            w.cnc_events()
+                .any(|e| e == "!START REFUSED reason=not_ready")
+        },
+        ms(500),
+    )
+    .expect("the refusal reaches the CNC");
+    assert_eq!(w.io().start_locked_by(), Some(Interlock::NotReady));
+    assert!(!w.io().outputs().start);
+    assert_eq!(field(&w.cnc_line("STATUS"), "start"), Some("OFF"));
+
+    w.run_until(|w| w.bridge().status().ready, Duration::from_secs(10))
+        .expect("the purge ends");
+    w.run_for(ms(200));
+    assert!(
+        !w.io().outputs().start,
+        "the refusal latches until released"
+    );
+    assert_eq!(w.sim_ref::<Hpr>().counters().starts, 0);
+    w.set_torch(false);
+    w.set_torch(true);
+    assert!(w.io().outputs().start);
+    w.wait_cnc_line("!STATE 4 name=PREFLOW from=3", Duration::from_secs(1))
+        .unwrap();
+    // The unit left IDLE2 because it took the start: START stays on.
+    w.run_for(ms(300));
+    assert!(w.io().outputs().start);
+}
+
 #[test]
 fn hpr_events_report_state_changes_and_a_transfer_timeout() {
     let mut w = ready_hpr(Model::Hpr130);
