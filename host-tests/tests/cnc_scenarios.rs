@@ -264,7 +264,10 @@ fn sync_commands_ok_and_err() {
                 "SET PROCESS GOUGE 45 AUTO",
                 "ERR RANGE *GOUGE*CUT*EXPANDED*",
             ),
-            ("SET PROCESS CUT 500 AUTO", "ERR RANGE *5..400*"),
+            (
+                "SET PROCESS CUT 500 AUTO",
+                "ERR RANGE amps out of range 20..65 for this cartridge",
+            ),
             ("SET PROCESS CUT 45.01 AUTO", "ERR RANGE *1/64*"),
             (
                 "SET PROCESS FLY 45 AUTO",

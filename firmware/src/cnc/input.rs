@@ -3,10 +3,13 @@
 
 use plasma_protocol::cnc::phoenix::{self, Deframer, Format};
 use plasma_protocol::cnc::reply::write_parse_error;
-use plasma_protocol::cnc::{Command, ErrorCode, LineError, MAX_LINE_LEN, ParseError};
+use plasma_protocol::cnc::{
+    AMPS_ARGUMENT, Command, ErrorCode, LineError, MAX_LINE_LEN, ParseError,
+};
 
 use super::texts::{self, frame_error};
-use super::{Context, LineText, Session, err_line, line};
+use super::replies::AmpsRange;
+use super::{Context, LineText, ReplyLine, Session, err_line, line};
 
 /// Why an input could not become a command; answered in turn like a command.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -235,11 +238,11 @@ impl Session {
     /// Answer one item: its input error, or the command's reply (none yet when it waits).
     pub(super) fn execute(&mut self, ctx: &mut Context<'_>, item: Item) {
         let reply = match item.error {
-            Some(InputError::Parse(error)) => line(|l| write_parse_error(l, &error)),
+            Some(InputError::Parse(error)) => parse_error(ctx, &error),
             Some(InputError::Frame(error)) => frame_error(error),
             Some(InputError::Interrupted) => err_line(ErrorCode::Syntax, texts::LINE_INTERRUPTED),
             None => match Command::parse(&item.text) {
-                Err(error) => line(|l| write_parse_error(l, &error)),
+                Err(error) => parse_error(ctx, &error),
                 Ok(command) => match self.run(ctx, command) {
                     Some(reply) => reply,
                     None => return,
@@ -247,6 +250,20 @@ impl Session {
             },
         };
         self.send(reply);
+    }
+}
+
+/// The reply to a line that did not parse. A current outside every unit's bounds quotes the
+/// range of the unit on the line when the link knows it (what LIMITS shows), not the bounds.
+fn parse_error(ctx: &Context<'_>, error: &ParseError) -> ReplyLine {
+    let status = ctx.link.status();
+    let family = status.family.filter(|_| status.link_up);
+    match (error, AmpsRange::of(status, family)) {
+        (ParseError::OutOfRange { what, .. }, Some(range)) if *what == AMPS_ARGUMENT => err_line(
+            ErrorCode::Range,
+            format_args!("{what} out of range {range} {}", texts::limit_scope(family)),
+        ),
+        _ => line(|l| write_parse_error(l, error)),
     }
 }
 

@@ -129,14 +129,48 @@ pub(super) fn limits(status: &UnitStatus, family: Option<Family>) -> ReplyLine {
     }
 }
 
+/// The current range the unit on the line accepts, as LIMITS shows it (`20..65`).
+#[derive(Debug, Clone, Copy)]
+pub(super) enum AmpsRange {
+    /// An HPR's or MaxPro200's: the manual's least current up to the unit's rating.
+    Hpr(hpr::SystemId),
+    /// A Powermax's, as it reported them (SYNC: for the installed cartridge).
+    Powermax(Limits),
+}
+
+impl AmpsRange {
+    /// The range of the unit on the line, if the link knows it.
+    pub(super) fn of(status: &UnitStatus, family: Option<Family>) -> Option<AmpsRange> {
+        match (family?, status.model) {
+            (Family::Hpr | Family::MaxPro200, Some(Model::Hpr(system))) => {
+                Some(AmpsRange::Hpr(system))
+            }
+            _ => status.limits.map(AmpsRange::Powermax),
+        }
+    }
+}
+
+impl Display for AmpsRange {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            AmpsRange::Hpr(system) => {
+                let max = match system {
+                    hpr::SystemId::Hpr { rating, .. } => rating.max_amps(),
+                    hpr::SystemId::MaxPro200 => hpr::MAX_MAXPRO_AMPS,
+                };
+                write!(f, "{}..{max}", hpr::MIN_AMPS)
+            }
+            AmpsRange::Powermax(limits) => {
+                write!(f, "{}..{}", limits.min_current, limits.max_current)
+            }
+        }
+    }
+}
+
 /// An HPR's or MaxPro200's ranges: from the manual and the unit's rating.
 fn hpr_limits(system: hpr::SystemId) -> ReplyLine {
-    let max = match system {
-        hpr::SystemId::Hpr { rating, .. } => rating.max_amps(),
-        hpr::SystemId::MaxPro200 => hpr::MAX_MAXPRO_AMPS,
-    };
     ok_line(|w| {
-        w.field("amps", format_args!("{}..{max}", hpr::MIN_AMPS))?;
+        w.field("amps", AmpsRange::Hpr(system))?;
         if !system.is_maxpro200() {
             let (low, high) = (hpr::CORNER_PERCENT.start(), hpr::CORNER_PERCENT.end());
             w.field("corner", format_args!("{low}..{high}"))?;
@@ -160,8 +194,7 @@ fn powermax_limits(limits: &Limits, family: Family) -> ReplyLine {
             }
             None => w.field("modes", "CUT,CPA,GOUGE")?,
         }
-        let (min, max) = (limits.min_current, limits.max_current);
-        w.field("amps", format_args!("{min}..{max}"))?;
+        w.field("amps", AmpsRange::Powermax(*limits))?;
         let (min, max) = (limits.min_pressure, limits.max_pressure);
         w.field("psi", format_args!("{min}..{max}"))?;
         let scope = match family {

@@ -211,7 +211,7 @@ impl Display for ExceptionName {
 }
 
 /// The word naming what a limit applies to.
-fn limit_scope(family: Option<Family>) -> &'static str {
+pub(super) fn limit_scope(family: Option<Family>) -> &'static str {
     match family {
         Some(Family::PowermaxSync) => "for this cartridge",
         _ => "for this unit",

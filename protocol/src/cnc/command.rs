@@ -9,6 +9,9 @@ pub const AMPS_MIN: Amps = Amps::from_raw(5 * Amps::STEPS_PER_UNIT);
 pub const AMPS_MAX: Amps = Amps::from_raw(400 * Amps::STEPS_PER_UNIT);
 /// [`AMPS_MIN`]..[`AMPS_MAX`] as written in an error reply.
 pub const AMPS_RANGE_TEXT: &str = "5..400";
+/// The current argument's name in a [`ParseError`] (`what`), so a caller that knows the
+/// unit's own range can tell this refusal apart and quote that range instead.
+pub const AMPS_ARGUMENT: &str = "amps";
 
 /// Lowest explicit pressure (0 means automatic on a Powermax: write `AUTO`).
 pub const PSI_MIN: Psi = Psi::from_raw(Psi::STEPS_PER_UNIT);
@@ -462,7 +465,7 @@ fn number(
 }
 
 fn amps(args: &mut Args<'_>) -> Result<Amps, ParseError> {
-    const WHAT: &str = "amps";
+    const WHAT: &str = AMPS_ARGUMENT;
     let steps = number(
         args.expect(WHAT)?,
         Amps::FRACTION_BITS,

@@ -63,7 +63,7 @@ pub mod reply;
 
 pub use crate::units::{Amps, Pressure, Psi};
 pub use command::{
-    AMPS_MAX, AMPS_MIN, AMPS_RANGE_TEXT, Command, ConfigCommand, ConfigKey, Gas, Mode, PSI_MAX,
+    AMPS_ARGUMENT, AMPS_MAX, AMPS_MIN, AMPS_RANGE_TEXT, Command, ConfigCommand, ConfigKey, Gas, Mode, PSI_MAX,
     PSI_MIN, PSI_RANGE_TEXT,
 };
 pub use error::{ErrorCode, ParseError};

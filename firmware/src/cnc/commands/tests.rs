@@ -70,13 +70,45 @@ fn limits_are_refused_with_the_permitted_range_before_anything_is_sent() {
     assert_err(&rig.cmd("SET AMPS 120"), "ERR RANGE *120*20..65*");
     assert_err(&rig.cmd("SET PROCESS CUT 45 80"), "ERR RANGE *80*58..78*");
     assert_err(&rig.cmd("SET MODE GOUGE"), "ERR RANGE *GOUGE*CUT*EXPANDED*");
-    // The protocol's absolute bounds come first.
-    assert_err(&rig.cmd("SET AMPS 500"), "ERR RANGE *5..400*");
+    // Beyond every unit's bounds too, the unit's own range is what the operator needs.
+    assert_eq!(
+        rig.cmd("SET AMPS 500"),
+        "ERR RANGE amps out of range 20..65 for this cartridge"
+    );
+    assert_eq!(
+        rig.cmd("SET PROCESS CUT 401 AUTO"),
+        "ERR RANGE amps out of range 20..65 for this cartridge"
+    );
     assert_err(&rig.cmd("SET AMPS 45.01"), "ERR RANGE *1/64*");
     assert!(rig.writes().is_empty(), "nothing was sent");
     assert_eq!(
         rig.cmd("LIMITS"),
         "OK modes=CUT,EXPANDED amps=20..65 psi=58..78 scope=cartridge"
+    );
+}
+
+#[test]
+fn a_current_beyond_every_units_bounds_quotes_the_range_limits_reports() {
+    let mut rig = Rig::hpr("hpr130");
+    let limits = rig.cmd("LIMITS");
+    let range = limits
+        .split(' ')
+        .find_map(|w| w.strip_prefix("amps="))
+        .unwrap()
+        .to_string();
+    assert_eq!(range, "5..130");
+    assert_eq!(
+        rig.cmd("SET AMPS 500"),
+        std::format!("ERR RANGE amps out of range {range} for this unit")
+    );
+    // No unit on the line: the protocol's bounds, all the bridge knows.
+    let mut rig = Rig::new(Settings::default(), None);
+    assert_eq!(
+        rig.cmd("SET AMPS 500"),
+        parse_err(ParseError::OutOfRange {
+            what: "amps",
+            range: "5..400"
+        })
     );
 }
 
