@@ -98,7 +98,16 @@ pub(super) fn status_line(ctx: &Context<'_>, refused: Option<FaultCode>) -> Repl
                 OrDash(settings.and_then(|s| s.mode).map(|m| mode_word(m, family))),
             )?;
             w.field("amps", OrDash(settings.map(|s| s.current)))?;
-            w.field("psi", OrDash(settings.map(|s| s.pressure)))?;
+            // Asked for automatic pressure, the unit reads back the set point it chose (SYNC
+            // 0x3012 "gas pressure setting"): the request is AUTO, as SET answered, and the
+            // choice is shown beside it.
+            let unit_psi = settings.map(|s| s.pressure);
+            if status.remote && kept_auto_pressure(ctx.link) {
+                w.field("psi", "AUTO")?;
+                w.field("auto_psi", OrDash(unit_psi.and_then(Pressure::psi)))?;
+            } else {
+                w.field("psi", OrDash(unit_psi))?;
+            }
             w.field("out_amps", OrDash(status.actual_current))?;
             w.field("out_psi", OrDash(status.actual_pressure))?;
         }
@@ -116,6 +125,13 @@ pub(super) fn status_line(ctx: &Context<'_>, refused: Option<FaultCode>) -> Repl
         }
         Ok(())
     })
+}
+
+/// The process the unit confirmed, and the link re-applies, asks for automatic pressure.
+fn kept_auto_pressure(link: &PsLink) -> bool {
+    link.kept()
+        .powermax()
+        .is_some_and(|p| p.pressure == Pressure::Auto)
 }
 
 pub(super) fn limits(status: &UnitStatus, family: Option<Family>) -> ReplyLine {

@@ -35,10 +35,13 @@ fn set_process_answers_once_after_the_read_back() {
         })
     );
     rig.run(300);
+    // Automatic pressure is asked by writing 0 (SYNC manual (000_dd931256418ae627.txt) line
+    // 821); 0x3012 then reads the set point the unit chose (lines 1225-1226, "Reads ... the gas
+    // pressure setting"), 72 psi here, never 0: STATUS says what was asked and what was chosen.
     assert_eq!(
         rig.cmd("STATUS"),
-        "OK link=UP model=Powermax65 family=SYNC remote=ON mode=CUT amps=45 psi=72 \
-         out_amps=0 out_psi=0 fault=none start=OFF motion=OFF arc_ok=OFF ready=ON"
+        "OK link=UP model=Powermax65 family=SYNC remote=ON mode=CUT amps=45 psi=AUTO \
+         auto_psi=72 out_amps=0 out_psi=0 fault=none start=OFF motion=OFF arc_ok=OFF ready=ON"
     );
 }
 
