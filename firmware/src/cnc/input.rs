@@ -7,8 +7,8 @@ use plasma_protocol::cnc::{
     AMPS_ARGUMENT, Command, ErrorCode, LineError, MAX_LINE_LEN, ParseError,
 };
 
-use super::texts::{self, frame_error};
 use super::replies::AmpsRange;
+use super::texts::{self, frame_error};
 use super::{Context, LineText, ReplyLine, Session, err_line, line};
 
 /// Why an input could not become a command; answered in turn like a command.

@@ -11,12 +11,14 @@
 //! behind it, a fault on the unit reaching pmx485's fault pin, the unit's link lost and seen
 //! as pmx485's `status` FALSE, and the text protocol answering on the same port afterwards.
 //! And the firmware itself: the emulated board's CNC UART on a pty (`pbtool emu --cnc-port`),
-//! with a SYNC unit (and a fault) and a MaxPro200 behind it.
+//! with a SYNC unit (and a fault) and a MaxPro200 behind it, and with pmx485 polling before
+//! the board has booted.
 //!
 //! One HAL session per machine: `.ci/pmx485-check` queues its runs on a lock.
 
 mod common;
 
+use std::io::Read;
 use std::path::PathBuf;
 use std::process::{Command, Output, Stdio};
 use std::sync::OnceLock;
@@ -277,4 +279,60 @@ fn linuxcnc_pmx485_drives_the_emulated_board() {
     );
     assert_eq!(cnc.command_within("ID", Duration::from_secs(2)), None);
     emu.expect_stderr("the board's CNC UART now runs 9600 8E1, the CNC's line 19200 8E1");
+}
+
+#[test]
+fn linuxcnc_pmx485_polling_before_the_emulated_board_boots_connects_once_it_is_up() {
+    // pmx485 starts first and polls an empty line while QEMU boots; what it sent meanwhile
+    // must not be answered late (every reply would then be one behind, and pmx485 never
+    // catches up). pmx485 retries for ever: the script reads its pins once every expectation
+    // holds, within a bound generous enough for the board's build and boot on a loaded
+    // machine, instead of a fixed run.
+    let cable = Cable::with_taps(1);
+    let port = cable.a.clone();
+    let pmx485 = std::thread::spawn(move || {
+        let mut args = AS_QTPLASMAC.to_vec();
+        args[7] = "600";
+        args.extend_from_slice(&["--expect-limits", "20:65:58:78"]);
+        pmx485_on(&port, &args)
+    });
+    // Its requests on the line: pmx485 is polling. The tap is read until the cable goes
+    // (a tap nobody reads fills up and holds the whole cable).
+    let mut tap = serialport::new(&cable.taps[0], 19_200)
+        .timeout(Duration::from_millis(100))
+        .open()
+        .expect("the tap opens");
+    let (polling, heard) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        let mut seen = Vec::new();
+        let mut buf = [0u8; 256];
+        loop {
+            match tap.read(&mut buf) {
+                Ok(n) => seen.extend_from_slice(&buf[..n]),
+                Err(e) if e.kind() == std::io::ErrorKind::TimedOut => {}
+                Err(_) => return,
+            }
+            if String::from_utf8_lossy(&seen).contains(":01") {
+                let _ = polling.send(());
+                seen.clear();
+            }
+        }
+    });
+    assert!(
+        heard.recv_timeout(Duration::from_secs(300)).is_ok(),
+        "pmx485 never polled"
+    );
+    let emu = Pbtool::spawn(&[
+        "emu",
+        "--cnc-port",
+        &cable.b,
+        "--cnc-framing",
+        "19200:8E1",
+        "--ps",
+        "sync65",
+    ]);
+    emu.expect_stderr("characters the CNC sent while the board was booting");
+    let (output, text) = pmx485.join().expect("the pmx485 run ends");
+    assert!(output.status.success(), "{text}\n{}", emu.transcript());
+    assert!(text.contains("status        TRUE"), "{text}");
 }
