@@ -245,6 +245,54 @@ fn the_cnc_framing_follows_config_at_once_and_the_port_answers_modbus_after() {
     board.assert_safe();
 }
 
+#[test]
+fn holding_b1_at_reset_restores_the_cnc_ports_default_framing_and_nothing_else() {
+    let mut board = ready_board(Model::Sync65);
+    let default = PortConfig {
+        baud: 115_200,
+        parity: Parity::None,
+        stop_bits: StopBits::One,
+    };
+    let saved = PortConfig {
+        baud: 19_200,
+        parity: Parity::Even,
+        stop_bits: StopBits::One,
+    };
+    for (line, reply) in [
+        (
+            "CONFIG timeout_ms 250",
+            "OK timeout_ms=250 link=redetecting",
+        ),
+        ("CONFIG cnc_baud 19200", "OK cnc_baud=19200"),
+        ("CONFIG cnc_parity EVEN", "OK cnc_parity=EVEN"),
+        ("CONFIG SAVE", "OK config=saved"),
+    ] {
+        assert_eq!(command(&mut board, line), reply);
+    }
+    board.cut_power(LINK_EVENT).unwrap();
+    expect_cnc_framing(&board, saved);
+
+    // Held through a reset: the default framing, logged, and the other settings as saved.
+    board.hold_user_button(true).unwrap();
+    let mark = board.log().len();
+    board.cut_power(LINK_EVENT).unwrap();
+    expect_cnc_framing(&board, default);
+    logged(&board, mark, "B1 held", |l| {
+        l.starts_with("B1 held at reset")
+    });
+    board.hold_user_button(false).unwrap();
+    assert_eq!(
+        command(&mut board, "CONFIG timeout_ms"),
+        "OK timeout_ms=250"
+    );
+    assert_eq!(command(&mut board, "CONFIG cnc_baud"), "OK cnc_baud=115200");
+
+    // Nothing was written: without B1 the saved framing comes back.
+    board.cut_power(LINK_EVENT).unwrap();
+    expect_cnc_framing(&board, saved);
+    board.assert_safe();
+}
+
 /// Waits for a firmware log line since `mark` for which `matches` holds (`what` names it).
 fn logged(board: &Board, mark: usize, what: &str, matches: impl Fn(&str) -> bool) {
     board

@@ -157,10 +157,16 @@ pub const fn output(output: Output) -> Wiring {
 /// The green heartbeat LED (LD2 on the Nucleo, LD1 on the B-L475E-IOT01A: PA5 on both).
 pub const HEARTBEAT_LED: Wiring = Wiring::new(Port::A, 5, Polarity::ActiveHigh);
 
-/// The user button (B1 on the Nucleo, PC13 on both boards): only test images read it, as the
-/// trigger that stalls thread mode on purpose (the emulated board's `test-hooks` feature,
-/// which the QEMU harness turns on to test the fail-safe). Active low, as the button.
-pub const TEST_STALL: Pin = Pin::new(Port::C, 13);
+/// The user button (B1 on the Nucleo; the B-L475E-IOT01A's user button is PC13 too), active
+/// low. Read once at boot: held at reset, the CNC port starts at its default framing
+/// ([`Settings::at_boot`](crate::settings::Settings::at_boot)), the way back to a board whose
+/// saved framing is forgotten. After boot only test images read it ([`TEST_STALL`]).
+pub const USER_BUTTON: Wiring = Wiring::new(Port::C, 13, Polarity::ActiveLow);
+
+/// The user button again ([`USER_BUTTON`], read at boot only): in test images, after boot,
+/// the trigger that stalls thread mode on purpose (the emulated board's `test-hooks`
+/// feature, which the QEMU harness turns on to test the fail-safe). Active low, as the button.
+pub const TEST_STALL: Pin = USER_BUTTON.pin;
 
 /// Test images only, as [`TEST_STALL`]: pulled low, the firmware panics (the fault path's
 /// end-to-end test). PC11 and [`TEST_HARD_FAULT`]'s PC12 are free on both boards (ST morpho
@@ -360,5 +366,7 @@ mod tests {
         assert!(output(Output::Start).pin.is(Port::B, 0));
         assert!(!output(Output::Start).pin.is(Port::A, 0));
         assert_eq!(PS_UART.pins().count() + CNC_UART.pins().count(), 5);
+        assert_eq!(USER_BUTTON.pin.to_string(), "PC13");
+        assert!(USER_BUTTON.is_on(false), "pressed pulls the pin low");
     }
 }

@@ -195,6 +195,23 @@ impl Settings {
         self.cnc.framing
     }
 
+    /// The settings a boot runs with: as loaded, except that with the user button (B1) held
+    /// at reset the CNC port takes its default framing ([`CncPort::DEFAULT`]), the way back
+    /// to a board whose saved framing is forgotten. Everything else stays, the CNC port's
+    /// node address among it, and nothing is written: `CONFIG SAVE` keeps the default framing.
+    pub fn at_boot(self, user_button_held: bool) -> Settings {
+        if !user_button_held {
+            return self;
+        }
+        Settings {
+            cnc: CncPort {
+                framing: CncPort::DEFAULT.framing,
+                ..self.cnc
+            },
+            ..self
+        }
+    }
+
     /// True when every field is one this firmware accepts (what [`decode`] insists on).
     ///
     /// [`decode`]: storage::Persistent::decode
@@ -222,6 +239,7 @@ impl Settings {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use plasma_protocol::cnc::ConfigKey;
 
     #[test]
     fn save_errors_from_the_store() {
@@ -230,5 +248,33 @@ mod tests {
             SaveError::TooLarge
         );
         assert_eq!(SaveError::from(StoreError::Flash(7)), SaveError::Flash);
+    }
+
+    #[test]
+    fn the_user_button_at_boot_restores_the_cnc_framing_only() {
+        let mut saved = Settings::default();
+        for (key, value) in [
+            (ConfigKey::CncBaud, "19200"),
+            (ConfigKey::CncParity, "EVEN"),
+            (ConfigKey::CncStopBits, "2"),
+            (ConfigKey::CncAddress, "7"),
+            (ConfigKey::TimeoutMs, "250"),
+            (ConfigKey::InterlockReady, "OFF"),
+        ] {
+            saved.set(key, value).unwrap();
+        }
+        assert_eq!(saved.at_boot(false), saved, "not held: as saved");
+        let booted = saved.at_boot(true);
+        assert_eq!(booted.cnc_port_config(), CncPort::DEFAULT.framing);
+        assert_ne!(booted.cnc_port_config(), saved.cnc_port_config());
+        assert_eq!(booted.cnc.address, 7, "the node address stays");
+        assert_eq!(
+            Settings {
+                cnc: saved.cnc,
+                ..booted
+            },
+            saved,
+            "nothing else changes"
+        );
     }
 }

@@ -37,8 +37,15 @@ const EXTI_PR1: usize = EXTI + 0x14;
 const GPIO_LINES: u32 = 0xFFFF;
 
 const GPIO_MODER: usize = 0x00;
+const GPIO_PUPDR: usize = 0x0C;
+const GPIO_IDR: usize = 0x10;
 const GPIO_BSRR: usize = 0x18;
 const MODER_OUTPUT: u32 = 0b01;
+const PUPDR_PULL_UP: u32 = 0b01;
+/// Time for a pull-up to charge the pin before it is read: the Nucleo's B1 has a 100 nF
+/// debounce capacitor behind 4.7 kΩ (0.5 ms); 100 000 cycles are 1.25 ms at 80 MHz, more at
+/// any slower clock.
+const PULL_UP_SETTLE_CYCLES: u32 = 100_000;
 
 fn read(address: usize) -> u32 {
     // SAFETY: only called with the addresses above, word-aligned registers that exist on
@@ -69,6 +76,25 @@ pub fn drive_as_output(pin: Pin, high: bool) {
         block + GPIO_MODER,
         (moder & !(0b11 << (2 * n))) | (MODER_OUTPUT << (2 * n)),
     );
+}
+
+/// Makes `pin` an input with its pull-up, lets the pull-up settle and reads it: `true` = high.
+/// Read-modify-writes the port's mode and pull registers: call before the tasks start, with
+/// the port's clock on.
+pub fn read_pulled_up(pin: Pin) -> bool {
+    let block = pin.port.register_block() as usize;
+    let n = u32::from(pin.number);
+    let pupdr = read(block + GPIO_PUPDR);
+    write(
+        block + GPIO_PUPDR,
+        (pupdr & !(0b11 << (2 * n))) | (PUPDR_PULL_UP << (2 * n)),
+    );
+    write(
+        block + GPIO_MODER,
+        read(block + GPIO_MODER) & !(0b11 << (2 * n)),
+    );
+    cortex_m::asm::delay(PULL_UP_SETTLE_CYCLES);
+    read(block + GPIO_IDR) & pin.mask() != 0
 }
 
 /// Turns on SYSCFG's clock (it routes the pins to the EXTI lines).

@@ -67,6 +67,20 @@ pub async fn load<B: Board>(store: Option<&mut Store<B>>) -> LoadedSettings<Sett
     loaded
 }
 
+/// The loaded settings as this boot runs them ([`Settings::at_boot`]): with the user button
+/// held at reset, the CNC port's default framing, logged.
+pub fn at_boot(loaded: Settings, user_button_held: bool) -> Settings {
+    let settings = loaded.at_boot(user_button_held);
+    if user_button_held {
+        info!(
+            "B1 held at reset: the CNC port runs its default framing {} (saved: {}); CONFIG SAVE keeps it",
+            settings.cnc_port_config(),
+            loaded.cnc_port_config()
+        );
+    }
+    settings
+}
+
 /// One word for the boot report on the CNC port.
 pub const fn outcome_word(outcome: LoadOutcome) -> &'static str {
     match outcome {

@@ -13,6 +13,7 @@ use std::sync::{Arc, Condvar, Mutex};
 use std::time::{Duration, Instant};
 
 use plasma_firmware::io::{Input, Output};
+use plasma_firmware::platform::pins::USER_BUTTON;
 
 use super::cnc::CncPort;
 use super::error::{Error, Result};
@@ -145,6 +146,8 @@ pub struct Board {
     options: BoardOptions,
     elf: PathBuf,
     start_at_power_up: bool,
+    /// The user button (B1) is held through the resets that follow.
+    user_button_held: bool,
     epoch: Instant,
     _slot: Slot,
 }
@@ -229,6 +232,7 @@ impl Board {
             options,
             elf,
             start_at_power_up,
+            user_button_held: false,
             epoch,
             _slot: slot,
         })
@@ -290,6 +294,15 @@ impl Board {
         Ok(())
     }
 
+    /// Holds the user button (B1, PC13) down, or lets it go: the firmware reads it once at
+    /// boot, so a hold counts from the next reset ([`Board::cut_power`]), through which it is
+    /// held as a person holds it.
+    pub fn hold_user_button(&mut self, held: bool) -> Result<()> {
+        self.user_button_held = held;
+        let level = USER_BUTTON.level(held);
+        self.qtest.set_pin(USER_BUTTON.pin, level).map(drop)
+    }
+
     /// Makes the firmware fail on purpose: the test images' `hook`, its pin pulled low. The
     /// reset that follows (the fault path's, the watchdog's) is held, QEMU stopped, until
     /// [`Board::reboot_after_reset`].
@@ -340,6 +353,10 @@ impl Board {
             if let Some(high) = self.qtest.driven_level(pin) {
                 self.qtest.set_pin(pin, high)?;
             }
+        }
+        if self.user_button_held {
+            self.qtest
+                .set_pin(USER_BUTTON.pin, USER_BUTTON.level(true))?;
         }
         self.qemu.resume()?;
         wait_cnc_port_ready(&self.qtest)?;

@@ -65,7 +65,7 @@ mod image {
     use plasma_firmware::bridge::Bridge;
     use plasma_firmware::io::InputConfig;
     use plasma_firmware::platform::safe_state::BootReport;
-    use plasma_tasks::boot::boot_text;
+    use plasma_tasks::boot::{boot_text, user_button_held};
     use plasma_tasks::clock::now;
     use plasma_tasks::clock_tree::UsartClock;
     use plasma_tasks::layout::{Tasks, set_serial_priorities};
@@ -145,7 +145,7 @@ mod image {
         let mut store =
             shared_settings::open::<Emulated>(SettingsFlash::new(), 0..SETTINGS_SIZE as u32);
         let loaded = shared_settings::load::<Emulated>(store.as_mut()).await;
-        let settings = loaded.settings;
+        let settings = shared_settings::at_boot(loaded.settings, user_button_held());
         // Pulls per the board's circuit (the pin table), whatever the wiring settings say.
         let input_config = InputConfig::default();
 

@@ -52,7 +52,7 @@ mod image {
     use embassy_stm32::{bind_interrupts, pac};
     use plasma_firmware::bridge::Bridge;
     use plasma_firmware::io::InputConfig;
-    use plasma_tasks::boot::boot_text;
+    use plasma_tasks::boot::{boot_text, user_button_held};
     use plasma_tasks::clock::now;
     use plasma_tasks::clock_tree::UsartClock;
     use plasma_tasks::reset;
@@ -166,7 +166,7 @@ mod image {
             p.FLASH, Irqs,
         )));
         let loaded = shared_settings::load::<Nucleo>(store.as_mut()).await;
-        let settings = loaded.settings;
+        let settings = shared_settings::at_boot(loaded.settings, user_button_held());
         // The pulls belong to the board's input circuit (the pin table's polarity), not to
         // the level the CNC's wiring settings call active (docs/board.md, the CNC's wiring).
         let input_config = InputConfig::default();
