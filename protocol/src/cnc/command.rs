@@ -1,5 +1,6 @@
 //! The CNC text commands: one line in, one typed [`Command`] out.
 
+use super::clock::{CLOCK_FORM, WallClock};
 use super::error::ParseError;
 use crate::units::{self, Amps, Pressure, Psi, Rounding};
 
@@ -361,7 +362,28 @@ pub enum Command<'a> {
     Raw(&'a str),
     /// `TORCH ON|OFF`: simulator only.
     Torch(bool),
+    /// `HISTORY [N]`: the newest N entries of the event history; `HISTORY CLEAR` erases it.
+    History(HistoryCommand),
+    /// `CLOCK <YYYY-MM-DDTHH:MM:SS>` sets the wall clock (UTC); `CLOCK` alone reports it.
+    Clock(Option<WallClock>),
 }
+
+/// The forms of `HISTORY`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum HistoryCommand {
+    /// `HISTORY [N]`: the newest N entries ([`HISTORY_DEFAULT`] without N), newest first.
+    Newest(u8),
+    /// `HISTORY CLEAR`: erase the history.
+    Clear,
+}
+
+/// Entries `HISTORY` lists without a count.
+pub const HISTORY_DEFAULT: u8 = 10;
+/// The most entries one `HISTORY` lists.
+pub const HISTORY_MAX: u8 = 16;
+/// `1..HISTORY_MAX` as written in an error reply (a test ties them).
+const HISTORY_RANGE_TEXT: &str = "1..16";
 
 /// Corner current bounds (HPR command 095: "corner current percent (50 - 100%)").
 const CORNER_MIN: u8 = 50;
@@ -565,9 +587,45 @@ fn config<'a>(args: &mut Args<'a>) -> Result<ConfigCommand<'a>, ParseError> {
     })
 }
 
+fn history(args: &mut Args<'_>) -> Result<HistoryCommand, ParseError> {
+    const WHAT: &str = "count";
+    let Some(word) = args.next() else {
+        return Ok(HistoryCommand::Newest(HISTORY_DEFAULT));
+    };
+    if is(word, "CLEAR") {
+        return Ok(HistoryCommand::Clear);
+    }
+    let count = number(word, 0, WHAT, HISTORY_RANGE_TEXT, "1").map_err(|e| match e {
+        ParseError::BadNumber { what } => ParseError::BadKeyword {
+            what,
+            expected: "a number or CLEAR",
+        },
+        other => other,
+    })?;
+    match u8::try_from(count) {
+        Ok(n) if (1..=HISTORY_MAX).contains(&n) => Ok(HistoryCommand::Newest(n)),
+        _ => Err(ParseError::OutOfRange {
+            what: WHAT,
+            range: HISTORY_RANGE_TEXT,
+        }),
+    }
+}
+
+fn clock(args: &mut Args<'_>) -> Result<Option<WallClock>, ParseError> {
+    let Some(word) = args.next() else {
+        return Ok(None);
+    };
+    WallClock::parse(word)
+        .map(Some)
+        .ok_or(ParseError::BadKeyword {
+            what: "clock",
+            expected: CLOCK_FORM,
+        })
+}
+
 /// The first word of every command a CNC program may send, in the order HELP lists them
 /// (`TORCH`, which only the simulator runs, is listed apart by HELP).
-pub const COMMAND_WORDS: [&str; 19] = [
+pub const COMMAND_WORDS: [&str; 21] = [
     "HELP",
     "ID",
     "STATUS",
@@ -586,6 +644,8 @@ pub const COMMAND_WORDS: [&str; 19] = [
     "CLEARWARN",
     "EVENTS",
     "CONFIG",
+    "HISTORY",
+    "CLOCK",
     "RAW",
 ];
 
@@ -658,6 +718,10 @@ impl<'a> Command<'a> {
             Command::Corner(corner(&mut args)?)
         } else if is(word, "CONFIG") {
             Command::Config(config(&mut args)?)
+        } else if is(word, "HISTORY") {
+            Command::History(history(&mut args)?)
+        } else if is(word, "CLOCK") {
+            Command::Clock(clock(&mut args)?)
         } else if is(word, "RAW") {
             let frame = args.remainder();
             if frame.is_empty() {
@@ -780,6 +844,8 @@ mod tests {
             "EVENTS ON",
             "CONFIG",
             "CONFIG SAVE",
+            "HISTORY 5",
+            "CLOCK 2026-11-26T07:30:00",
             "RAW 01030000",
             "TORCH ON",
         ];
@@ -788,6 +854,45 @@ mod tests {
             let first = line.split(' ').next().unwrap_or(line);
             assert!(COMMAND_WORDS.contains(&first) || first == "TORCH", "{line}");
         }
+    }
+
+    #[test]
+    fn history_and_clock() {
+        use HistoryCommand::{Clear, Newest};
+        let cases = [
+            ("HISTORY", Command::History(Newest(HISTORY_DEFAULT))),
+            ("history 1", Command::History(Newest(1))),
+            ("HISTORY 16", Command::History(Newest(HISTORY_MAX))),
+            ("History clear", Command::History(Clear)),
+            ("CLOCK", Command::Clock(None)),
+            (
+                "clock 2026-11-26T07:30:00",
+                Command::Clock(WallClock::parse("2026-11-26T07:30:00")),
+            ),
+        ];
+        for (line, command) in cases {
+            assert_eq!(Command::parse(line), Ok(command), "{line}");
+        }
+        let range = ParseError::OutOfRange {
+            what: "count",
+            range: HISTORY_RANGE_TEXT,
+        };
+        assert_eq!(err("HISTORY 0"), range);
+        assert_eq!(err("HISTORY 17"), range);
+        assert_eq!(err("HISTORY 300"), range);
+        assert_eq!(text(err("HISTORY 17")), "RANGE count out of range 1..16");
+        assert_eq!(
+            text(err("HISTORY ALL")),
+            "SYNTAX count: expected a number or CLEAR"
+        );
+        assert_eq!(err("HISTORY 5 6"), ParseError::UnexpectedArgument);
+        assert_eq!(
+            text(err("CLOCK 2026-11-26")),
+            "SYNTAX clock: expected YYYY-MM-DDTHH:MM:SS"
+        );
+        let mut written = heapless::String::<8>::new();
+        write!(written, "1..{HISTORY_MAX}").unwrap();
+        assert_eq!(written, HISTORY_RANGE_TEXT);
     }
 
     #[test]

@@ -55,6 +55,7 @@
 //! # Ok::<(), plasma_protocol::Error>(())
 //! ```
 
+pub mod clock;
 pub mod command;
 mod error;
 pub mod line;
@@ -64,7 +65,7 @@ pub mod reply;
 pub use crate::units::{Amps, Pressure, Psi};
 pub use command::{
     AMPS_ARGUMENT, AMPS_MAX, AMPS_MIN, AMPS_RANGE_TEXT, Command, ConfigCommand, ConfigKey, Gas,
-    Mode, PSI_MAX, PSI_MIN, PSI_RANGE_TEXT,
+    HISTORY_DEFAULT, HISTORY_MAX, HistoryCommand, Mode, PSI_MAX, PSI_MIN, PSI_RANGE_TEXT,
 };
 pub use error::{ErrorCode, ParseError};
 pub use line::{LineAssembler, LineError, MAX_LINE_LEN};
