@@ -17,6 +17,9 @@
 //! - bytes from the CNC → [`Bridge::handle_cnc_rx`]; bytes for it ← [`Bridge::poll_cnc_output`];
 //! - [`Bridge::poll`] no later than [`Bridge::poll_at`];
 //! - after `CONFIG SAVE`: [`Bridge::take_save_request`], store, [`Bridge::save_finished`];
+//! - the history: write every [`Bridge::take_history_draft`] in the background; after
+//!   `HISTORY`: [`Bridge::take_history_request`], read or erase,
+//!   [`Bridge::history_finished`] (both with [`serve`](crate::storage::history::serve) and its store);
 //! - simulator only: [`Bridge::poll_sim_command`] (`TORCH ON|OFF`).
 //!
 //! ```
@@ -34,11 +37,15 @@
 //! assert_eq!(reply, expected.as_bytes());
 //! ```
 
+use crate::cnc::history::HistoryLog;
 use crate::cnc::{Context, Session, SessionStats};
 pub use crate::cnc::{FRAME_IDLE_TIMEOUT, MAX_REPLY_LEN, OUTPUT_CAPACITY, SimCommand};
 use crate::io::{Inputs, IoConfig, IoEvent, Outputs, SupplyState};
 use crate::link::{Diagnostics, PowermaxProcess, PsLink, UnitStatus};
+use crate::platform::safe_state::ResetCause;
 use crate::settings::{Process, SaveError, Settings};
+use crate::storage::history::{Draft, Event, HistoryAnswer, HistoryRequest, Unit};
+use plasma_protocol::cnc::HistoryCommand;
 use plasma_protocol::serial::PortConfig;
 use plasma_protocol::time::Instant;
 
@@ -50,6 +57,7 @@ pub struct Bridge {
     settings: Settings,
     io: Option<(Inputs, Outputs)>,
     boot_report: Option<&'static str>,
+    history: HistoryLog,
     now: Instant,
 }
 
@@ -63,6 +71,7 @@ macro_rules! ctx {
             settings: &mut $bridge.settings,
             io: $bridge.io,
             boot_report: $bridge.boot_report,
+            history: &mut $bridge.history,
         }
     };
 }
@@ -82,6 +91,7 @@ impl Bridge {
             settings,
             io: None,
             boot_report: None,
+            history: HistoryLog::default(),
             now,
         }
     }
@@ -216,8 +226,7 @@ impl Bridge {
 
     /// Something the interlocks report (`!ARC ON`, `!START REFUSED ...` with events on).
     pub fn on_io_event(&mut self, now: Instant, event: IoEvent) {
-        let ctx = ctx!(self, now);
-        self.session.on_io_event(&ctx, event);
+        self.session.on_io_event(&mut ctx!(self, now), event);
     }
 
     // --- persistence --------------------------------------------------------------------
@@ -231,6 +240,39 @@ impl Bridge {
     /// The store finished: answers `CONFIG SAVE` (`OK config=saved` or `ERR STORAGE ...`).
     pub fn save_finished(&mut self, now: Instant, result: Result<(), SaveError>) {
         self.session.save_finished(&mut ctx!(self, now), result);
+        self.service(now);
+    }
+
+    // --- history ------------------------------------------------------------------------
+
+    /// The board's reset and its cause go into the history (once, at boot).
+    pub fn record_reset(&mut self, now: Instant, cause: ResetCause) {
+        let event = Event::BridgeReset { cause };
+        self.history.note(now, Unit::default(), event);
+    }
+
+    /// The oldest event waiting to be written to the history (never blocks anything: the
+    /// queue is bounded, see [`Pending`](crate::storage::history::Pending)).
+    pub fn take_history_draft(&mut self) -> Option<Draft> {
+        self.history.take()
+    }
+
+    /// After `HISTORY`: what to read or erase (once). Serve it ([`serve`](crate::storage::history::serve)) and call
+    /// [`Bridge::history_finished`].
+    pub fn take_history_request(&mut self) -> Option<HistoryRequest> {
+        let command = self.session.take_history_request()?;
+        Some(match command {
+            HistoryCommand::Newest(n) => HistoryRequest::Newest(n),
+            HistoryCommand::Clear => {
+                let unit = crate::cnc::history::unit_on(&self.link);
+                HistoryRequest::Clear(self.history.stamp(self.now, unit))
+            }
+        })
+    }
+
+    /// The history's answer: the `HISTORY` lines and their closing reply.
+    pub fn history_finished(&mut self, now: Instant, answer: &HistoryAnswer) {
+        self.session.history_finished(&mut ctx!(self, now), answer);
         self.service(now);
     }
 

@@ -12,6 +12,7 @@ use super::{Context, Pending, ReplyLine, Session, SimCommand, err_line, line, no
 use crate::link::command::RAW_CAPACITY;
 use crate::link::{CommandFailure, CommandOutput, Family, LinkCommand};
 use crate::settings::Process;
+use crate::storage::history::ChangedBy;
 
 impl Session {
     /// Carry out one command: its reply, or `None` when it waits for the link or a save.
@@ -59,6 +60,8 @@ impl Session {
             Command::Config(config) => return self.config(ctx, config),
             Command::Torch(on) => self.torch(on),
             Command::Raw(frame) => return self.raw(ctx, frame),
+            Command::History(history) => return self.history(history),
+            Command::Clock(set) => Session::clock(ctx, set),
             // The table routes every other command to the unit.
             _ => no_link(),
         })
@@ -108,6 +111,7 @@ impl Session {
                 None => return Some(err_line(ErrorCode::State, texts::SETTINGS_UNKNOWN)),
             },
         };
+        super::history::process_change_starts(ctx);
         let command = LinkCommand::ApplyProcess {
             mode: unit_mode(process.mode),
             current: process.amps,
@@ -201,10 +205,11 @@ impl Session {
         ctx: &mut Context<'_>,
         awaiting: Awaiting,
         result: &Result<CommandOutput, CommandFailure>,
+        by: ChangedBy,
     ) {
         match (awaiting, result) {
             (Awaiting::Settings(process), Ok(CommandOutput::Process(_))) => {
-                ctx.settings.process = Some(process);
+                super::history::keep_process(ctx, process, by);
             }
             (Awaiting::RemoteOff, Ok(_)) => ctx.settings.process = None,
             _ => {}

@@ -122,16 +122,16 @@ pub struct ActionWord(pub ActiveFault);
 
 impl Display for ActionWord {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let word = match self.0 {
-            ActiveFault::Powermax(code) => match code.steps_required() {
-                StepsRequired::Yes => "required",
-                StepsRequired::Recommended => "recommended",
-                StepsRequired::No => "none",
-            },
-            fault @ ActiveFault::Hpr(_) if fault.action_required() => "required",
-            ActiveFault::Hpr(_) => "none",
-        };
-        f.write_str(word)
+        f.write_str(steps_word(super::history::steps_of(self.0)))
+    }
+}
+
+/// `action=` for a fault's steps required (an HPR error's from [`super::history::steps_of`]).
+pub const fn steps_word(steps: StepsRequired) -> &'static str {
+    match steps {
+        StepsRequired::Yes => "required",
+        StepsRequired::Recommended => "recommended",
+        StepsRequired::No => "none",
     }
 }
 

@@ -18,6 +18,7 @@ use crate::link::{Family, LinkDownReason, LinkEvent, UnitStatus};
 impl Session {
     /// A link event: the reply of the command in progress, and/or an event line.
     pub fn on_link_event(&mut self, ctx: &mut Context<'_>, event: &LinkEvent) {
+        super::history::note_link_event(ctx, event);
         self.powermax.on_link_event(ctx, event);
         if let LinkEvent::CommandDone { ticket, result } = event {
             if let Some(Pending::Link {
@@ -27,7 +28,7 @@ impl Session {
                 && t == *ticket
             {
                 self.pending = None;
-                Session::keep_outcome(ctx, awaiting, result);
+                Session::keep_outcome(ctx, awaiting, result, self.origin);
                 let reply = complete(ctx, awaiting, result);
                 self.send(reply);
                 self.pump(ctx);
@@ -55,7 +56,8 @@ impl Session {
     }
 
     /// A discrete-I/O event: an event line.
-    pub fn on_io_event(&mut self, ctx: &Context<'_>, event: IoEvent) {
+    pub fn on_io_event(&mut self, ctx: &mut Context<'_>, event: IoEvent) {
+        super::history::note_io_event(ctx, event);
         let now = ctx.now;
         self.event(ctx, |l| match event {
             IoEvent::ArcOn => l.write_str("!ARC ON\r\n"),
@@ -186,7 +188,7 @@ fn write_state_changed(
     w.finish().map(|_| ())
 }
 
-fn interlock_word(interlock: Interlock) -> &'static str {
+pub(super) fn interlock_word(interlock: Interlock) -> &'static str {
     match interlock {
         Interlock::TorchOnAtPowerUp => "torch_on_at_power_up",
         Interlock::TorchOnAtWiringChange => "torch_on_at_config",

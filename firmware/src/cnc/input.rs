@@ -10,6 +10,7 @@ use plasma_protocol::cnc::{
 use super::replies::AmpsRange;
 use super::texts::{self, frame_error};
 use super::{Context, LineText, ReplyLine, Session, err_line, line};
+use crate::storage::history::ChangedBy;
 
 /// Why an input could not become a command; answered in turn like a command.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -24,6 +25,8 @@ pub(super) enum InputError {
 pub(super) struct Item {
     text: LineText,
     error: Option<InputError>,
+    /// Came as a Phoenix message (not a text line).
+    framed: bool,
 }
 
 impl Item {
@@ -31,6 +34,7 @@ impl Item {
         Item {
             text: LineText::new(),
             error: Some(error),
+            framed: false,
         }
     }
 }
@@ -115,7 +119,14 @@ impl Session {
             Some(Ok(text)) => {
                 self.text_partial = false;
                 self.text_discarding = false;
-                self.admit(ctx, Item { text, error: None });
+                self.admit(
+                    ctx,
+                    Item {
+                        text,
+                        error: None,
+                        framed: false,
+                    },
+                );
             }
             Some(Err(error)) => {
                 self.text_partial = false;
@@ -237,6 +248,11 @@ impl Session {
 
     /// Answer one item: its input error, or the command's reply (none yet when it waits).
     pub(super) fn execute(&mut self, ctx: &mut Context<'_>, item: Item) {
+        self.origin = if item.framed {
+            ChangedBy::Phoenix
+        } else {
+            ChangedBy::Text
+        };
         let reply = match item.error {
             Some(InputError::Parse(error)) => parse_error(ctx, &error),
             Some(InputError::Frame(error)) => frame_error(error),
@@ -312,7 +328,11 @@ fn message_item(payload: &[u8]) -> Item {
             .unwrap_or_default(),
     };
     let error = error.or_else(|| Command::parse(&text).err().map(InputError::Parse));
-    Item { text, error }
+    Item {
+        text,
+        error,
+        framed: true,
+    }
 }
 
 #[cfg(test)]

@@ -34,6 +34,7 @@
 mod commands;
 mod describe;
 mod events;
+pub mod history;
 mod input;
 pub mod powermax_port;
 mod replies;
@@ -102,6 +103,8 @@ pub struct Context<'a> {
     pub io: Option<(Inputs, Outputs)>,
     /// Why the board last reset, if the board said.
     pub boot_report: Option<&'static str>,
+    /// The history's queue and the wall clock.
+    pub history: &'a mut history::HistoryLog,
 }
 
 /// Counters of the CNC side.
@@ -124,8 +127,17 @@ pub struct SessionStats {
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum Pending {
-    Link { ticket: Ticket, awaiting: Awaiting },
-    Save { taken: bool },
+    Link {
+        ticket: Ticket,
+        awaiting: Awaiting,
+    },
+    Save {
+        taken: bool,
+    },
+    History {
+        command: plasma_protocol::cnc::HistoryCommand,
+        taken: bool,
+    },
 }
 
 /// Output bytes, whole lines at a time.
@@ -231,6 +243,8 @@ pub struct Session {
     last_rx: Instant,
     /// Modbus ASCII requests: the bridge answering as a Powermax.
     powermax: powermax_port::PowermaxPort,
+    /// Who sent the command being carried out (for the history's process changes).
+    origin: crate::storage::history::ChangedBy,
 }
 
 impl Session {
@@ -257,6 +271,7 @@ impl Session {
             stats: SessionStats::default(),
             last_rx: Instant::ZERO,
             powermax: powermax_port::PowermaxPort::default(),
+            origin: crate::storage::history::ChangedBy::Text,
         }
     }
 

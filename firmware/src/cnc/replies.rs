@@ -25,7 +25,8 @@ use plasma_protocol::powermax::FaultCode;
 /// writes them (one literal: the list joined at run time cost 180 B of flash);
 /// `help_is_the_parsers_word_lists` ties the two.
 const HELP_COMMANDS: &str = "HELP,ID,STATUS,LIMITS,FAULT,FAULTLOG,COUNTERS,CARTRIDGE,SET,REMOTE,\
-                             GASTEST,RESTART,GASES,CORNER,RESET,CLEARWARN,EVENTS,CONFIG,RAW";
+                             GASTEST,RESTART,GASES,CORNER,RESET,CLEARWARN,EVENTS,CONFIG,HISTORY,\
+                             CLOCK,RAW";
 /// The parser's [`SET_WORDS`](plasma_protocol::cnc::command::SET_WORDS) as HELP writes them.
 const HELP_SET: &str = "MODE,AMPS,PSI,PROCESS";
 
@@ -36,6 +37,7 @@ pub(super) fn help(sim: bool) -> ReplyLine {
         w.field("set", HELP_SET)?;
         w.field("remote", "OFF")?;
         w.field("config", "SAVE")?;
+        w.field("history", "CLEAR")?;
         w.field("simulator_only", "TORCH")?;
         w.field("simulator", if sim { "YES" } else { "NO" })
     })

@@ -12,10 +12,15 @@ use std::vec::Vec;
 use plasma_protocol::cnc::phoenix::{self, Format};
 use plasma_protocol::modbus_ascii::{self, Request};
 
+use embassy_futures::block_on;
+
 use crate::bridge::Bridge;
 use crate::link::ProtocolChoice;
+use crate::platform::safe_state::ResetCause;
 use crate::settings::{SaveError, Settings};
 use crate::storage::Persistent as _;
+use crate::storage::history::{HistoryStore, serve};
+use crate::storage::ram_flash::RamFlash;
 use crate::testing::SimPs;
 use plasma_protocol::time::{Duration, Instant};
 use plasma_sim::clock::{Accumulator, earliest};
@@ -46,7 +51,12 @@ pub(crate) struct Rig {
     pub save_result: Option<Result<(), SaveError>>,
     /// What a save stored.
     pub saved: Option<Vec<u8>>,
+    /// The history, in 8 pages of RAM flash: every draft is written at the next step.
+    pub history: HistoryStore<RamFlash<HISTORY_BYTES>>,
 }
+
+/// The rig's history region: 8 pages, as the boards'.
+const HISTORY_BYTES: usize = 8 * crate::storage::ram_flash::PAGE_SIZE;
 
 pub(crate) const ACK_TOKEN: &str = "<ACK>";
 pub(crate) const NAK_TOKEN: &str = "<NAK>";
@@ -63,6 +73,7 @@ impl Rig {
             partial: Vec::new(),
             save_result: Some(Ok(())),
             saved: None,
+            history: new_history(RamFlash::new()),
         }
     }
 
@@ -151,6 +162,7 @@ impl Rig {
             self.saved = Some(record[..len].to_vec());
             self.bridge.save_finished(self.now, result);
         }
+        self.serve_history();
         let line_next = self.exchange();
         self.bridge.poll(self.now);
         self.collect();
@@ -170,6 +182,28 @@ impl Rig {
         }
         self.now = next;
         true
+    }
+
+    /// Writes the history's drafts and answers a `HISTORY` at once.
+    fn serve_history(&mut self) {
+        while let Some(draft) = self.bridge.take_history_draft() {
+            block_on(self.history.record(draft)).unwrap();
+        }
+        if let Some(request) = self.bridge.take_history_request() {
+            let answer = block_on(serve(&mut self.history, request));
+            self.bridge.history_finished(self.now, &answer);
+            self.collect();
+        }
+    }
+
+    /// Power cycle of the board: a new bridge with `settings` over the same history flash,
+    /// recording its reset as the boards do.
+    pub(crate) fn reboot(&mut self, settings: Settings, cause: ResetCause) {
+        self.serve_history();
+        let flash = core::mem::replace(&mut self.history, new_history(RamFlash::new()));
+        self.history = new_history(flash.into_flash());
+        self.bridge = Bridge::new(settings, self.now);
+        self.bridge.record_reset(self.now, cause);
     }
 
     /// The bridge's frames to the unit, the unit's replies to the bridge (with nothing
@@ -258,6 +292,13 @@ impl Rig {
     pub(crate) fn hpr_commands(&mut self) -> Vec<u16> {
         self.ps().hpr().commands_received().to_vec()
     }
+}
+
+/// A history over `flash`, scanned as at boot.
+fn new_history(flash: RamFlash<HISTORY_BYTES>) -> HistoryStore<RamFlash<HISTORY_BYTES>> {
+    let mut store = HistoryStore::new(flash, 0..HISTORY_BYTES as u32).unwrap();
+    block_on(store.scan()).unwrap();
+    store
 }
 
 pub(crate) fn is_reply(token: &str) -> bool {

@@ -74,6 +74,8 @@ pub(super) fn route<'a>(command: &Command<'a>, family: Option<Family>) -> Route<
             | Command::Events(_)
             | Command::Config(_)
             | Command::Torch(_)
+            | Command::History(_)
+            | Command::Clock(_)
             | Command::Raw(_),
             _,
         ) => Route::Session,

@@ -66,6 +66,9 @@ pub fn not_saved(error: SaveError) -> ReplyLine {
     )
 }
 
+/// `HISTORY` when the history's flash could not be read or erased (or the board keeps none).
+pub const HISTORY_UNAVAILABLE: &str = "history not available";
+
 /// A line that found the queue of [`QUEUE_CAPACITY`](super::QUEUE_CAPACITY) full (a test ties the number).
 pub const QUEUE_FULL: &str = "4 commands are already waiting, line dropped";
 

@@ -84,8 +84,8 @@ impl WallClock {
             return None;
         }
         let days = u64::from(days_before(year, month) + day - 1);
-        let seconds = days * u64::from(SECONDS_PER_DAY)
-            + u64::from(hour * 3600 + minute * 60 + second);
+        let seconds =
+            days * u64::from(SECONDS_PER_DAY) + u64::from(hour * 3600 + minute * 60 + second);
         u32::try_from(seconds).ok().map(WallClock)
     }
 

@@ -89,6 +89,13 @@ impl<W: Write> ReplyWriter<W> {
         Ok(ReplyWriter { out })
     }
 
+    /// Start a data line of a multi-line reply: `name` followed by fields (the lines
+    /// `HISTORY` writes before its closing `OK`).
+    pub fn data(mut out: W, name: &str) -> Result<Self, fmt::Error> {
+        sanitized(&mut out, false, &name)?;
+        Ok(ReplyWriter { out })
+    }
+
     /// Append ` key=value`.
     pub fn field(&mut self, key: &str, value: impl Display) -> fmt::Result {
         write_field(&mut self.out, key, &value)

@@ -188,8 +188,9 @@ fn every_command_on_a_sync_unit() {
     assert_eq!(
         rig.cmd("HELP"),
         "OK commands=HELP,ID,STATUS,LIMITS,FAULT,FAULTLOG,COUNTERS,CARTRIDGE,SET,REMOTE,\
-         GASTEST,RESTART,GASES,CORNER,RESET,CLEARWARN,EVENTS,CONFIG,RAW \
-         set=MODE,AMPS,PSI,PROCESS remote=OFF config=SAVE simulator_only=TORCH simulator=NO"
+         GASTEST,RESTART,GASES,CORNER,RESET,CLEARWARN,EVENTS,CONFIG,HISTORY,CLOCK,RAW \
+         set=MODE,AMPS,PSI,PROCESS remote=OFF config=SAVE history=CLEAR simulator_only=TORCH \
+         simulator=NO"
     );
     assert_eq!(
         rig.cmd("ID"),

@@ -48,6 +48,7 @@ use crate::link::{
     CommandOutput, Family, LinkCommand, LinkEvent, Model, ProcessFailure, Refusal, Ticket,
 };
 use crate::settings::Process;
+use crate::storage::history::ChangedBy;
 use coils::Coils;
 use group::is_force_register;
 use map::{View, served};
@@ -169,7 +170,7 @@ impl PowermaxPort {
                 self.applying = None;
                 match (result, process) {
                     (Ok(CommandOutput::Process(_)), Keep::Process(p)) => {
-                        ctx.settings.process = Some(p);
+                        super::history::keep_process(ctx, p, ChangedBy::ModbusCnc);
                     }
                     (Ok(_), Keep::Forget) => ctx.settings.process = None,
                     (Ok(_), _) => {}
@@ -435,6 +436,7 @@ impl PowermaxPort {
                     self.refused = None;
                     return None;
                 }
+                super::history::process_change_starts(ctx);
                 let command = LinkCommand::ApplyProcess {
                     mode,
                     current,

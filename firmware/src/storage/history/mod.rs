@@ -39,10 +39,12 @@
 
 pub mod entry;
 pub mod pending;
+pub mod service;
 mod store;
 
 pub use entry::{ChangedBy, Entry, EntryError, Event, MAX_ENTRY, Unit};
 pub use pending::{Draft, Pending, Stamp};
+pub use service::{HistoryAnswer, HistoryPage, HistoryRequest, HistoryUnavailable, serve};
 pub use store::{BootScan, HistoryStore, Newest};
 
 #[cfg(test)]
