@@ -1287,3 +1287,57 @@ fn a_torch_on_wiring_change_during_a_cut_drops_start_until_released() {
     );
     w.assert_safe();
 }
+
+/// The history survives the bridge's power cycle, and every family's faults go into it with
+/// their codes: a Powermax X-YY-Z, an HPR error number.
+#[test]
+fn the_history_keeps_faults_across_a_power_cycle_on_every_family() {
+    for (model, code, written) in [
+        (Model::Sync65, 500, "0-50-0"),
+        (Model::Pm65, 500, "0-50-0"),
+        (Model::Hpr260, 44, "044"),
+        (Model::MaxPro200, 44, "044"),
+    ] {
+        let mut w = World::with_bridge(model, WorldOptions::default(), Settings::default());
+        w.wait_link_up(Duration::from_secs(5)).unwrap();
+        assert_eq!(
+            w.cnc_line("CLOCK 2026-11-26T07:30:00"),
+            "OK clock=2026-11-26T07:30:00"
+        );
+        w.inject_fault(code);
+        w.run_for(Duration::from_secs(2));
+        w.clear_fault();
+        w.run_for(Duration::from_secs(2));
+        w.power_cycle_bridge();
+        w.wait_link_up(Duration::from_secs(5)).unwrap();
+        let mark = w.cnc_output().len();
+        assert_eq!(
+            w.cnc_line("HISTORY 3"),
+            "OK history=3 skipped=0",
+            "{model:?}"
+        );
+        let lines: Vec<&str> = w.cnc_output()[mark..]
+            .iter()
+            .filter_map(|r| r.item.line())
+            .collect();
+        assert!(
+            lines[0].contains(" boot=1 ")
+                && lines[0].ends_with(" family=- event=RESET cause=power-on"),
+            "{model:?}: {lines:?}"
+        );
+        assert!(
+            lines[1].contains(" boot=0 ") && lines[1].contains(" clock=2026-11-26T07:30:0"),
+            "{model:?}: {lines:?}"
+        );
+        assert!(
+            lines[1].ends_with(&format!(" event=FAULT_CLEARED code={written}")),
+            "{model:?}: {lines:?}"
+        );
+        assert!(
+            lines[2].contains(&format!(" event=FAULT code={written} action=")),
+            "{model:?}: {lines:?}"
+        );
+        // The new boot's clock is unset until the CNC sets it again.
+        assert_eq!(w.cnc_line("CLOCK"), "OK clock=unset");
+    }
+}

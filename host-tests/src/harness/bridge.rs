@@ -17,6 +17,11 @@
 
 use std::collections::VecDeque;
 
+use embassy_futures::block_on;
+use plasma_firmware::platform::safe_state::ResetCause;
+use plasma_firmware::storage::history::{HistoryStore, serve};
+use plasma_firmware::storage::ram_flash::{PAGE_SIZE, RamFlash};
+
 use plasma_firmware::bridge::Bridge;
 use plasma_firmware::bridge::SimCommand;
 use plasma_firmware::io::{Inputs, IoConfig, IoEvent, Outputs};
@@ -92,10 +97,16 @@ impl CncItem {
         }
     }
 
-    /// True for a reply line (`OK` / `ERR`), false for an event line or ACK/NAK.
+    /// True for a reply line (`OK` / `ERR`), false for an event line, a data line of a
+    /// multi-line reply (`HISTORY ...`) or ACK/NAK.
     pub fn is_reply(&self) -> bool {
-        self.line().is_some_and(|l| !l.starts_with('!'))
+        self.line().is_some_and(is_reply_line)
     }
+}
+
+/// `OK ...` or `ERR ...`: the line that ends a command's reply.
+pub fn is_reply_line(line: &str) -> bool {
+    line.starts_with("OK") || line.starts_with("ERR")
 }
 
 /// What the CNC received, with the instant it was taken from the bridge.
@@ -105,6 +116,18 @@ pub struct CncRecord {
     pub at: Instant,
     /// What it was.
     pub item: CncItem,
+}
+
+/// The history region: 8 pages, as the boards'.
+const HISTORY_BYTES: usize = 8 * PAGE_SIZE;
+type HistoryFlash = RamFlash<HISTORY_BYTES>;
+
+/// A history over `flash`, scanned as at boot.
+fn open_history(flash: HistoryFlash) -> HistoryStore<HistoryFlash> {
+    let mut store = HistoryStore::new(flash, 0..HISTORY_BYTES as u32).expect("8 whole pages");
+    // A RAM flash does not fail.
+    let _ = block_on(store.scan());
+    store
 }
 
 /// The result of the next `CONFIG SAVE`.
@@ -129,6 +152,8 @@ pub struct BridgeEndpoint {
     torch: VecDeque<bool>,
     /// The stored record payload (what the flash would hold).
     stored: Option<Vec<u8>>,
+    /// The history, in flash as the board's; it survives [`BridgeEndpoint::power_cycle`].
+    history: HistoryStore<HistoryFlash>,
     saves: u32,
     next_save: SaveOutcome,
 }
@@ -148,6 +173,7 @@ impl BridgeEndpoint {
             partial: Vec::new(),
             torch: VecDeque::new(),
             stored: None,
+            history: open_history(HistoryFlash::new()),
             saves: 0,
             next_save: SaveOutcome::Store,
         }
@@ -199,7 +225,11 @@ impl BridgeEndpoint {
     /// saved); the CNC output so far is kept, a partial line is lost.
     pub fn power_cycle(&mut self, now: Instant) {
         let settings = self.saved_settings().unwrap_or_default();
+        self.serve_history(now);
+        let flash = std::mem::replace(&mut self.history, open_history(HistoryFlash::new()));
+        self.history = open_history(flash.into_flash());
         self.bridge = Bridge::new(settings, now);
+        self.bridge.record_reset(now, ResetCause::PowerOn);
         if self.sim_commands {
             self.bridge.enable_sim_commands();
         }
@@ -219,6 +249,9 @@ impl BridgeEndpoint {
                     SimCommand::Torch(on) => self.torch.push_back(on),
                 }
             }
+            if self.serve_history(now) {
+                continue;
+            }
             let Some(settings) = self.bridge.take_save_request() else {
                 break;
             };
@@ -226,6 +259,20 @@ impl BridgeEndpoint {
             self.saves += 1;
             self.bridge.save_finished(now, result);
         }
+    }
+
+    /// Writes the history's drafts; answers a `HISTORY` (true if one was answered).
+    fn serve_history(&mut self, now: Instant) -> bool {
+        while let Some(draft) = self.bridge.take_history_draft() {
+            // A RAM flash does not fail; the entry is the board's to lose, not the harness's.
+            let _ = block_on(self.history.record(draft));
+        }
+        let Some(request) = self.bridge.take_history_request() else {
+            return false;
+        };
+        let answer = block_on(serve(&mut self.history, request));
+        self.bridge.history_finished(now, &answer);
+        true
     }
 
     fn store(&mut self, settings: &Settings) -> Result<(), SaveError> {
@@ -418,7 +465,7 @@ impl World<BridgeEndpoint> {
 
     /// The reply lines (`OK` / `ERR`) the CNC received.
     pub fn cnc_replies(&self) -> impl Iterator<Item = &str> {
-        self.cnc_lines().filter(|l| !l.starts_with('!'))
+        self.cnc_lines().filter(|l| is_reply_line(l))
     }
 
     /// How many reply lines the CNC has received.

@@ -57,6 +57,17 @@ pub struct HistoryStore<F: NorFlash> {
     next_sequence: u32,
 }
 
+/// The counters and the region (not the flash's contents).
+impl<F: NorFlash> core::fmt::Debug for HistoryStore<F> {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.debug_struct("HistoryStore")
+            .field("region", &self.region)
+            .field("boot", &self.boot)
+            .field("next_sequence", &self.next_sequence)
+            .finish()
+    }
+}
+
 impl<F: NorFlash> HistoryStore<F> {
     /// A store in `region` (flash offsets, whole erase pages, at least two). Nothing is read
     /// yet: call [`Self::scan`] once at boot before recording.
