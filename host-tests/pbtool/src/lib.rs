@@ -6,6 +6,7 @@
 //! - [`emu`]: `pbtool emu`, the firmware image on the emulated board (the QEMU harness of
 //!   host-tests) with its CNC port on stdin/stdout, and `--measure`.
 //! - [`monitor`]: `pbtool monitor`, the live dashboard of a bridge over its CNC text protocol.
+//! - [`history`]: `pbtool history`, the bridge's event history as a table, JSON or CSV.
 //! - [`config`]: `pbtool config`, the board's CNC-port framing set from the PC, both ends in step.
 #![warn(missing_docs)]
 
@@ -13,6 +14,7 @@ pub mod config;
 pub mod decode;
 pub mod emu;
 pub mod framer;
+pub mod history;
 pub mod monitor;
 pub mod probe;
 pub mod realtime;

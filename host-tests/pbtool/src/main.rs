@@ -8,6 +8,7 @@
 //! `pbtool emu --measure` reports the image's latency and idle figures.
 //! `pbtool run` runs the bridge where it can: the board, the emulated board or the simulator.
 //! `pbtool monitor --sim sync65` shows a live dashboard of a bridge (see `pbtool::monitor`).
+//! `pbtool history --port DEV` prints the bridge's event history.
 //! `pbtool config --port DEV --cnc-framing 19200:8E1 --save` sets the board's CNC framing.
 
 use std::process::ExitCode;
@@ -101,6 +102,13 @@ enum Command {
     /// warnings, q quit. `--snapshot` prints one frame to stdout instead (for docs and bug
     /// reports).
     Monitor(cli::monitor::MonitorArgs),
+    /// The bridge's event history (faults, link, resets, refused STARTs, process changes),
+    /// newest first, as a table (`--json`, `--csv` for a spreadsheet).
+    ///
+    /// From the board's CNC port (`--port DEV`) or a simulated bridge (`--sim MODEL`). Sets
+    /// the bridge's clock to the PC's first (`CLOCK`), so this boot's entries carry the time.
+    /// Exit status 0 with the entries, 1 when the bridge refused, 2 on a port error.
+    History(cli::history::HistoryArgs),
 }
 
 fn main() -> ExitCode {
@@ -115,5 +123,6 @@ fn main() -> ExitCode {
         Command::Probe(args) => cli::probe::probe_command(&args),
         Command::Config(args) => cli::config::config(&args),
         Command::Monitor(args) => cli::monitor::monitor(&args),
+        Command::History(args) => cli::history::history(&args),
     }
 }

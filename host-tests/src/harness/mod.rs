@@ -49,7 +49,7 @@ mod options;
 mod trace;
 mod world;
 
-pub use bridge::{BridgeEndpoint, CNC_REPLY_TIMEOUT, CncItem, CncRecord};
+pub use bridge::{BridgeEndpoint, CNC_REPLY_TIMEOUT, CncItem, CncRecord, is_reply_line};
 pub use endpoint::WorldEndpoint;
 pub use options::{RxErrors, WorldOptions};
 pub use trace::{Direction, TraceFrame, WireTrace};

@@ -3,6 +3,7 @@
 pub mod config;
 pub mod decode;
 pub mod emu;
+pub mod history;
 mod line;
 pub mod monitor;
 pub mod probe;
