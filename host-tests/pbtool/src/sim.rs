@@ -127,6 +127,21 @@ impl Console {
     }
 
     /// True once the link is up and what the first commands need is known.
+    /// Boots the bridge from a flash image (`--flash FILE`, see
+    /// [`BridgeEndpoint::flash_image`]): a power cycle of the bridge's board, so its settings
+    /// and history are the image's and the history records the reset.
+    pub fn boot_from_flash(&mut self, image: &[u8]) -> Result<(), String> {
+        self.world.endpoint_mut().load_flash_image(image)?;
+        self.world.power_cycle_bridge();
+        self.printed = self.world.cnc_output().len();
+        Ok(())
+    }
+
+    /// The bridge's flash now, for the file of `--flash`.
+    pub fn flash_image(&mut self) -> Vec<u8> {
+        self.world.endpoint_mut().flash_image()
+    }
+
     fn settled(world: &World<BridgeEndpoint>) -> bool {
         settled(world.bridge())
     }

@@ -190,3 +190,49 @@ fn run_without_a_probe_runs_the_simulator() {
         assert!(lines[0].contains("family=LEGACY"), "{lines:?}");
     }
 }
+
+/// `--flash FILE` keeps the board's flash between runs: restarting is a power cycle, the
+/// saved settings and the history are still there.
+#[test]
+fn the_flash_file_survives_a_restart_as_a_power_cycle() {
+    let dir = std::env::temp_dir().join(format!("pbtool-flash-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("bridge.flash");
+    let flash = file.to_str().unwrap();
+    let args = [
+        "--ps", "sync65", "--fast", "--fault", "0-50-0", "--flash", flash,
+    ];
+    let first = sim(&args, "CONFIG arc_ok_debounce_ms 7\nCONFIG SAVE\nHISTORY\n");
+    assert!(first.status.success(), "{first:?}");
+    let lines = stdout_lines(&first);
+    assert_eq!(lines[..2], ["OK arc_ok_debounce_ms=7", "OK config=saved"]);
+    assert!(
+        lines[2].contains(" boot=0 ") && lines[2].contains(" event=FAULT code=0-50-0"),
+        "{lines:?}"
+    );
+
+    let second = sim(
+        &["--ps", "sync65", "--fast", "--flash", flash],
+        "CONFIG arc_ok_debounce_ms\nHISTORY 16\n",
+    );
+    assert!(second.status.success(), "{second:?}");
+    let lines = stdout_lines(&second);
+    assert_eq!(lines[0], "OK arc_ok_debounce_ms=7", "{lines:?}");
+    let reset = lines
+        .iter()
+        .position(|l| l.ends_with(" event=RESET cause=power-on"))
+        .expect("the restart is a reset");
+    assert!(lines[reset].contains(" boot=1 "), "{lines:?}");
+    // Older than the reset: the first run's fault, of boot 0.
+    assert!(
+        lines[reset + 1..]
+            .iter()
+            .any(|l| l.contains(" boot=0 ") && l.contains(" event=FAULT code=0-50-0")),
+        "{lines:?}"
+    );
+    assert!(
+        lines.last().unwrap().starts_with("OK history="),
+        "{lines:?}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -118,6 +118,9 @@ pub struct CncRecord {
     pub item: CncItem,
 }
 
+/// The first bytes of [`BridgeEndpoint::flash_image`].
+pub const FLASH_IMAGE_MAGIC: [u8; 8] = *b"PBFLASH1";
+
 /// The history region: 8 pages, as the boards'.
 const HISTORY_BYTES: usize = 8 * PAGE_SIZE;
 type HistoryFlash = RamFlash<HISTORY_BYTES>;
@@ -214,6 +217,52 @@ impl BridgeEndpoint {
     /// Completed `CONFIG SAVE`s (successful or not).
     pub fn saves(&self) -> u32 {
         self.saves
+    }
+
+    /// The bridge's flash as a file keeps it (`pbtool sim --flash`): [`FLASH_IMAGE_MAGIC`],
+    /// the stored settings payload (length as u16 little endian, `0xFFFF`: none saved, then
+    /// the bytes), then the history region's bytes.
+    pub fn flash_image(&mut self) -> Vec<u8> {
+        self.serve_history(Instant::ZERO);
+        let mut image = FLASH_IMAGE_MAGIC.to_vec();
+        match &self.stored {
+            Some(payload) => {
+                image.extend_from_slice(&(payload.len() as u16).to_le_bytes());
+                image.extend_from_slice(payload);
+            }
+            None => image.extend_from_slice(&u16::MAX.to_le_bytes()),
+        }
+        image.extend_from_slice(self.history.flash().bytes());
+        image
+    }
+
+    /// Takes the flash from an image of [`BridgeEndpoint::flash_image`]; the bridge runs on
+    /// until the next [`BridgeEndpoint::power_cycle`] (the board reads its flash at boot).
+    pub fn load_flash_image(&mut self, image: &[u8]) -> Result<(), String> {
+        let rest = image
+            .strip_prefix(FLASH_IMAGE_MAGIC.as_slice())
+            .ok_or("not a plasma-bridge flash image")?;
+        let (len, rest) = rest.split_at_checked(2).ok_or("flash image truncated")?;
+        let (stored, rest) = match u16::from_le_bytes([len[0], len[1]]) {
+            u16::MAX => (None, rest),
+            len => {
+                let (payload, rest) = rest
+                    .split_at_checked(usize::from(len))
+                    .ok_or("flash image truncated")?;
+                (Some(payload.to_vec()), rest)
+            }
+        };
+        if rest.len() != HISTORY_BYTES {
+            return Err(format!(
+                "flash image: history region of {} bytes, expected {HISTORY_BYTES}",
+                rest.len()
+            ));
+        }
+        let mut flash = HistoryFlash::new();
+        flash.bytes_mut().copy_from_slice(rest);
+        self.history = open_history(flash);
+        self.stored = stored;
+        Ok(())
     }
 
     /// Make the next `CONFIG SAVE` fail with `error`.

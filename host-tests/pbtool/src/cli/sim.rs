@@ -29,6 +29,11 @@ pub struct SimArgs {
     /// `cnc_stop_bits`): 115200:8N1 by default, 19200:8E1 for LinuxCNC's pmx485.
     #[arg(long, value_name = "FRAMING", default_value = "115200:8N1", value_parser = cnc_framing)]
     pub cnc_framing: PortConfig,
+    /// Keep the bridge's flash (stored settings and history) in FILE: read at start (a power
+    /// cycle of the board: settings and history as the last run left them), written when
+    /// the run ends. Restarting `pbtool sim --flash FILE` is a power cycle of the board.
+    #[arg(long, value_name = "FILE")]
+    pub flash: Option<std::path::PathBuf>,
     /// Log every change of the discrete outputs (START, ARC_OK, READY, FAULT) with its
     /// reason on stderr.
     #[arg(short, long)]
@@ -48,6 +53,12 @@ pub fn sim(args: &SimArgs) -> ExitCode {
         verbose: args.verbose,
         cnc_framing: args.cnc_framing,
     });
+    if let Some(path) = &args.flash
+        && let Err(e) = boot_from_flash(&mut console, path)
+    {
+        eprintln!("pbtool sim: --flash {}: {e}", path.display());
+        return ExitCode::from(super::USAGE);
+    }
     if let Some(name) = &args.cnc_port {
         return on_cnc_port(&mut console, name, model);
     }
@@ -68,6 +79,12 @@ pub fn sim(args: &SimArgs) -> ExitCode {
         console.run_realtime(stdin_lines(), &mut out, &mut err)
     };
     let _ = out.flush();
+    if let Some(path) = &args.flash
+        && let Err(e) = std::fs::write(path, console.flash_image())
+    {
+        eprintln!("pbtool sim: --flash {}: {e}", path.display());
+        return ExitCode::FAILURE;
+    }
     match result {
         Ok(()) => ExitCode::SUCCESS,
         // A closed stdout (`| head`) ends the simulation quietly.
@@ -76,6 +93,15 @@ pub fn sim(args: &SimArgs) -> ExitCode {
             eprintln!("pbtool sim: {e}");
             ExitCode::FAILURE
         }
+    }
+}
+
+/// The flash of an earlier run, if `path` exists (a new file starts erased).
+fn boot_from_flash(console: &mut Console, path: &std::path::Path) -> Result<(), String> {
+    match std::fs::read(path) {
+        Ok(image) => console.boot_from_flash(&image),
+        Err(e) if e.kind() == io::ErrorKind::NotFound => Ok(()),
+        Err(e) => Err(e.to_string()),
     }
 }
 
