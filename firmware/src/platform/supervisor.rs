@@ -13,10 +13,12 @@
 //!    CNC framing changed (`CONFIG cnc_baud|cnc_parity|cnc_stop_bits`), waits until that
 //!    output has left (the reply to the CONFIG goes out at the old framing) and switches the
 //!    CNC port;
-//! 4. hands the supply state and the I/O settings to the I/O task when they changed, and a
-//!    save request to the settings saver;
+//! 4. hands the supply state and the I/O settings to the I/O task when they changed, a save
+//!    request to the settings saver, and the history's drafts (as many as it has room for)
+//!    and a `HISTORY` request to the [`HistoryKeeper`];
 //! 5. waits for the first of: bytes on either port, an I/O event, the end of a save, the
-//!    bridge's `poll_at` (at most [`MAX_WAIT`], so the caller reports progress regularly).
+//!    history's answer, the bridge's `poll_at` (at most [`MAX_WAIT`], so the caller reports
+//!    progress regularly).
 //!
 //! CNC output is written in pieces of at most the port's buffer size, each after the
 //! previous one has left (`flush`): a bounded write per turn, so a long reply never holds the
@@ -25,7 +27,7 @@
 
 use core::future::{Future, pending};
 
-use embassy_futures::select::{Either5, select5};
+use embassy_futures::select::{Either6, select6};
 use embassy_futures::yield_now;
 use embedded_io_async::Read;
 
@@ -36,6 +38,7 @@ use crate::platform::runner::{
     UnsupportedConfig,
 };
 use crate::settings::{SaveError, Settings};
+use crate::storage::history::{Draft, HistoryAnswer, HistoryRequest, HistoryUnavailable};
 use plasma_protocol::serial::PortConfig;
 use plasma_protocol::time::Instant;
 
@@ -66,6 +69,12 @@ pub trait BridgeEndpoint: PsEndpoint {
     fn take_save_request(&mut self) -> Option<Self::Saved>;
     /// How the store went.
     fn save_finished(&mut self, now: Instant, result: Result<(), Self::SaveError>);
+    /// The oldest event waiting for the history.
+    fn take_history_draft(&mut self) -> Option<Draft>;
+    /// What `HISTORY` asks of the history's store.
+    fn take_history_request(&mut self) -> Option<HistoryRequest>;
+    /// The store's answer.
+    fn history_finished(&mut self, now: Instant, answer: &HistoryAnswer);
 }
 
 impl BridgeEndpoint for Bridge {
@@ -102,6 +111,15 @@ impl BridgeEndpoint for Bridge {
     fn save_finished(&mut self, now: Instant, result: Result<(), SaveError>) {
         Bridge::save_finished(self, now, result);
     }
+    fn take_history_draft(&mut self) -> Option<Draft> {
+        Bridge::take_history_draft(self)
+    }
+    fn take_history_request(&mut self) -> Option<HistoryRequest> {
+        Bridge::take_history_request(self)
+    }
+    fn history_finished(&mut self, now: Instant, answer: &HistoryAnswer) {
+        Bridge::history_finished(self, now, answer);
+    }
 }
 
 /// The supervisor's side of the exchange with the I/O task.
@@ -126,6 +144,36 @@ pub trait SettingsSaver<S, E> {
     fn finished(&mut self) -> impl Future<Output = Result<(), E>>;
 }
 
+/// Keeps the history in the background (the board: a flash task; the host: a store over a
+/// RAM flash): writes drafts, and reads or erases for `HISTORY` with
+/// [`serve`](crate::storage::history::serve).
+pub trait HistoryKeeper {
+    /// Whether one more draft can be taken now (the drafts wait in the bridge meanwhile).
+    fn has_room(&self) -> bool;
+    /// Write `draft` (the caller checked [`HistoryKeeper::has_room`]).
+    fn record(&mut self, draft: Draft);
+    /// Start carrying out `request`.
+    fn start(&mut self, request: HistoryRequest);
+    /// Completes with the answer to the request started last (cancel-safe).
+    fn finished(&mut self) -> impl Future<Output = HistoryAnswer>;
+}
+
+/// No history kept: drafts stay in the bridge's bounded queue (dropped and counted when it
+/// is full) and `HISTORY` is answered `ERR STORAGE`.
+#[derive(Debug, Default, Clone, Copy)]
+pub struct NoHistory;
+
+impl HistoryKeeper for NoHistory {
+    fn has_room(&self) -> bool {
+        false
+    }
+    fn record(&mut self, _draft: Draft) {}
+    fn start(&mut self, _request: HistoryRequest) {}
+    async fn finished(&mut self) -> HistoryAnswer {
+        Err(HistoryUnavailable)
+    }
+}
+
 /// A port failed during a turn (the turn ends there; the next one starts afresh).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -147,7 +195,7 @@ pub enum TurnError<PsError, CncError> {
 pub const CNC_RX_CHUNK: usize = 64;
 
 /// The loop around a bridge.
-pub struct Supervisor<P, C, I, V> {
+pub struct Supervisor<P, C, I, V, H = NoHistory> {
     ps: PsPort<P>,
     cnc: C,
     cnc_piece: usize,
@@ -155,9 +203,11 @@ pub struct Supervisor<P, C, I, V> {
     cnc_framing: Option<PortConfig>,
     io: I,
     saver: V,
+    history: H,
     sent_supply: Option<SupplyState>,
     sent_io_config: Option<IoConfig>,
     saving: bool,
+    reading_history: bool,
 }
 
 type TurnResult<T, P, C> = core::result::Result<
@@ -175,7 +225,8 @@ where
     I: IoExchange,
 {
     /// A supervisor over the PS port, the CNC port (whose transmit buffer holds
-    /// `cnc_tx_buffer` bytes), the I/O exchange and the settings saver.
+    /// `cnc_tx_buffer` bytes), the I/O exchange and the settings saver; no history is kept
+    /// until [`Supervisor::with_history`].
     pub fn new(ps: P, cnc: C, cnc_tx_buffer: usize, io: I, saver: V) -> Self {
         Supervisor {
             ps: PsPort::new(ps),
@@ -184,12 +235,51 @@ where
             cnc_framing: None,
             io,
             saver,
+            history: NoHistory,
             sent_supply: None,
             sent_io_config: None,
             saving: false,
+            reading_history: false,
         }
     }
 
+    /// The history is kept by `history`.
+    pub fn with_history<H: HistoryKeeper>(self, history: H) -> Supervisor<P, C, I, V, H> {
+        let Supervisor {
+            ps,
+            cnc,
+            cnc_piece,
+            cnc_framing,
+            io,
+            saver,
+            sent_supply,
+            sent_io_config,
+            saving,
+            ..
+        } = self;
+        Supervisor {
+            ps,
+            cnc,
+            cnc_piece,
+            cnc_framing,
+            io,
+            saver,
+            history,
+            sent_supply,
+            sent_io_config,
+            saving,
+            reading_history: false,
+        }
+    }
+}
+
+impl<P, C, I, V, H> Supervisor<P, C, I, V, H>
+where
+    P: ConfigurablePort,
+    C: ConfigurablePort,
+    I: IoExchange,
+    H: HistoryKeeper,
+{
     /// The CNC port already runs at `framing` (the board opened it at the bridge's): the first
     /// turn leaves it as it is instead of setting it again.
     pub fn with_cnc_framing(mut self, framing: PortConfig) -> Self {
@@ -264,6 +354,7 @@ where
             self.saver.start(settings);
             self.saving = true;
         }
+        self.exchange_history(bridge);
 
         self.wait(bridge, clock).await
     }
@@ -290,6 +381,23 @@ where
         }
         while let Some((at, event)) = self.io.try_event() {
             bridge.on_io_event(at, event);
+        }
+    }
+
+    /// Drafts to the keeper while it has room (the rest wait in the bridge's bounded queue),
+    /// and a `HISTORY` request when none is under way.
+    fn exchange_history<B: BridgeEndpoint>(&mut self, bridge: &mut B) {
+        while self.history.has_room() {
+            let Some(draft) = bridge.take_history_draft() else {
+                break;
+            };
+            self.history.record(draft);
+        }
+        if !self.reading_history
+            && let Some(request) = bridge.take_history_request()
+        {
+            self.history.start(request);
+            self.reading_history = true;
         }
     }
 
@@ -330,9 +438,14 @@ where
         let deadline = bridge.poll_at().map_or(latest, |at| at.min(latest));
         let mut ps_buf = [0u8; PS_RX_CHUNK];
         let mut cnc_buf = [0u8; CNC_RX_CHUNK];
-        let saving = self.saving;
+        let (saving, reading_history) = (self.saving, self.reading_history);
         let Supervisor {
-            ps, cnc, io, saver, ..
+            ps,
+            cnc,
+            io,
+            saver,
+            history,
+            ..
         } = self;
         let save_done = async {
             if saving {
@@ -341,31 +454,43 @@ where
                 pending().await
             }
         };
-        let woke = select5(
+        let history_done = async {
+            if reading_history {
+                history.finished().await
+            } else {
+                pending().await
+            }
+        };
+        let woke = select6(
             ps.read(&mut ps_buf),
             read_cnc(cnc, &mut cnc_buf),
             io.event_ready(),
             save_done,
+            history_done,
             clock.sleep_until(deadline),
         )
         .await;
         let now = clock.now();
         match woke {
-            Either5::First(read) => {
+            Either6::First(read) => {
                 let n = read.map_err(TurnError::Ps)?;
                 bridge.handle_ps_rx(now, ps_buf.get(..n).unwrap_or(&ps_buf));
             }
-            Either5::Second(read) => {
+            Either6::Second(read) => {
                 let n = read?;
                 bridge.handle_cnc_rx(now, cnc_buf.get(..n).unwrap_or(&cnc_buf));
             }
             // Taken at the start of the next turn.
-            Either5::Third(()) => {}
-            Either5::Fourth(result) => {
+            Either6::Third(()) => {}
+            Either6::Fourth(result) => {
                 self.saving = false;
                 bridge.save_finished(now, result);
             }
-            Either5::Fifth(()) => {
+            Either6::Fifth(answer) => {
+                self.reading_history = false;
+                bridge.history_finished(now, &answer);
+            }
+            Either6::Sixth(()) => {
                 if deadline <= started {
                     // The bridge asked to be polled at a time already past and nothing else
                     // happened: let the other tasks run before the next turn.

@@ -306,6 +306,13 @@ impl BridgeEndpoint for FakeBridge {
             Err(()) => b"SAVE FAILED\r\n".to_vec(),
         });
     }
+    fn take_history_draft(&mut self) -> Option<crate::storage::history::Draft> {
+        None
+    }
+    fn take_history_request(&mut self) -> Option<crate::storage::history::HistoryRequest> {
+        None
+    }
+    fn history_finished(&mut self, _: Instant, _: &crate::storage::history::HistoryAnswer) {}
 }
 
 #[derive(Default)]
@@ -711,4 +718,96 @@ fn drives_the_real_bridge_end_to_end() {
     assert_eq!(sup.saver().started[0].0, 50_000);
     let cnc = String::from_utf8_lossy(&w.written(CNC)).into_owned();
     assert!(cnc.contains("OK config=saved\r\n"), "{cnc}");
+}
+
+/// A history over a RAM flash: drafts written at once, requests answered at once.
+struct RamHistory {
+    store: crate::storage::history::HistoryStore<
+        crate::storage::ram_flash::RamFlash<{ 8 * crate::storage::ram_flash::PAGE_SIZE }>,
+    >,
+    answer: Option<crate::storage::history::HistoryAnswer>,
+    recorded: usize,
+}
+
+impl HistoryKeeper for RamHistory {
+    fn has_room(&self) -> bool {
+        true
+    }
+    fn record(&mut self, draft: Draft) {
+        block_on(self.store.record(draft)).unwrap();
+        self.recorded += 1;
+    }
+    fn start(&mut self, request: HistoryRequest) {
+        let answer = block_on(crate::storage::history::serve(&mut self.store, request));
+        self.answer = Some(answer);
+    }
+    fn finished(&mut self) -> impl Future<Output = HistoryAnswer> {
+        let answer = self.answer.take();
+        poll_fn(move |_| match answer.clone() {
+            Some(answer) => Poll::Ready(answer),
+            None => Poll::Pending,
+        })
+    }
+}
+
+/// The real bridge's `HISTORY` over the supervisor: `ERR STORAGE` without a keeper; with one,
+/// the drafts are written and the request served.
+#[test]
+fn history_reaches_its_keeper_and_the_answer_the_cnc() {
+    use crate::bridge::Bridge;
+    use crate::platform::safe_state::ResetCause;
+    use crate::settings::{SaveError, Settings};
+    use crate::storage::ram_flash::{PAGE_SIZE, RamFlash};
+
+    let run = |with_keeper: bool| {
+        let world: Shared = Rc::default();
+        let clock = FakeClock(world.clone());
+        let sup = supervisor(
+            &world,
+            64,
+            FakeSaver::<Settings, SaveError>::new(&world, |_| Ok(())),
+        );
+        let mut bridge = Bridge::new(Settings::default(), Instant::ZERO);
+        bridge.record_reset(Instant::ZERO, ResetCause::Pin);
+        cnc_rx(&world, 50, b"HISTORY\r\n");
+        let mut store = crate::storage::history::HistoryStore::new(
+            RamFlash::<{ 8 * PAGE_SIZE }>::new(),
+            0..(8 * PAGE_SIZE) as u32,
+        )
+        .unwrap();
+        block_on(store.scan()).unwrap();
+        let keeper = RamHistory {
+            store,
+            answer: None,
+            recorded: 0,
+        };
+        let recorded = if with_keeper {
+            let mut sup = sup.with_history(keeper);
+            block_on(async {
+                while clock.now() < Instant::from_millis(200) {
+                    sup.turn(&mut bridge, &clock).await.unwrap();
+                }
+            });
+            sup.history.recorded
+        } else {
+            let mut sup = sup;
+            block_on(async {
+                while clock.now() < Instant::from_millis(200) {
+                    sup.turn(&mut bridge, &clock).await.unwrap();
+                }
+            });
+            0
+        };
+        let cnc = String::from_utf8_lossy(&world.borrow().written(CNC)).into_owned();
+        (cnc, recorded)
+    };
+    let (cnc, _) = run(false);
+    assert_eq!(cnc, "ERR STORAGE history not available\r\n");
+    let (cnc, recorded) = run(true);
+    assert_eq!(recorded, 1);
+    assert_eq!(
+        cnc,
+        "HISTORY seq=0 boot=0 uptime_ms=0 clock=- family=- event=RESET cause=reset_pin\r\n\
+         OK history=1 skipped=0\r\n"
+    );
 }
