@@ -72,7 +72,9 @@ impl HistoryLog {
 
 /// Whole seconds since boot.
 fn uptime_secs(now: Instant) -> u32 {
-    u32::try_from(now.as_millis() / 1000).unwrap_or(u32::MAX)
+    // `div_rem_u16`: a 64-bit division would link the runtime's (docs/developers.md).
+    let (secs, _) = plasma_protocol::time::div_rem_u16(now.as_millis(), 1000);
+    u32::try_from(secs).unwrap_or(u32::MAX)
 }
 
 /// The unit an entry is about: the family on `link` (model code 0: entries name the family
