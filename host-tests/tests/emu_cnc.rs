@@ -92,6 +92,23 @@ fn a_cnc_session_sets_a_process_and_reads_status() {
     assert_eq!(value(&status, "remote"), Some("OFF"), "{status}");
 }
 
+/// The board keeps no history yet: HISTORY is answered at once (never left waiting, which
+/// would hold every later command), and the clock is kept.
+#[test]
+fn history_is_answered_and_the_clock_kept_on_the_board() {
+    let mut board = ready_board(Model::Sync65);
+    assert_eq!(
+        command(&mut board, "HISTORY"),
+        "ERR STORAGE history not available"
+    );
+    assert_eq!(
+        command(&mut board, "CLOCK 2026-11-26T07:30:00"),
+        "OK clock=2026-11-26T07:30:00"
+    );
+    assert!(command(&mut board, "CLOCK").starts_with("OK clock=2026-11-26T07:3"));
+    assert!(command(&mut board, "ID").starts_with("OK bridge=plasma-bridge"));
+}
+
 #[test]
 fn a_fault_raised_by_the_unit_reaches_the_cnc_and_holds_start_off() {
     let mut board = ready_board(Model::Sync65);
