@@ -4,7 +4,7 @@
 use core::fmt::{self, Display, Write};
 
 use plasma_protocol::cnc::reply::ReplyWriter;
-use plasma_protocol::cnc::{ErrorCode, Pressure};
+use plasma_protocol::cnc::{ErrorCode, Gas, Pressure};
 use plasma_protocol::hpr;
 
 use super::describe::{
@@ -16,7 +16,8 @@ use super::texts::{self, write_failure};
 use super::{Context, List, ReplyLine, err_line, line, no_link, ok_line};
 use crate::io::{Inputs, Outputs};
 use crate::link::{
-    ActiveFault, CommandFailure, CommandOutput, Family, Limits, Model, PsLink, UnitStatus,
+    ActiveFault, CommandFailure, CommandOutput, Family, HprStatus, Limits, Model, PsLink,
+    UnitStatus,
 };
 use crate::settings::Process;
 use plasma_protocol::powermax::FaultCode;
@@ -88,11 +89,16 @@ pub(super) fn status_line(ctx: &Context<'_>, refused: Option<FaultCode>) -> Repl
         w.field("family", OrDash(family.map(family_word)))?;
         w.field("remote", on_off(status.remote))?;
         if hpr {
+            // What 079 GET_PS_INFO and 028 READ_PLASMA_AMPS report (HPR manual lines 148,
+            // 168): an HPR's 079 has measured pressures, a MaxPro200's the set points.
+            let hpr = &status.hpr;
+            let maxpro = hpr.maxpro_info;
             w.field("mode", "-")?;
-            w.field("amps", OrDash(status.hpr.nominal_amps))?;
-            w.field("psi", "-")?;
-            w.field("out_amps", "-")?;
-            w.field("out_psi", "-")?;
+            w.field("amps", OrDash(hpr.nominal_amps))?;
+            w.field("psi", OrDash(maxpro.map(|m| m.plasma_setpoint)))?;
+            w.field("out_amps", OrDash(hpr.actual_amps))?;
+            let pressures = hpr.ps_info.map(|p| p.pressures);
+            w.field("out_psi", OrDash(pressures.map(|p| p.plasma_cutflow)))?;
         } else {
             let settings = status.settings;
             w.field(
@@ -125,6 +131,9 @@ pub(super) fn status_line(ctx: &Context<'_>, refused: Option<FaultCode>) -> Repl
             w.field("state", state.0)?;
             w.field("state_name", state_name(state, family))?;
         }
+        if hpr {
+            hpr_status(w, &status.hpr)?;
+        }
         Ok(())
     })
 }
@@ -134,6 +143,36 @@ fn kept_auto_pressure(link: &PsLink) -> bool {
     link.kept()
         .powermax()
         .is_some_and(|p| p.pressure == Pressure::Auto)
+}
+
+/// STATUS's HPR / MaxPro200 fields from the last 079 GET_PS_INFO: the HPR's four measured
+/// pressures, the MaxPro200's shield set point and gases.
+fn hpr_status(w: &mut ReplyWriter<&mut ReplyLine>, hpr: &HprStatus) -> fmt::Result {
+    if let Some(p) = hpr.ps_info.map(|i| i.pressures) {
+        w.field("plasma_cutflow_psi", p.plasma_cutflow)?;
+        w.field("plasma_preflow_psi", p.plasma_preflow)?;
+        w.field("shield_cutflow_psi", p.shield_cutflow)?;
+        w.field("shield_preflow_psi", p.shield_preflow)?;
+    }
+    if let Some(m) = hpr.maxpro_info {
+        w.field("shield_psi", m.shield_setpoint)?;
+        w.field("plasma", GasName(m.plasma_gas))?;
+        w.field("shield", GasName(m.shield_gas))?;
+    }
+    Ok(())
+}
+
+/// A table VI gas code as the word `GASES` takes, or its number (codes a CNC does not select).
+struct GasName(hpr::GasCode);
+
+impl Display for GasName {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let gas = u8::try_from(self.0.0).ok().and_then(Gas::from_hpr_code);
+        match gas {
+            Some(gas) => f.write_str(gas.name()),
+            None => write!(f, "{}", self.0.0),
+        }
+    }
 }
 
 pub(super) fn limits(status: &UnitStatus, family: Option<Family>) -> ReplyLine {

@@ -120,6 +120,8 @@ pub struct HprStatus {
     pub maxpro_info: Option<MaxProPsInfo>,
     /// Last nominal current set or reported, amps.
     pub nominal_amps: Option<u16>,
+    /// Output current of an HPR (028 READ_PLASMA_AMPS, read after each poll), amps.
+    pub actual_amps: Option<u16>,
     /// Last error log read (134), most recent first.
     pub error_log: Option<[ErrorCode; 4]>,
     /// Last timer/counter read (125).

@@ -307,9 +307,10 @@ fn every_command_on_an_hpr() {
     let mut rig = Rig::hpr("hpr130");
     assert_eq!(
         rig.cmd("STATUS"),
-        "OK link=UP model=HPR130 family=HPR remote=OFF mode=- amps=130 psi=- out_amps=- \
-         out_psi=- fault=none start=OFF motion=OFF arc_ok=OFF ready=ON state=3 \
-         state_name=IDLE2"
+        "OK link=UP model=HPR130 family=HPR remote=OFF mode=- amps=130 psi=- out_amps=0 \
+         out_psi=55 fault=none start=OFF motion=OFF arc_ok=OFF ready=ON state=3 \
+         state_name=IDLE2 plasma_cutflow_psi=55 plasma_preflow_psi=45 shield_cutflow_psi=35 \
+         shield_preflow_psi=25"
     );
     assert_eq!(rig.cmd("LIMITS"), "OK amps=5..130 corner=50..100");
     assert_eq!(rig.cmd("SET AMPS 100"), "OK amps=100");
@@ -345,6 +346,8 @@ fn every_command_on_an_hpr() {
     assert_eq!(rig.cmd("CLEARWARN"), "OK clearwarn=done");
     assert_eq!(rig.cmd("GASTEST ON"), "OK gastest=ON");
     assert_eq!(rig.cmd("GASTEST OFF"), "OK gastest=OFF");
+    // The next poll sees the unit back in IDLE2.
+    rig.run(300);
     assert_err(&rig.cmd("RESET"), "ERR STATE *3*IDLE2*000*NO*ERROR*");
     // Two errors come and go before the bridge polls: only the log keeps them.
     rig.fault(20);

@@ -49,6 +49,8 @@ pub(crate) enum HprExpect {
 pub(crate) enum HprPurpose {
     /// GET_PS_INFO.
     Poll,
+    /// 028 READ_PLASMA_AMPS after each HPR poll (the MaxPro200 has no 028).
+    PollAmps,
     /// GET_STATE while the pilot arc lasts.
     State,
     /// 004 REMOTE_MODE before the first setting.
@@ -110,6 +112,8 @@ pub(crate) struct HprDriver {
     reapply_not_before: Instant,
     /// The last transaction started was a poll (the next turn goes to due slow data).
     polled_last: bool,
+    /// The poll's 028 READ_PLASMA_AMPS is still to send (HPR only).
+    amps_due: bool,
     now: Instant,
 }
 
@@ -167,6 +171,7 @@ impl HprDriver {
             reapply_pending: !core.kept.hpr.is_empty(),
             reapply_not_before: now,
             polled_last: false,
+            amps_due: false,
             now,
         }
     }
@@ -251,6 +256,9 @@ impl HprDriver {
                 }
             };
         }
+        if core::mem::take(&mut self.amps_due) {
+            return typed(HprPurpose::PollAmps, Request::ReadPlasmaAmps);
+        }
         // Round robin: after a poll, due slow data gets one transaction before the next
         // poll, so a short poll interval cannot starve it.
         let poll_due = now >= self.next_poll_at;
@@ -307,6 +315,8 @@ impl HprDriver {
     ) -> Option<(HprPurpose, HprExpect, Vec<u8, RAW_HPR_CAPACITY>)> {
         self.next_poll_at = now + core.config.poll_interval;
         self.polled_last = true;
+        // 079 has the HPR's set point, not its output current: 028 follows (lines 148, 168).
+        self.amps_due = !self.maxpro();
         typed(HprPurpose::Poll, Request::GetPsInfo)
     }
 

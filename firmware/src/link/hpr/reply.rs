@@ -75,6 +75,9 @@ impl HprDriver {
                 core.status.hpr.maxpro_info = Some(*info);
                 self.polled(now, info.state, info.error, info.current_setpoint, core);
             }
+            (HprPurpose::PollAmps, Some(Reply::PlasmaAmps(amps))) => {
+                core.status.hpr.actual_amps = Some(*amps);
+            }
             (HprPurpose::State, Some(Reply::State(state))) => {
                 self.next_poll_at = now + core.config.poll_interval;
                 self.update_state(now, *state, core);
@@ -259,7 +262,7 @@ impl HprDriver {
     ) {
         self.now = now;
         match purpose {
-            HprPurpose::Poll | HprPurpose::State => {}
+            HprPurpose::Poll | HprPurpose::PollAmps | HprPurpose::State => {}
             HprPurpose::SlowErrorLog => self.slow_done(now, SLOW_ERROR_LOG, Some(error), core),
             HprPurpose::SlowTimers => self.slow_done(now, SLOW_TIMERS, Some(error), core),
             HprPurpose::RemoteMode | HprPurpose::Active => {

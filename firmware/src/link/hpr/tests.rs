@@ -54,6 +54,32 @@ fn hpr_retries_span_more_than_a_one_second_blackout() {
 }
 
 #[test]
+fn an_hpr_poll_reads_the_pressures_the_set_point_and_the_output_current() {
+    let mut bench = hpr_bench("HYPERFORMANCE130AUTO");
+    // HPR manual (002_72b43a5685974c77.txt) line 168: the 079 sample, request and reply.
+    assert_eq!(bench.next_tx(bench.now).unwrap(), b">079A0<");
+    bench.rx(
+        2,
+        b">079PC0044 PP0042 SC0034 SP0035 CS0040 ST0003 ER0000 CG0000 CG0000 MV0000 MV0000DE<",
+    );
+    let hpr = bench.link.status().hpr;
+    assert_eq!(hpr.nominal_amps, Some(40));
+    let pressures = hpr.ps_info.unwrap().pressures;
+    assert_eq!(
+        [
+            pressures.plasma_cutflow,
+            pressures.plasma_preflow,
+            pressures.shield_cutflow,
+            pressures.shield_preflow
+        ],
+        [44, 42, 34, 35]
+    );
+    assert_eq!(hpr.actual_amps, None);
+    // The output current follows the poll (line 148).
+    plasma_amps_read(&mut bench);
+}
+
+#[test]
 fn hpr_error_replies_are_classified() {
     let mut bench = hpr_bench("HYPERFORMANCE130MANUAL");
     bench.next_tx(bench.now).unwrap();
@@ -206,6 +232,7 @@ fn hpr_at_100_a() -> Bench {
             b"079" => ps_info_at(3, 130),
             b"134" => hf(134, "000 000 000 000"),
             b"125" => hf(125, &"0000000 ".repeat(7)),
+            b"028" => hf(28, "0000"),
             other => panic!("unexpected {other:?}"),
         };
         bench.rx(2, &reply);
@@ -226,6 +253,14 @@ fn hpr_at_100_a() -> Bench {
     bench
 }
 
+/// The 028 READ_PLASMA_AMPS that follows each HPR poll, answered with the manual's sample:
+/// ">0289A< >02801305E< (130 amps)", HPR manual (002_72b43a5685974c77.txt) line 148.
+fn plasma_amps_read(bench: &mut Bench) {
+    assert_eq!(bench.next_tx(bench.now).unwrap(), b">0289A<");
+    bench.rx(2, b">02801305E<");
+    assert_eq!(bench.link.status().hpr.actual_amps, Some(130));
+}
+
 fn ps_info_at(state: u16, amps: u16) -> Vec<u8> {
     hf(
         79,
@@ -244,6 +279,7 @@ fn an_hpr_back_in_its_power_up_state_gets_remote_mode_and_its_settings_again() {
         b">079A0<"
     );
     bench.rx(2, &ps_info_at(0, 130));
+    plasma_amps_read(&mut bench);
     assert!(!bench.link.status().hpr.remote_accepted);
     assert!(
         bench
@@ -256,6 +292,7 @@ fn an_hpr_back_in_its_power_up_state_gets_remote_mode_and_its_settings_again() {
         b">079A0<"
     );
     bench.rx(2, &ps_info_at(2, 130));
+    // The re-apply goes before the poll's 028.
     assert_eq!(
         bench.next_tx(bench.now + Duration::from_secs(1)).unwrap(),
         b">00494<"
