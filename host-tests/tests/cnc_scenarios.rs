@@ -469,7 +469,9 @@ fn hpr_commands_ok_and_err() {
             ),
             (
                 "STATUS",
-                "OK link=UP model=HPR260 family=HPR remote=* state=3 state_name=IDLE2",
+                "OK link=UP model=HPR260 family=HPR remote=* state=3 state_name=IDLE2 \
+                 plasma_cutflow_psi=55 plasma_preflow_psi=45 shield_cutflow_psi=35 \
+                 shield_preflow_psi=25",
             ),
             ("LIMITS", "OK amps=5..260 corner=50..100"),
             ("FAULT", "OK fault=none"),
@@ -541,6 +543,11 @@ fn hpr_commands_ok_and_err() {
             ("CLEARWARN", "OK clearwarn=done"),
             ("GASTEST ON", "OK gastest=ON"),
             ("GASTEST OFF", "OK gastest=OFF"),
+            ("GASTEST PREFLOW ON", "OK gastest=ON flow=PREFLOW"),
+            ("GASTEST PREFLOW OFF", "OK gastest=OFF flow=PREFLOW"),
+            ("GASTEST CUTFLOW ON", "OK gastest=ON flow=CUTFLOW"),
+            ("GASTEST CUTFLOW OFF", "OK gastest=OFF flow=CUTFLOW"),
+            ("GASTEST CUTFLOW", "ERR SYNTAX missing GASTEST argument"),
             ("RAW >00292<", "OK reply=>002*"),
             (
                 "RAW >00293<",
@@ -577,7 +584,8 @@ fn maxpro200_commands_ok_and_err() {
             ),
             (
                 "STATUS",
-                "OK link=UP model=MaxPro200 family=MAXPRO200 *ready=ON state=3 state_name=READY_FOR_START",
+                "OK link=UP model=MaxPro200 family=MAXPRO200 *ready=ON state=3 \
+                 state_name=READY_FOR_START gastest=OFF shield_psi=35 plasma=O2 shield=AIR",
             ),
             ("LIMITS", "OK amps=5..200"),
             (
@@ -601,10 +609,10 @@ fn maxpro200_commands_ok_and_err() {
                 .as_str(),
             ),
             (
-                "GASTEST ON",
+                "GASTEST CUTFLOW ON",
                 err(
                     ErrorCode::Unsupported,
-                    UnsupportedText(unsupported::NOT_SUPPORTED, Family::MaxPro200),
+                    UnsupportedText(unsupported::GAS_FLOW_TEST, Family::MaxPro200),
                 )
                 .as_str(),
             ),
@@ -628,6 +636,25 @@ fn maxpro200_commands_ok_and_err() {
             ("RESET", "OK reset=done"),
         ],
     );
+}
+
+/// `GASTEST ON|OFF` on a MaxPro200 is 143 SET TEST MODE 1 / 0: "1 Test Gas, plasma and
+/// shield gases flow at set value", only in state 3 (HPR manual (002_72b43a5685974c77.txt)
+/// line 283); STATUS shows it from the 079 display mode 3 "Test Mode" (line 168).
+#[test]
+fn a_maxpro200_gas_test_runs_143_test_gas() {
+    let mut w = ready_hpr(Model::MaxPro200);
+    assert_eq!(w.cnc_line("GASTEST ON"), "OK gastest=ON");
+    assert!(w.sim_ref::<Hpr>().test_gas());
+    w.run_for(ms(300));
+    assert_eq!(field(&w.cnc_line("STATUS"), "gastest"), Some("ON"));
+    assert_eq!(w.cnc_line("GASTEST OFF"), "OK gastest=OFF");
+    assert!(!w.sim_ref::<Hpr>().test_gas());
+    w.run_for(ms(300));
+    assert_eq!(field(&w.cnc_line("STATUS"), "gastest"), Some("OFF"));
+    let received = w.sim_ref::<Hpr>().commands_received();
+    assert!(received.contains(&143));
+    assert!(!received.iter().any(|id| (64..=67).contains(id)));
 }
 
 #[test]

@@ -185,8 +185,22 @@ fn factory_only_dangerous_and_line_control_commands_never_reach_the_unit() {
         LinkCommand::HprClearWarnings,
         LinkCommand::HprReadErrorLog,
         LinkCommand::HprReadTimers,
-        LinkCommand::HprGasTest { on: true },
-        LinkCommand::HprGasTest { on: false },
+        LinkCommand::HprGasTest {
+            cutflow: false,
+            on: true,
+        },
+        LinkCommand::HprGasTest {
+            cutflow: false,
+            on: false,
+        },
+        LinkCommand::HprGasTest {
+            cutflow: true,
+            on: true,
+        },
+        LinkCommand::HprGasTest {
+            cutflow: true,
+            on: false,
+        },
         LinkCommand::HprSetInletGases(GasPair {
             plasma: GasCode::OXYGEN,
             shield: GasCode::AIR,

@@ -30,6 +30,8 @@ const HELP_COMMANDS: &str = "HELP,ID,STATUS,LIMITS,FAULT,FAULTLOG,COUNTERS,CARTR
                              CLOCK,RAW";
 /// The parser's [`SET_WORDS`](plasma_protocol::cnc::command::SET_WORDS) as HELP writes them.
 const HELP_SET: &str = "MODE,AMPS,PSI,PROCESS";
+/// The parser's [`GASTEST_WORDS`](plasma_protocol::cnc::command::GASTEST_WORDS).
+const HELP_GASTEST: &str = "ON,OFF,PREFLOW,CUTFLOW";
 
 pub(super) fn help(sim: bool) -> ReplyLine {
     ok_line(|w| {
@@ -37,6 +39,7 @@ pub(super) fn help(sim: bool) -> ReplyLine {
         w.field("commands", HELP_COMMANDS)?;
         w.field("set", HELP_SET)?;
         w.field("remote", "OFF")?;
+        w.field("gastest", HELP_GASTEST)?;
         w.field("config", "SAVE")?;
         w.field("history", "CLEAR")?;
         w.field("simulator_only", "TORCH")?;
@@ -155,6 +158,8 @@ fn hpr_status(w: &mut ReplyWriter<&mut ReplyLine>, hpr: &HprStatus) -> fmt::Resu
         w.field("shield_preflow_psi", p.shield_preflow)?;
     }
     if let Some(m) = hpr.maxpro_info {
+        // Display mode 3 is "Test Mode" (line 168): the 143 test gas is on.
+        w.field("gastest", on_off(m.display_mode == 3))?;
         w.field("shield_psi", m.shield_setpoint)?;
         w.field("plasma", GasName(m.plasma_gas))?;
         w.field("shield", GasName(m.shield_gas))?;
@@ -349,6 +354,10 @@ pub(super) fn complete(
         Awaiting::Settings(process) => process_done(process, output, family),
         Awaiting::RemoteOff => ok_line(|w| w.field("remote", "OFF")),
         Awaiting::GasTest(on) => ok_line(|w| w.field("gastest", on_off(on))),
+        Awaiting::GasFlowTest(flow, on) => ok_line(|w| {
+            w.field("gastest", on_off(on))?;
+            w.field("flow", flow.name())
+        }),
         Awaiting::Restart => restart_done(ctx),
         Awaiting::HprAmps => match output {
             CommandOutput::Value(amps) => ok_line(|w| w.field("amps", amps)),
@@ -465,12 +474,13 @@ impl Display for HprId {
 
 #[cfg(test)]
 mod tests {
-    use super::{HELP_COMMANDS, HELP_SET};
-    use plasma_protocol::cnc::command::{COMMAND_WORDS, SET_WORDS};
+    use super::{HELP_COMMANDS, HELP_GASTEST, HELP_SET};
+    use plasma_protocol::cnc::command::{COMMAND_WORDS, GASTEST_WORDS, SET_WORDS};
 
     #[test]
     fn help_is_the_parsers_word_lists() {
         assert!(HELP_COMMANDS.split(',').eq(COMMAND_WORDS));
         assert!(HELP_SET.split(',').eq(SET_WORDS));
+        assert!(HELP_GASTEST.split(',').eq(GASTEST_WORDS));
     }
 }

@@ -4,7 +4,7 @@
 //! without the function. This is the only place that maps CNC commands to link requests; the
 //! link checks each request against the family once ([`LinkCommand::runs_on`]).
 
-use plasma_protocol::cnc::{Amps, Command, Gas, Mode, Pressure};
+use plasma_protocol::cnc::{Amps, Command, Gas, GasFlow, Mode, Pressure};
 use plasma_protocol::hpr::{GasCode, GasPair};
 
 use super::texts::{Unsupported, unsupported};
@@ -18,6 +18,7 @@ pub(super) enum Awaiting {
     Settings(Process),
     RemoteOff,
     GasTest(bool),
+    GasFlowTest(GasFlow, bool),
     Restart,
     HprAmps,
     Gases(Gas, Gas),
@@ -102,9 +103,20 @@ pub(super) fn route<'a>(command: &Command<'a>, family: Option<Family>) -> Route<
         (Command::GasTest(on), Some(Sync | Legacy)) => {
             Send(L::GasTest { on }, Awaiting::GasTest(on))
         }
-        (Command::GasTest(on), Some(Hpr)) => Send(L::HprGasTest { on }, Awaiting::GasTest(on)),
-        // The MaxPro200 protocol has no gas test.
-        (Command::GasTest(_), Some(MaxPro200)) => No(&text::NOT_SUPPORTED),
+        (Command::GasTest(on), Some(Hpr)) => {
+            Send(L::HprGasTest { cutflow: false, on }, Awaiting::GasTest(on))
+        }
+        (Command::GasTest(on), Some(MaxPro200)) => {
+            Send(L::MaxProTestGas { on }, Awaiting::GasTest(on))
+        }
+        (Command::GasFlowTest { flow, on }, Some(Hpr)) => Send(
+            L::HprGasTest {
+                cutflow: flow == GasFlow::Cutflow,
+                on,
+            },
+            Awaiting::GasFlowTest(flow, on),
+        ),
+        (Command::GasFlowTest { .. }, _) => No(&text::GAS_FLOW_TEST),
         // Quick restart (clears 0-50-0) exists on SYNC units only.
         (Command::Restart, Some(Sync)) => Send(L::QuickRestart, Awaiting::Restart),
         (Command::Restart, _) => No(&text::RESTART),
@@ -155,7 +167,7 @@ mod tests {
     ];
 
     /// One command of each kind the table routes to the unit.
-    fn unit_commands() -> [Command<'static>; 15] {
+    fn unit_commands() -> [Command<'static>; 16] {
         let amps = Amps::from_raw(45 * Amps::STEPS_PER_UNIT);
         [
             Command::SetMode(Mode::Cut),
@@ -168,6 +180,10 @@ mod tests {
             Command::SetAmps(amps),
             Command::RemoteOff,
             Command::GasTest(true),
+            Command::GasFlowTest {
+                flow: GasFlow::Cutflow,
+                on: true,
+            },
             Command::Restart,
             Command::Gases {
                 plasma: Gas::Air,

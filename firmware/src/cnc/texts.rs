@@ -145,6 +145,11 @@ pub mod unsupported {
         "RESET is an HPR/MaxPro200 command (068 software reset), not available on ",
         "; a Powermax SYNC clears 0-50-0 with RESTART",
     );
+    /// `GASTEST PREFLOW|CUTFLOW` on anything but an HPR.
+    pub const GAS_FLOW_TEST: Unsupported = words(
+        "GASTEST PREFLOW|CUTFLOW is an HPR command (064-067 gas tests), not available on ",
+        "; GASTEST ON|OFF runs the unit's gas test",
+    );
     /// `CLEARWARN` on anything but an HPR.
     pub const CLEAR_WARN: Unsupported = words(
         "CLEARWARN is an HPR command (131 clear warnings), not available on ",
@@ -160,7 +165,7 @@ pub mod unsupported {
         "CARTRIDGE is a Powermax SYNC function; ",
         " has no cartridge data",
     );
-    /// Any other command a family lacks (`GASTEST` on a MaxPro200), and a request the link
+    /// Any other command a family lacks, and a request the link
     /// refuses for the family (`Refusal::NotSupported`).
     pub const NOT_SUPPORTED: Unsupported = words("not supported by ", "");
 }

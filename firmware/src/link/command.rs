@@ -58,9 +58,15 @@ pub enum LinkCommand<'a> {
     HprClearWarnings,
     /// HPR / MaxPro200: software reset (068), only when the manual allows it.
     HprSoftwareReset,
-    /// HPR: start or stop the preflow gas test (064 / 065). No CNC command asks for the
-    /// cutflow test (066 / 067), which the protocol crate still knows as a manual command.
+    /// HPR: start or stop the preflow (064 / 065) or cutflow (066 / 067) gas test.
     HprGasTest {
+        /// The cutflow test; `false`: the preflow test.
+        cutflow: bool,
+        /// Start or stop.
+        on: bool,
+    },
+    /// MaxPro200: 143 SET TEST MODE 1 "Test Gas" (start, only in state 3) or 0 "No test".
+    MaxProTestGas {
         /// Start or stop.
         on: bool,
     },
@@ -96,6 +102,7 @@ impl LinkCommand<'_> {
             | LinkCommand::HprGasTest { .. }
             | LinkCommand::HprReadErrorLog
             | LinkCommand::HprReadTimers => matches!(family, Family::Hpr),
+            LinkCommand::MaxProTestGas { .. } => matches!(family, Family::MaxPro200),
         }
     }
 }
@@ -228,7 +235,13 @@ mod tests {
         use Family::{Hpr, MaxPro200, PowermaxLegacy, PowermaxSync};
         assert!(LinkCommand::HprSetCornerCurrent { percent: 80 }.runs_on(Hpr));
         assert!(!LinkCommand::HprSetCornerCurrent { percent: 80 }.runs_on(MaxPro200));
-        assert!(!LinkCommand::HprGasTest { on: true }.runs_on(MaxPro200));
+        let cutflow_test = LinkCommand::HprGasTest {
+            cutflow: true,
+            on: true,
+        };
+        assert!(!cutflow_test.runs_on(MaxPro200));
+        assert!(LinkCommand::MaxProTestGas { on: true }.runs_on(MaxPro200));
+        assert!(!LinkCommand::MaxProTestGas { on: true }.runs_on(Hpr));
         assert!(LinkCommand::QuickRestart.runs_on(PowermaxSync));
         assert!(!LinkCommand::QuickRestart.runs_on(PowermaxLegacy));
         assert!(LinkCommand::RefreshSlowData.runs_on(PowermaxLegacy));
@@ -250,7 +263,8 @@ mod tests {
                 LinkCommand::HprSetCornerCurrent { percent: 80 },
                 LinkCommand::HprClearWarnings,
                 LinkCommand::HprSoftwareReset,
-                LinkCommand::HprGasTest { on: true },
+                cutflow_test,
+                LinkCommand::MaxProTestGas { on: false },
                 LinkCommand::HprReadErrorLog,
                 LinkCommand::HprReadTimers,
             ];

@@ -144,6 +144,26 @@ impl Gas {
     }
 }
 
+/// The HPR's two gas flow tests (HPR manual commands 064/065 and 066/067).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum GasFlow {
+    /// Preflow gases (064 start, 065 stop).
+    Preflow,
+    /// Cutflow gases (066 start, 067 stop).
+    Cutflow,
+}
+
+impl GasFlow {
+    /// The word after `GASTEST`, as in replies.
+    pub const fn name(self) -> &'static str {
+        match self {
+            GasFlow::Preflow => GASTEST_WORDS[2],
+            GasFlow::Cutflow => GASTEST_WORDS[3],
+        }
+    }
+}
+
 /// A setting of the bridge, read and written with `CONFIG`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -336,8 +356,15 @@ pub enum Command<'a> {
     },
     /// `REMOTE OFF`: hand control back to the supply's front panel.
     RemoteOff,
-    /// `GASTEST ON|OFF`.
+    /// `GASTEST ON|OFF`: the unit's gas test (HPR: preflow, MaxPro200: 143 test gas).
     GasTest(bool),
+    /// `GASTEST PREFLOW|CUTFLOW ON|OFF`: one HPR gas flow test (064-067).
+    GasFlowTest {
+        /// Which flow.
+        flow: GasFlow,
+        /// Start or stop.
+        on: bool,
+    },
     /// `RESTART`: quick restart (Powermax SYNC).
     Restart,
     /// `GASES <plasma> <shield>` (HPR, MaxPro200).
@@ -652,6 +679,30 @@ pub const COMMAND_WORDS: [&str; 21] = [
 /// The words that may follow `SET`.
 pub const SET_WORDS: [&str; 4] = ["MODE", "AMPS", "PSI", "PROCESS"];
 
+/// The words that may follow `GASTEST`.
+pub const GASTEST_WORDS: [&str; 4] = ["ON", "OFF", "PREFLOW", "CUTFLOW"];
+
+/// `GASTEST ON|OFF` or `GASTEST PREFLOW|CUTFLOW ON|OFF`.
+fn gas_test(args: &mut Args<'_>) -> Result<Command<'static>, ParseError> {
+    const WHAT: &str = "GASTEST argument";
+    let [on_word, off_word, preflow, cutflow] = GASTEST_WORDS;
+    let word = args.expect(WHAT)?;
+    let flow = if is(word, on_word) || is(word, off_word) {
+        return Ok(Command::GasTest(is(word, on_word)));
+    } else if is(word, preflow) {
+        GasFlow::Preflow
+    } else if is(word, cutflow) {
+        GasFlow::Cutflow
+    } else {
+        return Err(ParseError::BadKeyword {
+            what: WHAT,
+            expected: "ON|OFF|PREFLOW|CUTFLOW",
+        });
+    };
+    let on = on_off(args, WHAT)?;
+    Ok(Command::GasFlowTest { flow, on })
+}
+
 /// Commands that take no argument.
 const PLAIN_COMMANDS: [(&str, Command<'static>); 11] = [
     ("HELP", Command::Help),
@@ -704,7 +755,7 @@ impl<'a> Command<'a> {
             }
             Command::RemoteOff
         } else if is(word, "GASTEST") {
-            Command::GasTest(on_off(&mut args, "GASTEST argument")?)
+            gas_test(&mut args)?
         } else if is(word, "EVENTS") {
             Command::Events(on_off(&mut args, "EVENTS argument")?)
         } else if is(word, "TORCH") {
@@ -810,6 +861,14 @@ mod tests {
                 Command::parse(word),
                 Err(ParseError::UnknownCommand),
                 "{word}"
+            );
+        }
+        for word in GASTEST_WORDS {
+            let mut line = heapless::String::<24>::new();
+            write!(line, "GASTEST {word}").unwrap();
+            assert!(
+                !matches!(Command::parse(&line), Err(ParseError::BadKeyword { .. })),
+                "{line}"
             );
         }
         for word in SET_WORDS {
@@ -1050,9 +1109,33 @@ mod tests {
         );
         assert_eq!(text(err("REMOTE")), "SYNTAX missing REMOTE argument");
         assert_eq!(err("REMOTE OFF NOW"), ParseError::UnexpectedArgument);
+        assert_eq!(Command::parse("gastest on"), Ok(Command::GasTest(true)));
+        assert_eq!(Command::parse("GASTEST OFF"), Ok(Command::GasTest(false)));
+        assert_eq!(
+            Command::parse("GASTEST cutflow ON"),
+            Ok(Command::GasFlowTest {
+                flow: GasFlow::Cutflow,
+                on: true
+            })
+        );
+        assert_eq!(
+            Command::parse("GASTEST PREFLOW off"),
+            Ok(Command::GasFlowTest {
+                flow: GasFlow::Preflow,
+                on: false
+            })
+        );
+        assert_eq!(
+            text(err("GASTEST maybe")),
+            "SYNTAX GASTEST argument: expected ON|OFF|PREFLOW|CUTFLOW"
+        );
+        assert_eq!(
+            text(err("GASTEST CUTFLOW")),
+            "SYNTAX missing GASTEST argument"
+        );
+        assert_eq!(err("GASTEST ON ON"), ParseError::UnexpectedArgument);
         for (word, make) in [
-            ("GASTEST", Command::GasTest as fn(bool) -> Command<'static>),
-            ("EVENTS", Command::Events),
+            ("EVENTS", Command::Events as fn(bool) -> Command<'static>),
             ("TORCH", Command::Torch),
         ] {
             let mut line = heapless::String::<32>::new();
@@ -1073,7 +1156,7 @@ mod tests {
             assert!(matches!(err(word), ParseError::MissingArgument { .. }));
         }
         assert_eq!(
-            text(err("GASTEST 1")),
+            text(err("GASTEST CUTFLOW 1")),
             "SYNTAX GASTEST argument: expected ON|OFF"
         );
         assert_eq!(err("TORCH ON ON"), ParseError::UnexpectedArgument);

@@ -189,8 +189,8 @@ fn every_command_on_a_sync_unit() {
         rig.cmd("HELP"),
         "OK commands=HELP,ID,STATUS,LIMITS,FAULT,FAULTLOG,COUNTERS,CARTRIDGE,SET,REMOTE,\
          GASTEST,RESTART,GASES,CORNER,RESET,CLEARWARN,EVENTS,CONFIG,HISTORY,CLOCK,RAW \
-         set=MODE,AMPS,PSI,PROCESS remote=OFF config=SAVE history=CLEAR simulator_only=TORCH \
-         simulator=NO"
+         set=MODE,AMPS,PSI,PROCESS remote=OFF gastest=ON,OFF,PREFLOW,CUTFLOW config=SAVE \
+         history=CLEAR simulator_only=TORCH simulator=NO"
     );
     assert_eq!(
         rig.cmd("ID"),
@@ -346,6 +346,13 @@ fn every_command_on_an_hpr() {
     assert_eq!(rig.cmd("CLEARWARN"), "OK clearwarn=done");
     assert_eq!(rig.cmd("GASTEST ON"), "OK gastest=ON");
     assert_eq!(rig.cmd("GASTEST OFF"), "OK gastest=OFF");
+    assert_eq!(rig.cmd("GASTEST CUTFLOW ON"), "OK gastest=ON flow=CUTFLOW");
+    assert_eq!(
+        rig.cmd("GASTEST CUTFLOW OFF"),
+        "OK gastest=OFF flow=CUTFLOW"
+    );
+    let requests = rig.hpr_commands();
+    assert_eq!(requests[requests.len() - 2..], [66, 67]);
     // The next poll sees the unit back in IDLE2.
     rig.run(300);
     assert_err(&rig.cmd("RESET"), "ERR STATE *3*IDLE2*000*NO*ERROR*");

@@ -226,6 +226,15 @@ impl HprDriver {
                     Err(CommandFailure::NotAccepted)
                 }
             }
+            // The manual's only 143 sample answers mode 1 with `1` (line 283): an echo of the
+            // mode or an accept flag. Either reading of the reply counts as taken.
+            (HprJob::Typed(Request::SetTestMode(mode)), Some(Reply::SetTestMode(reply))) => {
+                if *reply == mode.code() || *reply == 1 {
+                    Ok(CommandOutput::Done)
+                } else {
+                    Err(CommandFailure::NotAccepted)
+                }
+            }
             (_, Some(Reply::ErrorLog(log))) => {
                 core.status.hpr.error_log = Some(*log);
                 Ok(CommandOutput::ErrorLog(*log))

@@ -3,7 +3,7 @@
 
 use heapless::Vec;
 use plasma_protocol::hpr::command::id;
-use plasma_protocol::hpr::{self, Frame, GasCode, GasPair, Request, StateCode};
+use plasma_protocol::hpr::{self, Frame, GasCode, GasPair, Request, StateCode, TestMode};
 use plasma_protocol::time::Instant;
 
 use super::{HprDriver, HprJob, SLOW_ALL, is_cutting};
@@ -89,15 +89,34 @@ impl HprDriver {
                 }
                 Request::SoftwareReset
             }
-            LinkCommand::HprGasTest { on } => {
+            // "Not allowed when cutting" (lines 150-155).
+            LinkCommand::HprGasTest { cutflow, on } => {
                 if is_cutting(state) {
                     return Err(forbidden(core));
                 }
-                if *on {
-                    Request::GasPreflowTestStart
-                } else {
-                    Request::GasPreflowTestStop
+                match (cutflow, on) {
+                    (false, true) => Request::GasPreflowTestStart,
+                    (false, false) => Request::GasPreflowTestStop,
+                    (true, true) => Request::GasCutflowTestStart,
+                    (true, false) => Request::GasCutflowTestStop,
                 }
+            }
+            // 143 starts a test "when the system is in state #3 - Ready for Start" (line 283);
+            // mode 0 stops the gases, not while cutting.
+            LinkCommand::MaxProTestGas { on } => {
+                let allowed = if *on {
+                    state == Some(StateCode(3))
+                } else {
+                    state.is_some() && !is_cutting(state)
+                };
+                if !allowed {
+                    return Err(forbidden(core));
+                }
+                Request::SetTestMode(if *on {
+                    TestMode::TestGas
+                } else {
+                    TestMode::None
+                })
             }
             LinkCommand::HprReadErrorLog => Request::ReadErrorLog,
             LinkCommand::HprReadTimers => Request::GetTimerCounter,

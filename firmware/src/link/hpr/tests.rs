@@ -370,3 +370,108 @@ fn kept_hpr_settings_are_not_given_to_another_model() {
         reason: ProcessFailure::OutsideLimits
     }));
 }
+
+/// Submit `command` to a bench whose unit is in state 3 (after the poll and its 028, for an
+/// HPR), and check that it goes out as `request` and that `reply` completes it with `result`.
+fn gas_test_frames(
+    bench: &mut Bench,
+    command: LinkCommand<'_>,
+    request: &[u8],
+    reply: &[u8],
+    result: Result<CommandOutput, CommandFailure>,
+) {
+    let ticket = bench.link.submit(bench.now, command).unwrap();
+    assert_eq!(bench.next_tx(bench.now).unwrap(), request);
+    bench.rx(2, reply);
+    assert!(
+        bench
+            .events()
+            .contains(&LinkEvent::CommandDone { ticket, result }),
+        "{command:?}"
+    );
+}
+
+#[test]
+fn hpr_cutflow_and_preflow_gas_tests_go_out_as_the_manual_writes_them() {
+    let mut bench = hpr_bench("HYPERFORMANCE130MANUAL");
+    bench.next_tx(bench.now).unwrap();
+    bench.rx(2, &ps_info(3, 0));
+    plasma_amps_read(&mut bench);
+    // HPR manual (002_72b43a5685974c77.txt) lines 150, 153, 154, 155: request and reply.
+    for (cutflow, on, request, reply) in [
+        (false, true, &b">0649A<"[..], &b">0641CB<"[..]),
+        (false, false, b">0659B<", b">0651CC<"),
+        (true, true, b">0669C<", b">0661CD<"),
+        (true, false, b">0679D<", b">0671CE<"),
+    ] {
+        let command = LinkCommand::HprGasTest { cutflow, on };
+        gas_test_frames(&mut bench, command, request, reply, Ok(CommandOutput::Done));
+    }
+    // "0 = not accepted".
+    let command = LinkCommand::HprGasTest {
+        cutflow: true,
+        on: true,
+    };
+    let refused = hf(66, "0");
+    let failure = Err(CommandFailure::NotAccepted);
+    gas_test_frames(&mut bench, command, b">0669C<", &refused, failure);
+    // Not while cutting: the next poll (the slow data answered meanwhile) finds state 8.
+    loop {
+        let frame = bench.next_tx(bench.now + Duration::from_secs(1)).unwrap();
+        match &frame[1..4] {
+            b"079" => break,
+            b"134" => bench.rx(2, &hf(134, "000 000 000 000")),
+            b"125" => bench.rx(2, &hf(125, &"0000000 ".repeat(7))),
+            b"028" => bench.rx(2, &hf(28, "0000")),
+            other => panic!("unexpected {other:?}"),
+        }
+    }
+    bench.rx(2, &ps_info(8, 0));
+    assert!(matches!(
+        bench.link.submit(bench.now, command),
+        Err(Refusal::StateForbids { .. })
+    ));
+}
+
+#[test]
+fn a_maxpro200_gas_test_is_143_test_mode_1_in_state_3_only() {
+    let mut bench = hpr_bench("MaxPro200");
+    bench.next_tx(bench.now).unwrap();
+    let info = |state: u16| {
+        hf(
+            79,
+            &std::format!("st{state:04} er0000 pg0001 ps0056 sg0001 ss0058 cs0200 dm0001 lm0000"),
+        )
+    };
+    bench.rx(2, &info(2));
+    // "When the system is in state #3 - Ready for Start" (HPR manual
+    // (002_72b43a5685974c77.txt) line 283): refused in the purge.
+    assert!(matches!(
+        bench
+            .link
+            .submit(bench.now, LinkCommand::MaxProTestGas { on: true }),
+        Err(Refusal::StateForbids {
+            state: Some(StateCode(2)),
+            ..
+        })
+    ));
+    bench.next_tx(bench.now + Duration::from_secs(1)).unwrap();
+    bench.rx(2, &info(3));
+    // The manual's sample: ">1431C9< //request test mode 1 >1431C9<" (line 283).
+    let on = LinkCommand::MaxProTestGas { on: true };
+    gas_test_frames(
+        &mut bench,
+        on,
+        b">1431C9<",
+        b">1431C9<",
+        Ok(CommandOutput::Done),
+    );
+    // Mode 0, "No test": the gases stop.
+    let off = LinkCommand::MaxProTestGas { on: false };
+    let stop = hf(143, "0");
+    gas_test_frames(&mut bench, off, &stop, &stop, Ok(CommandOutput::Done));
+    // A unit that answers mode 1 with 0 did not take it.
+    let refused = hf(143, "0");
+    let failure = Err(CommandFailure::NotAccepted);
+    gas_test_frames(&mut bench, on, b">1431C9<", &refused, failure);
+}

@@ -71,6 +71,7 @@ impl Hpr {
                 };
                 if ok {
                     self.error = 0;
+                    self.test_gas = false;
                     self.enter(Phase::PowerUp, now);
                 }
                 reply(Self::flag(ok))
@@ -97,14 +98,16 @@ impl Hpr {
                 ))
             }
             79 => reply(format!(
-                "st{:04} er{:04} pg{:04} ps{:04} sg{:04} ss{:04} cs{:04} dm0001 lm0000",
+                "st{:04} er{:04} pg{:04} ps{:04} sg{:04} ss{:04} cs{:04} dm{:04} lm0000",
                 self.state_code(),
                 self.error,
                 self.gases.0,
                 self.flows[0],
                 self.gases.1,
                 self.flows[2],
-                self.amps
+                self.amps,
+                // Display mode 3 "Test Mode" while the test gas flows, else 1 "Error/Status".
+                if self.test_gas { 3 } else { 1 },
             )),
             85 if hpr => {
                 if fields.first().and_then(|f| f.parse::<u8>().ok()) == Some(self.config.id) {
@@ -222,8 +225,21 @@ impl Hpr {
                 reply(if ok { "1".into() } else { "2".into() })
             }
             138 if !hpr => reply(Self::flag(
-                self.phase == Phase::Ready && !self.error_blocks_start(),
+                self.phase == Phase::Ready && !self.error_blocks_start() && !self.test_gas,
             )),
+            // 143 SET TEST MODE: 1 Test Gas only in state 3, 0 stops it (line 283). The reply
+            // echoes the mode taken, as the manual's sample (`>1431C9<` to `>1431C9<`).
+            143 if !hpr => match data {
+                "1" if self.phase == Phase::Ready && !self.error_blocks_start() => {
+                    self.test_gas = true;
+                    reply("1".into())
+                }
+                "0" => {
+                    self.test_gas = false;
+                    reply("0".into())
+                }
+                _ => reply("0".into()),
+            },
             _ => unknown,
         }
     }

@@ -24,6 +24,8 @@
 //! - Errors (section IV): codes below 43 are warnings (Start still works; 131 clears them);
 //!   43-79 block Start while present; above 79 shut down (state 14) until 068 SOFTWARE_RESET.
 //!   Error log (134) of the last 4 errors since power-up, timers/counters (125).
+//! - MaxPro200 143 SET TEST MODE 1 (Test Gas, state 3 only) and 0; the gases flow (079 display
+//!   mode 3), no start is taken until mode 0 or a software reset ends it.
 //! - Settings: 004 remote mode, 058 nominal amps (clamped to 5..=130/260/400/200 and echoed),
 //!   070 corner current (50-100 %), 095 all parameters, 096 inlet gases (a change of gas purges;
 //!   refused in states 4-10), 137 process (MaxPro200, states 2-3 only), 136 response delay (XD).
@@ -42,7 +44,7 @@
 //!
 //! # Not modelled
 //! The factory-test and diagnostic commands (074, 100-124 except those listed, 126-130, 132,
-//! 133, 135, 139-147) answer 501.
+//! 133, 135, 139-142, 144-147) answer 501.
 //!
 //! By job: `config` what makes a unit, `sequence` the arc sequence and errors, `commands` the
 //! serial command table; this file the unit's state and its [`SimulatedUnit`] face.
@@ -87,6 +89,8 @@ pub struct Hpr {
     error_log: [u16; 4],
     remote: bool,
     response_delay: bool,
+    /// MaxPro200 143 test mode 1 (Test Gas): the gases flow, no start.
+    test_gas: bool,
     amps: u16,
     corner_pct: u16,
     gases: (u16, u16),
@@ -118,6 +122,7 @@ impl Hpr {
             error_log: [0; 4],
             remote: false,
             response_delay: false,
+            test_gas: false,
             amps: max,
             corner_pct: 100,
             gases: (1, 5),
@@ -289,6 +294,11 @@ impl Hpr {
         self.error_log
     }
 
+    /// True while a MaxPro200's 143 Test Gas runs.
+    pub fn test_gas(&self) -> bool {
+        self.test_gas
+    }
+
     /// The output current now (corner current applied while CORNER_CURRENT is on).
     pub fn actual_amps(&self) -> u16 {
         match self.phase {
@@ -374,7 +384,7 @@ impl SimulatedUnit for Hpr {
             return;
         }
         if on {
-            if self.phase == Phase::Ready && !self.error_blocks_start() {
+            if self.phase == Phase::Ready && !self.error_blocks_start() && !self.test_gas {
                 let hold = self.hold && self.is_maxpro();
                 self.enter(
                     if hold {
@@ -428,6 +438,7 @@ impl SimulatedUnit for Hpr {
         self.broadcast = false;
         self.remote = false;
         self.response_delay = false;
+        self.test_gas = false;
         self.error = 0;
         self.error_log = [0; 4];
         self.amps = max_amps(self.config.model);
