@@ -470,10 +470,10 @@ fn hpr_commands_ok_and_err() {
             (
                 "STATUS",
                 "OK link=UP model=HPR260 family=HPR remote=* state=3 state_name=IDLE2 \
-                 plasma_cutflow_psi=55 plasma_preflow_psi=45 shield_cutflow_psi=35 \
-                 shield_preflow_psi=25",
+                 console=AUTO plasma_cutflow_psi=55 plasma_preflow_psi=45 shield_cutflow_psi=35 \
+                 shield_preflow_psi=25 plasma=O2 shield=AIR",
             ),
-            ("LIMITS", "OK amps=5..260 corner=50..100"),
+            ("LIMITS", "OK amps=5..260 corner=50..100 console=AUTO"),
             ("FAULT", "OK fault=none"),
             ("FAULTLOG", "OK log=none"),
             (
@@ -1366,5 +1366,49 @@ fn the_history_keeps_faults_across_a_power_cycle_on_every_family() {
         );
         // The new boot's clock is unset until the CNC sets it again.
         assert_eq!(w.cnc_line("CLOCK"), "OK clock=unset");
+
+/// A manual gas console HPR (HELLO `HYPERFORMANCE130MANUAL`) is never sent what the manual's
+/// "System" column leaves it out of: 058 SET_NOMINAL_AMPS and 096 SET_INLET_GASES are "Auto
+/// Gas System MaxPro200" (HPR manual (002_72b43a5685974c77.txt) lines 149, 180). LIMITS says
+/// the CNC sets no current; STATUS shows the knobs' gases from 122 READ_GAS_SWITCH (line 252).
+#[test]
+fn a_manual_gas_console_hpr_gets_no_setting_its_console_does_not_take() {
+    use plasma_firmware::link::Refusal;
+    let mut options = WorldOptions::default();
+    options.sim.gas_console = plasma_sim::hpr::GasConsole::Manual;
+    let mut w = World::with_bridge(Model::Hpr130, options, Settings::default());
+    settle(&mut w);
+    w.run_until(|w| w.bridge().status().ready, Duration::from_secs(10))
+        .expect("ready");
+    let system = plasma_protocol::hpr::SystemId::parse(b"HYPERFORMANCE130MANUAL").unwrap();
+    let refusal = |id| refusal_line(&Refusal::NotOnThisSystem { id, system }, Some(Family::Hpr));
+    expect_all(
+        &mut w,
+        &[
+            ("LIMITS", "OK amps=- corner=50..100 console=MANUAL"),
+            ("SET AMPS 100", refusal(58).as_str()),
+            ("GASES O2 N2", refusal(96).as_str()),
+            ("CORNER 80", "OK corner=80"),
+            ("RAW >05813031<", refusal(58).as_str()),
+        ],
+    );
+    assert!(
+        refusal(58).contains("manual gas console"),
+        "{}",
+        refusal(58)
+    );
+    w.run_for(ms(500));
+    let status = w.cnc_line("STATUS");
+    assert_eq!(field(&status, "console"), Some("MANUAL"), "{status}");
+    assert_eq!(field(&status, "amps"), Some("130"), "{status}");
+    assert_eq!(field(&status, "plasma"), Some("O2"), "{status}");
+    assert_eq!(field(&status, "shield"), Some("AIR"), "{status}");
+    let received = w.sim_ref::<Hpr>().commands_received();
+    assert!(received.contains(&122));
+    for id in [58, 78, 95, 96, 99, 98] {
+        assert!(
+            !received.contains(&id),
+            "{id:03} reached the manual console"
+        );
     }
 }

@@ -135,7 +135,7 @@ pub(super) fn status_line(ctx: &Context<'_>, refused: Option<FaultCode>) -> Repl
             w.field("state_name", state_name(state, family))?;
         }
         if hpr {
-            hpr_status(w, &status.hpr)?;
+            hpr_status(w, &status.hpr, status.model)?;
         }
         Ok(())
     })
@@ -150,7 +150,16 @@ fn kept_auto_pressure(link: &PsLink) -> bool {
 
 /// STATUS's HPR / MaxPro200 fields from the last 079 GET_PS_INFO: the HPR's four measured
 /// pressures, the MaxPro200's shield set point and gases.
-fn hpr_status(w: &mut ReplyWriter<&mut ReplyLine>, hpr: &HprStatus) -> fmt::Result {
+fn hpr_status(
+    w: &mut ReplyWriter<&mut ReplyLine>,
+    hpr: &HprStatus,
+    model: Option<Model>,
+) -> fmt::Result {
+    if let Some(Model::Hpr(system)) = model
+        && let Some(console) = console_word(system)
+    {
+        w.field("console", console)?;
+    }
     if let Some(p) = hpr.ps_info.map(|i| i.pressures) {
         w.field("plasma_cutflow_psi", p.plasma_cutflow)?;
         w.field("plasma_preflow_psi", p.plasma_preflow)?;
@@ -164,7 +173,27 @@ fn hpr_status(w: &mut ReplyWriter<&mut ReplyLine>, hpr: &HprStatus) -> fmt::Resu
         w.field("plasma", GasName(m.plasma_gas))?;
         w.field("shield", GasName(m.shield_gas))?;
     }
+    // An HPR's inlet gases (slow data): a manual console's knobs (122), else 098.
+    if let Some(gases) = hpr.gases {
+        w.field("plasma", GasName(gases.plasma))?;
+        w.field("shield", GasName(gases.shield))?;
+    }
     Ok(())
+}
+
+/// An HPR's gas console as HELLO names it.
+fn console_word(system: hpr::SystemId) -> Option<&'static str> {
+    match system {
+        hpr::SystemId::Hpr {
+            console: Some(console),
+            ..
+        } => Some(match console {
+            hpr::GasConsole::Manual => "MANUAL",
+            hpr::GasConsole::Auto => "AUTO",
+            hpr::GasConsole::AutoMix => "AUTOMIX",
+        }),
+        _ => None,
+    }
 }
 
 /// A table VI gas code as the word `GASES` takes, or its number (codes a CNC does not select).
@@ -229,13 +258,19 @@ impl Display for AmpsRange {
     }
 }
 
-/// An HPR's or MaxPro200's ranges: from the manual and the unit's rating.
+/// An HPR's or MaxPro200's ranges: from the manual and the unit's rating, for what its
+/// system takes (a manual gas console sets the current at its knobs: `amps=-`).
 fn hpr_limits(system: hpr::SystemId) -> ReplyLine {
+    use hpr::command::id;
+    let amps = hpr::accepts(id::SET_NOMINAL_AMPS, &system).then_some(AmpsRange::Hpr(system));
     ok_line(|w| {
-        w.field("amps", AmpsRange::Hpr(system))?;
-        if !system.is_maxpro200() {
+        w.field("amps", OrDash(amps))?;
+        if hpr::accepts(id::SET_CORNER_CURRENT, &system) {
             let (low, high) = (hpr::CORNER_PERCENT.start(), hpr::CORNER_PERCENT.end());
             w.field("corner", format_args!("{low}..{high}"))?;
+        }
+        if let Some(console) = console_word(system) {
+            w.field("console", console)?;
         }
         Ok(())
     })

@@ -12,6 +12,7 @@ use core::fmt::{self, Display, Write};
 use plasma_protocol::cnc::reply::write_error;
 use plasma_protocol::cnc::{Amps, ErrorCode, phoenix};
 use plasma_protocol::hpr::ErrorCode as HprError;
+use plasma_protocol::hpr::{GasConsole, SystemId};
 use plasma_protocol::modbus_ascii::ExceptionCode;
 use plasma_protocol::powermax::OperatingMode;
 use plasma_protocol::time::{Decimal, Instant};
@@ -245,6 +246,9 @@ pub fn write_refusal<W: Write>(
             UnsupportedText(unsupported::NOT_SUPPORTED, *family),
         ),
         Refusal::LimitsUnknown => write_error(out, ErrorCode::State, LIMITS_NOT_READ),
+        Refusal::NotOnThisSystem { .. } => {
+            write_error(out, ErrorCode::Unsupported, RefusalText(refusal))
+        }
         Refusal::QuickRestartNeeds050 { .. } => {
             write_error(out, ErrorCode::State, RefusalText(refusal))
         }
@@ -332,6 +336,22 @@ fn write_range_refusal<W: Write>(
         ),
         // `write_refusal` sends only the four above here.
         _ => Ok(()),
+    }
+}
+
+/// The system a command is refused for, with what to do instead.
+struct SystemText(SystemId);
+
+impl Display for SystemText {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self.0 {
+            SystemId::MaxPro200 => "a MaxPro200",
+            SystemId::Hpr {
+                console: Some(GasConsole::Manual),
+                ..
+            } => "an HPR with a manual gas console: its knobs set the current and gases",
+            SystemId::Hpr { .. } => "an HPR with an automatic gas console",
+        })
     }
 }
 
@@ -435,6 +455,13 @@ impl Display for RefusalText<'_> {
                 write!(f, "quiet after quick restart until {until} ms")
             }
             Refusal::QueueFull => f.write_str("too many commands waiting"),
+            Refusal::NotOnThisSystem { id, system } => {
+                write!(
+                    f,
+                    "HPR command {id:03} is not taken by {}",
+                    SystemText(*system)
+                )
+            }
             Refusal::HprValueOutOfRange {
                 value,
                 requested,

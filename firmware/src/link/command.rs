@@ -1,6 +1,6 @@
 //! What the CNC session can ask of the link, and why the link may refuse before sending.
 
-use plasma_protocol::hpr::{ErrorCode, GasPair, StateCode};
+use plasma_protocol::hpr::{ErrorCode, GasPair, StateCode, SystemId};
 use plasma_protocol::powermax::sync::PermittedModes;
 use plasma_protocol::powermax::{Amps, FaultCode, OperatingMode, Pressure, Psi};
 
@@ -198,6 +198,14 @@ pub enum Refusal {
         state: Option<StateCode>,
         /// Current error, if known.
         error: Option<ErrorCode>,
+    },
+    /// The manual's "System" column does not name the unit's system for this HPR command
+    /// (058 SET_NOMINAL_AMPS on a manual gas console HPR: "Auto Gas System MaxPro200").
+    NotOnThisSystem {
+        /// Command id.
+        id: u16,
+        /// The unit, as HELLO named it.
+        system: SystemId,
     },
     /// The RAW frame could not be parsed (framing, checksum, PDU).
     RawMalformed(plasma_protocol::Error),

@@ -1,6 +1,8 @@
 //! The bridge's picture of the power supply, kept up to date by the link.
 
-use plasma_protocol::hpr::{ErrorCode, MaxProPsInfo, PsInfo, StateCode, SystemId, TimerCounter};
+use plasma_protocol::hpr::{
+    ErrorCode, GasPair, MaxProPsInfo, PsInfo, StateCode, SystemId, TimerCounter,
+};
 use plasma_protocol::powermax::sync::{
     Cartridge, FaultLog, Identification, PermittedModes, PsCounters,
 };
@@ -126,6 +128,9 @@ pub struct HprStatus {
     pub error_log: Option<[ErrorCode; 4]>,
     /// Last timer/counter read (125).
     pub timers: Option<TimerCounter>,
+    /// Inlet gases of an HPR (slow data): a manual gas console's switch positions (122), an
+    /// automatic console's gases (098).
+    pub gases: Option<GasPair>,
     /// True after the unit accepted 004 REMOTE_MODE.
     pub remote_accepted: bool,
 }

@@ -46,7 +46,9 @@ mod values;
 
 #[cfg(feature = "descriptions")]
 pub use command::command_name;
-pub use command::{Class, CommandInfo, classify, command_info, is_allowed};
+pub use command::{
+    Class, CommandInfo, Systems, accepts, classify, command_info, is_allowed, systems_of,
+};
 #[cfg(feature = "diagnostics")]
 pub use diagnostics::{
     AUTO_CONSOLE_INPUTS, ControlData, ControlData3, CoolantCounts, DiagnosticRead, DiagnosticReply,

@@ -59,6 +59,8 @@ pub(crate) enum HprPurpose {
     SlowErrorLog,
     /// 125 GET_TIMER_COUNTER (slow data).
     SlowTimers,
+    /// 122 READ_GAS_SWITCH or 098 GET_INLET_GASES (slow data).
+    SlowGases,
     /// The active command.
     Active,
 }
@@ -81,7 +83,10 @@ impl HprJob {
 
 const SLOW_ERROR_LOG: u8 = 1;
 const SLOW_TIMERS: u8 = 2;
-const SLOW_ALL: u8 = SLOW_ERROR_LOG | SLOW_TIMERS;
+/// The inlet gases: 122 READ_GAS_SWITCH on a manual gas console (the knobs' positions, line
+/// 252), 098 GET_INLET_GASES on an automatic one.
+const SLOW_GASES: u8 = 4;
+const SLOW_ALL: u8 = SLOW_ERROR_LOG | SLOW_TIMERS | SLOW_GASES;
 
 /// Wait before re-applying kept settings again after a re-apply failed.
 pub(crate) const REAPPLY_BACKOFF: Duration = Duration::from_secs(5);
@@ -330,6 +335,15 @@ impl HprDriver {
         }
         self.slow.take_due_retries(now);
         let pending = self.slow.pending();
+        if pending & SLOW_GASES != 0 {
+            let switch = hpr::accepts(hpr::command::id::READ_GAS_SWITCH, &self.system);
+            let request = if switch {
+                Request::ReadGasSwitch
+            } else {
+                Request::GetInletGases
+            };
+            return typed(HprPurpose::SlowGases, request);
+        }
         if pending & SLOW_ERROR_LOG != 0 {
             return typed(HprPurpose::SlowErrorLog, Request::ReadErrorLog);
         }

@@ -8,7 +8,7 @@ use plasma_protocol::time::Instant;
 use super::kept::sets;
 use super::{
     ActiveJob, HprDriver, HprJob, HprPurpose, PILOT_ARC_PAUSE, REAPPLY_BACKOFF, SLOW_ERROR_LOG,
-    SLOW_TIMERS, is_pilot_arc, is_power_up,
+    SLOW_GASES, SLOW_TIMERS, is_pilot_arc, is_power_up,
 };
 use crate::link::core::Core;
 use crate::link::event::{CommandFailure, CommandOutput, LinkEvent, ProcessFailure};
@@ -90,6 +90,12 @@ impl HprDriver {
                     core.status.hpr.error_log = Some(*log);
                 }
                 self.slow_done(now, SLOW_ERROR_LOG, None, core);
+            }
+            (HprPurpose::SlowGases, reply) => {
+                if let Some(Reply::GasSwitch(gases) | Reply::InletGases(gases)) = reply {
+                    core.status.hpr.gases = Some(*gases);
+                }
+                self.slow_done(now, SLOW_GASES, None, core);
             }
             (HprPurpose::SlowTimers, reply) => {
                 if let Some(Reply::TimerCounter(t)) = reply {
@@ -274,6 +280,7 @@ impl HprDriver {
             HprPurpose::Poll | HprPurpose::PollAmps | HprPurpose::State => {}
             HprPurpose::SlowErrorLog => self.slow_done(now, SLOW_ERROR_LOG, Some(error), core),
             HprPurpose::SlowTimers => self.slow_done(now, SLOW_TIMERS, Some(error), core),
+            HprPurpose::SlowGases => self.slow_done(now, SLOW_GASES, Some(error), core),
             HprPurpose::RemoteMode | HprPurpose::Active => {
                 if let Some(job) = self.active.take() {
                     self.job_failed(

@@ -29,6 +29,17 @@ impl HprDriver {
             LinkCommand::Raw(bytes) => parse_raw(bytes)?,
             command => HprJob::Typed(checked(self.settings_request(command, core)?)?),
         };
+        // Nothing the unit's gas console (or the MaxPro200) does not take is sent.
+        let id = match &job {
+            HprJob::Typed(request) => request.id(),
+            HprJob::Raw { id, .. } => *id,
+        };
+        if !hpr::accepts(id, &self.system) {
+            return Err(Refusal::NotOnThisSystem {
+                id,
+                system: self.system,
+            });
+        }
         self.queue
             .push_back((ticket, job))
             .map_err(|_| Refusal::QueueFull)

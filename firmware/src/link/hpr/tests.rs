@@ -233,6 +233,7 @@ fn hpr_at_100_a() -> Bench {
             b"134" => hf(134, "000 000 000 000"),
             b"125" => hf(125, &"0000000 ".repeat(7)),
             b"028" => hf(28, "0000"),
+            b"098" => hf(98, "0001 0005"),
             other => panic!("unexpected {other:?}"),
         };
         bench.rx(2, &reply);
@@ -423,6 +424,7 @@ fn hpr_cutflow_and_preflow_gas_tests_go_out_as_the_manual_writes_them() {
             b"134" => bench.rx(2, &hf(134, "000 000 000 000")),
             b"125" => bench.rx(2, &hf(125, &"0000000 ".repeat(7))),
             b"028" => bench.rx(2, &hf(28, "0000")),
+            b"122" => bench.rx(2, &hf(122, "0001 0006")),
             other => panic!("unexpected {other:?}"),
         }
     }
@@ -474,4 +476,48 @@ fn a_maxpro200_gas_test_is_143_test_mode_1_in_state_3_only() {
     let refused = hf(143, "0");
     let failure = Err(CommandFailure::NotAccepted);
     gas_test_frames(&mut bench, on, b">1431C9<", &refused, failure);
+}
+
+#[test]
+fn a_manual_gas_console_hpr_is_sent_only_what_its_console_takes() {
+    let mut bench = hpr_bench("HYPERFORMANCE130MANUAL");
+    bench.next_tx(bench.now).unwrap();
+    bench.rx(2, &ps_info(3, 0));
+    plasma_amps_read(&mut bench);
+    let system = plasma_protocol::hpr::SystemId::parse(b"HYPERFORMANCE130MANUAL").unwrap();
+    // HPR manual (002_72b43a5685974c77.txt) line 149: 058 SET_NOMINAL_AMPS is "Auto Gas
+    // System MaxPro200"; its sample request, typed or RAW, is refused before it is sent.
+    let refused = Err(Refusal::NotOnThisSystem { id: 58, system });
+    let amps = LinkCommand::HprSetNominalAmps { amps: 130 };
+    assert_eq!(bench.link.submit(bench.now, amps), refused);
+    assert_eq!(
+        bench
+            .link
+            .submit(bench.now, LinkCommand::Raw(b">05813031<")),
+        refused
+    );
+    // Line 180: 096 SET_INLET_GASES is "Auto Gas System MaxPro200" too.
+    let gases = plasma_protocol::hpr::GasPair {
+        plasma: plasma_protocol::hpr::GasCode(1),
+        shield: plasma_protocol::hpr::GasCode(6),
+    };
+    assert_eq!(
+        bench
+            .link
+            .submit(bench.now, LinkCommand::HprSetInletGases(gases)),
+        Err(Refusal::NotOnThisSystem { id: 96, system })
+    );
+    // Line 252: 122 READ_GAS_SWITCH, the slow data of a manual console, read with the
+    // manual's sample ">12295< >1220001 00063C<" (plasma O2, shield N2).
+    loop {
+        let frame = bench.next_tx(bench.now + Duration::from_secs(1)).unwrap();
+        if frame == b">12295<" {
+            break;
+        }
+        assert_ne!(&frame[1..4], b"058");
+        assert_ne!(&frame[1..4], b"098", "098 is the automatic console's read");
+        bench.rx(2, &ps_info(3, 0));
+    }
+    bench.rx(2, b">1220001 00063C<");
+    assert_eq!(bench.link.status().hpr.gases, Some(gases));
 }

@@ -167,6 +167,8 @@ impl Hpr {
                     f[0], f[1], f[2], f[3], f[4], f[5]
                 ))
             }
+            // 122 READ_GAS_SWITCH, "Manual Gas System" only (line 252): the knobs' positions.
+            122 if hpr && !auto => reply(format!("{:04} {:04}", self.gases.0, self.gases.1)),
             125 if hpr => {
                 let c = self.counters;
                 let fields = [
