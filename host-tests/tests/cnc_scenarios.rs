@@ -532,6 +532,14 @@ fn hpr_commands_ok_and_err() {
                 .as_str(),
             ),
             ("CORNER 80", "OK corner=80"),
+            (
+                "SET HPR_PROCESS 100 O2 AIR",
+                err(
+                    ErrorCode::Unsupported,
+                    UnsupportedText(unsupported::HPR_PROCESS, Family::Hpr),
+                )
+                .as_str(),
+            ),
             ("CORNER 120", "ERR RANGE *50..100*"),
             ("CORNER", "ERR SYNTAX missing *"),
             ("GASES O2", "ERR SYNTAX missing *"),
@@ -633,9 +641,19 @@ fn maxpro200_commands_ok_and_err() {
                 .as_str(),
             ),
             ("GASES O2 AIR", "OK plasma=O2 shield=AIR"),
+            (
+                "SET HPR_PROCESS 150 N2 AIR",
+                "OK amps=150 plasma=N2 shield=AIR",
+            ),
+            (
+                "SET HPR_PROCESS 150.5 N2 AIR",
+                "ERR RANGE *150.5*whole amps",
+            ),
+            ("SET HPR_PROCESS 201 N2 AIR", "ERR RANGE *201*5..200*"),
             ("RESET", "OK reset=done"),
         ],
     );
+    assert_eq!(w.sim_ref::<Hpr>().nominal_amps(), 150);
 }
 
 /// `GASTEST ON|OFF` on a MaxPro200 is 143 SET TEST MODE 1 / 0: "1 Test Gas, plasma and

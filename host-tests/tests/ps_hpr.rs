@@ -349,3 +349,30 @@ fn continuous_polling_does_not_starve_hpr_slow_data() {
     let amps = world.command(LinkCommand::HprSetNominalAmps { amps: 150 }, secs(3));
     assert_eq!(amps, Ok(CommandOutput::Value(150)));
 }
+
+/// `SET HPR_PROCESS` on a MaxPro200 is 137 SET PROCESS, "recommended ... for MaxPro200
+/// systems" (HPR manual (002_72b43a5685974c77.txt) line 180, the command at line 275): kept
+/// and re-applied after the unit comes back, like the current.
+#[test]
+fn a_maxpro200_process_is_reapplied_after_a_power_cycle() {
+    let mut world = ready(Model::MaxPro200);
+    let gases = GasPair {
+        plasma: GasCode::OXYGEN,
+        shield: GasCode::AIR,
+    };
+    let process = LinkCommand::MaxProSetProcess { amps: 150, gases };
+    assert_eq!(world.command(process, secs(3)), Ok(CommandOutput::Done));
+    assert_eq!(world.sim::<Hpr>().nominal_amps(), 150);
+    world.power_off();
+    world
+        .wait_event(|e| matches!(e, LinkEvent::LinkDown { .. }), secs(6))
+        .expect("link down");
+    world.power_on();
+    world.wait_link_up(secs(20)).expect("link back");
+    world
+        .run_until(|w| w.sim_ref::<Hpr>().nominal_amps() == 150, secs(10))
+        .expect("the process is set again");
+    assert_eq!(world.sim::<Hpr>().gases(), (1, 5));
+    let received = world.sim::<Hpr>().commands_received();
+    assert_eq!(received.iter().filter(|&&id| id == 137).count(), 2);
+}

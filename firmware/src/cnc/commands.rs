@@ -2,11 +2,13 @@
 //! the link as the one request the command table ([`super::table`]) names for the unit on
 //! the line.
 
-use plasma_protocol::cnc::{Amps, Command, ConfigCommand, ConfigKey, ErrorCode, Mode, Pressure};
+use plasma_protocol::cnc::{
+    Amps, Command, ConfigCommand, ConfigKey, ErrorCode, Gas, Mode, Pressure,
+};
 
 use super::describe::{cnc_mode, on_off, unit_mode};
 use super::replies::{cartridge, counters, fault, help, id, limits, status_line};
-use super::table::{Awaiting, Route, route};
+use super::table::{Awaiting, Route, gas_pair, route};
 use super::texts::{self, UnsupportedText, write_refusal};
 use super::{Context, Pending, ReplyLine, Session, SimCommand, err_line, line, no_link, ok_line};
 use crate::link::command::RAW_CAPACITY;
@@ -27,6 +29,9 @@ impl Session {
                 pressure,
             } => self.set_powermax(ctx, family, mode, amps, pressure),
             Route::HprAmps(amps) => self.set_hpr_amps(ctx, amps),
+            Route::HprProcess(amps, plasma, shield) => {
+                self.set_hpr_process(ctx, amps, plasma, shield)
+            }
             // The table answers only CARTRIDGE (SYNC) and COUNTERS (MaxPro200, no unit)
             // locally.
             Route::Local => Some(match command {
@@ -129,6 +134,26 @@ impl Session {
             amps: steps / Amps::STEPS_PER_UNIT,
         };
         self.submit(ctx, command, Awaiting::HprAmps)
+    }
+
+    /// `SET HPR_PROCESS` on a MaxPro200: 137, kept and re-applied like `SET AMPS`.
+    fn set_hpr_process(
+        &mut self,
+        ctx: &mut Context<'_>,
+        amps: Amps,
+        plasma: Gas,
+        shield: Gas,
+    ) -> Option<ReplyLine> {
+        let steps = amps.raw();
+        if !steps.is_multiple_of(Amps::STEPS_PER_UNIT) {
+            return Some(texts::whole_amps(amps));
+        }
+        let amps = steps / Amps::STEPS_PER_UNIT;
+        let command = LinkCommand::MaxProSetProcess {
+            amps,
+            gases: gas_pair(plasma, shield),
+        };
+        self.submit(ctx, command, Awaiting::HprProcess(amps, plasma, shield))
     }
 
     fn raw(&mut self, ctx: &mut Context<'_>, frame: &str) -> Option<ReplyLine> {

@@ -29,7 +29,7 @@ const HELP_COMMANDS: &str = "HELP,ID,STATUS,LIMITS,FAULT,FAULTLOG,COUNTERS,CARTR
                              GASTEST,RESTART,GASES,CORNER,RESET,CLEARWARN,EVENTS,CONFIG,HISTORY,\
                              CLOCK,RAW";
 /// The parser's [`SET_WORDS`](plasma_protocol::cnc::command::SET_WORDS) as HELP writes them.
-const HELP_SET: &str = "MODE,AMPS,PSI,PROCESS";
+const HELP_SET: &str = "MODE,AMPS,PSI,PROCESS,HPR_PROCESS";
 /// The parser's [`GASTEST_WORDS`](plasma_protocol::cnc::command::GASTEST_WORDS).
 const HELP_GASTEST: &str = "ON,OFF,PREFLOW,CUTFLOW";
 
@@ -398,6 +398,11 @@ pub(super) fn complete(
             CommandOutput::Value(amps) => ok_line(|w| w.field("amps", amps)),
             _ => ok_line(|w| w.field("amps", "set")),
         },
+        Awaiting::HprProcess(amps, plasma, shield) => ok_line(|w| {
+            w.field("amps", amps)?;
+            w.field("plasma", plasma.name())?;
+            w.field("shield", shield.name())
+        }),
         Awaiting::Gases(plasma, shield) => ok_line(|w| {
             w.field("plasma", plasma.name())?;
             w.field("shield", shield.name())

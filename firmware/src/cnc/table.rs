@@ -21,6 +21,7 @@ pub(super) enum Awaiting {
     GasFlowTest(GasFlow, bool),
     Restart,
     HprAmps,
+    HprProcess(u16, Gas, Gas),
     Gases(Gas, Gas),
     Corner,
     Reset,
@@ -44,6 +45,8 @@ pub(super) enum Route<'a> {
     },
     /// `SET AMPS` on an HPR or MaxPro200: sent as `HprSetNominalAmps` when it is whole amps.
     HprAmps(Amps),
+    /// `SET HPR_PROCESS` on a MaxPro200: sent as `MaxProSetProcess` when it is whole amps.
+    HprProcess(Amps, Gas, Gas),
     /// Answered from what the bridge knows; nothing is sent.
     Local,
     /// The family has no such function.
@@ -98,6 +101,15 @@ pub(super) fn route<'a>(command: &Command<'a>, family: Option<Family>) -> Route<
         (Command::SetProcess { .. }, _) => No(&text::SET_PROCESS),
         (Command::SetAmps(amps), Some(Sync | Legacy)) => settings(None, Some(amps), None),
         (Command::SetAmps(amps), Some(Hpr | MaxPro200)) => Route::HprAmps(amps),
+        (
+            Command::SetHprProcess {
+                amps,
+                plasma,
+                shield,
+            },
+            Some(MaxPro200),
+        ) => Route::HprProcess(amps, plasma, shield),
+        (Command::SetHprProcess { .. }, _) => No(&text::HPR_PROCESS),
         (Command::RemoteOff, Some(Sync | Legacy)) => Send(L::ExitRemote, Awaiting::RemoteOff),
         (Command::RemoteOff, _) => No(&text::REMOTE_OFF),
         (Command::GasTest(on), Some(Sync | Legacy)) => {
@@ -147,8 +159,8 @@ pub(super) fn route<'a>(command: &Command<'a>, family: Option<Family>) -> Route<
     }
 }
 
-/// The HPR gas codes of a `GASES` command.
-fn gas_pair(plasma: Gas, shield: Gas) -> GasPair {
+/// The HPR gas codes of a `GASES` or `SET HPR_PROCESS` command.
+pub(super) fn gas_pair(plasma: Gas, shield: Gas) -> GasPair {
     GasPair {
         plasma: GasCode(u16::from(plasma.hpr_code())),
         shield: GasCode(u16::from(shield.hpr_code())),
@@ -167,7 +179,7 @@ mod tests {
     ];
 
     /// One command of each kind the table routes to the unit.
-    fn unit_commands() -> [Command<'static>; 16] {
+    fn unit_commands() -> [Command<'static>; 17] {
         let amps = Amps::from_raw(45 * Amps::STEPS_PER_UNIT);
         [
             Command::SetMode(Mode::Cut),
@@ -178,6 +190,11 @@ mod tests {
                 pressure: Pressure::Auto,
             },
             Command::SetAmps(amps),
+            Command::SetHprProcess {
+                amps,
+                plasma: Gas::O2,
+                shield: Gas::Air,
+            },
             Command::RemoteOff,
             Command::GasTest(true),
             Command::GasFlowTest {

@@ -126,6 +126,11 @@ pub mod unsupported {
         "REMOTE OFF is a Powermax command; ",
         " stays in remote mode while the bridge talks to it",
     );
+    /// `SET HPR_PROCESS` on anything but a MaxPro200.
+    pub const HPR_PROCESS: Unsupported = words(
+        "SET HPR_PROCESS is a MaxPro200 command (137 set process), not available on ",
+        "; an HPR takes SET AMPS, GASES and CORNER",
+    );
     /// `RESTART` on anything but a Powermax SYNC.
     pub const RESTART: Unsupported = words(
         "RESTART (quick restart, clears 0-50-0) is a Powermax SYNC function, not available on ",

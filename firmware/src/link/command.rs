@@ -47,6 +47,14 @@ pub enum LinkCommand<'a> {
         /// Amps (5 up to the unit's rating).
         amps: u16,
     },
+    /// MaxPro200: 137 SET PROCESS, current and gases (the unit sets the pressures); kept and
+    /// re-applied like the current.
+    MaxProSetProcess {
+        /// Amps, 5-200.
+        amps: u16,
+        /// Plasma and shield gases.
+        gases: GasPair,
+    },
     /// HPR (auto gas) / MaxPro200: set the inlet gases (096).
     HprSetInletGases(GasPair),
     /// HPR: corner current percent 50-100 (070).
@@ -102,7 +110,9 @@ impl LinkCommand<'_> {
             | LinkCommand::HprGasTest { .. }
             | LinkCommand::HprReadErrorLog
             | LinkCommand::HprReadTimers => matches!(family, Family::Hpr),
-            LinkCommand::MaxProTestGas { .. } => matches!(family, Family::MaxPro200),
+            LinkCommand::MaxProTestGas { .. } | LinkCommand::MaxProSetProcess { .. } => {
+                matches!(family, Family::MaxPro200)
+            }
         }
     }
 }

@@ -354,6 +354,16 @@ pub enum Command<'a> {
         /// Pressure.
         pressure: Pressure,
     },
+    /// `SET HPR_PROCESS <A> <plasma> <shield>`: MaxPro200 137 SET PROCESS (current and
+    /// gases; the unit sets the pressures).
+    SetHprProcess {
+        /// Current (whole amps on the unit).
+        amps: Amps,
+        /// Plasma gas.
+        plasma: Gas,
+        /// Shield gas.
+        shield: Gas,
+    },
     /// `REMOTE OFF`: hand control back to the supply's front panel.
     RemoteOff,
     /// `GASTEST ON|OFF`: the unit's gas test (HPR: preflow, MaxPro200: 143 test gas).
@@ -571,8 +581,14 @@ fn corner(args: &mut Args<'_>) -> Result<u8, ParseError> {
 
 fn set(args: &mut Args<'_>) -> Result<Command<'static>, ParseError> {
     const WHAT: &str = "SET parameter";
-    const EXPECTED: &str = "MODE|AMPS|PSI|PROCESS";
-    let [mode_word, amps_word, psi_word, process_word] = SET_WORDS;
+    const EXPECTED: &str = "MODE|AMPS|PSI|PROCESS|HPR_PROCESS";
+    let [
+        mode_word,
+        amps_word,
+        psi_word,
+        process_word,
+        hpr_process_word,
+    ] = SET_WORDS;
     let word = args
         .next()
         .ok_or(ParseError::MissingArgument { what: WHAT })?;
@@ -587,6 +603,12 @@ fn set(args: &mut Args<'_>) -> Result<Command<'static>, ParseError> {
             mode: mode(args)?,
             amps: amps(args)?,
             pressure: pressure(args)?,
+        }
+    } else if is(word, hpr_process_word) {
+        Command::SetHprProcess {
+            amps: amps(args)?,
+            plasma: gas(args, "plasma gas")?,
+            shield: gas(args, "shield gas")?,
         }
     } else {
         return Err(ParseError::BadKeyword {
@@ -677,7 +699,7 @@ pub const COMMAND_WORDS: [&str; 21] = [
 ];
 
 /// The words that may follow `SET`.
-pub const SET_WORDS: [&str; 4] = ["MODE", "AMPS", "PSI", "PROCESS"];
+pub const SET_WORDS: [&str; 5] = ["MODE", "AMPS", "PSI", "PROCESS", "HPR_PROCESS"];
 
 /// The words that may follow `GASTEST`.
 pub const GASTEST_WORDS: [&str; 4] = ["ON", "OFF", "PREFLOW", "CUTFLOW"];
@@ -984,8 +1006,21 @@ mod tests {
         assert_eq!(text(err("SET")), "SYNTAX missing SET parameter");
         assert_eq!(
             text(err("SET VOLTS 5")),
-            "SYNTAX SET parameter: expected MODE|AMPS|PSI|PROCESS"
+            "SYNTAX SET parameter: expected MODE|AMPS|PSI|PROCESS|HPR_PROCESS"
         );
+        assert_eq!(
+            Command::parse("set hpr_process 200 o2 air"),
+            Ok(Command::SetHprProcess {
+                amps: amps(200.0),
+                plasma: Gas::O2,
+                shield: Gas::Air
+            })
+        );
+        assert_eq!(
+            text(err("SET HPR_PROCESS 200 O2")),
+            "SYNTAX missing shield gas"
+        );
+        assert_eq!(err("SET HPR_PROCESS 4 O2 AIR").code(), ErrorCode::Range);
     }
 
     #[test]

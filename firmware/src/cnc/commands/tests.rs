@@ -189,8 +189,8 @@ fn every_command_on_a_sync_unit() {
         rig.cmd("HELP"),
         "OK commands=HELP,ID,STATUS,LIMITS,FAULT,FAULTLOG,COUNTERS,CARTRIDGE,SET,REMOTE,\
          GASTEST,RESTART,GASES,CORNER,RESET,CLEARWARN,EVENTS,CONFIG,HISTORY,CLOCK,RAW \
-         set=MODE,AMPS,PSI,PROCESS remote=OFF gastest=ON,OFF,PREFLOW,CUTFLOW config=SAVE \
-         history=CLEAR simulator_only=TORCH simulator=NO"
+         set=MODE,AMPS,PSI,PROCESS,HPR_PROCESS remote=OFF gastest=ON,OFF,PREFLOW,CUTFLOW \
+         config=SAVE history=CLEAR simulator_only=TORCH simulator=NO"
     );
     assert_eq!(
         rig.cmd("ID"),

@@ -73,6 +73,18 @@ impl HprDriver {
                 }
                 Request::SetInletGases(*gases)
             }
+            // "Only accepted when the system is in state #2 or #3" (line 275).
+            LinkCommand::MaxProSetProcess { amps, gases } => {
+                check_amps(*amps, self.max_amps())?;
+                check_gases(gases)?;
+                if !state.is_some_and(|s| matches!(s.0, 2 | 3)) {
+                    return Err(forbidden(core));
+                }
+                Request::SetProcess {
+                    amps: *amps,
+                    gases: *gases,
+                }
+            }
             LinkCommand::HprSetCornerCurrent { percent } => {
                 check_corner(*percent)?;
                 Request::SetCornerCurrent { percent: *percent }

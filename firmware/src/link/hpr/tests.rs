@@ -521,3 +521,43 @@ fn a_manual_gas_console_hpr_is_sent_only_what_its_console_takes() {
     bench.rx(2, b">1220001 00063C<");
     assert_eq!(bench.link.status().hpr.gases, Some(gases));
 }
+
+#[test]
+fn a_maxpro200_process_goes_out_as_the_manuals_137_sample_and_is_kept() {
+    let mut bench = hpr_bench("MaxPro200");
+    bench.next_tx(bench.now).unwrap();
+    bench.rx(
+        2,
+        &hf(
+            79,
+            "st0003 er0000 pg0001 ps0056 sg0001 ss0058 cs0130 dm0001 lm0000",
+        ),
+    );
+    let gases = plasma_protocol::hpr::GasPair {
+        plasma: plasma_protocol::hpr::GasCode(5),
+        shield: plasma_protocol::hpr::GasCode(5),
+    };
+    let process = LinkCommand::MaxProSetProcess { amps: 200, gases };
+    // 5-200 A (HPR manual (002_72b43a5685974c77.txt) line 275).
+    assert!(matches!(
+        bench.link.submit(
+            bench.now,
+            LinkCommand::MaxProSetProcess { amps: 201, gases }
+        ),
+        Err(Refusal::HprValueOutOfRange { max: 200, .. })
+    ));
+    let ticket = bench.link.submit(bench.now, process).unwrap();
+    assert_eq!(bench.next_tx(bench.now).unwrap(), b">00494<");
+    bench.rx(2, b">0041C5<");
+    // Line 275: ">137200 5 5D7< >1371CC<".
+    assert_eq!(bench.next_tx(bench.now).unwrap(), b">137200 5 5D7<");
+    bench.rx(2, b">1371CC<");
+    assert!(bench.events().contains(&LinkEvent::CommandDone {
+        ticket,
+        result: Ok(CommandOutput::Done)
+    }));
+    assert_eq!(
+        bench.link.kept().hpr_requests(),
+        [plasma_protocol::hpr::Request::SetProcess { amps: 200, gases }]
+    );
+}
