@@ -194,6 +194,13 @@ fn an_hpr_session_sets_amps_gases_corner_and_cuts() {
     w.set_input(Input::CornerCurrent, false);
     w.run_for(ms(50));
     assert_eq!(w.sim_ref::<Hpr>().actual_amps(), 200);
+    // STATUS shows the output current the bridge reads with 028 while the arc is on.
+    w.run_until(
+        |w| w.bridge().status().hpr.actual_amps == Some(200),
+        Duration::from_secs(2),
+    )
+    .unwrap();
+    assert_eq!(field(&w.cnc_line("STATUS"), "out_amps"), Some("200"));
 
     assert_eq!(w.cnc_line("TORCH OFF"), "OK torch=OFF");
     w.wait_cnc_line("!ARC OFF", Duration::from_secs(2)).unwrap();
@@ -471,7 +478,7 @@ fn hpr_commands_ok_and_err() {
                 "STATUS",
                 "OK link=UP model=HPR260 family=HPR remote=* state=3 state_name=IDLE2 \
                  console=AUTO plasma_cutflow_psi=55 plasma_preflow_psi=45 shield_cutflow_psi=35 \
-                 shield_preflow_psi=25 plasma=O2 shield=AIR",
+                 shield_preflow_psi=25",
             ),
             ("LIMITS", "OK amps=5..260 corner=50..100 console=AUTO"),
             ("FAULT", "OK fault=none"),

@@ -433,7 +433,9 @@ fn request_is_harmless(f: &host_tests::harness::TraceFrame) -> bool {
         return matches!(f.modbus_function(), Some(0x01 | 0x03 | 0x04 | 0x2B));
     }
     match f.hpr_id() {
-        Some(id) => hpr::is_allowed(id) && matches!(id, 0 | 2 | 79 | 85 | 86 | 125 | 134),
+        Some(id) => {
+            hpr::is_allowed(id) && matches!(id, 0 | 2 | 28 | 79 | 85 | 86 | 122 | 125 | 134)
+        }
         None => false,
     }
 }

@@ -173,7 +173,7 @@ fn hpr_status(
         w.field("plasma", GasName(m.plasma_gas))?;
         w.field("shield", GasName(m.shield_gas))?;
     }
-    // An HPR's inlet gases (slow data): a manual console's knobs (122), else 098.
+    // A manual gas console's switch positions (slow data, 122).
     if let Some(gases) = hpr.gases {
         w.field("plasma", GasName(gases.plasma))?;
         w.field("shield", GasName(gases.shield))?;

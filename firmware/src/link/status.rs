@@ -122,14 +122,14 @@ pub struct HprStatus {
     pub maxpro_info: Option<MaxProPsInfo>,
     /// Last nominal current set or reported, amps.
     pub nominal_amps: Option<u16>,
-    /// Output current of an HPR (028 READ_PLASMA_AMPS, read after each poll), amps.
+    /// Output current of an HPR, amps: 028 READ_PLASMA_AMPS, read after each poll that shows
+    /// the main arc on (states 6-10); 0 after a poll that shows it off.
     pub actual_amps: Option<u16>,
     /// Last error log read (134), most recent first.
     pub error_log: Option<[ErrorCode; 4]>,
     /// Last timer/counter read (125).
     pub timers: Option<TimerCounter>,
-    /// Inlet gases of an HPR (slow data): a manual gas console's switch positions (122), an
-    /// automatic console's gases (098).
+    /// A manual gas console's switch positions (122 READ_GAS_SWITCH, slow data).
     pub gases: Option<GasPair>,
     /// True after the unit accepted 004 REMOTE_MODE.
     pub remote_accepted: bool,

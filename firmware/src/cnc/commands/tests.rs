@@ -310,7 +310,7 @@ fn every_command_on_an_hpr() {
         "OK link=UP model=HPR130 family=HPR remote=OFF mode=- amps=130 psi=- out_amps=0 \
          out_psi=55 fault=none start=OFF motion=OFF arc_ok=OFF ready=ON state=3 \
          state_name=IDLE2 console=AUTO plasma_cutflow_psi=55 plasma_preflow_psi=45 \
-         shield_cutflow_psi=35 shield_preflow_psi=25 plasma=O2 shield=AIR"
+         shield_cutflow_psi=35 shield_preflow_psi=25"
     );
     assert_eq!(
         rig.cmd("LIMITS"),

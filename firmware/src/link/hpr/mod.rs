@@ -49,7 +49,8 @@ pub(crate) enum HprExpect {
 pub(crate) enum HprPurpose {
     /// GET_PS_INFO.
     Poll,
-    /// 028 READ_PLASMA_AMPS after each HPR poll (the MaxPro200 has no 028).
+    /// 028 READ_PLASMA_AMPS after an HPR poll that shows the arc on (the MaxPro200 has no
+    /// 028).
     PollAmps,
     /// GET_STATE while the pilot arc lasts.
     State,
@@ -59,7 +60,7 @@ pub(crate) enum HprPurpose {
     SlowErrorLog,
     /// 125 GET_TIMER_COUNTER (slow data).
     SlowTimers,
-    /// 122 READ_GAS_SWITCH or 098 GET_INLET_GASES (slow data).
+    /// 122 READ_GAS_SWITCH (slow data, manual gas console).
     SlowGases,
     /// The active command.
     Active,
@@ -83,10 +84,21 @@ impl HprJob {
 
 const SLOW_ERROR_LOG: u8 = 1;
 const SLOW_TIMERS: u8 = 2;
-/// The inlet gases: 122 READ_GAS_SWITCH on a manual gas console (the knobs' positions, line
-/// 252), 098 GET_INLET_GASES on an automatic one.
+/// A manual gas console's switch positions: 122 READ_GAS_SWITCH ("Manual Gas System" only,
+/// line 252).
 const SLOW_GASES: u8 = 4;
-const SLOW_ALL: u8 = SLOW_ERROR_LOG | SLOW_TIMERS | SLOW_GASES;
+
+/// The slow data of `system`: an HPR's error log and timers, and a manual console's gas
+/// switches; a MaxPro200 has none.
+fn slow_items(system: &SystemId) -> u8 {
+    if system.is_maxpro200() {
+        0
+    } else if hpr::accepts(hpr::command::id::READ_GAS_SWITCH, system) {
+        SLOW_ERROR_LOG | SLOW_TIMERS | SLOW_GASES
+    } else {
+        SLOW_ERROR_LOG | SLOW_TIMERS
+    }
+}
 
 /// Wait before re-applying kept settings again after a re-apply failed.
 pub(crate) const REAPPLY_BACKOFF: Duration = Duration::from_secs(5);
@@ -117,7 +129,7 @@ pub(crate) struct HprDriver {
     reapply_not_before: Instant,
     /// The last transaction started was a poll (the next turn goes to due slow data).
     polled_last: bool,
-    /// The poll's 028 READ_PLASMA_AMPS is still to send (HPR only).
+    /// The poll's 028 READ_PLASMA_AMPS is still to send (HPR with the arc on only).
     amps_due: bool,
     now: Instant,
 }
@@ -130,6 +142,12 @@ fn is_pilot_arc(maxpro: bool, state: StateCode) -> bool {
     } else {
         state.0 == 5
     }
+}
+
+/// True for the HPR states with the main arc on (6 TRANSFER to 10 FINAL RAMPDOWN), when the
+/// output current is worth reading; in the others there is no main arc.
+fn is_arc_on(state: StateCode) -> bool {
+    (6..=10).contains(&state.0)
 }
 
 /// True for the states a unit is in right after power-up (HPR 0; MaxPro200 0 power up and
@@ -151,7 +169,6 @@ fn is_cutting(state: Option<StateCode>) -> bool {
 impl HprDriver {
     /// A driver for a unit that answered HELLO with `system`.
     pub(crate) fn new(system: SystemId, now: Instant, core: &mut Core) -> Self {
-        let maxpro = system == SystemId::MaxPro200;
         // Only a Powermax keeps a process: the persisted one is not for this unit.
         core.kept.restore_done();
         if !core.kept.hpr.is_empty() && core.kept.hpr.system() != Some(system) {
@@ -165,11 +182,7 @@ impl HprDriver {
             system,
             next_poll_at: now,
             pause_until: None,
-            slow: SlowData::new(
-                if maxpro { 0 } else { SLOW_ALL },
-                now,
-                core.config.slow_data_interval,
-            ),
+            slow: SlowData::new(slow_items(&system), now, core.config.slow_data_interval),
             queue: Deque::new(),
             active: None,
             reapply: Deque::new(),
@@ -320,8 +333,6 @@ impl HprDriver {
     ) -> Option<(HprPurpose, HprExpect, Vec<u8, RAW_HPR_CAPACITY>)> {
         self.next_poll_at = now + core.config.poll_interval;
         self.polled_last = true;
-        // 079 has the HPR's set point, not its output current: 028 follows (lines 148, 168).
-        self.amps_due = !self.maxpro();
         typed(HprPurpose::Poll, Request::GetPsInfo)
     }
 
@@ -331,18 +342,12 @@ impl HprDriver {
         core: &Core,
     ) -> Option<(HprPurpose, HprExpect, Vec<u8, RAW_HPR_CAPACITY>)> {
         if self.slow.refresh_due(now, core.config.slow_data_interval) && !self.maxpro() {
-            self.slow.request(SLOW_ALL);
+            self.slow.request(slow_items(&self.system));
         }
         self.slow.take_due_retries(now);
         let pending = self.slow.pending();
         if pending & SLOW_GASES != 0 {
-            let switch = hpr::accepts(hpr::command::id::READ_GAS_SWITCH, &self.system);
-            let request = if switch {
-                Request::ReadGasSwitch
-            } else {
-                Request::GetInletGases
-            };
-            return typed(HprPurpose::SlowGases, request);
+            return typed(HprPurpose::SlowGases, Request::ReadGasSwitch);
         }
         if pending & SLOW_ERROR_LOG != 0 {
             return typed(HprPurpose::SlowErrorLog, Request::ReadErrorLog);

@@ -8,7 +8,7 @@ use plasma_protocol::time::Instant;
 use super::kept::sets;
 use super::{
     ActiveJob, HprDriver, HprJob, HprPurpose, PILOT_ARC_PAUSE, REAPPLY_BACKOFF, SLOW_ERROR_LOG,
-    SLOW_GASES, SLOW_TIMERS, is_pilot_arc, is_power_up,
+    SLOW_GASES, SLOW_TIMERS, is_arc_on, is_pilot_arc, is_power_up,
 };
 use crate::link::core::Core;
 use crate::link::event::{CommandFailure, CommandOutput, LinkEvent, ProcessFailure};
@@ -69,6 +69,12 @@ impl HprDriver {
         match (purpose, reply) {
             (HprPurpose::Poll, Some(Reply::PsInfo(info))) => {
                 core.status.hpr.ps_info = Some(*info);
+                // 079 has the set point, not the output current: 028 follows while the arc
+                // is on (lines 148, 168); without a main arc the output is 0 A.
+                self.amps_due = is_arc_on(info.state);
+                if !self.amps_due {
+                    core.status.hpr.actual_amps = Some(0);
+                }
                 self.polled(now, info.state, info.error, info.current_setpoint, core);
             }
             (HprPurpose::Poll, Some(Reply::MaxProPsInfo(info))) => {
@@ -92,7 +98,7 @@ impl HprDriver {
                 self.slow_done(now, SLOW_ERROR_LOG, None, core);
             }
             (HprPurpose::SlowGases, reply) => {
-                if let Some(Reply::GasSwitch(gases) | Reply::InletGases(gases)) = reply {
+                if let Some(Reply::GasSwitch(gases)) = reply {
                     core.status.hpr.gases = Some(*gases);
                 }
                 self.slow_done(now, SLOW_GASES, None, core);

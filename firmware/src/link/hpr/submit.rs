@@ -6,7 +6,7 @@ use plasma_protocol::hpr::command::id;
 use plasma_protocol::hpr::{self, Frame, GasCode, GasPair, Request, StateCode, TestMode};
 use plasma_protocol::time::Instant;
 
-use super::{HprDriver, HprJob, SLOW_ALL, is_cutting};
+use super::{HprDriver, HprJob, is_cutting, slow_items};
 use crate::link::command::{HprValue, LinkCommand, Refusal};
 use crate::link::core::Core;
 use crate::link::event::{CommandOutput, LinkEvent, Ticket};
@@ -54,7 +54,7 @@ impl HprDriver {
             });
             return Ok(());
         }
-        self.slow.request_for(ticket, SLOW_ALL)
+        self.slow.request_for(ticket, slow_items(&self.system))
     }
 
     /// The request a setting command becomes, checked against the unit's rating, the
