@@ -1391,6 +1391,8 @@ fn the_history_keeps_faults_across_a_power_cycle_on_every_family() {
         );
         // The new boot's clock is unset until the CNC sets it again.
         assert_eq!(w.cnc_line("CLOCK"), "OK clock=unset");
+    }
+}
 
 /// A manual gas console HPR (HELLO `HYPERFORMANCE130MANUAL`) is never sent what the manual's
 /// "System" column leaves it out of: 058 SET_NOMINAL_AMPS and 096 SET_INLET_GASES are "Auto
