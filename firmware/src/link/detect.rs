@@ -8,7 +8,8 @@
 use heapless::Vec;
 use plasma_protocol::hpr::{self as hpr_wire, Reply, SystemId};
 use plasma_protocol::modbus_ascii::Response;
-use plasma_protocol::powermax::{PowerSupplyModel, device_id, legacy as pm_legacy};
+use plasma_protocol::modbus_ascii::pdu::DeviceIdentification;
+use plasma_protocol::powermax::{device_id, legacy as pm_legacy};
 use plasma_protocol::serial::{Parity, PortConfig, StopBits};
 use plasma_protocol::time::{Duration, Instant};
 
@@ -406,7 +407,7 @@ impl PsLink {
         response: &Response<'_>,
     ) {
         match step {
-            DetectStep::DeviceId => self.detected_modbus(now, identified_model(response)),
+            DetectStep::DeviceId => self.detected_modbus(now, device_identification(response)),
             DetectStep::LegacyProbe => {
                 let family = match self.core.config.protocol {
                     ProtocolChoice::Sync => Family::PowermaxSync,
@@ -439,12 +440,12 @@ impl PsLink {
     }
 }
 
-/// The model a device identification `response` names, if Table 2 knows it.
-pub(super) fn identified_model(response: &Response<'_>) -> Option<PowerSupplyModel> {
+/// The device identification a `response` carries, if it is one.
+pub(super) fn device_identification<'r>(
+    response: &'r Response<'_>,
+) -> Option<&'r DeviceIdentification<'r>> {
     match response {
-        Response::ReadDeviceIdentification(id) => {
-            device_id::model_from_device_id(id).ok().flatten()
-        }
+        Response::ReadDeviceIdentification(id) => Some(id),
         _ => None,
     }
 }

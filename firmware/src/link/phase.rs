@@ -4,7 +4,8 @@
 //! again).
 
 use plasma_protocol::hpr::SystemId;
-use plasma_protocol::powermax::{AddressingSystem, PowerSupplyModel};
+use plasma_protocol::modbus_ascii::pdu::DeviceIdentification;
+use plasma_protocol::powermax::{AddressingSystem, device_id};
 use plasma_protocol::time::Instant;
 
 use crate::link::detect::{DetectStep, Detector};
@@ -52,8 +53,9 @@ impl PsLink {
         };
     }
 
-    /// A Modbus unit answered device identification (`model` if Table 2 knows it).
-    pub(super) fn detected_modbus(&mut self, now: Instant, model: Option<PowerSupplyModel>) {
+    /// A Modbus unit answered device identification with `id`, or refused it (`None`).
+    pub(super) fn detected_modbus(&mut self, now: Instant, id: Option<&DeviceIdentification<'_>>) {
+        let model = id.and_then(|id| device_id::model_from_device_id(id).ok().flatten());
         let choice = self.core.config.protocol;
         let variant = match (choice, model.map(|m| m.addressing())) {
             (ProtocolChoice::Sync, _) => Some(Family::PowermaxSync),
@@ -62,24 +64,26 @@ impl PsLink {
             (_, Some(AddressingSystem::Legacy)) => Some(Family::PowermaxLegacy),
             (_, None) => None,
         };
-        match (variant, model) {
-            (Some(family), Some(model)) => self.link_up(now, Model::Powermax(model), family),
-            (Some(family), None) => self.link_up(now, Model::PowermaxUnidentified, family),
+        let Some(family) = variant else {
             // Unknown product code: the legacy register read decides.
-            (None, _) => self.detect_next(now, DetectStep::DeviceId),
-        }
+            return self.detect_next(now, DetectStep::DeviceId);
+        };
+        self.core.status.device_id_conformity = id.map(|id| id.conformity);
+        let model = model.map_or(Model::PowermaxUnidentified, Model::Powermax);
+        self.link_up(now, model, family);
     }
 
     /// A unit running as legacy (found by the register probe) answered device
-    /// identification with `model`. A SYNC unit changes family: pending commands fail as on a
+    /// identification with `id`. A SYNC unit changes family: pending commands fail as on a
     /// link-down (kept settings stay and are re-applied), and `LinkUp` reports the unit again
     /// with its model and family.
-    pub(super) fn reidentified(&mut self, now: Instant, model: Option<PowerSupplyModel>) {
-        let Some(model) = model else {
+    pub(super) fn reidentified(&mut self, now: Instant, id: &DeviceIdentification<'_>) {
+        let Ok(Some(model)) = device_id::model_from_device_id(id) else {
             return;
         };
         if model.addressing() != AddressingSystem::Sync {
             self.core.status.model = Some(Model::Powermax(model));
+            self.core.status.device_id_conformity = Some(id.conformity);
             return;
         }
         if let Phase::Powermax(driver) = &mut self.phase {
@@ -88,6 +92,7 @@ impl PsLink {
         // Device identification found it, not the legacy probe.
         self.known_good_asks(DetectStep::DeviceId);
         self.core.status.forget_unit();
+        self.core.status.device_id_conformity = Some(id.conformity);
         self.link_up(now, Model::Powermax(model), Family::PowermaxSync);
     }
 

@@ -11,7 +11,7 @@ use plasma_protocol::hpr::{self as hpr_wire, Reply};
 use plasma_protocol::modbus_ascii::{self, Response};
 use plasma_protocol::time::Instant;
 
-use crate::link::detect::{DetectExpect, identified_model};
+use crate::link::detect::{DetectExpect, device_identification};
 use crate::link::hpr::HprExpect;
 use crate::link::powermax::MbPurpose;
 use crate::link::powermax::modbus::{self, MbRequest};
@@ -163,7 +163,9 @@ impl PsLink {
         match tag {
             Tag::Detect(step, _) => self.modbus_probe_answered(now, step, response),
             Tag::Modbus(MbPurpose::Identify, _) => {
-                self.reidentified(now, identified_model(response));
+                if let Some(id) = device_identification(response) {
+                    self.reidentified(now, id);
+                }
             }
             Tag::Modbus(purpose, _) => {
                 if let Phase::Powermax(driver) = &mut self.phase {

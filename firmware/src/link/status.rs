@@ -160,6 +160,9 @@ pub struct UnitStatus {
     pub limits: Option<Limits>,
     /// SYNC 0x3000: torch and power-supply type.
     pub identification: Option<Identification>,
+    /// The conformity level the unit gave in its Read Device Identification reply
+    /// (0x2B/0x0E) when it identified itself; `None` when it answered none.
+    pub device_id_conformity: Option<u8>,
     /// Legacy torch-lead coils 0x0808/0x0809 (slow data); a SYNC unit has its lead in
     /// [`UnitStatus::identification`].
     pub legacy_lead: Option<LeadLength>,

@@ -507,8 +507,8 @@ fn exception(function: u8, code: ExceptionCode) -> Response<'static> {
 }
 
 /// The reply PDU to Read Device Identification, as the unit behind the bridge gives it: its
-/// Table 2 product code (object 0x01), the only object the bridge holds, with the unit's
-/// conformity level. Individual access (code 04) to object 0x01 is the guide's sample reply
+/// Table 2 product code (object 0x01), the only object the bridge holds, with the conformity
+/// level the unit gave at detection. Individual access (code 04) to object 0x01 is the guide's sample reply
 /// (next object id 0x01 as there); another object is exception 02. Stream access (codes
 /// 01-03) lists the objects from the one asked for, an object not held restarting at the
 /// first (the Modbus rule), so it is the product code in one reply (no more follows).
@@ -538,7 +538,11 @@ fn identification(
         DeviceIdCode::Specific => object_id,
         _ => 0,
     };
-    DeviceIdentification::emit_objects(code, CONFORMITY_LEVEL, false, next_object_id, &objects, out)
+    // A unit that gave no level of its own (as a legacy unit, whose guide has no 0x2B/0x0E)
+    // is answered with the level of the SYNC manual's sample (000_dd931256418ae627.txt line
+    // 587).
+    let conformity = status.device_id_conformity.unwrap_or(CONFORMITY_LEVEL);
+    DeviceIdentification::emit_objects(code, conformity, false, next_object_id, &objects, out)
         .map_err(|_| ExceptionCode::ServerDeviceFailure)
 }
 

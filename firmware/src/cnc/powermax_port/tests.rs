@@ -10,6 +10,7 @@ use proptest::prelude::*;
 use super::SETTLE;
 use crate::cnc::rig::{Rig, mb};
 use crate::settings::Settings;
+use plasma_sim::powermax::DeviceIdSupport;
 
 /// Send one Modbus frame; the reply line (without CR LF), or `None` when none came.
 fn ask(rig: &mut Rig, frame: &[u8]) -> Option<String> {
@@ -492,6 +493,31 @@ fn identification_of_legacy_units_and_none_for_an_hpr() {
         ask(&mut hpr, b":012B0E0401C1\r\n"),
         Some(line(mb(&[0xAB, 0x01])))
     );
+}
+
+/// The conformity level is the one the unit gave at detection, not the sample's 0x81 (SYNC
+/// manual (000_dd931256418ae627.txt) line 587): a unit that reports 0x83 (basic and regular
+/// identification, stream and individual access, in the Modbus reading) is answered with 0x83,
+/// the rest of the sample's reply unchanged, behind a SYNC and a legacy unit.
+#[test]
+fn identification_gives_the_conformity_level_the_unit_gave() {
+    for (model, hex) in [("sync65", "303831333335"), ("pm125", "303831323531")] {
+        let mut rig = Rig::new(Settings::default(), Some(model));
+        rig.ps().powermax().config_mut().device_id = DeviceIdSupport::Answers { conformity: 0x83 };
+        rig.run(600);
+        assert_eq!(
+            rig.bridge.status().device_id_conformity,
+            Some(0x83),
+            "{model}"
+        );
+        let mut reply = std::vec![0x2B, 0x0E, 0x04, 0x83, 0x00, 0x01, 0x01, 0x01, 0x06];
+        reply.extend(hex_bytes(hex));
+        assert_eq!(
+            ask(&mut rig, b":012B0E0401C1\r\n"),
+            Some(line(mb(&reply))),
+            "{model}"
+        );
+    }
 }
 
 #[test]

@@ -28,8 +28,12 @@ pub enum OutOfRange {
 /// How a unit treats Read Device Identification (0x2B / 0x0E).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum DeviceIdSupport {
-    /// Answers with its product code (SYNC guide Table 2).
-    Answers,
+    /// Answers with its product code (SYNC guide Table 2) and this conformity level (0x81 in
+    /// the guide's sample reply).
+    Answers {
+        /// Conformity level in the reply header.
+        conformity: u8,
+    },
     /// Refuses with exception 01.
     IllegalFunction,
     /// Does not answer at all.
@@ -115,7 +119,9 @@ impl PowermaxConfig {
             latency_jitter: Duration::ZERO,
             undocumented: UndocumentedAddresses::Accept,
             out_of_range: OutOfRange::Fault,
-            device_id: DeviceIdSupport::Answers,
+            device_id: DeviceIdSupport::Answers {
+                conformity: plasma_protocol::powermax::device_id::CONFORMITY_LEVEL,
+            },
             refused_registers: Vec::new(),
             remote_settings_apply: true,
             timings: ArcTimings::default(),

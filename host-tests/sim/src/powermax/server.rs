@@ -131,7 +131,7 @@ impl Powermax {
             Request::ReadDeviceIdentification { code, object_id } => match self.config.device_id {
                 DeviceIdSupport::Silent => None,
                 DeviceIdSupport::IllegalFunction => refuse(IllegalFunction),
-                DeviceIdSupport::Answers => {
+                DeviceIdSupport::Answers { conformity } => {
                     if code != DeviceIdCode::Specific {
                         return refuse(IllegalDataValue);
                     }
@@ -143,11 +143,10 @@ impl Powermax {
                     } else {
                         legacy::product_code(self.config.model)
                     };
-                    // Header as in the SYNC guide's example reply: conformity 0x81,
-                    // next object id 0x01.
+                    // Header as in the SYNC guide's example reply: next object id 0x01.
                     Some(Reply::DeviceIdentification {
                         code,
-                        conformity: plasma_protocol::powermax::device_id::CONFORMITY_LEVEL,
+                        conformity,
                         next_object_id: 0x01,
                         objects: vec![(0x01, product.as_bytes().to_vec())],
                     })
