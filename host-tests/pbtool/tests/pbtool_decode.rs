@@ -571,6 +571,34 @@ fn torch_lead_length_of_the_legacy_coils_and_sync_0x3000() {
         field(&reports[1], "torch lead length"),
         Some("bits 11: not a length the legacy guide lists")
     );
+    // A read that covers the two coils among others (16 coils from 0x0800, LRCs computed):
+    // 0x0808 on, 0x0809 off in the second byte's bits 0 and 1.
+    let reports = decode_frames(&[":010108000010E6", ":0101020001FB"]);
+    assert!(all_valid(&reports), "{reports:?}");
+    assert_eq!(
+        field(&reports[1], "torch lead length"),
+        Some("35-50 ft (up to 15 m)")
+    );
+    // A read that covers one of them only: no length.
+    let reports = decode_frames(&[":010108090001EC", ":01010101FC"]);
+    assert!(all_valid(&reports), "{reports:?}");
+    assert_eq!(field(&reports[1], "torch lead length"), None);
+    // The guide's reply alone (line 270): the coils are unknown, what it means if it answers
+    // the lead read is said.
+    let bare = one(":01010101FC");
+    assert!(
+        bare.notes
+            .iter()
+            .any(|n| n.contains("torch-lead read") && n.contains("35-50 ft (up to 15 m)")),
+        "{bare:?}"
+    );
+    assert_eq!(field(&bare, "torch lead length"), None);
+    // Two coil bytes cannot answer a two-coil read: no lead is suggested.
+    let bare = one(":0101020001FB");
+    assert!(
+        !bare.notes.iter().any(|n| n.contains("torch-lead read")),
+        "{bare:?}"
+    );
     // SYNC guide (000_dd931256418ae627.txt) line 607: 0x3000 = 0x0508, machine torch with a
     // 35-50 ft lead (Table 3) on a Powermax105 SYNC CSA 200-600 V (Table 4); LRCs computed.
     let reports = decode_frames(&[":010430000001CA", ":0104020508EC"]);

@@ -327,6 +327,17 @@ fn legacy_lead_length(bits: &[u8]) -> String {
     }
 }
 
+/// The two torch-lead coils (0x0808 in bit 0, 0x0809 in bit 1) out of a coil reply `bits`
+/// to a read of `quantity` coils from `start`, when the read covers both.
+fn lead_coils_of(start: u16, quantity: u16, bits: &[u8]) -> Option<u8> {
+    let offset = usize::from(legacy::TORCH_LEAD_BIT0_COIL.checked_sub(start)?);
+    if offset + 2 > usize::from(quantity) {
+        return None;
+    }
+    let bit = |i: usize| bits.get(i / 8).map(|b| b >> (i % 8) & 1);
+    Some(bit(offset)? | bit(offset + 1)? << 1)
+}
+
 fn describe_response(
     response: &Response<'_>,
     request: Option<&Request<'_>>,
@@ -344,14 +355,21 @@ fn describe_response(
                             on: Some(on),
                         });
                     }
-                    if start == legacy::TORCH_LEAD_BIT0_COIL && quantity >= 2 {
-                        report.field("torch lead length", legacy_lead_length(bits), None);
+                    if let Some(pair) = lead_coils_of(start, quantity, bits) {
+                        report.field("torch lead length", legacy_lead_length(&[pair]), None);
                     }
                 }
                 _ => {
                     let hex: Vec<String> = bits.iter().map(|b| format!("{b:02X}")).collect();
                     report.field("coil bytes (first coil in bit 0)", hex.join(" "), None);
                     report.note("coil addresses are unknown without the request: give the request frame first");
+                    // A reply to the two lead coils is one byte, the bits above them zero.
+                    if matches!(*bits, [0..=0b11]) && LeadLength::from_legacy_coils(bits).is_ok() {
+                        report.note(format!(
+                            "if this answers the legacy torch-lead read (2 coils from 0x0808), the torch lead is {}",
+                            legacy_lead_length(bits)
+                        ));
+                    }
                 }
             }
         }
