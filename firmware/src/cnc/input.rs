@@ -1,5 +1,6 @@
-//! From CNC bytes to commands in turn: text lines and Phoenix frames, ACK/NAK, the queue of
-//! lines that wait behind a command in progress.
+//! From CNC bytes to commands in turn: text lines and Phoenix messages (framed by SOH/STX, or
+//! in an unframed format 0, 1, 16 or 17), ACK/NAK, the queue of lines that wait behind a
+//! command in progress.
 
 use plasma_protocol::cnc::phoenix::{self, Deframer, Format};
 use plasma_protocol::cnc::reply::write_parse_error;
@@ -55,7 +56,29 @@ impl Session {
             self.start_frame(ctx, byte);
             return self.deframe(ctx, byte);
         }
+        if ctx.settings.phoenix_format.start_byte().is_none() {
+            // Line ends between messages are skipped, as blank lines are: the LF after the
+            // CR of the text line that set the format, a CNC's stray CR LF.
+            if byte == b'\r' || byte == b'\n' {
+                return;
+            }
+            self.start_unframed(ctx);
+            return self.deframe(ctx, byte);
+        }
         self.push_text_byte(ctx, byte);
+    }
+
+    /// Formats 0, 1, 16 and 17 open with the message itself: with one of them configured,
+    /// every input that is neither a Modbus request nor a SOH/STX frame is a message of that
+    /// format (format 1: a CR LF line; 0 and 16 end when the line goes quiet), ACKed like a
+    /// framed one. Text lines are messages then, not plain lines.
+    fn start_unframed(&mut self, ctx: &mut Context<'_>) {
+        let configured = ctx.settings.phoenix_format;
+        if self.deframer.format() != configured {
+            self.deframer = Deframer::new(configured);
+        }
+        self.raw_frame.clear();
+        self.deferred = None;
     }
 
     /// A frame begins on `start` (SOH or STX): a text line it interrupts is answered with an

@@ -10,7 +10,9 @@
 //! A byte that opens a Phoenix frame (SOH or STX, [`phoenix::is_frame_start`](plasma_protocol::cnc::phoenix::is_frame_start)) between two
 //! inputs goes to the [`Deframer`] of the configured format; everything else to the
 //! [`LineAssembler`] (CR, LF or CR LF; at most 128 characters). A text line that a frame
-//! start interrupts is dropped with an `ERR`.
+//! start interrupts is dropped with an `ERR`. With an unframed format configured (0, 1, 16 or
+//! 17, which open with the message itself) the other bytes go to that format's [`Deframer`]
+//! instead: every input is then a message, ACKed or NAKed.
 //!
 //! # One reply per command, in order
 //! Every command line (and every framed message) gets exactly one reply line: `OK ...` or

@@ -15,6 +15,8 @@ use super::{
 use crate::link::{LinkConfig, ProtocolChoice};
 
 const CNC_BAUD_WORDS: &str = "9600|19200|38400|57600|115200";
+/// Every format value the Phoenix manual lists (a test ties it to [`Format::ALL`]).
+const PHOENIX_FORMAT_WORDS: &str = "0|1|16|17|32|33|48|49|64|65|80|81|96|97|112|113";
 
 fn parse_parity(key: ConfigKey, text: &str) -> Result<Parity, SetError<'_>> {
     [Parity::None, Parity::Even, Parity::Odd]
@@ -79,8 +81,8 @@ pub enum SetError<'a> {
         /// Highest accepted.
         max: u32,
     },
-    /// A Phoenix format value that is not one of the framed formats.
-    NotFramedFormat {
+    /// A number that is not one of the Phoenix manual's format values.
+    NotPhoenixFormat {
         /// The value as typed (digits only).
         value: &'a str,
     },
@@ -91,7 +93,7 @@ impl SetError<'_> {
     pub const fn code(&self) -> ErrorCode {
         match self {
             SetError::NotANumber { .. } | SetError::BadWord { .. } => ErrorCode::Syntax,
-            SetError::OutOfRange { .. } | SetError::NotFramedFormat { .. } => ErrorCode::Range,
+            SetError::OutOfRange { .. } | SetError::NotPhoenixFormat { .. } => ErrorCode::Range,
         }
     }
 }
@@ -109,10 +111,9 @@ impl fmt::Display for SetError<'_> {
                 min,
                 max,
             } => write!(f, "{} {value} outside {min}..{max}", key.name()),
-            SetError::NotFramedFormat { value } => write!(
+            SetError::NotPhoenixFormat { value } => write!(
                 f,
-                "phoenix_format {value} is not a framed format (32 33 48 49 64 65 80 81 96 97 \
-                 112 113; without SOH or STX a message is a plain text line)"
+                "phoenix_format {value} is not a Phoenix format ({PHOENIX_FORMAT_WORDS})"
             ),
         }
     }
@@ -273,7 +274,7 @@ impl Settings {
             | ConfigKey::InterlockReady
             | ConfigKey::TransferTimeoutDropsStart
             | ConfigKey::Events => Accepted::Words(ON_OFF),
-            ConfigKey::PhoenixFormat => Accepted::Words("32|33|48|49|64|65|80|81|96|97|112|113"),
+            ConfigKey::PhoenixFormat => Accepted::Words(PHOENIX_FORMAT_WORDS),
             other => wiring::accepted(other).unwrap_or_else(|| {
                 let (min, max) = range_of(other);
                 Accepted::Range(min, max)
@@ -320,16 +321,15 @@ impl Settings {
             ConfigKey::Events => self.events = parse_on_off(key, text)?,
             ConfigKey::HprId => link.hpr_id = number(text)? as u8,
             ConfigKey::PhoenixFormat => {
-                let not_framed = SetError::NotFramedFormat { value: text };
+                let not_a_format = SetError::NotPhoenixFormat { value: text };
                 let value = number(text).map_err(|e| match e {
-                    SetError::OutOfRange { .. } => not_framed,
+                    SetError::OutOfRange { .. } => not_a_format,
                     other => other,
                 })?;
                 self.phoenix_format = u8::try_from(value)
                     .ok()
                     .and_then(|v| Format::from_value(v).ok())
-                    .filter(|f| f.start_byte().is_some())
-                    .ok_or(not_framed)?;
+                    .ok_or(not_a_format)?;
             }
             ConfigKey::CncAddress => self.cnc.address = number(text)? as u8,
             ConfigKey::CncBaud => self.cnc.framing.baud = parse_cnc_baud(key, text)?,
@@ -409,6 +409,23 @@ mod tests {
             .filter(|v| Settings::default().set(ConfigKey::PhoenixFormat, v).is_ok())
             .collect();
         assert_eq!(words(ConfigKey::PhoenixFormat), taken);
+        let all: std::vec::Vec<std::string::String> =
+            Format::ALL.iter().map(|f| f.value().to_string()).collect();
+        assert_eq!(taken, all);
+    }
+
+    /// Phoenix manual (003_610fea73110d789e.txt) line 7075: "0,1,16,17,32,33,48,49,64,
+    /// 65,80,81,96,97,112,113 are supported"; every one is a `phoenix_format`, the unframed
+    /// 0, 1, 16 and 17 included.
+    #[test]
+    fn phoenix_format_takes_every_value_the_manual_lists() {
+        let listed = "0,1,16,17,32,33,48,49,64,65,80,81,96,97,112,113";
+        for value in listed.split(',') {
+            let mut s = Settings::default();
+            assert_eq!(s.set(ConfigKey::PhoenixFormat, value), Ok(()), "{value}");
+            assert_eq!(s.get(ConfigKey::PhoenixFormat).to_string(), value);
+            assert!(s.is_valid(), "{value}");
+        }
     }
 
     #[test]
@@ -440,9 +457,10 @@ mod tests {
             text(s.set(ConfigKey::Address, "0").unwrap_err()),
             "RANGE address 0 outside 1..255"
         );
-        assert!(
-            text(s.set(ConfigKey::PhoenixFormat, "17").unwrap_err())
-                .starts_with("RANGE phoenix_format 17 is not a framed format")
+        assert_eq!(
+            text(s.set(ConfigKey::PhoenixFormat, "2").unwrap_err()),
+            "RANGE phoenix_format 2 is not a Phoenix format \
+             (0|1|16|17|32|33|48|49|64|65|80|81|96|97|112|113)"
         );
         assert!(s.set(ConfigKey::PhoenixFormat, "300").is_err());
         assert_eq!(s, before);

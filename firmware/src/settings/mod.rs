@@ -128,7 +128,7 @@ pub struct Settings {
     pub io: IoConfig,
     /// `!` event lines on the CNC port.
     pub events: bool,
-    /// How the Phoenix CNC frames serial messages (a format with SOH or STX).
+    /// How the Phoenix CNC frames serial messages (any of the manual's sixteen formats).
     pub phoenix_format: Format,
     /// The last process the unit confirmed (`None` after `REMOTE OFF`).
     pub process: Option<Process>,
@@ -230,7 +230,6 @@ impl Settings {
             && within(self.io.start_gap, START_GAP_MS)
             && within(self.io.arc_ok_debounce, ARC_OK_DEBOUNCE_MS)
             && within(self.io.transfer_timeout, TRANSFER_TIMEOUT_MS)
-            && self.phoenix_format.start_byte().is_some()
             && self.cnc.is_valid()
             && process_ok
     }

@@ -342,7 +342,6 @@ mod tests {
         assert_eq!(corrupt(13, 4), None, "HPR id 4");
         assert_eq!(corrupt(14, 0), None, "no failures before down");
         assert_eq!(corrupt(21, 0x40), None, "reserved flag");
-        assert_eq!(corrupt(22, 17), None, "unframed Phoenix format");
         assert_eq!(corrupt(22, 2), None, "no such Phoenix format");
         assert_eq!(corrupt(23, 2), None, "bad process tag");
         assert_eq!(corrupt(24, 1), None, "process bytes without a process");

@@ -61,6 +61,61 @@ fn phoenix_messages_are_acked_or_naked_then_answered() {
     assert_eq!(rig.bridge.session_stats().naks, 3);
 }
 
+/// Phoenix manual (003_610fea73110d789e.txt) lines 7204-7217: format 0 adds nothing, 1
+/// appends CR (0x0D) LF (0x0A), 16 the "Exclusive OR" check byte, 17 both (CR LF, then the
+/// check byte, line 7196: it never covers CR LF); lines 7124-7130: a type-22 message waits for
+/// ACK (0x06) and NAK (0x15) makes the CNC send it again. The bytes below are `FAULT` as each
+/// format sends it ("FAULT": F^A^U^L^T = 0x4A); the ESSI example at line 7102,
+/// `>20,1,1,0<Message`, is format 1: "Message" CR LF.
+#[test]
+fn unframed_phoenix_formats_0_1_16_17_are_acked_then_answered() {
+    let cases: [(u8, &[u8]); 4] = [
+        (0, b"FAULT"),
+        (1, b"FAULT\r\n"),
+        (16, b"FAULT\x4A"),
+        (17, b"FAULT\r\n\x4A"),
+    ];
+    for (format, wire) in cases {
+        let mut rig = Rig::sync65(Settings::default());
+        let key = std::format!("CONFIG phoenix_format {format}");
+        assert_eq!(rig.cmd(&key), std::format!("OK phoenix_format={format}"));
+        assert_eq!(framed(format, b"FAULT"), wire, "format {format}");
+        let tokens = rig.send_bytes(wire, 1);
+        assert_eq!(tokens, [ACK_TOKEN, "OK fault=none"], "format {format}");
+        // The same message with a wrong check byte (or without its CR): NAK and why.
+        let damaged: &[u8] = match format {
+            0 => b"FLY",
+            1 => b"FAULT\n",
+            16 => b"FAULT\x4B",
+            _ => b"FAULT\r\n\x4B",
+        };
+        let tokens = rig.send_bytes(damaged, 1);
+        assert_eq!(tokens[0], NAK_TOKEN, "format {format}: {tokens:?}");
+        // A framed message is still told by its SOH and taken.
+        let tokens = rig.send_bytes(&framed(113, b"FAULT"), 1);
+        assert_eq!(tokens, [ACK_TOKEN, "OK fault=none"], "format {format}");
+        // And the port's own format again after it.
+        let tokens = rig.send_bytes(wire, 1);
+        assert_eq!(tokens, [ACK_TOKEN, "OK fault=none"], "format {format}");
+        assert_eq!(rig.bridge.session_stats().acks, 3, "format {format}");
+        assert_eq!(rig.bridge.session_stats().naks, 1, "format {format}");
+    }
+}
+
+#[test]
+fn format_1_takes_a_command_as_a_message_and_a_program_can_switch_back() {
+    let mut rig = Rig::sync65(Settings::default());
+    assert_eq!(rig.cmd("CONFIG phoenix_format 1"), "OK phoenix_format=1");
+    // `>22,1<SET PROCESS CUT 45 AUTO`: ACK at once, the reply after the unit's read-back.
+    let tokens = rig.send_bytes(b"SET PROCESS CUT 45 AUTO\r\n", 1);
+    assert_eq!(tokens, [ACK_TOKEN, "OK mode=CUT amps=45 psi=AUTO"]);
+    let tokens = rig.send_bytes(b"CONFIG phoenix_format 113\r\n", 1);
+    assert_eq!(tokens, [ACK_TOKEN, "OK phoenix_format=113"]);
+    // Plain text lines again: no ACK.
+    let tokens = rig.send_bytes(b"FAULT\r\n", 1);
+    assert_eq!(tokens, ["OK fault=none"]);
+}
+
 // ---------------------------------------------------------------------------------------
 // bad input
 

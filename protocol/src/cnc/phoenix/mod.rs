@@ -19,8 +19,10 @@
 //! text line cannot start with. So a receiver that is between two inputs routes a SOH/STX byte
 //! to a [`Deframer`] and everything else to a
 //! [`LineAssembler`](crate::cnc::line::LineAssembler), see [`is_frame_start`]. Formats without
-//! SOH/STX cannot be told apart that way: format 1 (CR LF) *is* a text line, and formats 0, 16
-//! and 17 need a port of their own.
+//! SOH/STX cannot be told apart that way: format 1 (CR LF) looks like a text line, and formats
+//! 0, 16 and 17 like any bytes, so a receiver takes them only when told to expect them (the
+//! bridge's `phoenix_format`), and then reads every input that does not open with SOH/STX as
+//! a message of that format.
 //!
 //! # Which message to ACK
 //! The message type (20, 21, 22) is in the part program, not on the wire: a type-22 message
