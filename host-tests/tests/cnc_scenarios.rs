@@ -1439,3 +1439,104 @@ fn a_manual_gas_console_hpr_gets_no_setting_its_console_does_not_take() {
         );
     }
 }
+
+// --- the unit's power cycle or a pulled cable ------------------------------------------------
+
+/// A unit with a setting the CNC made, events on, in remote control.
+fn remote_unit(model: Model, setting: &str) -> World<host_tests::harness::BridgeEndpoint> {
+    let mut w = if model.family() == plasma_sim::Family::Hpr {
+        ready_hpr(model)
+    } else {
+        bridge_world(model)
+    };
+    assert_eq!(w.cnc_line("EVENTS ON"), "OK events=ON");
+    let reply = w.cnc_line(setting);
+    assert!(reply.starts_with("OK "), "{model:?} {setting}: {reply}");
+    assert!(w.bridge().status().remote, "{model:?}");
+    w
+}
+
+/// Events that arrived after the first `mark` lines.
+fn events_since(w: &World<host_tests::harness::BridgeEndpoint>, mark: usize) -> Vec<String> {
+    w.cnc_lines()
+        .skip(mark)
+        .filter(|l| l.starts_with('!'))
+        .map(str::to_string)
+        .collect()
+}
+
+const SETTINGS_BY_FAMILY: [(Model, &str); 3] = [
+    (Model::Sync65, "SET PROCESS CUT 45 AUTO"),
+    (Model::Pm65, "SET PROCESS CUT 45 AUTO"),
+    (Model::Hpr130, "SET AMPS 100"),
+];
+
+/// A pulled cable is a lost link: the unit kept remote control and the bridge applies the
+/// kept settings again when it answers, without a power-cycle event.
+#[test]
+fn after_a_pulled_cable_the_kept_settings_are_applied_again() {
+    for (model, setting) in SETTINGS_BY_FAMILY {
+        let mut w = remote_unit(model, setting);
+        w.pull_cable(true);
+        w.wait_cnc_line("!LINK DOWN", Duration::from_secs(5))
+            .unwrap_or_else(|t| panic!("{model:?}: {t}"));
+        let mark = w.cnc_lines().count();
+        w.pull_cable(false);
+        w.wait_cnc_line("!REMOTE ON", Duration::from_secs(10))
+            .unwrap_or_else(|t| panic!("{model:?}: not re-applied: {t}"));
+        let events = events_since(&w, mark);
+        assert!(
+            !events.iter().any(|e| e.starts_with("!UNIT POWER_CYCLED")),
+            "{model:?}: {events:?}"
+        );
+        w.assert_safe();
+    }
+}
+
+/// SYNC manual (000_dd931256418ae627.txt) line 1189: "You can also stop remote control mode by
+/// setting the power switch on the plasma power supply to the OFF (O) position and waiting
+/// approximately 1 minute." After that the bridge leaves the unit in local control, says so,
+/// and takes it back only when the CNC sets a process again (or when configured to).
+#[test]
+fn after_the_units_own_power_cycle_it_stays_local_until_the_cnc_asks_again() {
+    for (model, setting) in SETTINGS_BY_FAMILY {
+        let mut w = remote_unit(model, setting);
+        w.power_off();
+        w.run_for(Duration::from_secs(60));
+        assert!(!w.bridge().status().link_up, "{model:?}");
+        let mark = w.cnc_lines().count();
+        w.power_on();
+        w.wait_cnc_line("!UNIT POWER_CYCLED reapply=OFF", Duration::from_secs(10))
+            .unwrap_or_else(|t| panic!("{model:?}: {t}"));
+        w.run_for(Duration::from_secs(10));
+        assert!(!w.bridge().status().remote, "{model:?}: taken back");
+        assert_eq!(w.bridge().settings().process, None, "{model:?}: not kept");
+        let events = events_since(&w, mark);
+        assert!(
+            !events.iter().any(|e| e.starts_with("!REMOTE ON")),
+            "{model:?}: {events:?}"
+        );
+        // The CNC asks again: remote control again.
+        if model.family() == plasma_sim::Family::Hpr {
+            w.run_until(|w| w.bridge().status().ready, Duration::from_secs(10))
+                .expect("the unit becomes ready");
+        }
+        let reply = w.cnc_line(setting);
+        assert!(reply.starts_with("OK "), "{model:?}: {reply}");
+        assert!(w.bridge().status().remote, "{model:?}");
+        // Configured to: the next power cycle gets the settings again.
+        assert_eq!(
+            w.cnc_line("CONFIG reapply_after_power_cycle ON"),
+            "OK reapply_after_power_cycle=ON"
+        );
+        assert!(w.bridge().status().link_up, "no detection for the policy");
+        w.power_off();
+        w.run_for(Duration::from_secs(60));
+        w.power_on();
+        w.wait_cnc_line("!UNIT POWER_CYCLED reapply=ON", Duration::from_secs(10))
+            .unwrap_or_else(|t| panic!("{model:?}: {t}"));
+        w.wait_cnc_line("!REMOTE ON", Duration::from_secs(30))
+            .unwrap_or_else(|t| panic!("{model:?}: not re-applied: {t}"));
+        w.assert_safe();
+    }
+}

@@ -203,8 +203,8 @@ impl Session {
         if let Err(e) = ctx.settings.set(key, value) {
             return err_line(e.code(), e);
         }
-        let relink = before.link != ctx.settings.link;
-        if relink {
+        let relink = before.link.needs_redetect(&ctx.settings.link);
+        if before.link != ctx.settings.link {
             ctx.link.reconfigure(ctx.now, ctx.settings.link);
         }
         if before.io != ctx.settings.io {

@@ -35,6 +35,10 @@ impl Session {
             }
             return;
         }
+        // The kept process is forgotten: so is its persisted copy (`CONFIG SAVE` stores none).
+        if let LinkEvent::UnitPowerCycled { reapply: false } = event {
+            ctx.settings.process = None;
+        }
         let status = ctx.link.status();
         self.event(ctx, |l| write_link_event(l, event, status));
     }
@@ -151,6 +155,12 @@ fn write_link_event(l: &mut ReplyLine, event: &LinkEvent, status: &UnitStatus) -
             w.finish().map(|_| ())
         }
         LinkEvent::StateChanged { from, to } => write_state_changed(l, from, to, family),
+        LinkEvent::UnitPowerCycled { reapply } => {
+            let mut w = ReplyWriter::event(l, "UNIT")?;
+            w.word("POWER_CYCLED")?;
+            w.field("reapply", on_off(reapply))?;
+            w.finish().map(|_| ())
+        }
         LinkEvent::RemoteModeChanged { remote } => {
             let mut w = ReplyWriter::event(l, "REMOTE")?;
             w.word(on_off(remote))?;

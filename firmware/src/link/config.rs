@@ -59,9 +59,24 @@ pub struct LinkConfig {
     /// [`UNANSWERED_FACTOR`](super::UNANSWERED_FACTOR) times as many failures in a row
     /// without one valid reply take the link down.
     pub failures_before_down: u8,
+    /// After the unit's own power cycle (it answers again without the settings the bridge
+    /// gave it, see `kept`), apply the kept settings again anyway (default off: switching the
+    /// unit off is how an operator takes it back from remote control, and the CNC asks again
+    /// when it wants it). After a lost link they are always re-applied.
+    pub reapply_after_power_cycle: bool,
 }
 
 impl LinkConfig {
+    /// True when going from `self` to `other` needs detection to start again: any change
+    /// but the re-apply policy, which applies from the next decision on.
+    pub fn needs_redetect(&self, other: &LinkConfig) -> bool {
+        let same_policy = LinkConfig {
+            reapply_after_power_cycle: other.reapply_after_power_cycle,
+            ..*self
+        };
+        same_policy != *other
+    }
+
     /// Lowest node address accepted (0 is the units' own "learn the address" setting).
     pub const MIN_NODE_ADDRESS: u8 = 1;
     /// Shortest response time-out accepted.
@@ -181,6 +196,7 @@ impl Default for LinkConfig {
             slow_data_interval: Duration::from_secs(30),
             hpr_id: 0,
             failures_before_down: 3,
+            reapply_after_power_cycle: false,
         }
     }
 }

@@ -148,6 +148,14 @@ pub enum LinkEvent {
         /// New state.
         to: StateCode,
     },
+    /// The unit answered again without the settings the bridge gave it: it was switched off
+    /// and on (see `kept`'s "Power cycle or lost link"), and left remote control.
+    UnitPowerCycled {
+        /// True when the kept settings are applied again
+        /// ([`LinkConfig::reapply_after_power_cycle`](crate::link::LinkConfig)); otherwise they
+        /// are forgotten until the CNC sets them again.
+        reapply: bool,
+    },
     /// The unit entered or left remote control.
     RemoteModeChanged {
         /// True in remote control.

@@ -14,13 +14,60 @@
 //!   first. It is one attempt, like a command: a process outside the unit's limits is
 //!   reported ([`LinkEvent::RestoreRefused`]) and dropped, not tried again.
 //!
+//!
+//! # Power cycle or lost link
+//! Switching a Powermax off and waiting about a minute is how an operator takes it back from
+//! remote control (SYNC manual, "Exit remote control mode"), so the bridge must not take it
+//! again on its own after the unit's power cycle; after a lost link (a cable pulled, noise)
+//! it re-applies as before. The wire shows the two the same way (silence, then answers), so
+//! the unit's first answers after it returns decide:
+//! - a Powermax (SYNC or legacy) whose settings (0x3010-0x3012; the legacy force registers
+//!   0x2093-0x2096, which read 0 outside remote control) still show the kept ones kept
+//!   remote control: the link was lost. Other settings: it was switched off and on (a
+//!   Powermax powers up in local control, on its front-panel settings).
+//! - an HPR / MaxPro200 in a power-up state (0, MaxPro200 0 and 1) or purging (2, what it
+//!   does after power-up), or with another current set point than the kept one, restarted;
+//!   one in any other state with the kept set point kept running: the link was lost.
+//!
+//! The same signs while the link stays up (a power blip shorter than a link-down) count as a
+//! power cycle too. Then [`LinkEvent::UnitPowerCycled`] tells the CNC, and the kept settings
+//! are forgotten (the CNC sets them again when it wants remote control back) unless
+//! [`LinkConfig::reapply_after_power_cycle`] is on.
+//!
+//! Limits: a unit whose front-panel settings happen to equal the kept ones (or an HPR back in
+//! state 3 with the same set point) looks like a lost link, and is re-applied; a legacy unit
+//! that refuses to read its force registers cannot tell, and is re-applied as after a lost
+//! link.
+//!
 //! [`PsLink::restore`]: crate::link::PsLink::restore
 //! [`LinkEvent::RestoreRefused`]: crate::link::LinkEvent::RestoreRefused
+//! [`LinkEvent::UnitPowerCycled`]: crate::link::LinkEvent::UnitPowerCycled
+//! [`LinkConfig::reapply_after_power_cycle`]: crate::link::LinkConfig::reapply_after_power_cycle
 
 use plasma_protocol::hpr::Request;
 
+use crate::link::core::Core;
+use crate::link::event::LinkEvent;
 use crate::link::hpr::kept::HprKept;
 use crate::link::status::PowermaxProcess;
+
+/// The unit answered again without the settings the bridge gave it (see "Power cycle or
+/// lost link"): it is no longer in remote control, the CNC is told, and the kept settings
+/// are forgotten unless the configuration says to re-apply them. Returns true when they are
+/// to be re-applied.
+pub(crate) fn unit_power_cycled(core: &mut Core) -> bool {
+    if core.status.remote {
+        core.status.remote = false;
+        core.emit(LinkEvent::RemoteModeChanged { remote: false });
+    }
+    let reapply = core.config.reapply_after_power_cycle;
+    core.emit(LinkEvent::UnitPowerCycled { reapply });
+    if !reapply {
+        core.kept.forget_powermax();
+        core.kept.hpr.clear();
+    }
+    reapply
+}
 
 /// The settings the link re-applies. See the module docs.
 #[derive(Debug, Clone, Default, PartialEq, Eq)]

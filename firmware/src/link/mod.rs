@@ -346,8 +346,14 @@ impl PsLink {
     /// Use another configuration: whatever is in progress is abandoned (pending commands fail
     /// with [`CommandFailure::LinkDown`], a link that was up reports
     /// [`LinkDownReason::Reconfigured`]) and detection starts again. Kept settings stay.
+    /// A change of [`LinkConfig::reapply_after_power_cycle`] alone is taken as it is, without
+    /// detection ([`LinkConfig::needs_redetect`]).
     pub fn reconfigure(&mut self, now: Instant, config: LinkConfig) {
         self.now = now;
+        if config != self.core.config && !self.core.config.needs_redetect(&config) {
+            self.core.config = config;
+            return;
+        }
         let was_up = self.abort_unit();
         let config = config.clamped();
         let old = self.core.config;

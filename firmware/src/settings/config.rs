@@ -242,6 +242,7 @@ impl Settings {
             ConfigKey::TimeoutMs => ConfigValue::Number(ms(link.response_timeout)),
             ConfigKey::Retries => ConfigValue::Number(u32::from(link.retries)),
             ConfigKey::PollMs => ConfigValue::Number(ms(link.poll_interval)),
+            ConfigKey::ReapplyAfterPowerCycle => on_off(link.reapply_after_power_cycle),
             ConfigKey::InterlockFault => on_off(io.refuse_start_on_fault),
             ConfigKey::InterlockLink => on_off(io.link_required),
             ConfigKey::InterlockReady => on_off(io.ready_required),
@@ -273,6 +274,7 @@ impl Settings {
             | ConfigKey::InterlockLink
             | ConfigKey::InterlockReady
             | ConfigKey::TransferTimeoutDropsStart
+            | ConfigKey::ReapplyAfterPowerCycle
             | ConfigKey::Events => Accepted::Words(ON_OFF),
             ConfigKey::PhoenixFormat => Accepted::Words(PHOENIX_FORMAT_WORDS),
             other => wiring::accepted(other).unwrap_or_else(|| {
@@ -310,6 +312,9 @@ impl Settings {
             ConfigKey::TimeoutMs => link.response_timeout = millis(text)?,
             ConfigKey::Retries => link.retries = number(text)? as u8,
             ConfigKey::PollMs => link.poll_interval = millis(text)?,
+            ConfigKey::ReapplyAfterPowerCycle => {
+                link.reapply_after_power_cycle = parse_on_off(key, text)?;
+            }
             ConfigKey::InterlockFault => io.refuse_start_on_fault = parse_on_off(key, text)?,
             ConfigKey::InterlockLink => io.link_required = parse_on_off(key, text)?,
             ConfigKey::InterlockReady => io.ready_required = parse_on_off(key, text)?,

@@ -35,7 +35,8 @@ const FLAG_EVENTS: u8 = 1 << 4;
 /// Set when the ready interlock is off: a record saved before the interlock existed has the
 /// bit clear and loads with it on, the default.
 const FLAG_READY_NOT_REQUIRED: u8 = 1 << 5;
-const FLAGS_KNOWN: u8 = 0x3F;
+const FLAG_REAPPLY_AFTER_POWER_CYCLE: u8 = 1 << 6;
+const FLAGS_KNOWN: u8 = 0x7F;
 
 const PROTOCOLS: [ProtocolChoice; 4] = [
     ProtocolChoice::Auto,
@@ -122,7 +123,11 @@ impl storage::Persistent for Settings {
             | flag(io.refuse_start_on_fault, FLAG_REFUSE_START_ON_FAULT)
             | flag(io.link_required, FLAG_LINK_REQUIRED)
             | flag(self.events, FLAG_EVENTS)
-            | flag(!io.ready_required, FLAG_READY_NOT_REQUIRED);
+            | flag(!io.ready_required, FLAG_READY_NOT_REQUIRED)
+            | flag(
+                link.reapply_after_power_cycle,
+                FLAG_REAPPLY_AFTER_POWER_CYCLE,
+            );
         r[22] = self.phoenix_format.value();
         if let Some(process) = self.process {
             r[23] = 1;
@@ -192,6 +197,7 @@ fn decode_v1(payload: &[u8]) -> Option<Settings> {
         ]))),
         hpr_id: r[13],
         failures_before_down: r[14],
+        reapply_after_power_cycle: flags & FLAG_REAPPLY_AFTER_POWER_CYCLE != 0,
     };
     let io = IoConfig {
         start_gap: millis(15).max(MIN_START_GAP),
@@ -341,7 +347,7 @@ mod tests {
         assert_eq!(corrupt(6, 6), None, "six retries");
         assert_eq!(corrupt(13, 4), None, "HPR id 4");
         assert_eq!(corrupt(14, 0), None, "no failures before down");
-        assert_eq!(corrupt(21, 0x40), None, "reserved flag");
+        assert_eq!(corrupt(21, 0x80), None, "reserved flag");
         assert_eq!(corrupt(22, 2), None, "no such Phoenix format");
         assert_eq!(corrupt(23, 2), None, "bad process tag");
         assert_eq!(corrupt(24, 1), None, "process bytes without a process");

@@ -400,6 +400,15 @@ impl<E: WorldEndpoint> World<E> {
         self.process();
     }
 
+    /// Pull the unit's serial cable now (`true`) or plug it back: the unit stays powered and
+    /// keeps its state (remote control, settings), it only neither hears nor is heard. Unlike
+    /// [`World::power_off`], which the unit forgets its state through.
+    pub fn pull_cable(&mut self, pulled: bool) {
+        let now = self.now;
+        self.line.set_unit_powered(now, !pulled);
+        self.process();
+    }
+
     /// Electrical noise on the line from now on (independent of the unit's own bursts).
     pub fn add_noise(&mut self, length: Duration) {
         let now = self.now;

@@ -176,6 +176,7 @@ pub enum ConfigKey {
     TimeoutMs,
     Retries,
     PollMs,
+    ReapplyAfterPowerCycle,
     InterlockFault,
     InterlockLink,
     InterlockReady,
@@ -211,7 +212,7 @@ pub enum ConfigKey {
 
 impl ConfigKey {
     /// Every key, in the order `CONFIG` lists them.
-    pub const ALL: [ConfigKey; 36] = [
+    pub const ALL: [ConfigKey; 37] = [
         ConfigKey::Protocol,
         ConfigKey::Address,
         ConfigKey::Parity,
@@ -219,6 +220,7 @@ impl ConfigKey {
         ConfigKey::TimeoutMs,
         ConfigKey::Retries,
         ConfigKey::PollMs,
+        ConfigKey::ReapplyAfterPowerCycle,
         ConfigKey::InterlockFault,
         ConfigKey::InterlockLink,
         ConfigKey::InterlockReady,
@@ -260,6 +262,7 @@ impl ConfigKey {
             ConfigKey::TimeoutMs => "timeout_ms",
             ConfigKey::Retries => "retries",
             ConfigKey::PollMs => "poll_ms",
+            ConfigKey::ReapplyAfterPowerCycle => "reapply_after_power_cycle",
             ConfigKey::InterlockFault => "interlock_fault",
             ConfigKey::InterlockLink => "interlock_link",
             ConfigKey::InterlockReady => "interlock_ready",

@@ -418,7 +418,8 @@ fn config_get_set_and_save_round_trip_through_the_settings_record() {
     assert_eq!(
         rig.cmd("CONFIG"),
         "OK protocol=AUTO address=1 parity=EVEN stop_bits=1 timeout_ms=100 retries=2 \
-         poll_ms=100 interlock_fault=ON interlock_link=ON interlock_ready=ON \
+         poll_ms=100 reapply_after_power_cycle=OFF interlock_fault=ON interlock_link=ON \
+         interlock_ready=ON \
          arc_ok_debounce_ms=2 transfer_timeout_ms=3000 transfer_timeout_drops_start=ON \
          events=OFF hpr_id=0 phoenix_format=113 torch_on_active=LOW torch_on_debounce_ms=1 \
          hold_active=LOW \
@@ -454,6 +455,15 @@ fn config_get_set_and_save_round_trip_through_the_settings_record() {
         Some(Duration::from_millis(5))
     );
     assert_eq!(rig.cmd("CONFIG events on"), "OK events=ON");
+    // The re-apply policy is a link key that needs no detection.
+    rig.run(2000);
+    assert!(rig.bridge.status().link_up);
+    assert_eq!(
+        rig.cmd("CONFIG reapply_after_power_cycle on"),
+        "OK reapply_after_power_cycle=ON"
+    );
+    assert!(rig.bridge.status().link_up, "no detection for the policy");
+    assert!(rig.bridge.link().config().reapply_after_power_cycle);
     // SAVE waits for the store; a line sent meanwhile waits behind it.
     rig.save_result = None;
     let tokens = rig.send_bytes(b"CONFIG SAVE\r\nCONFIG hpr_id\r\n", 0);
@@ -475,6 +485,10 @@ fn config_get_set_and_save_round_trip_through_the_settings_record() {
     let mut rig = Rig::new(restored, Some("sync65"));
     assert_eq!(rig.cmd("CONFIG timeout_ms"), "OK timeout_ms=80");
     assert_eq!(rig.cmd("CONFIG events"), "OK events=ON");
+    assert_eq!(
+        rig.cmd("CONFIG reapply_after_power_cycle"),
+        "OK reapply_after_power_cycle=ON"
+    );
 }
 
 // ---------------------------------------------------------------------------------------

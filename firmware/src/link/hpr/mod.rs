@@ -127,6 +127,9 @@ pub(crate) struct HprDriver {
     /// Kept settings must be re-applied (from `reapply_not_before`, in state 2 or 3).
     reapply_pending: bool,
     reapply_not_before: Instant,
+    /// The unit answered again with settings kept: its first poll tells a power cycle from a
+    /// lost link before they are re-applied (see `kept`).
+    returned: bool,
     /// The last transaction started was a poll (the next turn goes to due slow data).
     polled_last: bool,
     /// The poll's 028 READ_PLASMA_AMPS is still to send (HPR with the arc on only).
@@ -186,8 +189,9 @@ impl HprDriver {
             queue: Deque::new(),
             active: None,
             reapply: Deque::new(),
-            reapply_pending: !core.kept.hpr.is_empty(),
+            reapply_pending: false,
             reapply_not_before: now,
+            returned: !core.kept.hpr.is_empty(),
             polled_last: false,
             amps_due: false,
             now,

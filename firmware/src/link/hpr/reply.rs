@@ -12,20 +12,46 @@ use super::{
 };
 use crate::link::core::Core;
 use crate::link::event::{CommandFailure, CommandOutput, LinkEvent, ProcessFailure};
+use crate::link::kept::unit_power_cycled;
 use crate::link::status::ActiveFault;
 use crate::link::transaction::TransactionError;
 
+/// State 2, GAS PURGE (MaxPro200) / PURGE (HPR): after power-up, before ready.
+const PURGE: u16 = 2;
+
 impl HprDriver {
     /// The unit lost its settings or restarted (state back to power-up, or a set point
-    /// other than the kept one): remote mode must be entered again and the kept settings
-    /// re-applied.
+    /// other than the kept one): it left remote mode on its own, a power cycle (see `kept`);
+    /// the kept settings are re-applied (after 004 again) only when configured so.
     fn settings_lost(&mut self, now: Instant, core: &mut Core) {
         core.status.hpr.remote_accepted = false;
-        if core.status.remote {
-            core.status.remote = false;
-            core.emit(LinkEvent::RemoteModeChanged { remote: false });
+        if core.kept.hpr.is_empty() || !self.reapply.is_empty() {
+            if core.status.remote {
+                core.status.remote = false;
+                core.emit(LinkEvent::RemoteModeChanged { remote: false });
+            }
+            return;
         }
-        if !core.kept.hpr.is_empty() && self.reapply.is_empty() {
+        if unit_power_cycled(core) {
+            self.reapply_pending = true;
+            self.reapply_not_before = now;
+        }
+    }
+
+    /// The first poll after the unit answered again with settings kept: powering up,
+    /// purging (what it does after power-up) or on another set point, it was switched off
+    /// and on; otherwise the link was lost and the kept settings are re-applied.
+    fn first_poll_after_return(
+        &mut self,
+        now: Instant,
+        state: StateCode,
+        setpoint: u16,
+        core: &mut Core,
+    ) {
+        let restarted = is_power_up(self.maxpro(), state)
+            || state.0 == PURGE
+            || core.kept.hpr.amps().is_some_and(|kept| kept != setpoint);
+        if !restarted || unit_power_cycled(core) {
             self.reapply_pending = true;
             self.reapply_not_before = now;
         }
@@ -131,7 +157,11 @@ impl HprDriver {
         core.status.hpr.nominal_amps = Some(setpoint);
         self.update_state(now, state, core);
         self.update_error(error, core);
-        self.check_setpoint(now, setpoint, core);
+        if core::mem::take(&mut self.returned) {
+            self.first_poll_after_return(now, state, setpoint, core);
+        } else {
+            self.check_setpoint(now, setpoint, core);
+        }
     }
 
     /// 004 REMOTE_MODE answered: remote mode is on, or the job that needed it fails.

@@ -282,8 +282,18 @@ fn ps_info_at(state: u16, amps: u16) -> Vec<u8> {
     )
 }
 
+/// `reapply_after_power_cycle` on, changed without detection starting again.
+fn reapply_after_power_cycle(bench: &mut Bench) {
+    let config = LinkConfig {
+        reapply_after_power_cycle: true,
+        ..*bench.link.config()
+    };
+    bench.link.reconfigure(bench.now, config);
+    assert!(bench.link.status().link_up, "no detection for the policy");
+}
+
 #[test]
-fn an_hpr_back_in_its_power_up_state_gets_remote_mode_and_its_settings_again() {
+fn an_hpr_back_in_its_power_up_state_was_power_cycled_and_keeps_local_control() {
     let mut bench = hpr_at_100_a();
     // A blip: the next poll finds the unit powering up, at its rated current.
     assert_eq!(
@@ -292,11 +302,33 @@ fn an_hpr_back_in_its_power_up_state_gets_remote_mode_and_its_settings_again() {
     );
     bench.rx(2, &ps_info_at(0, 130));
     assert!(!bench.link.status().hpr.remote_accepted);
-    assert!(
-        bench
-            .events()
-            .contains(&LinkEvent::RemoteModeChanged { remote: false })
+    let events = bench.events();
+    assert!(events.contains(&LinkEvent::RemoteModeChanged { remote: false }));
+    assert!(events.contains(&LinkEvent::UnitPowerCycled { reapply: false }));
+    assert!(bench.link.kept().hpr_requests().is_empty());
+    // Ready again: polls only, no 004, no 058 until the CNC asks.
+    for _ in 0..3 {
+        assert_eq!(
+            bench.next_tx(bench.now + Duration::from_secs(1)).unwrap(),
+            b">079A0<"
+        );
+        bench.rx(2, &ps_info_at(3, 130));
+    }
+}
+
+#[test]
+fn an_hpr_back_in_its_power_up_state_gets_its_settings_again_when_configured() {
+    let mut bench = hpr_at_100_a();
+    reapply_after_power_cycle(&mut bench);
+    assert_eq!(
+        bench.next_tx(bench.now + Duration::from_secs(1)).unwrap(),
+        b">079A0<"
     );
+    bench.rx(2, &ps_info_at(0, 130));
+    assert!(!bench.link.status().hpr.remote_accepted);
+    let events = bench.events();
+    assert!(events.contains(&LinkEvent::RemoteModeChanged { remote: false }));
+    assert!(events.contains(&LinkEvent::UnitPowerCycled { reapply: true }));
     // Nothing is re-applied before the unit is in state 2 or 3.
     assert_eq!(
         bench.next_tx(bench.now + Duration::from_secs(1)).unwrap(),
@@ -315,9 +347,22 @@ fn an_hpr_back_in_its_power_up_state_gets_remote_mode_and_its_settings_again() {
 }
 
 #[test]
-fn an_hpr_set_point_other_than_the_kept_one_is_set_again() {
+fn an_hpr_set_point_other_than_the_kept_one_counts_as_a_power_cycle() {
     let mut bench = hpr_at_100_a();
     // The state never showed the restart, but the set point did.
+    bench.next_tx(bench.now + Duration::from_secs(1)).unwrap();
+    bench.rx(2, &ps_info_at(3, 130));
+    assert!(
+        bench
+            .events()
+            .contains(&LinkEvent::UnitPowerCycled { reapply: false })
+    );
+    assert_eq!(
+        bench.next_tx(bench.now + Duration::from_secs(1)).unwrap(),
+        b">079A0<"
+    );
+    let mut bench = hpr_at_100_a();
+    reapply_after_power_cycle(&mut bench);
     bench.next_tx(bench.now + Duration::from_secs(1)).unwrap();
     bench.rx(2, &ps_info_at(3, 130));
     assert_eq!(

@@ -23,6 +23,7 @@ use plasma_protocol::powermax::device_id;
 use crate::link::config::ProtocolChoice;
 use crate::link::core::Core;
 use crate::link::event::Ticket;
+use crate::link::kept::Reapply;
 use crate::link::slow::SlowData;
 use crate::link::status::{Family, Model};
 use modbus::{BlockPart, BlockPoller, MbRequest};
@@ -123,6 +124,9 @@ pub(crate) struct PowermaxDriver {
     active: Option<Active>,
     reapply_pending: bool,
     reapply_not_before: Instant,
+    /// The unit answered again with settings kept: its first poll tells a power cycle from a
+    /// lost link before they are re-applied (see `kept`).
+    returned: bool,
     blackout_until: Option<Instant>,
     /// The unit refused device identification (an exception): it is not asked again.
     identify_refused: bool,
@@ -137,7 +141,7 @@ pub(crate) struct PowermaxDriver {
 
 impl PowermaxDriver {
     /// A driver for a unit just detected; slow data is read first, and kept settings are
-    /// re-applied (the link returned).
+    /// re-applied once the first poll shows the link was lost, not the unit switched off.
     pub(crate) fn new(variant: Variant, now: Instant, core: &Core) -> Self {
         let plan = match variant {
             Variant::Sync => sync::POLL_PLAN,
@@ -160,8 +164,9 @@ impl PowermaxDriver {
             next_uid_check_at: now + UID_CHECK_INTERVAL,
             queue: Deque::new(),
             active: None,
-            reapply_pending: core.kept.powermax_due().is_some(),
+            reapply_pending: matches!(core.kept.powermax_due(), Some(Reapply::Restore(_))),
             reapply_not_before: now,
+            returned: matches!(core.kept.powermax_due(), Some(Reapply::Kept(_))),
             blackout_until: None,
             identify_refused: false,
             turns: [Turn::Status, Turn::Command, Turn::Other],

@@ -1,6 +1,6 @@
 //! The settings the CNC asked for: checked against the permitted limits, written and read
-//! back, kept, and re-applied when the unit lost them (power cycle, link return, a change at
-//! the unit).
+//! back, kept, and re-applied when the link returns (after the unit's own power cycle only
+//! when configured, see `kept`).
 
 use plasma_protocol::modbus_ascii::Response;
 use plasma_protocol::powermax::{Amps, FaultCode, OperatingMode, Pressure, Psi};
@@ -10,7 +10,7 @@ use super::{Active, Job, PowermaxDriver, REAPPLY_BACKOFF, Variant};
 use crate::link::command::Refusal;
 use crate::link::core::Core;
 use crate::link::event::{CommandFailure, CommandOutput, LinkEvent, ProcessFailure};
-use crate::link::kept::Reapply;
+use crate::link::kept::{Reapply, unit_power_cycled};
 use crate::link::powermax::legacy;
 use crate::link::powermax::modbus::{MbRequest, read_values};
 use crate::link::powermax::sync;
@@ -45,15 +45,20 @@ impl DesiredProcess {
         })
     }
 
-    /// True when `read` shows these settings (automatic pressure reads back as whatever the
-    /// unit chose).
+    /// True when `read` shows these settings.
     fn matches(&self, read: &PowermaxProcess) -> bool {
-        let pressure_ok = match self.pressure {
-            Pressure::Auto => true,
-            Pressure::Set(_) => read.pressure == self.pressure,
-        };
-        read.mode == Some(self.mode) && read.current == self.current && pressure_ok
+        shows(&self.as_process(), read)
     }
+}
+
+/// True when the settings `read` show `kept` (automatic pressure reads back as whatever the
+/// unit chose).
+fn shows(kept: &PowermaxProcess, read: &PowermaxProcess) -> bool {
+    let pressure_ok = match kept.pressure {
+        Pressure::Auto => true,
+        Pressure::Set(_) => read.pressure == kept.pressure,
+    };
+    kept.mode.is_some() && read.mode == kept.mode && read.current == kept.current && pressure_ok
 }
 
 /// Check settings against the permitted limits (nothing is sent when this fails).
@@ -133,24 +138,34 @@ impl PowermaxDriver {
         }
     }
 
-    /// Settings differ from the kept ones while the bridge holds remote control: the unit
-    /// was power-cycled (or someone took over); re-apply.
-    pub(super) fn check_revert(&mut self, now: Instant, read: &PowermaxProcess, core: &mut Core) {
-        if self.active.is_some() || self.reapply_pending || !core.status.remote {
+    /// A poll read the unit's settings (`None`: a legacy unit that does not let its force
+    /// registers be read). After the link returned, and while the bridge holds remote
+    /// control, they are compared with the kept ones (see `kept`, "Power cycle or lost
+    /// link"): the kept ones after a return, the link was lost, and they are re-applied;
+    /// others, the unit was switched off and on.
+    pub(super) fn check_revert(
+        &mut self,
+        now: Instant,
+        read: Option<&PowermaxProcess>,
+        core: &mut Core,
+    ) {
+        if self.active.is_some() || self.reapply_pending {
             return;
         }
-        let Some(desired) = core.kept.powermax() else {
+        let returned = core::mem::take(&mut self.returned);
+        let Some(kept) = core.kept.powermax() else {
             return;
         };
-        let Some(limits) = core.status.limits else {
-            return;
+        // Unreadable settings cannot tell: as after a lost link.
+        let kept_shown = read.is_none_or(|read| shows(&kept, read));
+        let reapply = if kept_shown {
+            returned
+        } else if returned || core.status.remote {
+            unit_power_cycled(core)
+        } else {
+            false
         };
-        let Some(desired) = DesiredProcess::from_process(&desired, &limits) else {
-            return;
-        };
-        if !desired.matches(read) {
-            core.status.remote = false;
-            core.emit(LinkEvent::RemoteModeChanged { remote: false });
+        if reapply {
             self.reapply_pending = true;
             self.reapply_not_before = now;
         }
@@ -189,6 +204,8 @@ impl PowermaxDriver {
         };
         match verdict {
             Ok(read_back) => {
+                // What the unit shows now is what the CNC set: nothing left to tell apart.
+                self.returned = false;
                 core.kept.confirmed(desired.as_process());
                 core.status.settings = Some(read_back);
                 if !core.status.remote {

@@ -141,7 +141,7 @@ impl PowermaxDriver {
                 core.status.actual_current = Some(data.actual_current);
                 core.status.actual_pressure = Some(data.actual_pressure);
                 self.update_fault(now, data.fault, core);
-                self.check_revert(now, &data.settings, core);
+                self.check_revert(now, Some(&data.settings), core);
             }
             Variant::Legacy => {
                 let Some(data) = legacy::decode_poll(&self.poll) else {
@@ -152,8 +152,8 @@ impl PowermaxDriver {
                 self.update_fault(now, data.fault, core);
                 if let Some(settings) = data.settings {
                     core.status.settings = Some(settings);
-                    self.check_revert(now, &settings, core);
                 }
+                self.check_revert(now, data.settings.as_ref(), core);
             }
         }
     }

@@ -174,9 +174,16 @@ fn exit_remote_writes_zeros_to_all_three_registers() {
     assert_eq!(write, b":0110308000030600000000000036\r\n");
 }
 
-#[test]
-fn kept_settings_are_reapplied_when_the_unit_reverts_after_a_power_cycle() {
-    let mut bench = sync_bench();
+/// A SYNC unit at 63 A cut, in remote control, its events taken.
+fn sync_at_63_a(reapply_after_power_cycle: bool) -> Bench {
+    let mut bench = Bench::with_unit(
+        LinkConfig {
+            reapply_after_power_cycle,
+            ..LinkConfig::default()
+        },
+        "sync65",
+    );
+    bench.run(bench.now + Duration::from_millis(500));
     bench
         .link
         .submit(
@@ -191,14 +198,44 @@ fn kept_settings_are_reapplied_when_the_unit_reverts_after_a_power_cycle() {
     bench.run(bench.now + Duration::from_millis(300));
     assert!(bench.link.status().remote);
     bench.events();
+    bench
+}
+
+/// SYNC manual (000_dd931256418ae627.txt) line 1189: "You can also stop remote control mode
+/// by setting the power switch on the plasma power supply to the OFF (O) position and
+/// waiting approximately 1 minute." A unit back on its own settings was switched off and
+/// on: the bridge does not take it back.
+#[test]
+fn a_unit_back_on_its_own_settings_after_a_power_blip_keeps_local_control() {
+    let mut bench = sync_at_63_a(false);
     let mark = bench.sent.len();
-    // Power cycle: the unit is back on its own settings.
+    let now = bench.now;
+    bench.ps().unit().power_off(now);
+    bench.ps().unit().power_on(now);
+    bench.run(bench.now + Duration::from_millis(1000));
+    let events = bench.events();
+    assert!(events.contains(&LinkEvent::RemoteModeChanged { remote: false }));
+    assert!(events.contains(&LinkEvent::UnitPowerCycled { reapply: false }));
+    assert_eq!(
+        bench.writes_since(mark),
+        [] as [Vec<u8>; 0],
+        "nothing written"
+    );
+    assert!(!bench.link.status().remote);
+    assert_eq!(bench.link.kept().powermax(), None);
+}
+
+#[test]
+fn kept_settings_are_reapplied_after_a_power_cycle_when_configured() {
+    let mut bench = sync_at_63_a(true);
+    let mark = bench.sent.len();
     let now = bench.now;
     bench.ps().unit().power_off(now);
     bench.ps().unit().power_on(now);
     bench.run(bench.now + Duration::from_millis(300));
     let events = bench.events();
     assert!(events.contains(&LinkEvent::RemoteModeChanged { remote: false }));
+    assert!(events.contains(&LinkEvent::UnitPowerCycled { reapply: true }));
     assert!(events.iter().any(|e| matches!(
         e,
         LinkEvent::ProcessApplied {
@@ -211,6 +248,30 @@ fn kept_settings_are_reapplied_when_the_unit_reverts_after_a_power_cycle() {
         Some(&b":0110308000030600010FC0000066\r\n"[..])
     );
     assert!(bench.link.status().remote);
+}
+
+/// Off for longer than a link-down (the manual's "approximately 1 minute"): the unit
+/// returns on its own settings, a power cycle, not a lost link.
+#[test]
+fn a_unit_switched_off_for_a_minute_returns_in_local_control() {
+    let mut bench = sync_at_63_a(false);
+    let now = bench.now;
+    bench.ps().unit().power_off(now);
+    bench.run(bench.now + Duration::from_secs(60));
+    assert!(!bench.link.status().link_up);
+    let now = bench.now;
+    bench.ps().unit().power_on(now);
+    let mark = bench.sent.len();
+    bench.run(bench.now + Duration::from_secs(5));
+    assert!(bench.link.status().link_up);
+    let events = bench.events();
+    assert!(events.contains(&LinkEvent::UnitPowerCycled { reapply: false }));
+    assert_eq!(
+        bench.writes_since(mark),
+        [] as [Vec<u8>; 0],
+        "nothing written"
+    );
+    assert!(!bench.link.status().remote);
 }
 
 #[test]
