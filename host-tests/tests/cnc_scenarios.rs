@@ -811,13 +811,14 @@ fn events_report_link_fault_remote_and_arc() {
     assert!(w.io().outputs().start);
     w.cnc_line("TORCH OFF");
 
-    // The unit goes away and comes back.
-    w.power_off();
+    // The unit's cable is pulled and plugged back (its own power cycle: see
+    // `after_the_units_own_power_cycle_it_stays_local_until_the_cnc_asks_again`).
+    w.pull_cable(true);
     w.wait_cnc_line("!LINK DOWN reason=no_answer", Duration::from_secs(3))
         .unwrap();
     let status = w.cnc_line("STATUS");
     assert_eq!(field(&status, "link"), Some("DOWN"));
-    w.power_on();
+    w.pull_cable(false);
     w.wait_cnc_line("!LINK UP", Duration::from_secs(5)).unwrap();
     // The link puts the kept process back on the unit.
     w.wait_cnc_line("!SETTINGS applied mode=CUT amps=45", Duration::from_secs(5))

@@ -283,21 +283,37 @@ fn an_hpr_error_that_blocks_start_holds_start_off_and_is_reported() {
     assert_eq!(world.sim::<Hpr>().counters().starts, 0);
 }
 
+/// Switched off long enough for a link-down and on again: the HPR comes back powering up on
+/// its own set point, a power cycle. Its nominal current is set again only when configured.
 #[test]
-fn hpr_nominal_amps_are_reapplied_after_a_power_cycle() {
-    let mut world = ready(Model::Hpr260);
-    assert_eq!(
-        world.command(LinkCommand::HprSetNominalAmps { amps: 130 }, secs(3)),
-        Ok(CommandOutput::Value(130))
-    );
-    world.power_off();
-    world
-        .wait_event(|e| matches!(e, LinkEvent::LinkDown { .. }), secs(6))
-        .expect("link down");
-    world.power_on();
-    world.wait_link_up(secs(20)).expect("link back");
-    world.run_for(secs(5));
-    assert_eq!(world.sim::<Hpr>().nominal_amps(), 130);
+fn hpr_nominal_amps_after_a_power_cycle_only_when_configured() {
+    for reapply in [false, true] {
+        let link = plasma_firmware::link::LinkConfig {
+            reapply_after_power_cycle: reapply,
+            ..plasma_firmware::link::LinkConfig::default()
+        };
+        let mut world = World::new(Model::Hpr260, WorldOptions::with_link(link));
+        world.wait_link_up(secs(2)).expect("link up");
+        world
+            .run_until(|w| w.link().status().ready, secs(6))
+            .expect("unit ready");
+        assert_eq!(
+            world.command(LinkCommand::HprSetNominalAmps { amps: 130 }, secs(3)),
+            Ok(CommandOutput::Value(130))
+        );
+        world.power_off();
+        world
+            .wait_event(|e| matches!(e, LinkEvent::LinkDown { .. }), secs(6))
+            .expect("link down");
+        world.power_on();
+        world.wait_link_up(secs(20)).expect("link back");
+        world
+            .wait_event(|e| *e == LinkEvent::UnitPowerCycled { reapply }, secs(5))
+            .expect("power cycle seen");
+        world.run_for(secs(5));
+        let expected = if reapply { 130 } else { 260 };
+        assert_eq!(world.sim::<Hpr>().nominal_amps(), expected, "{reapply}");
+    }
 }
 
 #[test]

@@ -4,7 +4,8 @@
 use host_tests::harness::{World, WorldOptions};
 use plasma_firmware::io::{Interlock, IoConfig};
 use plasma_firmware::link::{
-    ActiveFault, CommandOutput, Family, LinkCommand, LinkEvent, PowermaxProcess, Refusal,
+    ActiveFault, CommandOutput, Family, LinkCommand, LinkConfig, LinkEvent, PowermaxProcess,
+    Refusal,
 };
 use plasma_protocol::modbus_ascii;
 use plasma_protocol::powermax::{Amps, FaultCode, OperatingMode, Pressure, Psi};
@@ -506,9 +507,23 @@ fn quick_restart_is_refused_for_other_faults_and_on_legacy_units() {
     );
 }
 
-/// Power off long enough for link-down, then on: the link comes back and re-applies.
-fn power_cycle_reapplies(model: Model, pressure: Pressure, expected_sim: Process) {
-    let mut world = ready(model, WorldOptions::default());
+/// Options with `reapply_after_power_cycle` as given.
+fn reapply_after_power_cycle(on: bool) -> WorldOptions {
+    WorldOptions {
+        link: LinkConfig {
+            reapply_after_power_cycle: on,
+            ..LinkConfig::default()
+        },
+        ..WorldOptions::default()
+    }
+}
+
+/// Power off long enough for link-down, then on: the link comes back and sees the unit on its
+/// own settings, a power cycle. Re-applied only when configured (SYNC manual
+/// (000_dd931256418ae627.txt) line 1189: switching the unit off is how an operator ends remote
+/// control).
+fn power_cycle(model: Model, pressure: Pressure, expected_sim: Process, reapply: bool) {
+    let mut world = ready(model, reapply_after_power_cycle(reapply));
     let desired = PowermaxProcess {
         mode: Some(OperatingMode::Cut),
         current: amps(45),
@@ -533,20 +548,29 @@ fn power_cycle_reapplies(model: Model, pressure: Pressure, expected_sim: Process
     let trace_mark = world.trace().len();
     world
         .wait_event(
-            |e| {
-                matches!(
-                    e,
-                    LinkEvent::ProcessApplied {
-                        reapplied: true,
-                        ..
-                    }
-                )
-            },
+            |e| matches!(e, LinkEvent::UnitPowerCycled { .. }),
             // The last known-good framing is asked first and between every two probes of
             // the search (see a_unit_switched_off_and_on_is_found_again_within_a_second).
             secs(3),
         )
-        .unwrap_or_else(|t| panic!("{model}: not re-applied: {t}\n{}", world.trace().tail(30)));
+        .unwrap_or_else(|t| panic!("{model}: not seen: {t}\n{}", world.trace().tail(30)));
+    if reapply {
+        world
+            .wait_event(
+                |e| {
+                    matches!(
+                        e,
+                        LinkEvent::ProcessApplied {
+                            reapplied: true,
+                            ..
+                        }
+                    )
+                },
+                secs(3),
+            )
+            .unwrap_or_else(|t| panic!("{model}: not re-applied: {t}"));
+    }
+    world.run_for(secs(1));
 
     let events: Vec<LinkEvent> = world.events()[mark..].iter().map(|(_, e)| *e).collect();
     let kinds: Vec<&str> = events
@@ -554,84 +578,118 @@ fn power_cycle_reapplies(model: Model, pressure: Pressure, expected_sim: Process
         .filter_map(|e| match e {
             LinkEvent::LinkDown { .. } => Some("down"),
             LinkEvent::LinkUp { .. } => Some("up"),
+            LinkEvent::UnitPowerCycled { .. } => Some("power cycled"),
             LinkEvent::ProcessApplied { .. } => Some("applied"),
             _ => None,
         })
         .collect();
-    assert_eq!(kinds, vec!["down", "up", "applied"], "{model}");
-    let sim = world.sim::<Powermax>();
-    assert!(sim.in_remote_mode(), "{model}");
-    assert_eq!(sim.settings(), expected_sim, "{model}");
-    assert!(!writes_since(&world, trace_mark).is_empty());
-    world.run_for(secs(1));
+    let expected = if reapply {
+        vec!["down", "up", "power cycled", "applied"]
+    } else {
+        vec!["down", "up", "power cycled"]
+    };
+    assert_eq!(kinds, expected, "{model}");
+    assert!(events.contains(&LinkEvent::UnitPowerCycled { reapply }));
     let status = world.link().status();
-    assert!(status.link_up && status.remote, "{model}");
-    assert_eq!(world.link().kept().powermax(), Some(desired), "{model}");
+    assert!(status.link_up, "{model}");
+    let sim = world.sim::<Powermax>();
+    if reapply {
+        assert!(sim.in_remote_mode(), "{model}");
+        assert_eq!(sim.settings(), expected_sim, "{model}");
+        assert!(!writes_since(&world, trace_mark).is_empty());
+        assert!(world.link().status().remote, "{model}");
+        assert_eq!(world.link().kept().powermax(), Some(desired), "{model}");
+    } else {
+        assert!(!sim.in_remote_mode(), "{model}");
+        assert!(writes_since(&world, trace_mark).is_empty(), "{model}");
+        assert!(!world.link().status().remote, "{model}");
+        assert_eq!(world.link().kept().powermax(), None, "{model}");
+    }
     assert!(down_at > Instant::ZERO);
 }
 
+const SYNC_45_A_70_PSI: Process = Process {
+    mode: 1,
+    current: 45 * 64,
+    pressure: 70 * 128,
+};
+
+const LEGACY_45_A_AUTO: Process = Process {
+    mode: 1,
+    current: 45 * 64,
+    pressure: 0,
+};
+
 #[test]
-fn after_a_power_cycle_the_link_returns_and_sync_settings_are_reapplied() {
-    power_cycle_reapplies(
+fn after_a_power_cycle_a_sync_unit_stays_in_local_control() {
+    power_cycle(
         Model::Sync65,
         Pressure::Set(psi(70)),
-        Process {
-            mode: 1,
-            current: 45 * 64,
-            pressure: 70 * 128,
-        },
+        SYNC_45_A_70_PSI,
+        false,
     );
 }
 
 #[test]
-fn after_a_power_cycle_the_link_returns_and_legacy_settings_are_reapplied() {
-    power_cycle_reapplies(
-        Model::Pm85,
-        Pressure::Auto,
-        Process {
-            mode: 1,
-            current: 45 * 64,
-            pressure: 0,
-        },
+fn after_a_power_cycle_sync_settings_are_reapplied_when_configured() {
+    power_cycle(
+        Model::Sync65,
+        Pressure::Set(psi(70)),
+        SYNC_45_A_70_PSI,
+        true,
     );
 }
 
 #[test]
-fn a_power_blip_shorter_than_link_down_is_noticed_and_settings_reapplied() {
-    let mut world = ready(Model::Sync105, WorldOptions::default());
-    world
-        .command(apply(OperatingMode::Cut, 90, Pressure::Auto), secs(2))
-        .unwrap();
-    world.run_for(ms(300));
-    let mark = world.events().len();
-    world.power_off();
-    world.run_for(ms(150));
-    world.power_on();
-    world
-        .wait_event(
-            |e| {
-                matches!(
-                    e,
-                    LinkEvent::ProcessApplied {
-                        reapplied: true,
-                        ..
-                    }
-                )
-            },
-            secs(2),
-        )
-        .expect("re-applied");
-    let events: Vec<LinkEvent> = world.events()[mark..].iter().map(|(_, e)| *e).collect();
-    assert!(
-        !events
-            .iter()
-            .any(|e| matches!(e, LinkEvent::LinkDown { .. })),
-        "{events:?}"
-    );
-    assert!(events.contains(&LinkEvent::RemoteModeChanged { remote: false }));
-    let sim = world.sim::<Powermax>();
-    assert!(sim.in_remote_mode());
-    assert_eq!(sim.settings().current, 90 * 64);
+fn after_a_power_cycle_a_legacy_unit_stays_in_local_control() {
+    power_cycle(Model::Pm85, Pressure::Auto, LEGACY_45_A_AUTO, false);
+}
+
+#[test]
+fn after_a_power_cycle_legacy_settings_are_reapplied_when_configured() {
+    power_cycle(Model::Pm85, Pressure::Auto, LEGACY_45_A_AUTO, true);
+}
+
+#[test]
+fn a_power_blip_shorter_than_link_down_is_noticed_as_a_power_cycle() {
+    for reapply in [false, true] {
+        let mut world = ready(Model::Sync105, reapply_after_power_cycle(reapply));
+        world
+            .command(apply(OperatingMode::Cut, 90, Pressure::Auto), secs(2))
+            .unwrap();
+        world.run_for(ms(300));
+        let mark = world.events().len();
+        world.power_off();
+        world.run_for(ms(150));
+        world.power_on();
+        world
+            .wait_event(|e| *e == LinkEvent::UnitPowerCycled { reapply }, secs(2))
+            .expect("noticed");
+        world.run_for(secs(2));
+        let events: Vec<LinkEvent> = world.events()[mark..].iter().map(|(_, e)| *e).collect();
+        assert!(
+            !events
+                .iter()
+                .any(|e| matches!(e, LinkEvent::LinkDown { .. })),
+            "{events:?}"
+        );
+        assert!(events.contains(&LinkEvent::RemoteModeChanged { remote: false }));
+        let reapplied = events.iter().any(|e| {
+            matches!(
+                e,
+                LinkEvent::ProcessApplied {
+                    reapplied: true,
+                    ..
+                }
+            )
+        });
+        assert_eq!(reapplied, reapply, "{events:?}");
+        let sim = world.sim::<Powermax>();
+        assert_eq!(sim.in_remote_mode(), reapply);
+        if reapply {
+            assert_eq!(sim.settings().current, 90 * 64);
+        }
+    }
 }
 
 #[test]

@@ -3,8 +3,9 @@
 //!
 //! # Why here
 //! Only the link sees the moments a re-apply is due: the unit answers again after a link-down,
-//! a Powermax reads back other settings while the bridge holds remote control (it was
-//! power-cycled), an HPR shows a restart. So the link keeps what it re-applies, for every
+//! a Powermax reads back other settings while the bridge holds remote control, an HPR shows a
+//! restart (the last two, and a return without the kept settings, are the unit's own power
+//! cycle: see "Power cycle or lost link"). So the link keeps what it re-applies, for every
 //! family, in this one place, and the others hold no decision:
 //! - the CNC session submits commands; what the unit confirms the link keeps here;
 //! - [`Settings::process`](crate::settings::Settings) is only the persisted copy of the

@@ -42,8 +42,9 @@
 //!
 //! # Kept settings
 //! Settings the CNC set and the unit confirmed are kept ([`kept`], the one place that decides
-//! what is re-applied and when) and re-applied after the unit power-cycles or the link
-//! returns: Powermax mode, current and pressure ([`Kept::powermax`], and once after start-up
+//! what is re-applied and when) and re-applied when the link returns (after the unit's own
+//! power cycle only with [`LinkConfig::reapply_after_power_cycle`]: [`kept`] tells the two
+//! apart and reports [`LinkEvent::UnitPowerCycled`]): Powermax mode, current and pressure ([`Kept::powermax`], and once after start-up
 //! the persisted process, [`PsLink::restore`]); HPR / MaxPro200 nominal current, corner
 //! current, process and inlet gases ([`Kept::hpr_requests`], a later setting replacing what
 //! it sets again), re-applied after 004 REMOTE_MODE once the unit is in state 2 or 3
@@ -52,7 +53,7 @@
 //! otherwise 004 is sent again and the setting once more (the unit may have restarted and
 //! left remote mode), then it fails `NotAccepted`. An HPR that shows a restart the link did
 //! not see as a link-down (a power blip: its state back to power-up, or a set point other than
-//! the kept one) has remote mode entered again and its settings re-applied. A re-apply that
+//! the kept one) was power-cycled, like a Powermax that reads back other settings. A re-apply that
 //! fails reports `ProcessFailed` and is tried again after a back-off: a setting is never
 //! silently lost.
 //!
