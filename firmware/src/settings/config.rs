@@ -14,7 +14,7 @@ use super::{
 };
 use crate::link::{LinkConfig, ProtocolChoice};
 
-const CNC_BAUD_WORDS: &str = "9600|19200|38400|57600|115200";
+const CNC_BAUD_WORDS: &str = "1200|2400|4800|9600|19200|38400|57600|115200";
 /// Every format value the Phoenix manual lists (a test ties it to [`Format::ALL`]).
 const PHOENIX_FORMAT_WORDS: &str = "0|1|16|17|32|33|48|49|64|65|80|81|96|97|112|113";
 
@@ -388,7 +388,7 @@ mod tests {
         let err = s.set(ConfigKey::CncBaud, "14400").unwrap_err();
         assert_eq!(
             err.to_string(),
-            "cnc_baud: expected 9600|19200|38400|57600|115200"
+            "cnc_baud: expected 1200|2400|4800|9600|19200|38400|57600|115200"
         );
         let err = s.set(ConfigKey::CncAddress, "0").unwrap_err();
         assert_eq!(err.to_string(), "cnc_address 0 outside 1..247");

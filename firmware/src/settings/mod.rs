@@ -61,8 +61,9 @@ pub const DEFAULT_PHOENIX_FORMAT: u8 = 113;
 
 // --- the CNC port: framing and Powermax node address (issue 13) ------------------------------
 
-/// The baud rates `cnc_baud` accepts.
-pub const CNC_BAUDS: [u32; 5] = [9_600, 19_200, 38_400, 57_600, 115_200];
+/// The baud rates `cnc_baud` accepts: Phoenix's messaging ports from 1200 up (Phoenix manual,
+/// "Baud Rate": 1200 to 115200; the rates between are the common ones).
+pub const CNC_BAUDS: [u32; 8] = [1_200, 2_400, 4_800, 9_600, 19_200, 38_400, 57_600, 115_200];
 
 /// The CNC port: its UART framing and the node address the bridge answers at as a Powermax
 /// (Modbus ASCII requests on the CNC port, see `cnc::powermax_port`).

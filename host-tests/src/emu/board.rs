@@ -14,6 +14,7 @@ use std::time::{Duration, Instant};
 
 use plasma_firmware::io::{Input, Output};
 use plasma_firmware::platform::pins::USER_BUTTON;
+use plasma_firmware::settings::CNC_BAUDS;
 
 use super::cnc::CncPort;
 use super::error::{Error, Result};
@@ -24,7 +25,7 @@ use super::qemu::{Qemu, QemuOptions};
 use super::qtest::Qtest;
 use super::safety::{self, Observed};
 use super::sim_port::{Framing, SimPort, SimPortOptions};
-use super::usart::{KERNEL_CLOCK_HZ, Usart};
+use super::usart::{CNC_KERNEL_CLOCK_HZ, Usart};
 use plasma_protocol::serial::PortConfig;
 use plasma_sim::{Model, SimOptions};
 
@@ -269,10 +270,18 @@ impl Board {
     }
 
     /// The framing the firmware runs its CNC UART (USART2) at, read from the registers now;
-    /// a baud rate within 2 % of `nominal_baud` reads as `nominal_baud` (BRR rounds). `None`
-    /// while the USART is off.
+    /// a baud rate within 2 % of `nominal_baud`, else of one `cnc_baud` accepts, reads as that
+    /// rate (BRR rounds: 9600 baud from 16 MHz is BRR 1667, 9598 baud). `None` while the USART
+    /// is off.
     pub fn cnc_framing(&self, nominal_baud: u32) -> Result<Option<PortConfig>> {
-        Usart::CNC.framing(&self.qtest, Some(KERNEL_CLOCK_HZ), nominal_baud)
+        let framing = Usart::CNC.framing(&self.qtest, Some(CNC_KERNEL_CLOCK_HZ), nominal_baud)?;
+        Ok(framing.map(|mut framing| {
+            let near = |b: u32| framing.baud.abs_diff(b) * 50 <= b;
+            if let Some(&baud) = CNC_BAUDS.iter().find(|&&b| near(b)) {
+                framing.baud = baud;
+            }
+            framing
+        }))
     }
 
     /// The firmware's log.

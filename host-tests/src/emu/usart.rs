@@ -9,9 +9,12 @@ use plasma_protocol::serial::{Parity, PortConfig, StopBits};
 use super::error::Result;
 use super::qtest::Qtest;
 
-/// The USARTs' kernel clock on the emulated board (SYSCLK, as on the Nucleo image), to turn
-/// BRR into a baud rate.
+/// The PS USART's kernel clock on the emulated board (SYSCLK, as on the Nucleo image), to
+/// turn BRR into a baud rate.
 pub const KERNEL_CLOCK_HZ: u32 = 80_000_000;
+/// The CNC USART's kernel clock on the emulated board (HSI16, as on the Nucleo image: 80 MHz
+/// cannot make 1200 baud).
+pub const CNC_KERNEL_CLOCK_HZ: u32 = 16_000_000;
 
 /// One USART's register block.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -4,16 +4,18 @@
 //! runs at 80 MHz), but not FLASH or PWR: the wait states are written for a real chip and not
 //! read back, which is what makes embassy-stm32's `init` hang there (docs/developers.md).
 
-use stm32_metapac::rcc::vals::{Pllm, Plln, Pllr, Pllsrc, Sw};
+use stm32_metapac::rcc::vals::{Pllm, Plln, Pllr, Pllsrc, Sw, Usartsel};
 use stm32_metapac::{FLASH, RCC};
 
-/// SYSCLK = HCLK = PCLK1 = PCLK2 after [`init`], as [`init`] means to set it: the UARTs
-/// program BRR from the clock QEMU's RCC reports (`plasma_tasks::clock_tree`), so the tests
-/// check that arithmetic too; this checks at build time that every baud rate `CONFIG
-/// cnc_baud` accepts runs at the intended clock.
+/// SYSCLK = HCLK = PCLK1 = PCLK2 after [`init`], as [`init`] means to set it.
 pub const SYSCLK_HZ: u32 = 80_000_000;
+/// The CNC USART's kernel clock after [`init`]: HSI16, as on the Nucleo image (80 MHz cannot
+/// make 1200 baud). The UARTs program BRR from the clock QEMU's RCC reports
+/// (`plasma_tasks::clock_tree`), so the tests check that arithmetic too; this checks at build
+/// time that every baud rate `CONFIG cnc_baud` accepts runs at the intended clock.
+pub const CNC_USART_CLOCK_HZ: u32 = 16_000_000;
 const _: () = assert!(plasma_tasks::uart::runs_every_baud(
-    SYSCLK_HZ,
+    CNC_USART_CLOCK_HZ,
     &plasma_firmware::settings::CNC_BAUDS
 ));
 
@@ -48,4 +50,5 @@ pub fn init() {
         w.set_usart1en(true);
     });
     RCC.apb1enr1().modify(|w| w.set_usart2en(true));
+    RCC.ccipr().modify(|w| w.set_usart2sel(Usartsel::HSI));
 }

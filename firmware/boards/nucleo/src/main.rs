@@ -89,6 +89,9 @@ mod image {
             divr: Some(PllRDiv::DIV2),
         });
         config.rcc.sys = Sysclk::PLL1_R;
+        // The CNC port's USART on HSI16: 80 MHz cannot make 1200 baud (BRR tops out at
+        // 0xFFFF, 80 MHz / 1200 = 66 667), 16 MHz makes 1200 to 115200 (BRR 13 333 to 138).
+        config.rcc.mux.usart2sel = embassy_stm32::pac::rcc::vals::Usartsel::HSI;
         // No RTC: embassy's default clocks an RTC the bridge never reads from the LSI (the
         // IWDG keeps the LSI running by itself once started). DBG_SLEEP stays on (embassy's
         // default): probe-rs reads the RTT buffer while the core sleeps in WFE, and it only
@@ -97,14 +100,13 @@ mod image {
         config
     }
 
-    /// The USARTs' kernel clock [`clock_config`] means to set: PCLK1 and PCLK2 (the reset
-    /// choice in RCC_CCIPR), both SYSCLK (the APB prescalers stay at 1). The UARTs program
-    /// BRR from the clock the RCC actually runs (`plasma_tasks::clock_tree`); this only
-    /// checks at build time that the intended one runs every baud rate `CONFIG cnc_baud`
-    /// accepts.
-    const INTENDED_USART_CLOCK_HZ: u32 = 80_000_000;
+    /// The CNC USART's kernel clock [`clock_config`] means to set: HSI16 (RCC_CCIPR
+    /// USART2SEL; the PS USART stays on PCLK2 = SYSCLK). The UARTs program BRR from the clock
+    /// the RCC actually runs (`plasma_tasks::clock_tree`); this only checks at build time that
+    /// the intended one runs every baud rate `CONFIG cnc_baud` accepts.
+    const INTENDED_CNC_USART_CLOCK_HZ: u32 = 16_000_000;
     const _: () = assert!(plasma_tasks::uart::runs_every_baud(
-        INTENDED_USART_CLOCK_HZ,
+        INTENDED_CNC_USART_CLOCK_HZ,
         &plasma_firmware::settings::CNC_BAUDS
     ));
 
