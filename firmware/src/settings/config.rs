@@ -419,6 +419,20 @@ mod tests {
         assert_eq!(taken, all);
     }
 
+    /// Phoenix manual (003_610fea73110d789e.txt) line 7012: a messaging port's "Baud Rate:
+    /// Select a communication speed from 1200 to 115200 Baud."
+    #[test]
+    fn cnc_baud_covers_a_phoenix_ports_range() {
+        for baud in [
+            "1200", "2400", "4800", "9600", "19200", "38400", "57600", "115200",
+        ] {
+            let mut s = Settings::default();
+            assert_eq!(s.set(ConfigKey::CncBaud, baud), Ok(()), "{baud}");
+            assert_eq!(s.get(ConfigKey::CncBaud).to_string(), baud);
+        }
+        assert!(Settings::default().set(ConfigKey::CncBaud, "600").is_err());
+    }
+
     /// Phoenix manual (003_610fea73110d789e.txt) line 7075: "0,1,16,17,32,33,48,49,64,
     /// 65,80,81,96,97,112,113 are supported"; every one is a `phoenix_format`, the unframed
     /// 0, 1, 16 and 17 included.
