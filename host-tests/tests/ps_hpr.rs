@@ -368,10 +368,20 @@ fn continuous_polling_does_not_starve_hpr_slow_data() {
 
 /// `SET HPR_PROCESS` on a MaxPro200 is 137 SET PROCESS, "recommended ... for MaxPro200
 /// systems" (HPR manual (002_72b43a5685974c77.txt) line 180, the command at line 275): kept
-/// and re-applied after the unit comes back, like the current.
+/// and re-applied after the unit comes back, like the current: after its own power cycle only
+/// when configured to (`reapply_after_power_cycle`; without it the unit stays local, the
+/// manual's way to take it back).
 #[test]
-fn a_maxpro200_process_is_reapplied_after_a_power_cycle() {
-    let mut world = ready(Model::MaxPro200);
+fn a_maxpro200_process_is_reapplied_after_a_power_cycle_when_configured() {
+    let link = plasma_firmware::link::LinkConfig {
+        reapply_after_power_cycle: true,
+        ..plasma_firmware::link::LinkConfig::default()
+    };
+    let mut world = World::new(Model::MaxPro200, WorldOptions::with_link(link));
+    world.wait_link_up(secs(2)).expect("link up");
+    world
+        .run_until(|w| w.link().status().ready, secs(6))
+        .expect("unit ready");
     let gases = GasPair {
         plasma: GasCode::OXYGEN,
         shield: GasCode::AIR,
