@@ -1,5 +1,5 @@
 //! Puts the workspace's `memory.x` on the linker search path, for the MCU build only, after
-//! checking its settings region.
+//! checking its settings and history regions.
 //!
 //! cortex-m-rt's `link.x` does `INCLUDE memory.x`; the linker runs in the board's package
 //! directory and would not find the file at the workspace root. Every board links this crate,
@@ -19,27 +19,33 @@ fn main() {
     let out = PathBuf::from(env::var("OUT_DIR").unwrap());
     let text = fs::read_to_string(&memory_x)
         .unwrap_or_else(|e| panic!("cannot read {}: {e}", memory_x.display()));
-    check_settings_region(&text);
+    check_storage_regions(&text);
     fs::write(out.join("memory.x"), text).unwrap();
     println!("cargo:rustc-link-search={}", out.display());
 }
 
-/// The settings store needs whole 2 KiB pages, at least two of them (sequential-storage's
-/// minimum), outside the program's FLASH region. A mistake here would erase code at run time,
-/// so it fails the build instead.
-fn check_settings_region(memory_x: &str) {
+/// The settings store and the history each need whole 2 KiB pages, at least two of them
+/// (sequential-storage's minimum), outside the program's FLASH region and apart from each
+/// other. A mistake here would erase code or settings at run time, so it fails the build
+/// instead.
+fn check_storage_regions(memory_x: &str) {
     const PAGE: u64 = 2048;
     let flash = region(memory_x, "FLASH");
     let settings = region(memory_x, "SETTINGS");
+    let history = region(memory_x, "HISTORY");
+    for (name, (origin, length)) in [("SETTINGS", settings), ("HISTORY", history)] {
+        assert!(
+            origin.is_multiple_of(PAGE) && length.is_multiple_of(PAGE) && length >= 2 * PAGE,
+            "memory.x: {name} must be at least two whole 2 KiB pages"
+        );
+        assert!(
+            flash.0 + flash.1 <= origin,
+            "memory.x: {name} overlaps FLASH (the program)"
+        );
+    }
     assert!(
-        settings.0.is_multiple_of(PAGE)
-            && settings.1.is_multiple_of(PAGE)
-            && settings.1 >= 2 * PAGE,
-        "memory.x: SETTINGS must be at least two whole 2 KiB pages"
-    );
-    assert!(
-        flash.0 + flash.1 <= settings.0,
-        "memory.x: SETTINGS overlaps FLASH (the program)"
+        history.0 + history.1 <= settings.0 || settings.0 + settings.1 <= history.0,
+        "memory.x: HISTORY overlaps SETTINGS"
     );
 }
 

@@ -52,8 +52,11 @@ pub trait Board: 'static {
     type Watchdog: Watchdog;
     /// The flash the settings are stored in.
     type SettingsFlash: NorFlash;
+    /// The flash the event history is kept in.
+    type HistoryFlash: NorFlash;
 
-    /// Read errors the flash reported since the last call (torn writes the store skipped).
+    /// Read errors the flash reported since the last call (torn writes the settings store or
+    /// the history skipped).
     fn flash_errors_seen() -> u32;
 
     /// On the fault path, after its log line and before the reset: gives the logger time to

@@ -1,5 +1,6 @@
 //! The bridge task (thread mode): `plasma_firmware::platform::supervisor::Supervisor` around the
-//! `Bridge`, over the PS UART, the CNC UART, the I/O task and the settings task.
+//! `Bridge`, over the PS UART, the CNC UART, the I/O task, the settings task and the history
+//! task.
 
 use defmt::{debug, info, warn};
 use plasma_firmware::bridge::Bridge;
@@ -10,6 +11,7 @@ use plasma_protocol::serial::PortConfig;
 
 use crate::Board;
 use crate::clock::EmbassyClock;
+use crate::history::BoardHistory;
 use crate::io::BoardIo;
 use crate::log_text::{FaultName, TurnFailure, UnitName, framing};
 use crate::progress::report;
@@ -28,8 +30,9 @@ pub async fn run<B: Board>(
     let clock = EmbassyClock;
     // The board opened the CNC UART at the framing of the settings the bridge was built from.
     let mut cnc_framing = bridge.cnc_port_config();
-    let mut supervisor =
-        Supervisor::new(ps, cnc, B::CNC_TX_BUFFER, io, BoardSaver).with_cnc_framing(cnc_framing);
+    let mut supervisor = Supervisor::new(ps, cnc, B::CNC_TX_BUFFER, io, BoardSaver)
+        .with_history(BoardHistory)
+        .with_cnc_framing(cnc_framing);
     let mut applied: Option<PortConfig> = None;
     let mut status = Seen::default();
     loop {

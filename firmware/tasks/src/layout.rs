@@ -13,7 +13,7 @@
 //! | judge executor (USART3 vector) | [`JUDGE_PRIORITY`] = 0 | the stall judge ([`crate::progress::judge`]) |
 //! | I/O executor (UART4 vector) | [`IO_PRIORITY`] = 1 | the I/O task |
 //! | USART1, USART2, FLASH | [`SERIAL_PRIORITY`] = 4 | the UART driver, flash |
-//! | thread mode | below all | bridge, settings, heartbeat |
+//! | thread mode | below all | bridge, settings, history, heartbeat |
 //!
 //! UART4 and USART3 are vectors neither board uses for a peripheral (the pin table puts no
 //! UART there); the executors pend them in software.
@@ -25,7 +25,7 @@ use plasma_protocol::time::Duration;
 use stm32_metapac::{Interrupt, interrupt};
 
 use crate::Board;
-use crate::settings::Store;
+use crate::{history, settings};
 
 /// NVIC priorities use the upper nibble (16 levels on the STM32L4).
 const fn level(priority: u8) -> u8 {
@@ -50,6 +50,8 @@ pub const IO_DEADLINE: Duration = Duration::from_millis(200);
 pub const BRIDGE_DEADLINE: Duration = Duration::from_millis(500);
 /// The settings task's (a page erase runs in it).
 pub const SETTINGS_DEADLINE: Duration = Duration::from_secs(1);
+/// The history task's (a page erase, or `HISTORY CLEAR`'s eight, runs in it).
+pub const HISTORY_DEADLINE: Duration = Duration::from_secs(1);
 /// The heartbeat's.
 pub const HEARTBEAT_DEADLINE: Duration = Duration::from_secs(1);
 
@@ -83,7 +85,9 @@ pub struct Tasks<B: Board> {
     /// The CNC UART, unmasked.
     pub cnc: B::CncUart,
     /// The settings store (`None`: settings are not kept).
-    pub store: Option<Store<B>>,
+    pub store: Option<settings::Store<B>>,
+    /// The history (`None`: no history is kept; `HISTORY` answers `ERR STORAGE`).
+    pub history: Option<history::Store<B>>,
     /// The heartbeat LED.
     pub led: B::Led,
     /// The watchdog the judge feeds.

@@ -3,10 +3,10 @@
 //! (`firmware/boards/emu`, bin `plasma-bridge-emu`).
 //!
 //! What a board provides is the [`Board`] trait: the input and output pins, the heartbeat
-//! LED, the power-supply and CNC UARTs, the settings flash and its read errors. The tasks are
+//! LED, the power-supply and CNC UARTs, the settings and history flash and their read errors. The tasks are
 //! generic over it; `#[embassy_executor::task]` functions cannot be, so each board expands
 //! [`board_tasks!`] with its board type, which declares the thin task wrappers around
-//! [`io::run`], [`bridge::run`], [`settings::run`], [`progress::heartbeat`] and
+//! [`io::run`], [`bridge::run`], [`settings::run`], [`history::run`], [`progress::heartbeat`] and
 //! [`progress::judge`] ([`tasks`]), and the `start_tasks` that puts each in its executor at
 //! its priority ([`layout`], the same for every board). A board also brings, outside the
 //! trait: its thread executor, its fault handlers (which call
@@ -37,6 +37,8 @@ pub mod clock_tree;
 pub mod edges;
 #[cfg(target_os = "none")]
 pub mod hard_fault;
+#[cfg(target_os = "none")]
+pub mod history;
 #[cfg(target_os = "none")]
 pub mod io;
 #[cfg(target_os = "none")]

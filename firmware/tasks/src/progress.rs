@@ -15,7 +15,7 @@ use crate::board::{Led, Watchdog};
 use crate::clock::now;
 use crate::safe_state::trip_fail_safe;
 
-/// One slot per task that matters: I/O, bridge (PS and CNC), settings, heartbeat.
+/// One slot per task that matters: I/O, bridge (PS and CNC), settings, history, heartbeat.
 const TASKS: usize = 6;
 
 static MONITOR: Mutex<CriticalSectionRawMutex, RefCell<ProgressMonitor<TASKS>>> =

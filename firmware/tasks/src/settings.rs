@@ -38,12 +38,13 @@ pub fn open<B: Board>(flash: B::SettingsFlash, region: Range<u32>) -> Option<Sto
     }
 }
 
-/// Logs flash read errors the board saw while the store was read (torn writes).
-fn report_flash_errors<B: Board>() {
+/// Logs flash read errors the board saw while the settings or the history were read (torn
+/// writes).
+pub(crate) fn report_flash_errors<B: Board>() {
     let errors = B::flash_errors_seen();
     if errors > 0 {
         warn!(
-            "settings: {} double ECC error(s) read (torn writes), skipped",
+            "flash: {} double ECC error(s) read (torn writes), skipped",
             errors
         );
     }

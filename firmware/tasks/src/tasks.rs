@@ -1,15 +1,16 @@
 //! The board's task wrappers, written once: `#[embassy_executor::task]` functions cannot be
 //! generic, so each board expands [`board_tasks!`](crate::board_tasks) with its [`Board`]
-//! type, which declares the five tasks with that board's concrete types, and `start_tasks`,
+//! type, which declares the six tasks with that board's concrete types, and `start_tasks`,
 //! which spawns each in the executor [`layout`](crate::layout) gives it. Each wrapper returns
 //! the shared body's future rather than being an `async fn` around `.await`: that future would
 //! keep the arguments twice (its own and the body's).
 //!
 //! [`Board`]: crate::Board
 
-/// Declares, in the calling module, the board's five tasks around the shared bodies:
+/// Declares, in the calling module, the board's six tasks around the shared bodies:
 /// `io_task` ([`io::run`](crate::io::run)), `bridge_task` ([`bridge::run`](crate::bridge::run)),
-/// `settings_task` ([`settings::run`](crate::settings::run)), `heartbeat_task`
+/// `settings_task` ([`settings::run`](crate::settings::run)), `history_task`
+/// ([`history::run`](crate::history::run)), `heartbeat_task`
 /// ([`progress::heartbeat`](crate::progress::heartbeat)) and `judge_task`
 /// ([`progress::judge`](crate::progress::judge)), with the types of `$board` (a
 /// [`Board`](crate::Board)), and `start_tasks`, the one task layout
@@ -54,6 +55,15 @@ macro_rules! board_tasks {
             $crate::settings::run::<$board>(store, progress)
         }
 
+        /// The history task ([`plasma_tasks::history::run`]).
+        #[::embassy_executor::task]
+        pub fn history_task(
+            store: ::core::option::Option<$crate::history::Store<$board>>,
+            progress: ::plasma_firmware::platform::watchdog::TaskId,
+        ) -> impl ::core::future::Future<Output = ()> {
+            $crate::history::run::<$board>(store, progress)
+        }
+
         /// The heartbeat task ([`plasma_tasks::progress::heartbeat`]).
         #[::embassy_executor::task]
         pub fn heartbeat_task(
@@ -72,7 +82,7 @@ macro_rules! board_tasks {
         }
 
         /// Spawns every task in its executor ([`plasma_tasks::layout`]): the I/O task on the
-        /// I/O executor, bridge, settings and heartbeat on `thread`, then the stall judge on
+        /// I/O executor, bridge, settings, history and heartbeat on `thread`, then the stall judge on
         /// its executor above them all, once every task it judges is registered. A spawn
         /// fails only if a task is spawned twice, a build mistake: panic = safe state.
         pub fn start_tasks(
@@ -84,6 +94,7 @@ macro_rules! board_tasks {
             let io = register("io", layout::IO_DEADLINE);
             let bridge = register("bridge", layout::BRIDGE_DEADLINE);
             let settings = register("settings", layout::SETTINGS_DEADLINE);
+            let history = register("history", layout::HISTORY_DEADLINE);
             let heartbeat = register("heartbeat", layout::HEARTBEAT_DEADLINE);
             layout::io_executor()
                 .spawn(io_task(tasks.inputs, tasks.outputs, tasks.io_config, io).unwrap());
@@ -98,6 +109,7 @@ macro_rules! board_tasks {
                 .unwrap(),
             );
             thread.spawn(settings_task(tasks.store, settings).unwrap());
+            thread.spawn(history_task(tasks.history, history).unwrap());
             thread.spawn(heartbeat_task(tasks.led, heartbeat).unwrap());
             layout::judge_executor().spawn(judge_task(tasks.watchdog).unwrap());
         }

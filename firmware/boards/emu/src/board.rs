@@ -3,7 +3,7 @@
 
 use plasma_tasks::Board;
 
-use crate::flash::SettingsFlash;
+use crate::flash::{HistoryFlash, SettingsFlash};
 use crate::gpio::{InputPins, Led, OutputPins};
 use crate::probe::ProbedCnc;
 use plasma_tasks::uart::Uart;
@@ -21,6 +21,7 @@ impl Board for Emulated {
     const CNC_TX_BUFFER: usize = plasma_tasks::uart::TX_CAPACITY;
     type Watchdog = crate::watchdog::SoftWatchdog;
     type SettingsFlash = SettingsFlash;
+    type HistoryFlash = HistoryFlash;
 
     /// The RAM model has no ECC: no read errors.
     fn flash_errors_seen() -> u32 {

@@ -1,10 +1,10 @@
-//! Settings "flash" in RAM that survives a reset, as flash survives a power cut. QEMU models
-//! no FLASH controller, so the store runs on the library's model of the L4 flash
-//! (`plasma_firmware::storage::ram_flash`: 2 KiB pages, double-word programming), the size of
-//! the Nucleo's settings region, kept in a `.uninit` section the start-up code does not clear
-//! (QEMU keeps RAM across a reset and zeroes it only when it starts). So `CONFIG SAVE` lasts
-//! until QEMU exits, and a reset in the middle of a save leaves what the silicon would: the
-//! steps done so far, one perhaps torn, none after.
+//! Settings and history "flash" in RAM that survives a reset, as flash survives a power cut.
+//! QEMU models no FLASH controller, so the stores run on the library's model of the L4 flash
+//! (`plasma_firmware::storage::ram_flash`: 2 KiB pages, double-word programming), the sizes of
+//! the Nucleo's regions, each kept in a `.uninit` section the start-up code does not clear
+//! (QEMU keeps RAM across a reset and zeroes it only when it starts). So `CONFIG SAVE` and the
+//! history last until QEMU exits, and a reset in the middle of a write leaves what the
+//! silicon would: the steps done so far, one perhaps torn, none after.
 //!
 //! Each program and erase takes the L4's time (datasheet: 22 ms a page erase, 82 µs a double
 //! word), as an async wait after the step: a save lasts as long as on the Nucleo, and a reset
@@ -18,31 +18,52 @@ use plasma_firmware::storage::ram_flash::{PAGE_SIZE, RamFlash, RamFlashError, WO
 
 /// The Nucleo's settings region: 8 KiB (memory.x).
 pub const SETTINGS_SIZE: usize = 8192;
+/// The Nucleo's history region: 16 KiB (memory.x).
+pub const HISTORY_SIZE: usize = 16384;
 
 /// Page erase time (STM32L476 datasheet, tERASE typical).
 const PAGE_ERASE_US: u64 = 22_000;
 /// Double-word program time (tPROG typical).
 const WORD_PROGRAM_US: u64 = 82;
 
-/// Marks a [`STORE`] that holds flash contents (QEMU zeroes RAM when it starts: not erased
+/// Marks a kept model that holds flash contents (QEMU zeroes RAM when it starts: not erased
 /// flash, so the first boot erases the model).
 const KEPT: u32 = 0x464C_5348;
 
+/// A flash model and its [`KEPT`] mark, in RAM the start-up code leaves alone.
+type Kept<const SIZE: usize> = MaybeUninit<(u32, RamFlash<SIZE>)>;
+
 #[unsafe(link_section = ".uninit.EMU_SETTINGS_FLASH")]
-static mut STORE: MaybeUninit<(u32, RamFlash<SETTINGS_SIZE>)> = MaybeUninit::uninit();
+static mut SETTINGS: Kept<SETTINGS_SIZE> = MaybeUninit::uninit();
 
-/// The flash the settings store writes: the model that outlives resets.
-pub struct SettingsFlash(&'static mut RamFlash<SETTINGS_SIZE>);
+#[unsafe(link_section = ".uninit.EMU_HISTORY_FLASH")]
+static mut HISTORY: Kept<HISTORY_SIZE> = MaybeUninit::uninit();
 
-impl SettingsFlash {
-    /// The kept flash (erased on QEMU's first boot). Call once.
-    pub fn new() -> Self {
-        // SAFETY: called once, at boot, before anything else uses STORE. Every bit pattern the
-        // previous run can have left is a valid RamFlash (it only ever stores whole valid
-        // values: bytes, counters, flags written as 0 or 1), and a store never marked KEPT is
-        // overwritten before it is read as one.
-        let place = &raw mut STORE;
-        let store = unsafe { &mut *place };
+/// A flash model that outlives resets.
+pub struct KeptFlash<const SIZE: usize>(&'static mut RamFlash<SIZE>);
+
+/// The flash the settings store writes.
+pub type SettingsFlash = KeptFlash<SETTINGS_SIZE>;
+/// The flash the history is kept in.
+pub type HistoryFlash = KeptFlash<HISTORY_SIZE>;
+
+/// The kept settings flash (erased on QEMU's first boot). Call once.
+pub fn settings_flash() -> SettingsFlash {
+    // SAFETY: called once, at boot, before anything else uses SETTINGS.
+    KeptFlash::take(unsafe { &mut *(&raw mut SETTINGS) })
+}
+
+/// The kept history flash (erased on QEMU's first boot). Call once.
+pub fn history_flash() -> HistoryFlash {
+    // SAFETY: called once, at boot, before anything else uses HISTORY.
+    KeptFlash::take(unsafe { &mut *(&raw mut HISTORY) })
+}
+
+impl<const SIZE: usize> KeptFlash<SIZE> {
+    fn take(store: &'static mut Kept<SIZE>) -> Self {
+        // SAFETY: every bit pattern the previous run can have left is a valid RamFlash (it
+        // only ever stores whole valid values: bytes, counters, flags written as 0 or 1), and
+        // a store never marked KEPT is overwritten before it is read as one.
         let kept = unsafe { (&raw const (*store.as_ptr()).0).read_volatile() } == KEPT;
         if !kept {
             store.write((KEPT, RamFlash::new()));
@@ -51,15 +72,15 @@ impl SettingsFlash {
         let (_, flash) = unsafe { store.assume_init_mut() };
         // A cut scheduled by the previous run (none: only tests schedule them) is over.
         flash.power_cycle();
-        SettingsFlash(flash)
+        KeptFlash(flash)
     }
 }
 
-impl ErrorType for SettingsFlash {
+impl<const SIZE: usize> ErrorType for KeptFlash<SIZE> {
     type Error = RamFlashError;
 }
 
-impl ReadNorFlash for SettingsFlash {
+impl<const SIZE: usize> ReadNorFlash for KeptFlash<SIZE> {
     const READ_SIZE: usize = 1;
 
     async fn read(&mut self, offset: u32, bytes: &mut [u8]) -> Result<(), Self::Error> {
@@ -67,11 +88,11 @@ impl ReadNorFlash for SettingsFlash {
     }
 
     fn capacity(&self) -> usize {
-        SETTINGS_SIZE
+        SIZE
     }
 }
 
-impl NorFlash for SettingsFlash {
+impl<const SIZE: usize> NorFlash for KeptFlash<SIZE> {
     const WRITE_SIZE: usize = WORD_SIZE;
     const ERASE_SIZE: usize = PAGE_SIZE;
 

@@ -13,7 +13,7 @@
 //! - [`gpio`]: the pins of the one pin table, EXTI inputs and outputs by register;
 //! - USART1 (power supply, hardware DE) and USART2 (CNC): the shared register-level driver
 //!   (`plasma_tasks::uart`), as on the Nucleo;
-//! - [`flash`]: the settings store on a RAM model of the flash;
+//! - [`flash`]: the settings store and the history on RAM models of the flash;
 //! - the tasks in the executors and at the priorities of the Nucleo's, one layout
 //!   (`plasma_tasks::layout`), so the tests here prove the Nucleo's arrangement;
 //! - [`watchdog`]: a software reset where the Nucleo has the IWDG, after the same stall judge;
@@ -71,12 +71,13 @@ mod image {
     use plasma_tasks::layout::{Tasks, set_serial_priorities};
     use plasma_tasks::reset;
     use plasma_tasks::safe_state::drive_safe_state;
+    use plasma_tasks::history;
     use plasma_tasks::settings as shared_settings;
     use static_cell::StaticCell;
     use stm32_metapac::{Interrupt, USART1, USART2, interrupt};
 
     use crate::board::{Emulated, start_tasks};
-    use crate::flash::{SETTINGS_SIZE, SettingsFlash};
+    use crate::flash::{HISTORY_SIZE, SETTINGS_SIZE, history_flash, settings_flash};
     use crate::gpio::{InputPins, Led, OutputPins};
     use crate::{executor, probe, rcc, reset_flags, time_driver, watchdog};
     use plasma_tasks::uart::{Uart, UartState, on_interrupt};
@@ -143,7 +144,8 @@ mod image {
     #[embassy_executor::task]
     async fn boot_task(spawner: Spawner, boot: BootReport) {
         let mut store =
-            shared_settings::open::<Emulated>(SettingsFlash::new(), 0..SETTINGS_SIZE as u32);
+            shared_settings::open::<Emulated>(settings_flash(), 0..SETTINGS_SIZE as u32);
+        let history = history::open::<Emulated>(history_flash(), 0..HISTORY_SIZE as u32);
         let loaded = shared_settings::load::<Emulated>(store.as_mut()).await;
         let settings = shared_settings::at_boot(loaded.settings, user_button_held());
         // Pulls per the board's circuit (the pin table), whatever the wiring settings say.
@@ -180,6 +182,7 @@ mod image {
 
         let bridge = BRIDGE.init_with(|| Bridge::new(settings, now()));
         bridge.set_boot_report(now(), boot_text(&boot, loaded.outcome));
+        bridge.record_reset(now(), boot.cause);
         start_tasks(
             spawner,
             Tasks {
@@ -190,6 +193,7 @@ mod image {
                 ps: ps_uart,
                 cnc: probe::ProbedCnc(cnc_uart),
                 store,
+                history,
                 led: Led::new(),
                 watchdog: watchdog::SoftWatchdog,
             },

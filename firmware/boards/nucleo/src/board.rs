@@ -19,7 +19,8 @@ impl Board for Nucleo {
     /// The shared driver's transmit ring: the bridge writes CNC output in pieces of this.
     const CNC_TX_BUFFER: usize = plasma_tasks::uart::TX_CAPACITY;
     type Watchdog = crate::watchdog::Iwdg;
-    type SettingsFlash = crate::flash::SettingsFlash;
+    type SettingsFlash = crate::flash::Region;
+    type HistoryFlash = crate::flash::Region;
 
     fn flash_errors_seen() -> u32 {
         crate::flash::flash_errors_seen()

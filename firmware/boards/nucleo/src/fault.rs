@@ -11,7 +11,7 @@ use embassy_stm32::pac;
 use plasma_tasks::Board;
 use plasma_tasks::chip::rcc_snapshot;
 
-use crate::flash::{FLASH_BANK2, FLASH_BASE, settings_region};
+use crate::flash::{FLASH_BANK2, FLASH_BASE, in_storage};
 
 use crate::board::Nucleo;
 
@@ -58,13 +58,13 @@ fn panic(info: &core::panic::PanicInfo) -> ! {
 
 plasma_tasks::hard_fault_handler!(Nucleo);
 
-/// Double ECC errors seen in the settings region (a program cut by a power loss can leave
-/// one), for the log.
-pub static SETTINGS_ECC_ERRORS: AtomicU32 = AtomicU32::new(0);
+/// Double ECC errors seen in the settings and history regions (a program cut by a power
+/// loss can leave one), for the log.
+pub static STORAGE_ECC_ERRORS: AtomicU32 = AtomicU32::new(0);
 
-/// The L4 raises an NMI when a flash read hits a double ECC error. In the settings region
-/// that is the trace of a torn write: clear it and return; the load completes with bad data,
-/// which the store's CRCs reject. Anywhere else the program itself is damaged.
+/// The L4 raises an NMI when a flash read hits a double ECC error. In the settings or
+/// history region that is the trace of a torn write: clear it and return; the read completes
+/// with bad data, which the stores' CRCs reject. Anywhere else the program itself is damaged.
 ///
 /// An NMI can interrupt a critical section, so this handler touches only an atomic and the
 /// FLASH registers; the failure path ignores that rule because it resets.
@@ -80,12 +80,9 @@ unsafe fn NonMaskableInt() {
         let address = bank_base + eccr.addr_ecc();
         // ECCD is write-1-to-clear.
         pac::FLASH.eccr().modify(|w| w.set_eccd(true));
-        let settings = settings_region();
-        // SYSF_ECC: ADDR_ECC is an offset in system flash (the bootloader), never a setting.
-        if !eccr.sysf_ecc()
-            && (settings.start + FLASH_BASE..settings.end + FLASH_BASE).contains(&address)
-        {
-            SETTINGS_ECC_ERRORS.fetch_add(1, Ordering::Relaxed);
+        // SYSF_ECC: ADDR_ECC is an offset in system flash (the bootloader), never stored data.
+        if !eccr.sysf_ecc() && in_storage(address) {
+            STORAGE_ECC_ERRORS.fetch_add(1, Ordering::Relaxed);
             return;
         }
         fail(|| error!("double ECC error in flash at {=u32:#010x}", address))

@@ -1,16 +1,23 @@
-//! The settings flash: the end of the MCU's flash (region from memory.x), through the HAL's
-//! async driver, with the data cache off while it programs or erases (errata ES0250).
+//! The settings and history flash: the end of the MCU's flash (regions from memory.x),
+//! through the HAL's one async driver, with the data cache off while it programs or erases
+//! (errata ES0250). The settings task and the history task each get a partition of it
+//! (embassy-embedded-hal's, behind an async mutex): one operation at a time, each within its
+//! own region.
 
 use core::ops::Range;
 use core::sync::atomic::Ordering;
 
+use embassy_embedded_hal::flash::partition::Partition;
 use embassy_stm32::flash::{Async, Error, Flash};
 use embassy_stm32::pac;
+use embassy_sync::blocking_mutex::raw::CriticalSectionRawMutex;
+use embassy_sync::mutex::Mutex;
 use embedded_storage_async::nor_flash::{ErrorType, NorFlash, ReadNorFlash};
-use plasma_tasks::settings::Store;
+use plasma_tasks::{history, settings};
+use static_cell::StaticCell;
 
 use crate::board::Nucleo;
-use crate::fault::SETTINGS_ECC_ERRORS;
+use crate::fault::STORAGE_ECC_ERRORS;
 
 /// Start of flash in the address map.
 pub const FLASH_BASE: u32 = 0x0800_0000;
@@ -29,6 +36,25 @@ pub fn settings_region() -> Range<u32> {
     start - FLASH_BASE..end - FLASH_BASE
 }
 
+/// The history region from memory.x, as offsets from the start of flash.
+pub fn history_region() -> Range<u32> {
+    unsafe extern "C" {
+        static __history_start: u8;
+        static __history_end: u8;
+    }
+    // As above: addresses only.
+    let start = (&raw const __history_start) as u32;
+    let end = (&raw const __history_end) as u32;
+    start - FLASH_BASE..end - FLASH_BASE
+}
+
+/// Whether `address` (in the address map) is in the settings or the history region.
+pub fn in_storage(address: u32) -> bool {
+    [settings_region(), history_region()]
+        .iter()
+        .any(|region| (region.start + FLASH_BASE..region.end + FLASH_BASE).contains(&address))
+}
+
 /// The HAL's flash with the data cache kept out of every program and erase.
 ///
 /// ES0250 (STM32L47x/L48x errata), "Data cache might be corrupted during Flash memory
@@ -39,14 +65,15 @@ pub fn settings_region() -> Range<u32> {
 ///
 /// If the operation's future is dropped halfway, the cache stays off: slower constant reads
 /// until the next reset, never a corrupt one.
-pub struct SettingsFlash(Flash<'static, Async>);
+pub struct GuardedFlash(Flash<'static, Async>);
 
-impl SettingsFlash {
-    /// Takes the HAL's flash.
-    pub fn new(flash: Flash<'static, Async>) -> Self {
-        SettingsFlash(flash)
-    }
-}
+/// The one flash, shared by the settings and history partitions.
+type SharedFlash = Mutex<CriticalSectionRawMutex, GuardedFlash>;
+
+/// A region of the flash: offsets from the region's start.
+pub type Region = Partition<'static, CriticalSectionRawMutex, GuardedFlash>;
+
+static FLASH: StaticCell<SharedFlash> = StaticCell::new();
 
 fn data_cache_off() {
     pac::FLASH.acr().modify(|w| w.set_dcen(false));
@@ -59,11 +86,11 @@ fn data_cache_reset_and_on() {
     pac::FLASH.acr().modify(|w| w.set_dcen(true));
 }
 
-impl ErrorType for SettingsFlash {
+impl ErrorType for GuardedFlash {
     type Error = Error;
 }
 
-impl ReadNorFlash for SettingsFlash {
+impl ReadNorFlash for GuardedFlash {
     const READ_SIZE: usize = <Flash<'static, Async> as ReadNorFlash>::READ_SIZE;
 
     async fn read(&mut self, offset: u32, bytes: &mut [u8]) -> Result<(), Error> {
@@ -75,7 +102,7 @@ impl ReadNorFlash for SettingsFlash {
     }
 }
 
-impl NorFlash for SettingsFlash {
+impl NorFlash for GuardedFlash {
     const WRITE_SIZE: usize = <Flash<'static, Async> as NorFlash>::WRITE_SIZE;
     const ERASE_SIZE: usize = <Flash<'static, Async> as NorFlash>::ERASE_SIZE;
 
@@ -94,20 +121,41 @@ impl NorFlash for SettingsFlash {
     }
 }
 
-/// The store over the settings region; build.rs checks the region against the page size.
-/// `None` (logged) while the banks are swapped (option bit BFB2 booted bank 2, SYSCFG_MEMRMP
-/// FB_MODE): the region's addresses would then be in the other bank from the one the flash
-/// controller erases, and every save would fail its read-back (docs/board.md).
-pub fn open(flash: SettingsFlash) -> Option<Store<Nucleo>> {
+/// The settings store and the history over their regions; build.rs checks the regions
+/// against the page size. Both `None` (logged) while the banks are swapped (option bit BFB2
+/// booted bank 2, SYSCFG_MEMRMP FB_MODE): the regions' addresses would then be in the other
+/// bank from the one the flash controller erases, and every write would fail its read-back
+/// (docs/board.md). Call once.
+pub fn open(
+    flash: Flash<'static, Async>,
+) -> (Option<settings::Store<Nucleo>>, Option<history::Store<Nucleo>>) {
     plasma_tasks::chip::enable_syscfg_clock();
     if pac::SYSCFG.memrmp().read().fb_mode() {
-        defmt::error!("flash banks swapped (BFB2 set): settings will not be kept");
-        return None;
+        defmt::error!("flash banks swapped (BFB2 set): settings and history will not be kept");
+        return (None, None);
     }
-    plasma_tasks::settings::open::<Nucleo>(flash, settings_region())
+    let shared: &'static SharedFlash = FLASH.init(Mutex::new(GuardedFlash(flash)));
+    let settings = partition(shared, settings_region())
+        .and_then(|(region, size)| settings::open::<Nucleo>(region, 0..size));
+    let history = partition(shared, history_region())
+        .and_then(|(region, size)| history::open::<Nucleo>(region, 0..size));
+    (settings, history)
 }
 
-/// Double ECC errors the NMI handler skipped in the settings region since the last call.
+/// The partition over `region` and its size, or `None` (logged) for a region that is not
+/// whole pages (which `Partition::new` would panic on; build.rs already refuses it).
+fn partition(shared: &'static SharedFlash, region: Range<u32>) -> Option<(Region, u32)> {
+    let page = GuardedFlash::ERASE_SIZE as u32;
+    let size = region.end.checked_sub(region.start)?;
+    if !region.start.is_multiple_of(page) || !size.is_multiple_of(page) {
+        defmt::error!("flash region {=u32:#x}: not whole pages", region.start);
+        return None;
+    }
+    Some((Partition::new(shared, region.start, size), size))
+}
+
+/// Double ECC errors the NMI handler skipped in the settings and history regions since the
+/// last call.
 pub fn flash_errors_seen() -> u32 {
-    SETTINGS_ECC_ERRORS.swap(0, Ordering::Relaxed)
+    STORAGE_ECC_ERRORS.swap(0, Ordering::Relaxed)
 }

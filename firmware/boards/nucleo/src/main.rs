@@ -16,7 +16,8 @@
 //!   the one pin table ([`pins`]); the bridge task in thread mode: the power-supply link on
 //!   USART1 with hardware driver-enable, the CNC session on USART2 ([`cnc_uart`]), both through
 //!   the shared register-level driver (`plasma_tasks::uart`); the settings task that stores
-//!   `CONFIG SAVE` in flash ([`flash`]); the heartbeat LED; the stall judge on its own
+//!   `CONFIG SAVE` in flash and the history task that keeps the event history there
+//!   ([`flash`]); the heartbeat LED; the stall judge on its own
 //!   executor above every task;
 //! - [`watchdog`]: the IWDG, started before anything that could hang, then fed by the stall
 //!   judge only while every task reports progress;
@@ -164,9 +165,7 @@ mod image {
         // Serial and flash interrupts below the I/O executor (docs/board.md, START latency).
         set_serial_priorities();
 
-        let mut store = flash::open(flash::SettingsFlash::new(embassy_stm32::flash::Flash::new(
-            p.FLASH, Irqs,
-        )));
+        let (mut store, history) = flash::open(embassy_stm32::flash::Flash::new(p.FLASH, Irqs));
         let loaded = shared_settings::load::<Nucleo>(store.as_mut()).await;
         let settings = shared_settings::at_boot(loaded.settings, user_button_held());
         // The pulls belong to the board's input circuit (the pin table's polarity), not to
@@ -202,6 +201,7 @@ mod image {
 
         let bridge = BRIDGE.init_with(|| Bridge::new(settings, now()));
         bridge.set_boot_report(now(), boot_text(&boot, loaded.outcome));
+        bridge.record_reset(now(), boot.cause);
         start_tasks(
             spawner,
             Tasks {
@@ -212,6 +212,7 @@ mod image {
                 ps: ps_uart,
                 cnc: CncUart(cnc_uart),
                 store,
+                history,
                 led: crate::pins::led(),
                 watchdog: iwdg,
             },
