@@ -94,12 +94,7 @@ pub async fn run<B: Board>(mut store: Option<Store<B>>, progress: TaskId) {
         report_flash_errors::<B>();
     }
     loop {
-        let next = select3(
-            DRAFTS.receive(),
-            REQUEST.wait(),
-            Timer::after_millis(250),
-        )
-        .await;
+        let next = select3(DRAFTS.receive(), REQUEST.wait(), Timer::after_millis(250)).await;
         report(progress);
         match next {
             Either3::First(draft) => write::<B>(&mut store, draft).await,

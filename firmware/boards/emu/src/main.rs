@@ -68,10 +68,10 @@ mod image {
     use plasma_tasks::boot::{boot_text, user_button_held};
     use plasma_tasks::clock::now;
     use plasma_tasks::clock_tree::UsartClock;
+    use plasma_tasks::history;
     use plasma_tasks::layout::{Tasks, set_serial_priorities};
     use plasma_tasks::reset;
     use plasma_tasks::safe_state::drive_safe_state;
-    use plasma_tasks::history;
     use plasma_tasks::settings as shared_settings;
     use static_cell::StaticCell;
     use stm32_metapac::{Interrupt, USART1, USART2, interrupt};

@@ -128,7 +128,10 @@ impl NorFlash for GuardedFlash {
 /// (docs/board.md). Call once.
 pub fn open(
     flash: Flash<'static, Async>,
-) -> (Option<settings::Store<Nucleo>>, Option<history::Store<Nucleo>>) {
+) -> (
+    Option<settings::Store<Nucleo>>,
+    Option<history::Store<Nucleo>>,
+) {
     plasma_tasks::chip::enable_syscfg_clock();
     if pac::SYSCFG.memrmp().read().fb_mode() {
         defmt::error!("flash banks swapped (BFB2 set): settings and history will not be kept");
