@@ -93,23 +93,24 @@ pub async fn run<B: Board>(mut store: Option<Store<B>>, progress: TaskId) {
         }
         report_flash_errors::<B>();
     }
+    let mut asked: Option<HistoryRequest> = None;
     loop {
+        // A `HISTORY` is answered once the drafts handed over before it are written: the
+        // answer shows them.
+        if DRAFTS.is_empty()
+            && let Some(request) = asked.take()
+        {
+            let answer = match store.as_mut() {
+                Some(history) => serve(history, request).await,
+                None => Err(HistoryUnavailable),
+            };
+            ANSWER.signal(answer);
+        }
         let next = select3(DRAFTS.receive(), REQUEST.wait(), Timer::after_millis(250)).await;
         report(progress);
         match next {
             Either3::First(draft) => write::<B>(&mut store, draft).await,
-            Either3::Second(request) => {
-                // What the bridge handed over before the command is in the answer.
-                while let Ok(draft) = DRAFTS.try_receive() {
-                    write::<B>(&mut store, draft).await;
-                    report(progress);
-                }
-                let answer = match store.as_mut() {
-                    Some(history) => serve(history, request).await,
-                    None => Err(HistoryUnavailable),
-                };
-                ANSWER.signal(answer);
-            }
+            Either3::Second(request) => asked = Some(request),
             Either3::Third(()) => {}
         }
     }

@@ -92,7 +92,8 @@ impl<F: NorFlash> HistoryStore<F> {
     }
 
     /// Calls `each` with every decodable entry, oldest first; returns how many were skipped.
-    async fn for_each(&mut self, mut each: impl FnMut(Entry)) -> Result<u32, StoreError<F::Error>> {
+    /// `dyn`: one copy of the read loop in the image for every caller.
+    async fn for_each(&mut self, each: &mut dyn FnMut(Entry)) -> Result<u32, StoreError<F::Error>> {
         let mut queue = Self::queue(&mut self.flash, self.region.clone());
         let mut items = queue.iter().await?;
         let mut skipped = 0u32;
@@ -124,7 +125,7 @@ impl<F: NorFlash> HistoryStore<F> {
         let mut newest: Option<(u32, u32)> = None;
         let mut entries = 0u32;
         let skipped = self
-            .for_each(|entry| {
+            .for_each(&mut |entry| {
                 entries = entries.saturating_add(1);
                 let (sequence, boot) = newest.unwrap_or((0, 0));
                 newest = Some((sequence.max(entry.sequence), boot.max(entry.boot)));
@@ -234,7 +235,7 @@ impl<F: NorFlash> HistoryStore<F> {
     pub async fn newest<const N: usize>(&mut self) -> Result<Newest<N>, StoreError<F::Error>> {
         let mut window: Deque<Entry, N> = Deque::new();
         let skipped = self
-            .for_each(|entry| {
+            .for_each(&mut |entry| {
                 if window.is_full() {
                     window.pop_front();
                 }
