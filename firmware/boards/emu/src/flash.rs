@@ -50,13 +50,15 @@ pub type HistoryFlash = KeptFlash<HISTORY_SIZE>;
 /// The kept settings flash (erased on QEMU's first boot). Call once.
 pub fn settings_flash() -> SettingsFlash {
     // SAFETY: called once, at boot, before anything else uses SETTINGS.
-    KeptFlash::take(unsafe { &mut *(&raw mut SETTINGS) })
+    let place = &raw mut SETTINGS;
+    KeptFlash::take(unsafe { &mut *place })
 }
 
 /// The kept history flash (erased on QEMU's first boot). Call once.
 pub fn history_flash() -> HistoryFlash {
     // SAFETY: called once, at boot, before anything else uses HISTORY.
-    KeptFlash::take(unsafe { &mut *(&raw mut HISTORY) })
+    let place = &raw mut HISTORY;
+    KeptFlash::take(unsafe { &mut *place })
 }
 
 impl<const SIZE: usize> KeptFlash<SIZE> {
