@@ -19,7 +19,19 @@ fn main() {
     let out = PathBuf::from(env::var("OUT_DIR").unwrap());
     let text = fs::read_to_string(&memory_x)
         .unwrap_or_else(|e| panic!("cannot read {}: {e}", memory_x.display()));
-    check_storage_regions(&text);
+    let (settings, history) = check_storage_regions(&text);
+    // The regions' sizes for the code (`plasma_tasks::regions`): memory.x stays their one
+    // source.
+    fs::write(
+        out.join("regions.rs"),
+        format!(
+            "/// The SETTINGS region's size in bytes (memory.x).\n\
+             pub const SETTINGS_BYTES: usize = {settings};\n\
+             /// The HISTORY region's size in bytes (memory.x).\n\
+             pub const HISTORY_BYTES: usize = {history};\n"
+        ),
+    )
+    .unwrap();
     fs::write(out.join("memory.x"), text).unwrap();
     println!("cargo:rustc-link-search={}", out.display());
 }
@@ -27,8 +39,8 @@ fn main() {
 /// The settings store and the history each need whole 2 KiB pages, at least two of them
 /// (sequential-storage's minimum), outside the program's FLASH region and apart from each
 /// other. A mistake here would erase code or settings at run time, so it fails the build
-/// instead.
-fn check_storage_regions(memory_x: &str) {
+/// instead. Returns the two sizes (settings, history).
+fn check_storage_regions(memory_x: &str) -> (u64, u64) {
     const PAGE: u64 = 2048;
     let flash = region(memory_x, "FLASH");
     let settings = region(memory_x, "SETTINGS");
@@ -47,6 +59,7 @@ fn check_storage_regions(memory_x: &str) {
         history.0 + history.1 <= settings.0 || settings.0 + settings.1 <= history.0,
         "memory.x: HISTORY overlaps SETTINGS"
     );
+    (settings.1, history.1)
 }
 
 /// `(origin, length)` of a MEMORY region line such as `FLASH : ORIGIN = 0x08000000, LENGTH = 512K`.

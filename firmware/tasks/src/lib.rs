@@ -48,6 +48,8 @@ pub mod log_text;
 #[cfg(target_os = "none")]
 pub mod progress;
 #[cfg(target_os = "none")]
+pub mod regions;
+#[cfg(target_os = "none")]
 pub mod reset;
 #[cfg(target_os = "none")]
 pub mod safe_state;

@@ -16,10 +16,10 @@ use embassy_time::Timer;
 use embedded_storage_async::nor_flash::{ErrorType, NorFlash, ReadNorFlash};
 use plasma_firmware::storage::ram_flash::{PAGE_SIZE, RamFlash, RamFlashError, WORD_SIZE};
 
-/// The Nucleo's settings region: 8 KiB (memory.x).
-pub const SETTINGS_SIZE: usize = 8192;
-/// The Nucleo's history region: 16 KiB (memory.x).
-pub const HISTORY_SIZE: usize = 16384;
+/// The Nucleo's settings region (memory.x).
+pub const SETTINGS_SIZE: usize = plasma_tasks::regions::SETTINGS_BYTES;
+/// The Nucleo's history region (memory.x).
+pub const HISTORY_SIZE: usize = plasma_tasks::regions::HISTORY_BYTES;
 
 /// Page erase time (STM32L476 datasheet, tERASE typical).
 const PAGE_ERASE_US: u64 = 22_000;
