@@ -116,7 +116,7 @@ pub async fn run<B: Board>(mut store: Option<Store<B>>, progress: TaskId) {
     }
 }
 
-/// Writes one draft (dropped, and logged, when the history is not kept or the write failed).
+/// Writes one draft (dropped when the history is not kept, and logged when the write failed).
 async fn write<B: Board>(store: &mut Option<Store<B>>, draft: Draft) {
     let Some(history) = store.as_mut() else {
         return;
