@@ -84,6 +84,7 @@ impl Session {
                 interlock_word(Interlock::TorchOnAtPowerUp)
             ),
             IoEvent::RampdownError => l.write_str("!RAMPDOWN ERROR\r\n"),
+            IoEvent::SystemError => l.write_str("!SYSTEM ERROR\r\n"),
         });
     }
 

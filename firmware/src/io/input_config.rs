@@ -64,7 +64,7 @@ pub struct InputConfig {
     /// One bit per input ([`slot`]): active high.
     active_high: u8,
     /// Debounce per input, ms, in [`Input::ALL`] order.
-    debounce_ms: [u8; 7],
+    debounce_ms: [u8; 8],
 }
 
 impl Default for InputConfig {
@@ -80,8 +80,8 @@ impl InputConfig {
     pub const REFERENCE: InputConfig = InputConfig {
         active_high: 0,
         // Input::ALL order: TORCH_ON, HOLD, PIERCE_COMPLETE, CORNER_CURRENT, MOTION,
-        // NOT_READY, RAMPDOWN_ERROR.
-        debounce_ms: [1, 5, 5, 5, 0, 5, 5],
+        // NOT_READY, RAMPDOWN_ERROR, SYSTEM_ERROR.
+        debounce_ms: [1, 5, 5, 5, 0, 5, 5, 5],
     };
 
     /// The settings of one input.
@@ -114,20 +114,22 @@ impl InputConfig {
 
     /// The stored form: the active-high bits (one per input, [`Input::ALL`] order) and the
     /// debounce times in ms.
-    pub(crate) const fn to_stored(self) -> (u8, [u8; 7]) {
+    pub(crate) const fn to_stored(self) -> (u8, [u8; 8]) {
         (self.active_high, self.debounce_ms)
     }
 
     /// From the stored form; `None` if a bit names no input or a time is above
     /// [`MAX_DEBOUNCE`].
-    pub(crate) fn from_stored(active_high: u8, debounce_ms: [u8; 7]) -> Option<Self> {
+    pub(crate) fn from_stored(active_high: u8, debounce_ms: [u8; 8]) -> Option<Self> {
         let max = MAX_DEBOUNCE.as_millis();
-        (active_high < 1 << 7 && debounce_ms.iter().all(|&ms| u64::from(ms) <= max)).then_some(
-            InputConfig {
+        // Eight inputs: every bit of `active_high` names one.
+        debounce_ms
+            .iter()
+            .all(|&ms| u64::from(ms) <= max)
+            .then_some(InputConfig {
                 active_high,
                 debounce_ms,
-            },
-        )
+            })
     }
 }
 
@@ -141,12 +143,13 @@ pub(super) const fn slot(input: Input) -> usize {
         Input::Motion => 4,
         Input::NotReady => 5,
         Input::RampdownError => 6,
+        Input::SystemError => 7,
     }
 }
 
 /// `input`'s element of a per-input array (in [`Input::ALL`] order), without indexing.
-pub(super) const fn pick<T: Copy>(items: &[T; 7], input: Input) -> T {
-    let [a, b, c, d, e, f, g] = items;
+pub(super) const fn pick<T: Copy>(items: &[T; 8], input: Input) -> T {
+    let [a, b, c, d, e, f, g, h] = items;
     *match input {
         Input::TorchOn => a,
         Input::Hold => b,
@@ -155,12 +158,13 @@ pub(super) const fn pick<T: Copy>(items: &[T; 7], input: Input) -> T {
         Input::Motion => e,
         Input::NotReady => f,
         Input::RampdownError => g,
+        Input::SystemError => h,
     }
 }
 
 /// `input`'s element of a per-input array, to change it.
-pub(super) fn pick_mut<T>(items: &mut [T; 7], input: Input) -> &mut T {
-    let [a, b, c, d, e, f, g] = items;
+pub(super) fn pick_mut<T>(items: &mut [T; 8], input: Input) -> &mut T {
+    let [a, b, c, d, e, f, g, h] = items;
     match input {
         Input::TorchOn => a,
         Input::Hold => b,
@@ -169,6 +173,7 @@ pub(super) fn pick_mut<T>(items: &mut [T; 7], input: Input) -> &mut T {
         Input::Motion => e,
         Input::NotReady => f,
         Input::RampdownError => g,
+        Input::SystemError => h,
     }
 }
 

@@ -17,7 +17,7 @@ use super::input_config::{InputConfig, pick, pick_mut, slot};
 use super::signals::{Input, Inputs};
 use plasma_protocol::time::{Duration, Instant};
 
-/// Raw pin levels of the seven inputs (`true` = pin high), as the board reads them.
+/// Raw pin levels of the eight inputs (`true` = pin high), as the board reads them.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct PinLevels(u8);
@@ -26,7 +26,7 @@ impl PinLevels {
     /// Every pin low.
     pub const ALL_LOW: PinLevels = PinLevels(0);
     /// Every pin high (the idle level of pulled-up, active-low inputs).
-    pub const ALL_HIGH: PinLevels = PinLevels(0x7f);
+    pub const ALL_HIGH: PinLevels = PinLevels(0xff);
 
     /// These levels with `input`'s pin at `high`.
     pub const fn with(self, input: Input, high: bool) -> Self {
@@ -43,12 +43,12 @@ impl PinLevels {
 /// Room for one change of every input several times over.
 const CHANGE_QUEUE: usize = 16;
 
-/// Polarity correction and debounce for the seven inputs, sans-IO.
+/// Polarity correction and debounce for the eight inputs, sans-IO.
 #[derive(Debug, Clone)]
 pub(crate) struct InputFilter {
     config: InputConfig,
     /// One per input, in [`Input::ALL`] order, on the logical (polarity-corrected) level.
-    channels: [Debouncer; 7],
+    channels: [Debouncer; 8],
     changes: Deque<(Input, bool), CHANGE_QUEUE>,
 }
 
@@ -242,7 +242,7 @@ mod tests {
         /// accepted levels, and `poll_at` names the exact instant the next level is accepted.
         #[test]
         fn changes_replay_the_levels(
-            debounce_us in prop::collection::vec(0u64..3_000, 7),
+            debounce_us in prop::collection::vec(0u64..3_000, 8),
             steps in prop::collection::vec((0u64..2_000, any::<u8>(), any::<bool>()), 0..80),
         ) {
             let mut config = InputConfig::default();
@@ -257,7 +257,7 @@ mod tests {
                 if poll_only {
                     filter.poll(us(now));
                 } else {
-                    filter.on_pins(us(now), PinLevels(bits & 0x7f));
+                    filter.on_pins(us(now), PinLevels(bits));
                 }
                 while let Some((input, active)) = filter.poll_change() {
                     prop_assert_ne!(replay.get(input), active, "a change must change the level");

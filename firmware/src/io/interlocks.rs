@@ -98,6 +98,7 @@ impl Interlocks {
         match input {
             Input::Motion => self.motion.on_level(now, active),
             Input::RampdownError if active && !was => self.push_event(IoEvent::RampdownError),
+            Input::SystemError if active && !was => self.push_event(IoEvent::SystemError),
             _ => {}
         }
         self.step(now);
@@ -443,6 +444,8 @@ impl Interlocks {
             Some(Reason::LinkDown)
         } else if self.supply.fault_active || self.supply.fault_requires_action {
             Some(Reason::FaultActive)
+        } else if self.inputs.system_error {
+            Some(Reason::SystemErrorSignal)
         } else {
             None
         }

@@ -41,7 +41,8 @@
 //! - **READY** = link up, no fault requiring action, no blackout, the link reports the unit
 //!   ready, and the HPR NOT_READY input inactive. NOT_READY does not refuse START (the
 //!   supply itself ignores a start it is not ready for); it only clears READY.
-//!   **FAULT** = the link is down, or the supply reports a fault.
+//!   **FAULT** = the link is down, the supply reports a fault, or the HPR / MaxPro200
+//!   SYSTEM_ERROR signal is active.
 //!   With [`IoConfig::link_required`] cleared, the link state is left out of START, READY and
 //!   FAULT (a discrete-only installation).
 //! - **HOLD, PIERCE_COMPLETE, CORNER_CURRENT** pass from the CNC to the supply at once and
@@ -50,6 +51,9 @@
 //!   to the set corner percentage. None of them can start an arc.
 //! - **RAMPDOWN_ERROR** raises [`IoEvent::RampdownError`] on its rising edge (consumable wear,
 //!   not a fault).
+//! - **SYSTEM_ERROR** raises [`IoEvent::SystemError`] on its rising edge and holds FAULT on
+//!   while active. It does not refuse START: the manual says only that an error occurred
+//!   and that its code is read over the serial link, which decides the fault interlock.
 //!
 //! [`SafetyMonitor`] checks the TORCH_ON edges the board receives and the START pin against
 //! the safety rules, independently of [`Interlocks`] (it never reads their view of the

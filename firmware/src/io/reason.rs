@@ -81,6 +81,8 @@ pub enum Reason {
     NotReadySignal,
     /// FAULT on: the supply reports a fault.
     FaultActive,
+    /// FAULT on: the HPR / MaxPro200 SYSTEM_ERROR signal is active.
+    SystemErrorSignal,
     /// FAULT off: no fault and the link is up.
     FaultCleared,
 }
@@ -101,6 +103,7 @@ log_texts!(Reason, delegate Reason::Interlock(interlock) => interlock {
     Reason::UnitNotReady => "power supply reports not ready",
     Reason::NotReadySignal => "NOT_READY signal active",
     Reason::FaultActive => "power supply fault active",
+    Reason::SystemErrorSignal => "SYSTEM_ERROR signal active",
     Reason::FaultCleared => "no fault, link up",
 });
 
@@ -175,6 +178,9 @@ pub enum IoEvent {
     StuckTorchOnAtPowerUp,
     /// The HPR reports that the last arc did not ramp down properly (consumable wear).
     RampdownError,
+    /// The HPR / MaxPro200 SYSTEM_ERROR signal came on: an error occurred in the plasma
+    /// system (its code is read over the serial link).
+    SystemError,
 }
 
 impl fmt::Display for IoEvent {
@@ -192,6 +198,7 @@ impl fmt::Display for IoEvent {
                 f.write_str("torch-on active at power-up, ignored until released")
             }
             IoEvent::RampdownError => f.write_str("rampdown error"),
+            IoEvent::SystemError => f.write_str("system error signal"),
         }
     }
 }

@@ -24,11 +24,14 @@ pub enum Input {
     NotReady,
     /// Power supply (HPR): the last arc did not ramp down properly.
     RampdownError,
+    /// Power supply (HPR, MaxPro200): an error has occurred in the plasma system (its code
+    /// is read over the serial link). Optional: an open input reads inactive.
+    SystemError,
 }
 
 impl Input {
     /// Every input, in declaration order.
-    pub const ALL: [Input; 7] = [
+    pub const ALL: [Input; 8] = [
         Input::TorchOn,
         Input::Hold,
         Input::PierceComplete,
@@ -36,6 +39,7 @@ impl Input {
         Input::Motion,
         Input::NotReady,
         Input::RampdownError,
+        Input::SystemError,
     ];
 
     /// Signal name as printed in logs.
@@ -48,6 +52,7 @@ impl Input {
             Input::Motion => "MOTION",
             Input::NotReady => "NOT_READY",
             Input::RampdownError => "RAMPDOWN_ERROR",
+            Input::SystemError => "SYSTEM_ERROR",
         }
     }
 }
@@ -128,6 +133,8 @@ pub struct Inputs {
     pub not_ready: bool,
     /// See [`Input::RampdownError`].
     pub rampdown_error: bool,
+    /// See [`Input::SystemError`].
+    pub system_error: bool,
 }
 
 impl Inputs {
@@ -140,6 +147,7 @@ impl Inputs {
         motion: false,
         not_ready: false,
         rampdown_error: false,
+        system_error: false,
     };
 
     /// The level of one input.
@@ -152,6 +160,7 @@ impl Inputs {
             Input::Motion => self.motion,
             Input::NotReady => self.not_ready,
             Input::RampdownError => self.rampdown_error,
+            Input::SystemError => self.system_error,
         }
     }
 
@@ -165,6 +174,7 @@ impl Inputs {
             Input::Motion => &mut self.motion,
             Input::NotReady => &mut self.not_ready,
             Input::RampdownError => &mut self.rampdown_error,
+            Input::SystemError => &mut self.system_error,
         };
         *slot = active;
     }

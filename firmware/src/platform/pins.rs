@@ -138,6 +138,8 @@ pub const fn input(input: Input) -> Wiring {
         Input::CornerCurrent => Wiring::new(Port::A, 7, IN),
         Input::NotReady => Wiring::new(Port::A, 8, IN),
         Input::RampdownError => Wiring::new(Port::B, 10, IN),
+        // Optional (HPR, MaxPro200): unwired, the pull-up reads it inactive.
+        Input::SystemError => Wiring::new(Port::C, 2, IN),
     }
 }
 
@@ -237,8 +239,8 @@ pub const OUTPUTS: [Wiring; 7] = {
     clippy::indexing_slicing,
     reason = "evaluated at compile time: an index out of range fails the build"
 )]
-pub const INPUTS: [Wiring; 7] = {
-    let mut all = [input(Input::TorchOn); 7];
+pub const INPUTS: [Wiring; 8] = {
+    let mut all = [input(Input::TorchOn); 8];
     let mut i = 0;
     while i < all.len() {
         all[i] = input(Input::ALL[i]);
@@ -356,6 +358,7 @@ mod tests {
     fn pins_match_the_board_map() {
         assert_eq!(input(Input::TorchOn).pin.to_string(), "PA0");
         assert_eq!(input(Input::RampdownError).pin.to_string(), "PB10");
+        assert_eq!(input(Input::SystemError).pin.to_string(), "PC2");
         assert_eq!(output(Output::Start).pin.to_string(), "PB0");
         assert_eq!(output(Output::Fault).pin.to_string(), "PC7");
         assert_eq!(Port::C.register_block(), 0x4800_0800);

@@ -1,5 +1,5 @@
-//! The settings record the store keeps: a fixed layout, version 2 (version 1 is its first 29
-//! bytes and still loads). Decoding is strict: a wrong length, an unknown code, a value out of
+//! The settings record the store keeps: a fixed layout, version 3 (version 2 is its first 45
+//! bytes, version 1 its first 29, and both still load). Decoding is strict: a wrong length, an unknown code, a value out of
 //! range or a reserved bit set gives `None`, and the store falls back to the defaults.
 
 use plasma_protocol::cnc::phoenix::Format;
@@ -8,24 +8,28 @@ use plasma_protocol::serial::{Parity, PortConfig, StopBits};
 use plasma_protocol::time::Duration;
 
 use super::{CncPort, Process, Settings, ms, stop_bits_number, wiring};
-use crate::io::{IoConfig, MIN_START_GAP};
+use crate::io::{InputConfig, IoConfig, MIN_START_GAP, OutputConfig};
 use crate::link::{LinkConfig, ProtocolChoice};
 use crate::storage;
 
 /// Length of the version-1 record (no wiring, no CNC port block).
 pub const RECORD_V1_LEN: usize = 29;
 /// Length of the version-2 record: version 1, the CNC's wiring, then the CNC port block.
-pub const RECORD_LEN: usize = RECORD_V1_LEN + wiring::RECORD_LEN + CNC_BLOCK_LEN;
+pub const RECORD_V2_LEN: usize = RECORD_V1_LEN + wiring::RECORD_LEN + CNC_BLOCK_LEN;
+/// Length of the version-3 record: version 2, then the wiring of the inputs added since.
+pub const RECORD_LEN: usize = RECORD_V2_LEN + wiring::TAIL_LEN;
 /// Bytes of the CNC port block in the record: address, baud (LE u32), parity, stop bits.
 const CNC_BLOCK_LEN: usize = 7;
 
-// --- record layout, version 2 (version 1 is its first 29 bytes) ----------------------------
+// --- record layout, version 3 (version 2 is its first 45 bytes, version 1 its first 29) ----
 // 0 protocol | 1 node address | 2 parity | 3 stop bits | 4-5 response time-out ms (LE)
 // 6 retries | 7-8 poll ms | 9-12 slow-data ms | 13 HPR id | 14 failures before down
 // 15-16 start gap ms | 17-18 ARC_OK debounce ms | 19-20 transfer time-out ms | 21 flags
 // 22 Phoenix format | 23 process present | 24 mode | 25-26 amps raw | 27-28 pressure raw
-// 29 active-high inputs (bit per input) | 30-36 input debounce ms | 37 inverted outputs
+// 29 active-high inputs (bit per input; bit 7 SYSTEM_ERROR from version 3)
+// 30-36 debounce ms of the first seven inputs | 37 inverted outputs
 // 38 CNC address | 39-42 CNC baud (LE) | 43 CNC parity | 44 CNC stop bits
+// 45 SYSTEM_ERROR debounce ms (version 3)
 
 const FLAG_ARC_OK_REQUIRES_START: u8 = 1 << 0;
 const FLAG_DROP_START_ON_TRANSFER_TIMEOUT: u8 = 1 << 1;
@@ -95,7 +99,7 @@ impl CncPort {
 }
 
 impl storage::Persistent for Settings {
-    const VERSION: u8 = 2;
+    const VERSION: u8 = 3;
 
     fn encode(&self, out: &mut [u8]) -> usize {
         let mut r = [0u8; RECORD_LEN];
@@ -135,9 +139,12 @@ impl storage::Persistent for Settings {
             r[25..27].copy_from_slice(&process.amps.raw().to_le_bytes());
             r[27..29].copy_from_slice(&process.pressure.raw().to_le_bytes());
         }
-        let (wiring_bytes, cnc) = r[RECORD_V1_LEN..].split_at_mut(wiring::RECORD_LEN);
-        wiring_bytes.copy_from_slice(&wiring::encode(io));
+        let (wiring_bytes, wiring_tail) = wiring::encode(io);
+        let (wiring_slot, rest) = r[RECORD_V1_LEN..].split_at_mut(wiring::RECORD_LEN);
+        let (cnc, tail) = rest.split_at_mut(CNC_BLOCK_LEN);
+        wiring_slot.copy_from_slice(&wiring_bytes);
         cnc.copy_from_slice(&self.cnc.encode());
+        tail.copy_from_slice(&wiring_tail);
         match out.get_mut(..RECORD_LEN) {
             Some(slot) => {
                 slot.copy_from_slice(&r);
@@ -149,25 +156,38 @@ impl storage::Persistent for Settings {
     }
 
     fn decode(payload: &[u8]) -> Option<Self> {
-        let (v1, rest) = payload.split_at_checked(RECORD_V1_LEN)?;
-        let (wiring_bytes, cnc) = rest.split_at_checked(wiring::RECORD_LEN)?;
-        let (inputs, outputs) = wiring::decode(wiring_bytes.try_into().ok()?)?;
-        let mut settings = Settings {
-            cnc: CncPort::decode(cnc)?,
-            ..decode_v1(v1)?
-        };
-        settings.io.inputs = inputs;
-        settings.io.outputs = outputs;
-        settings.is_valid().then_some(settings)
+        let (v2, tail) = payload.split_at_checked(RECORD_V2_LEN)?;
+        decode_v2(v2, |wiring_bytes| {
+            wiring::decode(wiring_bytes, tail.try_into().ok()?)
+        })
     }
 
     /// Version 1 had neither the wiring nor the CNC port block: both keep their defaults.
+    /// Version 2 had no SYSTEM_ERROR input: it keeps the reference board's wiring.
     fn migrate(version: u8, payload: &[u8]) -> Option<Self> {
         match version {
             1 => decode_v1(payload),
+            2 => decode_v2(payload, wiring::decode_v2),
             _ => None,
         }
     }
+}
+
+/// The version-2 record (also the first part of version 3), its wiring read by `wiring`.
+fn decode_v2(
+    payload: &[u8],
+    wiring: impl FnOnce(&[u8; wiring::RECORD_LEN]) -> Option<(InputConfig, OutputConfig)>,
+) -> Option<Settings> {
+    let (v1, rest) = payload.split_at_checked(RECORD_V1_LEN)?;
+    let (wiring_bytes, cnc) = rest.split_at_checked(wiring::RECORD_LEN)?;
+    let (inputs, outputs) = wiring(wiring_bytes.try_into().ok()?)?;
+    let mut settings = Settings {
+        cnc: CncPort::decode(cnc)?,
+        ..decode_v1(v1)?
+    };
+    settings.io.inputs = inputs;
+    settings.io.outputs = outputs;
+    settings.is_valid().then_some(settings)
 }
 
 /// The version-1 record (also the first part of version 2), the CNC port at its defaults.
@@ -323,7 +343,53 @@ mod tests {
         let migrated = Settings::migrate(1, v1).unwrap();
         assert_eq!(migrated.link.hpr_id, 2);
         assert_eq!(migrated.cnc, crate::settings::CncPort::DEFAULT);
-        assert_eq!(Settings::migrate(3, v1), None);
+        assert_eq!(Settings::migrate(4, v1), None);
+    }
+
+    #[test]
+    fn a_version_2_record_loads_with_the_reference_system_error_wiring() {
+        let mut s = Settings::default();
+        s.set(ConfigKey::HprId, "2").unwrap();
+        s.set(ConfigKey::RampdownErrorActive, "HIGH").unwrap();
+        s.set(ConfigKey::CncBaud, "19200").unwrap();
+        s.set(ConfigKey::SystemErrorActive, "HIGH").unwrap();
+        s.set(ConfigKey::SystemErrorDebounceMs, "40").unwrap();
+        let mut out = [0u8; storage::MAX_PAYLOAD];
+        let len = s.encode(&mut out);
+        assert_eq!((len, RECORD_V2_LEN + 1), (RECORD_LEN, 46));
+        assert_eq!(out[45], 40);
+        // A version-2 record is the first 45 bytes of a version-3 one, SYSTEM_ERROR's
+        // active-high bit clear (version 2 never set it).
+        let mut v2 = [0u8; RECORD_V2_LEN];
+        v2.copy_from_slice(&out[..RECORD_V2_LEN]);
+        assert_eq!(Settings::decode(&v2), None, "not a version-3 record");
+        assert_eq!(
+            Settings::migrate(2, &v2),
+            None,
+            "bit 7 set: not from version 2"
+        );
+        v2[29] &= !(1 << 7);
+        let migrated = Settings::migrate(2, &v2).unwrap();
+        assert_eq!(migrated.link.hpr_id, 2);
+        assert_eq!(migrated.cnc.framing.baud, 19200);
+        assert_eq!(
+            migrated.get(ConfigKey::RampdownErrorActive),
+            ConfigValue::Word("HIGH")
+        );
+        let reference = crate::io::InputConfig::REFERENCE.get(crate::io::Input::SystemError);
+        assert_eq!(
+            migrated.io.inputs.get(crate::io::Input::SystemError),
+            reference
+        );
+        assert_eq!(
+            migrated.get(ConfigKey::SystemErrorActive),
+            ConfigValue::Word("LOW")
+        );
+        assert_eq!(
+            migrated.get(ConfigKey::SystemErrorDebounceMs),
+            ConfigValue::Number(5)
+        );
+        assert_eq!(Settings::decode(&out[..len]), Some(s));
     }
 
     #[test]
@@ -351,7 +417,8 @@ mod tests {
         assert_eq!(corrupt(22, 2), None, "no such Phoenix format");
         assert_eq!(corrupt(23, 2), None, "bad process tag");
         assert_eq!(corrupt(24, 1), None, "process bytes without a process");
-        assert_eq!(corrupt(29, 0x80), None, "an eighth input active high");
+        assert!(corrupt(29, 0x80).is_some(), "SYSTEM_ERROR active high");
+        assert_eq!(corrupt(45, 101), None, "SYSTEM_ERROR debounce above 100 ms");
         assert_eq!(corrupt(30, 101), None, "TORCH_ON debounce above 100 ms");
         assert_eq!(corrupt(37, 1), None, "START inverted");
         assert_eq!(corrupt(38, 0), None, "CNC node address 0 (broadcast)");
@@ -393,7 +460,7 @@ mod tests {
             migrated.get(ConfigKey::TorchOnActive),
             ConfigValue::Word("LOW")
         );
-        assert_eq!(Settings::migrate(3, v1), None);
+        assert_eq!(Settings::migrate(4, v1), None);
         // And the wiring round-trips in version 2.
         assert_eq!(Settings::decode(&out[..len]), Some(s));
     }

@@ -23,7 +23,7 @@ enum Wire {
 }
 
 /// Every wiring key and what it sets: the one table the getter, the setter and the tests read.
-const KEYS: [(ConfigKey, Wire); 16] = [
+const KEYS: [(ConfigKey, Wire); 18] = [
     (ConfigKey::TorchOnActive, Wire::Active(Input::TorchOn)),
     (
         ConfigKey::TorchOnDebounceMs,
@@ -61,6 +61,14 @@ const KEYS: [(ConfigKey, Wire); 16] = [
     (
         ConfigKey::RampdownErrorDebounceMs,
         Wire::DebounceMs(Input::RampdownError),
+    ),
+    (
+        ConfigKey::SystemErrorActive,
+        Wire::Active(Input::SystemError),
+    ),
+    (
+        ConfigKey::SystemErrorDebounceMs,
+        Wire::DebounceMs(Input::SystemError),
     ),
     (ConfigKey::PsHoldActive, Wire::OutputActive(Output::Hold)),
     (ConfigKey::FaultActive, Wire::OutputActive(Output::Fault)),
@@ -143,23 +151,49 @@ pub(super) fn set<'a>(
     })
 }
 
-/// Bytes of the wiring in the record: input active-high bits, seven debounce times (ms),
+/// Bytes of the wiring in the record from version 2: input active-high bits (SYSTEM_ERROR's
+/// is bit 7, unused before version 3), the first seven inputs' debounce times (ms),
 /// inverted-output bits.
 pub(super) const RECORD_LEN: usize = 9;
+/// Bytes of the wiring appended in version 3: SYSTEM_ERROR's debounce time (ms).
+pub(super) const TAIL_LEN: usize = 1;
+/// The tail of a record older than version 3: the reference board's debounce.
+pub(super) const DEFAULT_TAIL: [u8; TAIL_LEN] = {
+    let (_, debounce) = InputConfig::REFERENCE.to_stored();
+    [debounce[7]]
+};
 
-/// The wiring's part of the record.
-pub(super) fn encode(io: &IoConfig) -> [u8; RECORD_LEN] {
-    let (high, [a, b, c, d, e, f, g]) = io.inputs.to_stored();
-    [high, a, b, c, d, e, f, g, io.outputs.bits()]
+/// The wiring's part of the record and its version-3 tail.
+pub(super) fn encode(io: &IoConfig) -> ([u8; RECORD_LEN], [u8; TAIL_LEN]) {
+    let (high, [a, b, c, d, e, f, g, system_error]) = io.inputs.to_stored();
+    (
+        [high, a, b, c, d, e, f, g, io.outputs.bits()],
+        [system_error],
+    )
 }
 
-/// The wiring from its part of the record; `None` if a bit or a time is out of range.
-pub(super) fn decode(bytes: &[u8; RECORD_LEN]) -> Option<(InputConfig, OutputConfig)> {
+/// The wiring from its part of the record and its tail; `None` if a bit or a time is out of
+/// range.
+pub(super) fn decode(
+    bytes: &[u8; RECORD_LEN],
+    tail: [u8; TAIL_LEN],
+) -> Option<(InputConfig, OutputConfig)> {
     let [high, a, b, c, d, e, f, g, outputs] = *bytes;
+    let [system_error] = tail;
     Some((
-        InputConfig::from_stored(high, [a, b, c, d, e, f, g])?,
+        InputConfig::from_stored(high, [a, b, c, d, e, f, g, system_error])?,
         OutputConfig::from_bits(outputs)?,
     ))
+}
+
+/// The wiring of a version-2 record: SYSTEM_ERROR at the reference board's settings. Its
+/// active-high bit was unused then, so a record that sets it is not one version 2 wrote.
+pub(super) fn decode_v2(bytes: &[u8; RECORD_LEN]) -> Option<(InputConfig, OutputConfig)> {
+    let [high, ..] = *bytes;
+    if high & 1 << 7 != 0 {
+        return None;
+    }
+    decode(bytes, DEFAULT_TAIL)
 }
 
 #[cfg(test)]
@@ -198,8 +232,20 @@ mod tests {
         ] {
             set(&mut io, key, value).unwrap().unwrap();
         }
-        let bytes = encode(&io);
-        assert_eq!(decode(&bytes), Some((io.inputs, io.outputs)));
+        set(&mut io, ConfigKey::SystemErrorActive, "HIGH")
+            .unwrap()
+            .unwrap();
+        set(&mut io, ConfigKey::SystemErrorDebounceMs, "20")
+            .unwrap()
+            .unwrap();
+        let (bytes, tail) = encode(&io);
+        assert_eq!(tail, [20]);
+        assert_eq!(decode(&bytes, tail), Some((io.inputs, io.outputs)));
+        assert_eq!(
+            decode_v2(&bytes),
+            None,
+            "SYSTEM_ERROR's bit in a version-2 record"
+        );
         assert_eq!(
             get(&io, ConfigKey::TorchOnActive),
             Some(ConfigValue::Word("HIGH"))
@@ -216,9 +262,13 @@ mod tests {
         let corrupt = |i: usize, v: u8| {
             let mut b = bytes;
             b[i] = v;
-            decode(&b)
+            decode(&b, tail)
         };
-        assert_eq!(corrupt(0, 0x80), None, "no eighth input");
+        assert_eq!(
+            decode(&bytes, [101]),
+            None,
+            "SYSTEM_ERROR debounce above 100 ms"
+        );
         assert_eq!(corrupt(3, 101), None, "debounce above 100 ms");
         assert_eq!(corrupt(8, 1), None, "START inverted");
     }

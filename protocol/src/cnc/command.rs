@@ -201,6 +201,8 @@ pub enum ConfigKey {
     NotReadyDebounceMs,
     RampdownErrorActive,
     RampdownErrorDebounceMs,
+    SystemErrorActive,
+    SystemErrorDebounceMs,
     PsHoldActive,
     FaultActive,
     // The CNC port: node address and framing (as a Powermax, and for the text protocol).
@@ -212,7 +214,7 @@ pub enum ConfigKey {
 
 impl ConfigKey {
     /// Every key, in the order `CONFIG` lists them.
-    pub const ALL: [ConfigKey; 37] = [
+    pub const ALL: [ConfigKey; 39] = [
         ConfigKey::Protocol,
         ConfigKey::Address,
         ConfigKey::Parity,
@@ -244,6 +246,8 @@ impl ConfigKey {
         ConfigKey::NotReadyDebounceMs,
         ConfigKey::RampdownErrorActive,
         ConfigKey::RampdownErrorDebounceMs,
+        ConfigKey::SystemErrorActive,
+        ConfigKey::SystemErrorDebounceMs,
         ConfigKey::PsHoldActive,
         ConfigKey::FaultActive,
         ConfigKey::CncAddress,
@@ -286,6 +290,8 @@ impl ConfigKey {
             ConfigKey::NotReadyDebounceMs => "not_ready_debounce_ms",
             ConfigKey::RampdownErrorActive => "rampdown_error_active",
             ConfigKey::RampdownErrorDebounceMs => "rampdown_error_debounce_ms",
+            ConfigKey::SystemErrorActive => "system_error_active",
+            ConfigKey::SystemErrorDebounceMs => "system_error_debounce_ms",
             ConfigKey::PsHoldActive => "ps_hold_active",
             ConfigKey::FaultActive => "fault_active",
             ConfigKey::CncAddress => "cnc_address",

@@ -426,7 +426,7 @@ fn config_get_set_and_save_round_trip_through_the_settings_record() {
          hold_debounce_ms=5 pierce_complete_active=LOW pierce_complete_debounce_ms=5 \
          corner_current_active=LOW corner_current_debounce_ms=5 motion_active=LOW \
          motion_debounce_ms=0 not_ready_active=LOW not_ready_debounce_ms=5 \
-         rampdown_error_active=LOW rampdown_error_debounce_ms=5 ps_hold_active=HIGH \
+         rampdown_error_active=LOW rampdown_error_debounce_ms=5 system_error_active=LOW system_error_debounce_ms=5 ps_hold_active=HIGH \
          fault_active=HIGH cnc_address=1 cnc_baud=115200 cnc_parity=NONE \
          cnc_stop_bits=1"
     );

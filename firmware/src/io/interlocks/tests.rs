@@ -945,6 +945,33 @@ fn rampdown_error_is_an_event_on_its_rising_edge() {
     assert!(rig.transitions.is_empty());
 }
 
+#[test]
+fn system_error_holds_fault_on_and_is_an_event_but_does_not_drop_start() {
+    // HPR manual (002_72b43a5685974c77.txt) line 51: System Error, an output of the unit,
+    // "indicates that an error has occurred in the plasma system. Use the serial interface
+    // to query for the specific error code number." A fault seen on the wire, so FAULT; the
+    // manual does not say the unit cannot cut, so START is left to the link's fault report.
+    let mut rig = Rig::healthy();
+    rig.torch(ms(100), true);
+    assert!(rig.start());
+    rig.clear();
+    rig.input(ms(200), Input::SystemError, true);
+    rig.input(ms(250), Input::SystemError, true);
+    assert_eq!(rig.events, [IoEvent::SystemError]);
+    assert!(rig.io.outputs().fault && rig.start() && rig.io.outputs().ready);
+    assert_eq!(
+        (rig.transitions[0].output, rig.transitions[0].reason),
+        (Output::Fault, Reason::SystemErrorSignal)
+    );
+    rig.input(ms(300), Input::SystemError, false);
+    assert!(!rig.io.outputs().fault);
+    assert_eq!(
+        rig.transitions.last().map(|t| t.reason),
+        Some(Reason::FaultCleared)
+    );
+    assert_eq!(rig.events.len(), 1, "an event on the rising edge only");
+}
+
 // ---- logs ----
 
 #[test]
