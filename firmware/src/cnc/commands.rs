@@ -64,6 +64,7 @@ impl Session {
             Command::Events(on) => events(ctx, on),
             Command::Config(config) => return self.config(ctx, config),
             Command::Torch(on) => self.torch(on),
+            Command::Power(on) => self.power(ctx, on),
             Command::Raw(frame) => return self.raw(ctx, frame),
             Command::History(history) => return self.history(history),
             Command::Clock(set) => Session::clock(ctx, set),
@@ -171,6 +172,16 @@ impl Session {
         } else {
             ok_line(|w| w.field("torch", on_off(on)))
         }
+    }
+
+    /// `POWER ON|OFF`: the REMOTE_POWER output, with or without a unit on the line (one that
+    /// is off has no link). HPR manual: Remote Power "is used to turn the power on or off".
+    fn power(&mut self, ctx: &mut Context<'_>, on: bool) -> ReplyLine {
+        if ctx.settings.io.remote_power != on {
+            ctx.settings.io.remote_power = on;
+            self.io_config_changed = true;
+        }
+        ok_line(|w| w.field("power", on_off(on)))
     }
 
     fn config(&mut self, ctx: &mut Context<'_>, config: ConfigCommand<'_>) -> Option<ReplyLine> {

@@ -26,7 +26,7 @@ use plasma_protocol::powermax::FaultCode;
 /// writes them (one literal: the list joined at run time cost 180 B of flash);
 /// `help_is_the_parsers_word_lists` ties the two.
 const HELP_COMMANDS: &str = "HELP,ID,STATUS,LIMITS,FAULT,FAULTLOG,COUNTERS,CARTRIDGE,SET,REMOTE,\
-                             GASTEST,RESTART,GASES,CORNER,RESET,CLEARWARN,EVENTS,CONFIG,HISTORY,\
+                             GASTEST,POWER,RESTART,GASES,CORNER,RESET,CLEARWARN,EVENTS,CONFIG,HISTORY,\
                              CLOCK,RAW";
 /// The parser's [`SET_WORDS`](plasma_protocol::cnc::command::SET_WORDS) as HELP writes them.
 const HELP_SET: &str = "MODE,AMPS,PSI,PROCESS,HPR_PROCESS";
@@ -130,6 +130,14 @@ pub(super) fn status_line(ctx: &Context<'_>, refused: Option<FaultCode>) -> Repl
         w.field("motion", on_off(inputs.motion))?;
         w.field("arc_ok", on_off(outputs.arc_ok))?;
         w.field("ready", on_off(ready))?;
+        // The optional HPR signals, only while on: an installation without them wired sees
+        // the line it always did.
+        if inputs.system_error {
+            w.field("system_error", "ON")?;
+        }
+        if outputs.remote_power {
+            w.field("power", "ON")?;
+        }
         if let Some(state) = status.hpr.state.filter(|_| hpr) {
             w.field("state", state.0)?;
             w.field("state_name", state_name(state, family))?;

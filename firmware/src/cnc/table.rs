@@ -80,6 +80,7 @@ pub(super) fn route<'a>(command: &Command<'a>, family: Option<Family>) -> Route<
             | Command::Torch(_)
             | Command::History(_)
             | Command::Clock(_)
+            | Command::Power(_)
             | Command::Raw(_),
             _,
         ) => Route::Session,

@@ -39,6 +39,9 @@ pub struct IoConfig {
     pub inputs: InputConfig,
     /// Active level of the outputs a table may need inverted.
     pub outputs: OutputConfig,
+    /// REMOTE_POWER on: what the CNC last asked with `POWER ON|OFF`. Not stored: off after
+    /// every reset of the bridge, like every output (the safe state).
+    pub remote_power: bool,
 }
 
 impl IoConfig {
@@ -74,6 +77,7 @@ impl Default for IoConfig {
             ready_required: true,
             inputs: InputConfig::default(),
             outputs: OutputConfig::default(),
+            remote_power: false,
         }
     }
 }

@@ -303,6 +303,11 @@ impl Interlocks {
                 self.set_output(now, output, level, Reason::CncInput);
             }
         }
+        // The CNC's POWER command: powering the unit on or off cannot fire an arc either.
+        if self.outputs.remote_power != self.config.remote_power {
+            let level = self.config.remote_power;
+            self.set_output(now, Output::RemotePower, level, Reason::CncCommand);
+        }
 
         let not_ready = self.ready_blocker(now);
         let ready = not_ready.is_none();

@@ -7,7 +7,8 @@
 //! which knows only the pin table ([`pins::SAFE_STATE`]). An inverted
 //! output reads ON there. For PS_HOLD and FAULT that is the fail-safe reading; for START it
 //! would fire the torch, for ARC_OK it would start motion without an arc, for READY it would
-//! report a bridge that is not there. Those keep the table's polarity, always.
+//! report a bridge that is not there, for REMOTE_POWER it would power the unit on. Those keep
+//! the table's polarity, always.
 //!
 //! ```
 //! use plasma_firmware::io::{Output, OutputConfig, Outputs, Polarity};
@@ -46,6 +47,7 @@ const fn bit(output: Output) -> u8 {
         Output::ArcOk => 4,
         Output::Ready => 5,
         Output::Fault => 6,
+        Output::RemotePower => 7,
     }
 }
 

@@ -85,6 +85,8 @@ pub enum Reason {
     SystemErrorSignal,
     /// FAULT off: no fault and the link is up.
     FaultCleared,
+    /// REMOTE_POWER: the CNC's `POWER ON|OFF`.
+    CncCommand,
 }
 
 log_texts!(Reason, delegate Reason::Interlock(interlock) => interlock {
@@ -105,6 +107,7 @@ log_texts!(Reason, delegate Reason::Interlock(interlock) => interlock {
     Reason::FaultActive => "power supply fault active",
     Reason::SystemErrorSignal => "SYSTEM_ERROR signal active",
     Reason::FaultCleared => "no fault, link up",
+    Reason::CncCommand => "POWER command from CNC",
 });
 
 impl From<Interlock> for Reason {

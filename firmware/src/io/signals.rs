@@ -81,11 +81,14 @@ pub enum Output {
     Ready,
     /// To the CNC: the supply has a fault, or the link to it is lost.
     Fault,
+    /// To the power supply (HPR): remote power on, as the CNC last asked with `POWER ON|OFF`;
+    /// off from reset until it asks. Optional: a unit without it wired ignores it.
+    RemotePower,
 }
 
 impl Output {
     /// Every output, in declaration order.
-    pub const ALL: [Output; 7] = [
+    pub const ALL: [Output; 8] = [
         Output::Start,
         Output::Hold,
         Output::PierceComplete,
@@ -93,6 +96,7 @@ impl Output {
         Output::ArcOk,
         Output::Ready,
         Output::Fault,
+        Output::RemotePower,
     ];
 
     /// Signal name as printed in logs.
@@ -105,6 +109,7 @@ impl Output {
             Output::ArcOk => "ARC_OK",
             Output::Ready => "READY",
             Output::Fault => "FAULT",
+            Output::RemotePower => "REMOTE_POWER",
         }
     }
 }
@@ -198,6 +203,8 @@ pub struct Outputs {
     pub ready: bool,
     /// See [`Output::Fault`].
     pub fault: bool,
+    /// See [`Output::RemotePower`].
+    pub remote_power: bool,
 }
 
 impl Outputs {
@@ -210,6 +217,7 @@ impl Outputs {
         arc_ok: false,
         ready: false,
         fault: false,
+        remote_power: false,
     };
 
     /// The level of one output.
@@ -222,6 +230,7 @@ impl Outputs {
             Output::ArcOk => self.arc_ok,
             Output::Ready => self.ready,
             Output::Fault => self.fault,
+            Output::RemotePower => self.remote_power,
         }
     }
 
@@ -234,6 +243,7 @@ impl Outputs {
             Output::ArcOk => &mut self.arc_ok,
             Output::Ready => &mut self.ready,
             Output::Fault => &mut self.fault,
+            Output::RemotePower => &mut self.remote_power,
         };
         *slot = active;
     }

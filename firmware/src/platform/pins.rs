@@ -139,7 +139,7 @@ pub const fn input(input: Input) -> Wiring {
         Input::NotReady => Wiring::new(Port::A, 8, IN),
         Input::RampdownError => Wiring::new(Port::B, 10, IN),
         // Optional (HPR, MaxPro200): unwired, the pull-up reads it inactive.
-        Input::SystemError => Wiring::new(Port::C, 2, IN),
+        Input::SystemError => Wiring::new(Port::C, 5, IN),
     }
 }
 
@@ -153,6 +153,8 @@ pub const fn output(output: Output) -> Wiring {
         Output::ArcOk => Wiring::new(Port::B, 9, OUT),
         Output::Ready => Wiring::new(Port::B, 6, OUT),
         Output::Fault => Wiring::new(Port::C, 7, OUT),
+        // Optional (HPR): unwired, nothing follows it.
+        Output::RemotePower => Wiring::new(Port::C, 8, OUT),
     }
 }
 
@@ -224,8 +226,8 @@ pub const CNC_UART: UartPins = UartPins {
     clippy::indexing_slicing,
     reason = "evaluated at compile time: an index out of range fails the build"
 )]
-pub const OUTPUTS: [Wiring; 7] = {
-    let mut all = [output(Output::Start); 7];
+pub const OUTPUTS: [Wiring; 8] = {
+    let mut all = [output(Output::Start); 8];
     let mut i = 0;
     while i < all.len() {
         all[i] = output(Output::ALL[i]);
@@ -255,8 +257,8 @@ pub const INPUTS: [Wiring; 8] = {
     clippy::indexing_slicing,
     reason = "evaluated at compile time: an index out of range fails the build"
 )]
-pub const SAFE_STATE: [(Pin, bool); 7] = {
-    let mut all = [(OUTPUTS[0].pin, false); 7];
+pub const SAFE_STATE: [(Pin, bool); 8] = {
+    let mut all = [(OUTPUTS[0].pin, false); 8];
     let mut i = 0;
     while i < all.len() {
         all[i] = (
@@ -358,9 +360,10 @@ mod tests {
     fn pins_match_the_board_map() {
         assert_eq!(input(Input::TorchOn).pin.to_string(), "PA0");
         assert_eq!(input(Input::RampdownError).pin.to_string(), "PB10");
-        assert_eq!(input(Input::SystemError).pin.to_string(), "PC2");
+        assert_eq!(input(Input::SystemError).pin.to_string(), "PC5");
         assert_eq!(output(Output::Start).pin.to_string(), "PB0");
         assert_eq!(output(Output::Fault).pin.to_string(), "PC7");
+        assert_eq!(output(Output::RemotePower).pin.to_string(), "PC8");
         assert_eq!(Port::C.register_block(), 0x4800_0800);
         assert_eq!(output(Output::Fault).pin.port_pin(), 2 * 16 + 7);
         assert_eq!(output(Output::ArcOk).pin.mask(), 1 << 9);

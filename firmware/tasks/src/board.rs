@@ -4,7 +4,7 @@ use embedded_storage_async::nor_flash::NorFlash;
 use plasma_firmware::io::{Outputs, PinLevels};
 use plasma_firmware::platform::runner::ConfigurablePort;
 
-/// The seven discrete inputs, owned by the I/O task. Their edges come through the EXTI
+/// The eight discrete inputs, owned by the I/O task. Their edges come through the EXTI
 /// lines the board arms with [`crate::edges::arm_inputs`].
 pub trait InputPins {
     /// Reads every pin now (pin levels; the I/O logic applies the polarity).

@@ -198,5 +198,6 @@ pub fn output_name(output: io::Output) -> defmt::Str {
         io::Output::ArcOk => defmt::intern!("ARC_OK"),
         io::Output::Ready => defmt::intern!("READY"),
         io::Output::Fault => defmt::intern!("FAULT"),
+        io::Output::RemotePower => defmt::intern!("PS_REMOTE_POWER"),
     }
 }

@@ -384,6 +384,9 @@ pub enum Command<'a> {
         /// Start or stop.
         on: bool,
     },
+    /// `POWER ON|OFF`: the HPR's Remote Power input, wired to the bridge's REMOTE_POWER
+    /// output ("used to turn the power on or off").
+    Power(bool),
     /// `RESTART`: quick restart (Powermax SYNC).
     Restart,
     /// `GASES <plasma> <shield>` (HPR, MaxPro200).
@@ -683,7 +686,7 @@ fn clock(args: &mut Args<'_>) -> Result<Option<WallClock>, ParseError> {
 
 /// The first word of every command a CNC program may send, in the order HELP lists them
 /// (`TORCH`, which only the simulator runs, is listed apart by HELP).
-pub const COMMAND_WORDS: [&str; 21] = [
+pub const COMMAND_WORDS: [&str; 22] = [
     "HELP",
     "ID",
     "STATUS",
@@ -695,6 +698,7 @@ pub const COMMAND_WORDS: [&str; 21] = [
     "SET",
     "REMOTE",
     "GASTEST",
+    "POWER",
     "RESTART",
     "GASES",
     "CORNER",
@@ -787,6 +791,8 @@ impl<'a> Command<'a> {
             Command::RemoteOff
         } else if is(word, "GASTEST") {
             gas_test(&mut args)?
+        } else if is(word, "POWER") {
+            Command::Power(on_off(&mut args, "POWER argument")?)
         } else if is(word, "EVENTS") {
             Command::Events(on_off(&mut args, "EVENTS argument")?)
         } else if is(word, "TORCH") {
@@ -926,6 +932,7 @@ mod tests {
             "SET PROCESS CUT 45 AUTO",
             "REMOTE OFF",
             "GASTEST ON",
+            "POWER ON",
             "RESTART",
             "GASES AIR AIR",
             "CORNER 50",
@@ -1180,6 +1187,7 @@ mod tests {
         assert_eq!(err("GASTEST ON ON"), ParseError::UnexpectedArgument);
         for (word, make) in [
             ("EVENTS", Command::Events as fn(bool) -> Command<'static>),
+            ("POWER", Command::Power),
             ("TORCH", Command::Torch),
         ] {
             let mut line = heapless::String::<32>::new();

@@ -64,7 +64,7 @@ const _: () = {
     }
 };
 
-/// The seven inputs, owned by the I/O task.
+/// The eight inputs, owned by the I/O task.
 pub struct InputPins(());
 
 impl InputPins {

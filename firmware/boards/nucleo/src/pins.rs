@@ -24,8 +24,8 @@ fn level(high: bool) -> Level {
     if high { Level::High } else { Level::Low }
 }
 
-/// The seven outputs, in [`io::Output::ALL`] order (START first).
-pub struct OutputPins([Output<'static>; 7]);
+/// The eight outputs, in [`io::Output::ALL`] order (START first).
+pub struct OutputPins([Output<'static>; 8]);
 
 impl OutputPins {
     /// Takes the outputs over at their safe level, the level `drive_safe_state` gave them.
@@ -47,8 +47,8 @@ impl plasma_tasks::board::OutputPins for OutputPins {
     }
 }
 
-/// The seven inputs, in [`Input::ALL`] order, each on its own EXTI line.
-pub struct InputPins([embassy_stm32::gpio::Input<'static>; 7]);
+/// The eight inputs, in [`Input::ALL`] order, each on its own EXTI line.
+pub struct InputPins([embassy_stm32::gpio::Input<'static>; 8]);
 
 impl InputPins {
     /// Every input with the pull that reads inactive when open, its EXTI line armed for good

@@ -68,6 +68,50 @@ fn status_is_one_line_with_the_io_snapshot() {
 }
 
 #[test]
+fn status_shows_the_optional_hpr_signals_while_on() {
+    let mut rig = Rig::sync65(Settings::default());
+    let inputs = Inputs {
+        system_error: true,
+        ..Inputs::NONE
+    };
+    let outputs = Outputs {
+        remote_power: true,
+        ..Outputs::OFF
+    };
+    rig.bridge.set_io_snapshot(inputs, outputs);
+    assert_eq!(
+        rig.cmd("STATUS"),
+        "OK link=UP model=Powermax65 family=SYNC remote=OFF mode=CUT amps=45 psi=76 \
+         out_amps=0 out_psi=0 fault=none start=OFF motion=OFF arc_ok=OFF ready=OFF \
+         system_error=ON power=ON"
+    );
+}
+
+#[test]
+fn power_drives_remote_power_with_or_without_a_unit() {
+    // HPR manual (002_72b43a5685974c77.txt) line 54: Remote Power, an input of the unit,
+    // "is used to turn the power on or off". A unit that is off has no link, so POWER needs
+    // none; the level reaches the I/O task as its settings do.
+    let mut rig = Rig::new(Settings::default(), None);
+    assert!(!rig.bridge.io_config().remote_power, "off from reset");
+    assert_eq!(rig.cmd("POWER ON"), "OK power=ON");
+    assert!(rig.bridge.io_config().remote_power);
+    assert_eq!(
+        rig.bridge.take_io_config_change().map(|c| c.remote_power),
+        Some(true)
+    );
+    assert_eq!(rig.cmd("power on"), "OK power=ON");
+    assert_eq!(
+        rig.bridge.take_io_config_change(),
+        None,
+        "no change, nothing sent"
+    );
+    assert_eq!(rig.cmd("POWER OFF"), "OK power=OFF");
+    assert!(!rig.bridge.io_config().remote_power);
+    assert_err(&rig.cmd("POWER"), "ERR SYNTAX *POWER*");
+}
+
+#[test]
 fn limits_are_refused_with_the_permitted_range_before_anything_is_sent() {
     let mut rig = Rig::sync65(Settings::default());
     assert_err(&rig.cmd("SET AMPS 120"), "ERR RANGE *120*20..65*");
@@ -188,7 +232,7 @@ fn every_command_on_a_sync_unit() {
     assert_eq!(
         rig.cmd("HELP"),
         "OK commands=HELP,ID,STATUS,LIMITS,FAULT,FAULTLOG,COUNTERS,CARTRIDGE,SET,REMOTE,\
-         GASTEST,RESTART,GASES,CORNER,RESET,CLEARWARN,EVENTS,CONFIG,HISTORY,CLOCK,RAW \
+         GASTEST,POWER,RESTART,GASES,CORNER,RESET,CLEARWARN,EVENTS,CONFIG,HISTORY,CLOCK,RAW \
          set=MODE,AMPS,PSI,PROCESS,HPR_PROCESS remote=OFF gastest=ON,OFF,PREFLOW,CUTFLOW \
          config=SAVE history=CLEAR simulator_only=TORCH simulator=NO"
     );

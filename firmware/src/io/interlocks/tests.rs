@@ -972,6 +972,31 @@ fn system_error_holds_fault_on_and_is_an_event_but_does_not_drop_start() {
     assert_eq!(rig.events.len(), 1, "an event on the rising edge only");
 }
 
+#[test]
+fn remote_power_follows_the_cnc_command_and_never_touches_start() {
+    let mut rig = Rig::healthy();
+    assert!(!rig.io.outputs().remote_power, "off from reset");
+    let on = IoConfig {
+        remote_power: true,
+        ..IoConfig::default()
+    };
+    rig.io.set_config(ms(100), on);
+    rig.after(ms(100));
+    assert!(rig.io.outputs().remote_power && !rig.start());
+    assert_eq!(
+        (rig.transitions[0].output, rig.transitions[0].reason),
+        (Output::RemotePower, Reason::CncCommand)
+    );
+    rig.torch(ms(200), true);
+    rig.io.set_config(ms(300), IoConfig::default());
+    rig.after(ms(300));
+    assert!(!rig.io.outputs().remote_power);
+    assert!(
+        rig.start(),
+        "START is the link's and TORCH_ON's, not POWER's"
+    );
+}
+
 // ---- logs ----
 
 #[test]
