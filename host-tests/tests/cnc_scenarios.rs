@@ -834,6 +834,45 @@ fn events_report_link_fault_remote_and_arc() {
     assert_eq!(field(&w.cnc_line("STATUS"), "fault"), Some("0-20-0"));
 }
 
+// HPR manual (002_72b43a5685974c77.txt) line 54: Remote Power, an input of the unit, "is
+// used to turn the power on or off"; line 51: System Error, an output of the unit, "indicates
+// that an error has occurred in the plasma system".
+#[test]
+fn power_switches_an_hpr_off_and_on_and_system_error_is_a_fault() {
+    let mut w = ready_hpr(Model::Hpr130);
+    w.cnc_line("EVENTS ON");
+    assert_eq!(w.cnc_line("POWER ON"), "OK power=ON");
+    assert!(w.io().outputs().remote_power);
+    assert_eq!(field(&w.cnc_line("STATUS"), "power"), Some("ON"));
+    assert_eq!(w.cnc_line("POWER OFF"), "OK power=OFF");
+    assert!(!w.unit_ref().is_powered());
+    w.wait_cnc_line("!LINK DOWN reason=no_answer", Duration::from_secs(10))
+        .unwrap();
+    assert!(w.io().outputs().fault && !w.io().outputs().ready);
+    // A unit that is off has no link: POWER needs none.
+    assert_eq!(w.cnc_line("POWER ON"), "OK power=ON");
+    w.wait_cnc_line("!LINK UP", Duration::from_secs(10))
+        .unwrap();
+    w.run_until(|w| !w.io().outputs().fault, Duration::from_secs(10))
+        .expect("FAULT clears with the link back");
+
+    w.set_input(Input::SystemError, true);
+    w.run_for(ms(10));
+    assert!(w.cnc_events().any(|e| e.starts_with("!SYSTEM ERROR")));
+    assert!(w.io().outputs().fault);
+    assert_eq!(field(&w.cnc_line("STATUS"), "system_error"), Some("ON"));
+    let fault_on = w
+        .transitions()
+        .iter()
+        .rev()
+        .find(|t| t.output == Output::Fault);
+    assert_eq!(fault_on.map(|t| t.reason), Some(Reason::SystemErrorSignal));
+    w.set_input(Input::SystemError, false);
+    w.run_for(ms(50));
+    assert!(!w.io().outputs().fault);
+    assert_eq!(field(&w.cnc_line("STATUS"), "system_error"), None);
+}
+
 // HPR manual (002_72b43a5685974c77.txt) line 55: NOT READY FOR START, "purging or in test gas
 // mode"; lines 456-459: state 02 PURGE, 03 IDLE2 (ready for start).
 #[test]

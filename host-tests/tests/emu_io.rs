@@ -156,6 +156,31 @@ fn wiring_changes_on_the_running_board_never_fire_and_never_touch_start() {
 }
 
 #[test]
+fn system_error_and_remote_power_are_on_their_pins() {
+    let mut board = ready_board(Model::Sync65);
+    // HPR manual (002_72b43a5685974c77.txt) line 51: System Error, an output of the unit,
+    // "indicates that an error has occurred in the plasma system": FAULT to the CNC.
+    set(&board, Input::SystemError, true);
+    expect_output(&board, Output::Fault, true, EDGE);
+    let status = command(&mut board, "STATUS");
+    assert_eq!(value(&status, "system_error"), Some("ON"), "{status}");
+    set(&board, Input::SystemError, false);
+    expect_output(&board, Output::Fault, false, EDGE);
+    // Line 54: Remote Power, an input of the unit, "is used to turn the power on or off".
+    expect_held(
+        &board,
+        Output::RemotePower,
+        false,
+        Duration::from_millis(100),
+    );
+    assert_eq!(command(&mut board, "POWER ON"), "OK power=ON");
+    expect_output(&board, Output::RemotePower, true, EDGE);
+    assert_eq!(command(&mut board, "POWER OFF"), "OK power=OFF");
+    expect_output(&board, Output::RemotePower, false, EDGE);
+    board.assert_safe();
+}
+
+#[test]
 fn once_a_task_stalls_the_outputs_stay_safe_until_the_reset() {
     let mut board = ready_board(Model::Sync65);
     set(&board, Input::TorchOn, true);

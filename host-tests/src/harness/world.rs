@@ -85,6 +85,9 @@ pub struct World<E: WorldEndpoint = PsLink> {
     start_given: bool,
     /// HOLD and CORNER_CURRENT as last given to an HPR simulator.
     hpr_inputs_given: (bool, bool),
+    /// REMOTE_POWER as last seen, and whether its falling edge switched the unit off.
+    remote_power_given: bool,
+    off_by_remote_power: bool,
     last_supply: SupplyState,
     scratch: Vec<LinkEvent>,
     repeats: u32,
@@ -178,6 +181,8 @@ impl<E: WorldEndpoint> World<E> {
             noise_bursts: Vec::new(),
             start_given: false,
             hpr_inputs_given: (false, false),
+            remote_power_given: false,
+            off_by_remote_power: false,
             last_supply: SupplyState::default(),
             scratch: Vec::new(),
             repeats: 0,
@@ -626,6 +631,7 @@ impl<E: WorldEndpoint> World<E> {
             self.start_given = start;
         }
         self.pass_through_to_hpr();
+        self.follow_remote_power();
         while let Some(t) = self.io.poll_transition() {
             self.transitions.push(t);
         }
@@ -711,6 +717,28 @@ impl<E: WorldEndpoint> World<E> {
             }
         }
         self.hpr_inputs_given = levels;
+    }
+}
+
+impl<E: WorldEndpoint> World<E> {
+    /// The unit's Remote Power input wired to REMOTE_POWER, edge by edge: the unit starts
+    /// switched on by its operator (REMOTE_POWER is off from the bridge's reset), a falling
+    /// edge switches it off and the next rising edge back on.
+    fn follow_remote_power(&mut self) {
+        let on = self.io.outputs().remote_power;
+        if on == self.remote_power_given {
+            return;
+        }
+        self.remote_power_given = on;
+        let now = self.now;
+        if !on {
+            self.unit.power_off(now);
+            self.line.set_unit_powered(now, false);
+            self.off_by_remote_power = true;
+        } else if core::mem::take(&mut self.off_by_remote_power) {
+            self.line.set_unit_powered(now, true);
+            self.unit.power_on(now);
+        }
     }
 }
 
