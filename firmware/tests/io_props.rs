@@ -37,24 +37,28 @@ fn any_config() -> impl Strategy<Value = IoConfig> {
         any::<bool>(),
         any::<bool>(),
         any::<bool>(),
+        any::<bool>(),
     )
         .prop_map(
-            |(gap, debounce, requires_start, timeout, drop, refuse_fault, link, ready)| IoConfig {
-                start_gap: Duration::from_millis(gap),
-                arc_ok_debounce: Duration::from_millis(debounce),
-                arc_ok_requires_start: requires_start,
-                transfer_timeout: Duration::from_millis(timeout),
-                drop_start_on_transfer_timeout: drop,
-                refuse_start_on_fault: refuse_fault,
-                link_required: link,
-                ready_required: ready,
-                ..IoConfig::default()
+            |(gap, debounce, requires_start, timeout, drop, refuse_fault, link, ready, power)| {
+                IoConfig {
+                    start_gap: Duration::from_millis(gap),
+                    arc_ok_debounce: Duration::from_millis(debounce),
+                    arc_ok_requires_start: requires_start,
+                    transfer_timeout: Duration::from_millis(timeout),
+                    drop_start_on_transfer_timeout: drop,
+                    refuse_start_on_fault: refuse_fault,
+                    link_required: link,
+                    ready_required: ready,
+                    remote_power: power,
+                    ..IoConfig::default()
+                }
             },
         )
 }
 
 fn any_inputs() -> impl Strategy<Value = Inputs> {
-    prop::array::uniform7(any::<bool>()).prop_map(|levels| {
+    prop::array::uniform8(any::<bool>()).prop_map(|levels| {
         let mut inputs = Inputs::NONE;
         for (input, level) in Input::ALL.into_iter().zip(levels) {
             inputs.set(input, level);
@@ -224,9 +228,13 @@ impl Run {
             assert!(!self.supply.fault_requires_action && self.supply.unit_ready);
             assert!(!self.inputs.not_ready);
         }
-        if self.supply.fault_active || (config.link_required && !self.supply.link_up) {
+        if self.supply.fault_active
+            || (config.link_required && !self.supply.link_up)
+            || self.inputs.system_error
+        {
             assert!(out.fault);
         }
+        assert_eq!(out.remote_power, config.remote_power);
         if polled {
             // poll_at names every pending deadline: after a poll none is due.
             if let Some(at) = self.io.poll_at() {
@@ -245,6 +253,7 @@ fn set(outputs: &mut Outputs, output: Output, level: bool) {
         Output::ArcOk => outputs.arc_ok = level,
         Output::Ready => outputs.ready = level,
         Output::Fault => outputs.fault = level,
+        Output::RemotePower => outputs.remote_power = level,
     }
 }
 
@@ -262,10 +271,11 @@ proptest! {
             run.apply(op, *blackout);
         }
 
-        // Never stuck: release the torch, heal the supply (and NOT_READY), wait out every blackout and the
-        // gap, press again: START must come on at once.
+        // Never stuck: release the torch, heal the supply (and NOT_READY, SYSTEM_ERROR), wait
+        // out every blackout and the gap, press again: START must come on at once.
         run.apply(&Op::Input(Input::TorchOn, false), None);
         run.apply(&Op::Input(Input::NotReady, false), None);
+        run.apply(&Op::Input(Input::SystemError, false), None);
         run.apply(&Op::Supply(SupplyState::HEALTHY), None);
         run.now = run.now.max(run.latest_blackout) + Duration::from_millis(200);
         run.io.poll(run.now);
