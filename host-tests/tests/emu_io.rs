@@ -76,10 +76,11 @@ fn start_follows_torch_on_and_keeps_50_ms_between_starts() {
         if rise.reason == Reason::TorchOn.as_str() {
             break;
         }
-        // Only a press within the gap may wait for it: START then rose at the gap's end.
+        // Only a press within the gap may wait for it: START then rose at the gap's end (as
+        // late after it as the first press above may be: the I/O task's timer on a loaded host).
         assert!(
             rise.reason == Reason::StartGapElapsed.as_str()
-                && rise.at_us - fall.at_us < 50_000 + 5_000,
+                && rise.at_us - fall.at_us < 50_000 + 100_000,
             "{changes:?}"
         );
         assert!(release < Duration::from_secs(10), "{changes:?}");
