@@ -48,6 +48,7 @@ use plasma_firmware::platform::runner::{MAX_FRAMES_PER_TURN, MAX_WAIT, PS_RX_CHU
 use plasma_firmware::platform::supervisor::CNC_RX_CHUNK;
 use plasma_firmware::settings::{SaveError, Settings};
 use plasma_firmware::storage::{MAX_PAYLOAD, Persistent as _};
+use plasma_protocol::cnc::command::COMMAND_WORDS;
 use plasma_protocol::cnc::phoenix::{self, ACK, NAK};
 use plasma_protocol::cnc::{ConfigKey, Gas, Mode};
 use plasma_protocol::hpr;
@@ -65,30 +66,9 @@ const MAX_REPEATS_AT_ONE_INSTANT: u32 = 2;
 /// Pieces of CNC output one drain may take before it counts as never draining.
 const MAX_OUTPUT_PIECES: usize = 1024;
 
-/// Command words for [`Step::CncLine`]: a seed for the search, not a specification (the
-/// parser is the one source; a word missing here only costs coverage).
-const VERBS: [&str; 20] = [
-    "HELP",
-    "ID",
-    "STATUS",
-    "LIMITS",
-    "FAULT",
-    "FAULTLOG",
-    "COUNTERS",
-    "CARTRIDGE",
-    "RESTART",
-    "RESET",
-    "CLEARWARN",
-    "SET",
-    "REMOTE",
-    "GASTEST",
-    "EVENTS",
-    "TORCH",
-    "GASES",
-    "CORNER",
-    "CONFIG",
-    "RAW",
-];
+/// Command words for [`Step::CncLine`]: the parser's own list (the one source HELP prints),
+/// and `TORCH`, which the simulator runs and the fuzzed bridge answers too.
+const SIMULATOR_VERB: &str = "TORCH";
 const WORDS: [&str; 8] = [
     "MODE", "AMPS", "PSI", "PROCESS", "SAVE", "ON", "OFF", "AUTO",
 ];
@@ -169,7 +149,10 @@ fn pick<T: Copy>(items: &[T], index: u8) -> T {
 
 impl Verb {
     fn write(&self, line: &mut Vec<u8>) {
-        line.extend_from_slice(pick(&VERBS, self.0).as_bytes());
+        let verb = COMMAND_WORDS
+            .get(usize::from(self.0) % (COMMAND_WORDS.len() + 1))
+            .unwrap_or(&SIMULATOR_VERB);
+        line.extend_from_slice(verb.as_bytes());
     }
 }
 
