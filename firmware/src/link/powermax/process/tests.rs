@@ -276,19 +276,7 @@ fn a_unit_switched_off_for_a_minute_returns_in_local_control() {
 
 #[test]
 fn kept_settings_are_reapplied_when_the_link_returns() {
-    let mut bench = sync_bench();
-    bench
-        .link
-        .submit(
-            bench.now,
-            LinkCommand::ApplyProcess {
-                mode: OperatingMode::Cut,
-                current: amps(63),
-                pressure: Pressure::Auto,
-            },
-        )
-        .unwrap();
-    bench.run(bench.now + Duration::from_millis(300));
+    let mut bench = sync_at_63_a(false);
     bench.unplug(true);
     bench.run(bench.now + Duration::from_millis(1000));
     assert!(!bench.link.status().link_up);
@@ -308,19 +296,7 @@ fn kept_settings_are_reapplied_when_the_link_returns() {
 
 #[test]
 fn a_reapply_waiting_for_limits_does_not_make_poll_at_spin() {
-    let mut bench = sync_bench();
-    bench
-        .link
-        .submit(
-            bench.now,
-            LinkCommand::ApplyProcess {
-                mode: OperatingMode::Cut,
-                current: amps(63),
-                pressure: Pressure::Auto,
-            },
-        )
-        .unwrap();
-    bench.run(bench.now + Duration::from_millis(300));
+    let mut bench = sync_at_63_a(false);
     bench.unplug(true);
     bench.run(bench.now + Duration::from_millis(1000));
     assert!(!bench.link.status().link_up);
