@@ -125,10 +125,16 @@ impl<'a> Request<'a> {
 }
 
 /// The workspace root: this package lives in `<root>/firmware/image`.
+///
+/// `cargo run` sets `CARGO_MANIFEST_DIR` at run time to the checkout it runs in; the value
+/// compiled in is only the fallback for a binary started by hand. Preferring the compiled-in
+/// path would build another checkout's sources when a `target/` directory was copied from it
+/// (cargo reuses the binary, whose compiled-in path still names the first checkout).
 fn workspace_root() -> PathBuf {
-    let manifest = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let root = manifest.ancestors().nth(2).unwrap_or(manifest);
-    root.canonicalize().unwrap_or_else(|_| root.to_path_buf())
+    let manifest = std::env::var_os("CARGO_MANIFEST_DIR")
+        .map_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")), PathBuf::from);
+    let root = manifest.ancestors().nth(2).unwrap_or(&manifest).to_path_buf();
+    root.canonicalize().unwrap_or(root)
 }
 
 /// The build machine's paths that end up in an image.
