@@ -133,7 +133,11 @@ impl<'a> Request<'a> {
 fn workspace_root() -> PathBuf {
     let manifest = std::env::var_os("CARGO_MANIFEST_DIR")
         .map_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")), PathBuf::from);
-    let root = manifest.ancestors().nth(2).unwrap_or(&manifest).to_path_buf();
+    let root = manifest
+        .ancestors()
+        .nth(2)
+        .unwrap_or(&manifest)
+        .to_path_buf();
     root.canonicalize().unwrap_or(root)
 }
 

@@ -39,6 +39,24 @@ impl Core {
         self.events.push(event, &mut self.diagnostics);
     }
 
+    /// The unit answered again without the settings the bridge gave it (see
+    /// [`kept`](crate::link::kept), "Power cycle or lost link"): it is no longer in remote
+    /// control, the CNC is told, and the kept settings are forgotten unless the configuration
+    /// says to re-apply them. Returns true when they are to be re-applied.
+    pub(crate) fn unit_power_cycled(&mut self) -> bool {
+        if self.status.remote {
+            self.status.remote = false;
+            self.emit(LinkEvent::RemoteModeChanged { remote: false });
+        }
+        let reapply = self.config.reapply_after_power_cycle;
+        self.emit(LinkEvent::UnitPowerCycled { reapply });
+        if !reapply {
+            self.kept.forget_powermax();
+            self.kept.hpr.clear();
+        }
+        reapply
+    }
+
     /// The oldest queued event, taken.
     pub(crate) fn pop_event(&mut self) -> Option<LinkEvent> {
         self.events.pop()

@@ -31,9 +31,10 @@
 //!   one in any other state with the kept set point kept running: the link was lost.
 //!
 //! The same signs while the link stays up (a power blip shorter than a link-down) count as a
-//! power cycle too. Then [`LinkEvent::UnitPowerCycled`] tells the CNC, and the kept settings
-//! are forgotten (the CNC sets them again when it wants remote control back) unless
-//! [`LinkConfig::reapply_after_power_cycle`] is on.
+//! power cycle too. Then `Core::unit_power_cycled` tells the CNC
+//! ([`LinkEvent::UnitPowerCycled`]), and the kept settings are forgotten (the CNC sets them
+//! again when it wants remote control back) unless [`LinkConfig::reapply_after_power_cycle`]
+//! is on.
 //!
 //! Limits: a unit whose front-panel settings happen to equal the kept ones (or an HPR back in
 //! state 3 with the same set point) looks like a lost link, and is re-applied; a legacy unit
@@ -47,28 +48,8 @@
 
 use plasma_protocol::hpr::Request;
 
-use crate::link::core::Core;
-use crate::link::event::LinkEvent;
 use crate::link::hpr::kept::HprKept;
 use crate::link::status::PowermaxProcess;
-
-/// The unit answered again without the settings the bridge gave it (see "Power cycle or
-/// lost link"): it is no longer in remote control, the CNC is told, and the kept settings
-/// are forgotten unless the configuration says to re-apply them. Returns true when they are
-/// to be re-applied.
-pub(crate) fn unit_power_cycled(core: &mut Core) -> bool {
-    if core.status.remote {
-        core.status.remote = false;
-        core.emit(LinkEvent::RemoteModeChanged { remote: false });
-    }
-    let reapply = core.config.reapply_after_power_cycle;
-    core.emit(LinkEvent::UnitPowerCycled { reapply });
-    if !reapply {
-        core.kept.forget_powermax();
-        core.kept.hpr.clear();
-    }
-    reapply
-}
 
 /// The settings the link re-applies. See the module docs.
 #[derive(Debug, Clone, Default, PartialEq, Eq)]

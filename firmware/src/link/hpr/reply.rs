@@ -12,7 +12,6 @@ use super::{
 };
 use crate::link::core::Core;
 use crate::link::event::{CommandFailure, CommandOutput, LinkEvent, ProcessFailure};
-use crate::link::kept::unit_power_cycled;
 use crate::link::status::ActiveFault;
 use crate::link::transaction::TransactionError;
 
@@ -32,7 +31,7 @@ impl HprDriver {
             }
             return;
         }
-        if unit_power_cycled(core) {
+        if core.unit_power_cycled() {
             self.reapply_pending = true;
             self.reapply_not_before = now;
         }
@@ -51,7 +50,7 @@ impl HprDriver {
         let restarted = is_power_up(self.maxpro(), state)
             || state.0 == PURGE
             || core.kept.hpr.amps().is_some_and(|kept| kept != setpoint);
-        if !restarted || unit_power_cycled(core) {
+        if !restarted || core.unit_power_cycled() {
             self.reapply_pending = true;
             self.reapply_not_before = now;
         }

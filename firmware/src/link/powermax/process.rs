@@ -10,7 +10,7 @@ use super::{Active, Job, PowermaxDriver, REAPPLY_BACKOFF, Variant};
 use crate::link::command::Refusal;
 use crate::link::core::Core;
 use crate::link::event::{CommandFailure, CommandOutput, LinkEvent, ProcessFailure};
-use crate::link::kept::{Reapply, unit_power_cycled};
+use crate::link::kept::Reapply;
 use crate::link::powermax::legacy;
 use crate::link::powermax::modbus::{MbRequest, read_values};
 use crate::link::powermax::sync;
@@ -161,7 +161,7 @@ impl PowermaxDriver {
         let reapply = if kept_shown {
             returned
         } else if returned || core.status.remote {
-            unit_power_cycled(core)
+            core.unit_power_cycled()
         } else {
             false
         };
