@@ -10,6 +10,7 @@ use plasma_protocol::powermax::{
     FaultCode, OperatingMode, PowerSupplyModel, StepsRequired, TorchKind,
 };
 
+use crate::io::Interlock;
 use crate::link::{
     ActiveFault, Family, Model, PowermaxProcess, ProcessFailure, TransactionError, UnitStatus,
 };
@@ -122,11 +123,11 @@ pub struct ActionWord(pub ActiveFault);
 
 impl Display for ActionWord {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(steps_word(super::history::steps_of(self.0)))
+        f.write_str(steps_word(steps_of(self.0)))
     }
 }
 
-/// `action=` for a fault's steps required (an HPR error's from [`super::history::steps_of`]).
+/// `action=` for a fault's steps required (an HPR error's from [`steps_of`]).
 pub const fn steps_word(steps: StepsRequired) -> &'static str {
     match steps {
         StepsRequired::Yes => "required",
@@ -243,5 +244,28 @@ impl Display for Uid<'_> {
             f.write_char(if b.is_ascii_graphic() { b as char } else { '?' })?;
         }
         Ok(())
+    }
+}
+
+/// A fault's "steps required" (`action=` and history entries): the Powermax table's, or for
+/// an HPR error whether someone must act.
+pub(super) fn steps_of(fault: ActiveFault) -> StepsRequired {
+    match fault {
+        ActiveFault::Powermax(code) => code.steps_required(),
+        ActiveFault::Hpr(_) if fault.action_required() => StepsRequired::Yes,
+        ActiveFault::Hpr(_) => StepsRequired::No,
+    }
+}
+
+/// `reason=` of `!START REFUSED`/`DROPPED` and of a history entry: the interlock as one word.
+pub(super) fn interlock_word(interlock: Interlock) -> &'static str {
+    match interlock {
+        Interlock::TorchOnAtPowerUp => "torch_on_at_power_up",
+        Interlock::TorchOnAtWiringChange => "torch_on_at_config",
+        Interlock::LinkDown => "link_down",
+        Interlock::RestartBlackout => "restart_blackout",
+        Interlock::FaultRequiresAction => "fault",
+        Interlock::TransferTimeout => "transfer_timeout",
+        Interlock::NotReady => "not_ready",
     }
 }

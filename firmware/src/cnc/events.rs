@@ -7,7 +7,7 @@ use plasma_protocol::cnc::reply::ReplyWriter;
 
 use super::describe::{
     ActionWord, FaultId, ModelName, OrDash, ProcessText, Text, Uid, family_word, fault_text,
-    on_off, process_failure_word, state_name, transaction_word,
+    interlock_word, on_off, process_failure_word, state_name, transaction_word,
 };
 use super::replies::complete;
 use super::texts::RefusalText;
@@ -197,18 +197,6 @@ fn write_state_changed(
     w.field("name", state_name(to, family))?;
     w.field("from", OrDash(from.map(|s| s.0)))?;
     w.finish().map(|_| ())
-}
-
-pub(super) fn interlock_word(interlock: Interlock) -> &'static str {
-    match interlock {
-        Interlock::TorchOnAtPowerUp => "torch_on_at_power_up",
-        Interlock::TorchOnAtWiringChange => "torch_on_at_config",
-        Interlock::LinkDown => "link_down",
-        Interlock::RestartBlackout => "restart_blackout",
-        Interlock::FaultRequiresAction => "fault",
-        Interlock::TransferTimeout => "transfer_timeout",
-        Interlock::NotReady => "not_ready",
-    }
 }
 
 #[cfg(test)]

@@ -11,14 +11,14 @@ use core::fmt;
 use plasma_protocol::cnc::clock::WallClock;
 use plasma_protocol::cnc::reply::ReplyWriter;
 use plasma_protocol::cnc::{Amps, ErrorCode, HistoryCommand};
-use plasma_protocol::powermax::StepsRequired;
+
 use plasma_protocol::time::Instant;
 
-use super::describe::{FaultId, family_word, steps_word};
-use super::events::interlock_word;
+use super::describe::{FaultId, family_word, interlock_word, steps_of, steps_word};
+
 use super::{Context, Pending as Waiting, ReplyLine, Session, err_line, line, ok_line, texts};
 use crate::io::{Interlock, IoEvent};
-use crate::link::{ActiveFault, LinkEvent, PsLink};
+use crate::link::{LinkEvent, PsLink};
 use crate::settings::Process;
 use crate::storage::history::{
     ChangedBy, Draft, Entry, Event, HistoryAnswer, HistoryPage, Pending, Stamp, Unit,
@@ -83,16 +83,6 @@ pub fn unit_on(link: &PsLink) -> Unit {
     Unit {
         family: link.status().family,
         model: 0,
-    }
-}
-
-/// A fault's "steps required", for its entry: the Powermax table's, or for an HPR error
-/// whether someone must act.
-pub(super) fn steps_of(fault: ActiveFault) -> StepsRequired {
-    match fault {
-        ActiveFault::Powermax(code) => code.steps_required(),
-        ActiveFault::Hpr(_) if fault.action_required() => StepsRequired::Yes,
-        ActiveFault::Hpr(_) => StepsRequired::No,
     }
 }
 
