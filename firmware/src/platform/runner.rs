@@ -27,7 +27,6 @@
 
 use core::future::Future;
 
-use embassy_futures::select::{Either, select};
 use embedded_io_async::{Error as _, ErrorKind, Read, ReadReady, Write};
 use heapless::Vec;
 
@@ -130,7 +129,8 @@ impl PsEndpoint for Bridge {
     }
 }
 
-/// Longest wait in one [`PsPort::turn`], so that a task reports progress at least this often.
+/// Longest wait in one [`Supervisor::turn`](super::supervisor::Supervisor::turn), so that a
+/// task reports progress at least this often.
 pub const MAX_WAIT: Duration = Duration::from_millis(100);
 
 /// Frames written in one turn at most. The link sends one and waits for its reply; the
@@ -154,38 +154,11 @@ pub enum PortError<E> {
     Unsupported(PortConfig),
 }
 
-/// Counters for diagnostics.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct PortStats {
-    /// Frames written and flushed.
-    pub frames_sent: u32,
-    /// Bytes received.
-    pub bytes_received: u32,
-    /// Line-setting changes applied.
-    pub config_changes: u32,
-    /// Characters received with a parity, framing or noise error.
-    pub rx_errors: u32,
-}
-
-/// What one [`PsPort::turn`] did.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct Turn {
-    /// Frames transmitted.
-    pub frames_sent: usize,
-    /// Bytes received and passed on.
-    pub bytes_received: usize,
-    /// The line settings changed to these.
-    pub new_config: Option<PortConfig>,
-}
-
 /// A serial port driven for a [`PsEndpoint`].
 pub struct PsPort<P> {
     port: P,
-    applied: Option<PortConfig>,
+    pub(super) applied: Option<PortConfig>,
     frame: Vec<u8, TX_CAPACITY>,
-    stats: PortStats,
 }
 
 impl<P: ConfigurablePort> PsPort<P> {
@@ -195,18 +168,7 @@ impl<P: ConfigurablePort> PsPort<P> {
             port,
             applied: None,
             frame: Vec::new(),
-            stats: PortStats::default(),
         }
-    }
-
-    /// The line settings last applied.
-    pub fn applied_config(&self) -> Option<PortConfig> {
-        self.applied
-    }
-
-    /// Counters.
-    pub fn stats(&self) -> PortStats {
-        self.stats
     }
 
     fn apply(&mut self, config: PortConfig) -> Result<bool, PortError<P::Error>> {
@@ -217,7 +179,6 @@ impl<P: ConfigurablePort> PsPort<P> {
             .set_port_config(config)
             .map_err(|UnsupportedConfig| PortError::Unsupported(config))?;
         self.applied = Some(config);
-        self.stats.config_changes = self.stats.config_changes.saturating_add(1);
         Ok(true)
     }
 
@@ -254,7 +215,6 @@ impl<P: ConfigurablePort> PsPort<P> {
             // starts now, not when the frame was handed to the UART.
             self.port.flush().await.map_err(PortError::Write)?;
             endpoint.ps_transmitted(clock.now());
-            self.stats.frames_sent = self.stats.frames_sent.saturating_add(1);
             sent += 1;
         }
         // Listen with the settings the endpoint expects its next reply in.
@@ -269,10 +229,7 @@ impl<P: ConfigurablePort> PsPort<P> {
     pub async fn read(&mut self, buf: &mut [u8]) -> Result<usize, PortError<P::Error>> {
         match self.port.read(buf).await {
             Ok(0) => Err(PortError::Closed),
-            Ok(n) => {
-                self.stats.bytes_received = self.stats.bytes_received.saturating_add(n as u32);
-                Ok(n)
-            }
+            Ok(n) => Ok(n),
             Err(e) => Err(PortError::Read(e)),
         }
     }
@@ -308,45 +265,11 @@ impl<P: ConfigurablePort> PsPort<P> {
                 Ok(n)
             }
             Err(PortError::Read(e)) if e.kind() == ErrorKind::InvalidData => {
-                self.stats.rx_errors = self.stats.rx_errors.saturating_add(1);
                 endpoint.handle_ps_rx_error(clock.now());
                 Ok(1)
             }
             Err(e) => Err(e),
         }
-    }
-
-    /// Waits until bytes arrive (and passes them to the endpoint) or `deadline` passes.
-    /// Returns the number of bytes received.
-    pub async fn receive_until<E: PsEndpoint + ?Sized>(
-        &mut self,
-        endpoint: &mut E,
-        clock: &impl Clock,
-        deadline: Instant,
-    ) -> Result<usize, PortError<P::Error>> {
-        let mut buf = [0u8; PS_RX_CHUNK];
-        match select(self.read(&mut buf), clock.sleep_until(deadline)).await {
-            Either::First(received) => self.hand_over(endpoint, clock, received, &buf),
-            Either::Second(()) => Ok(0),
-        }
-    }
-
-    /// One turn: transmit what is due, then wait for bytes until the endpoint's `poll_at`
-    /// (at most [`MAX_WAIT`]).
-    pub async fn turn<E: PsEndpoint + ?Sized>(
-        &mut self,
-        endpoint: &mut E,
-        clock: &impl Clock,
-    ) -> Result<Turn, PortError<P::Error>> {
-        let (frames_sent, new_config) = self.transmit(endpoint, clock).await?;
-        let latest = clock.now() + MAX_WAIT;
-        let deadline = endpoint.poll_at().map_or(latest, |at| at.min(latest));
-        let bytes_received = self.receive_until(endpoint, clock, deadline).await?;
-        Ok(Turn {
-            frames_sent,
-            bytes_received,
-            new_config,
-        })
     }
 }
 

@@ -292,9 +292,9 @@ where
         self.cnc_framing
     }
 
-    /// The power-supply port (line settings, counters).
-    pub fn ps(&mut self) -> &mut PsPort<P> {
-        &mut self.ps
+    /// The power-supply port's line settings last applied.
+    pub fn ps_framing(&self) -> Option<PortConfig> {
+        self.ps.applied
     }
 
     /// The I/O exchange.

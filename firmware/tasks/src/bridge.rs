@@ -40,7 +40,7 @@ pub async fn run<B: Board>(
         if let Err(e) = &turn {
             warn!("serial: {}", TurnFailure(e));
         }
-        let now_applied = supervisor.ps().applied_config();
+        let now_applied = supervisor.ps_framing();
         if now_applied != applied {
             applied = now_applied;
             if let Some(config) = now_applied {

@@ -10,6 +10,7 @@ use core::future::poll_fn;
 use core::task::Poll;
 
 use embassy_futures::block_on;
+use embassy_futures::select::{Either, select};
 use embedded_io_async::{ErrorKind, ErrorType, Read, ReadReady, Write};
 
 use super::*;
@@ -183,6 +184,37 @@ fn setup() -> (Shared, FakeClock, PsPort<FakePort>) {
     (world, clock, port)
 }
 
+/// What one [`turn`] did.
+#[derive(Debug, PartialEq, Eq)]
+struct Turn {
+    frames_sent: usize,
+    bytes_received: usize,
+    new_config: Option<PortConfig>,
+}
+
+/// The smallest loop over the port's pieces (the board's loop is the supervisor's turn, which
+/// adds the CNC port and the I/O): transmit what is due, then wait for bytes until the
+/// endpoint's `poll_at`, at most [`MAX_WAIT`].
+async fn turn<E: PsEndpoint + ?Sized>(
+    port: &mut PsPort<FakePort>,
+    endpoint: &mut E,
+    clock: &FakeClock,
+) -> Result<Turn, PortError<ErrorKind>> {
+    let (frames_sent, new_config) = port.transmit(endpoint, clock).await?;
+    let latest = clock.now() + MAX_WAIT;
+    let deadline = endpoint.poll_at().map_or(latest, |at| at.min(latest));
+    let mut buf = [0u8; PS_RX_CHUNK];
+    let bytes_received = match select(port.read(&mut buf), clock.sleep_until(deadline)).await {
+        Either::First(received) => port.hand_over(endpoint, clock, received, &buf)?,
+        Either::Second(()) => 0,
+    };
+    Ok(Turn {
+        frames_sent,
+        bytes_received,
+        new_config,
+    })
+}
+
 /// Runs turns until virtual time reaches `until_ms`; returns the turns' start times.
 fn run_until(
     link: &mut impl PsEndpoint,
@@ -194,7 +226,7 @@ fn run_until(
     block_on(async {
         while clock.now() < Instant::from_millis(until_ms) {
             starts.push(clock.now().as_micros());
-            port.turn(link, clock).await.unwrap();
+            turn(port, link, clock).await.unwrap();
         }
     });
     starts
@@ -234,8 +266,7 @@ fn detects_a_powermax_through_the_port() {
         Seen::Write(0, PortConfig::MODBUS_DEFAULT, DEVICE_ID_REQUEST.to_vec())
     );
     assert!(matches!(seen[2], Seen::Flush(_)));
-    assert_eq!(port.stats().bytes_received, DEVICE_ID_REPLY.len() as u32);
-    assert_eq!(port.applied_config(), Some(PortConfig::MODBUS_DEFAULT));
+    assert_eq!(port.applied, Some(PortConfig::MODBUS_DEFAULT));
 }
 
 #[test]
@@ -374,7 +405,7 @@ fn bytes_wake_the_turn_before_its_deadline() {
     let mut link = PsLink::new(LinkConfig::default(), Instant::ZERO);
     world.borrow_mut().rx.push_back((30_000, b":01".to_vec()));
     block_on(async {
-        let first = port.turn(&mut link, &clock).await.unwrap();
+        let first = turn(&mut port, &mut link, &clock).await.unwrap();
         assert_eq!(first.frames_sent, 1);
         assert_eq!(first.new_config, Some(PortConfig::MODBUS_DEFAULT));
         assert_eq!(first.bytes_received, 3);
@@ -387,7 +418,7 @@ fn port_errors_are_reported_not_swallowed() {
     let (world, clock, mut port) = setup();
     world.borrow_mut().fail_writes = true;
     let mut link = PsLink::new(LinkConfig::default(), Instant::ZERO);
-    let result = block_on(port.turn(&mut link, &clock));
+    let result = block_on(turn(&mut port, &mut link, &clock));
     assert_eq!(result, Err(PortError::Write(ErrorKind::Other)));
 
     struct Impossible;
@@ -408,7 +439,7 @@ fn port_errors_are_reported_not_swallowed() {
         }
     }
     let (_, clock, mut port) = setup();
-    let result = block_on(port.turn(&mut Impossible, &clock));
+    let result = block_on(turn(&mut port, &mut Impossible, &clock));
     assert!(matches!(result, Err(PortError::Unsupported(c)) if c.baud == 0));
 }
 
@@ -427,7 +458,7 @@ fn a_reply_waiting_in_the_port_beats_the_time_out() {
         w.rx.push_back((50_000, DEVICE_ID_REPLY.to_vec()));
         w.now_us = 150_000;
     }
-    block_on(port.turn(&mut link, &clock)).unwrap();
+    block_on(turn(&mut port, &mut link, &clock)).unwrap();
     assert!(link.status().link_up);
     assert_eq!(link.diagnostics().timeouts, 0);
 }
@@ -465,12 +496,11 @@ fn a_character_received_in_error_reaches_the_link_in_its_place() {
     let mut heard = Heard::default();
     block_on(async {
         for _ in 0..4 {
-            port.turn(&mut heard, &clock).await.unwrap();
+            turn(&mut port, &mut heard, &clock).await.unwrap();
         }
     });
     assert_eq!(
         heard.0,
         [Some(b":01".to_vec()), None, Some(b"03\r\n".to_vec())]
     );
-    assert_eq!(port.stats().rx_errors, 1);
 }
