@@ -13,6 +13,8 @@
 //!   [`legacy`]).
 //! - [`hpr::Hpr`] models HPR130/260/400 (and XD) with manual or automatic gas consoles, and the
 //!   MaxPro200.
+//! - [`multidrop::MultiDrop`] puts several units on one line: each answers as its manual says
+//!   (HPR ids with SLEEP/WAKE, Powermax node addresses), and two answering at once collide.
 //!
 //! The register maps, scaling and rules are written here from the manuals, independently of
 //! the bridge's own `plasma_protocol::powermax` tables, so that a mistake in one shows up as a
@@ -42,6 +44,7 @@ mod hpr_wire;
 pub mod legacy;
 pub mod line;
 pub mod modbus_wire;
+pub mod multidrop;
 pub mod powermax;
 pub mod sync;
 
@@ -236,7 +239,7 @@ impl Default for SimOptions {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::line::{End, Line, RxByte, Wiring};
     use clock::earliest;
@@ -244,7 +247,7 @@ mod tests {
 
     /// A minimal discrete-event loop (the shape of the scenario harness): the master sends
     /// `request` at `t0`; returns what the master hears until `until`.
-    fn over_the_line(
+    pub(crate) fn over_the_line(
         unit: &mut dyn SimulatedUnit,
         line: &mut Line,
         t0: Instant,
