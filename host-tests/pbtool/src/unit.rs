@@ -1,17 +1,22 @@
-//! `pbtool unit`: one of the simulated units ([`plasma_sim`]) served on a serial port in real
-//! time, answering any master: the bridge on a PC, a real board, CNC software.
+//! `pbtool unit`: simulated units ([`plasma_sim`]) served on a serial port in real time,
+//! answering any master: the bridge on a PC, a real board, CNC software.
 //!
-//! The unit is the same sans-IO simulator the scenario tests use, driven by the wall clock: it
-//! gets each character with the instant it arrived and is woken when it asked to be. The port
-//! takes the unit's framing (19200 8E1 for a Powermax, 8N1 for an HPR). Lines on stdin control
-//! it while it runs ([`Control`]): a fault raised and cleared, the unit switched off and on,
-//! the cable cut and mended.
+//! The units are the same sans-IO simulators the scenario tests use, driven by the wall clock:
+//! each gets every character with the instant it arrived and is woken when it asked to be.
+//! Several units share the port as they would share a line ([`MultiDrop`]): HPRs with ids 0,
+//! 1, ... (SLEEP/WAKE), Powermax units at node addresses in order; two answering at once
+//! collide on the port. The port takes the units' framing (19200 8E1 for a Powermax, 8N1 for
+//! an HPR). Lines on stdin control them while they run ([`Control`], `@N ` first for unit N):
+//! a fault raised and cleared, a unit switched off and on, its cable cut and mended.
 
 use std::io::Write;
 use std::sync::mpsc::Receiver;
 
 use plasma_protocol::powermax::FaultCode;
 use plasma_protocol::time::Instant;
+use plasma_sim::hpr::Hpr;
+use plasma_sim::multidrop::{MultiDrop, units_for_one_line};
+use plasma_sim::powermax::Powermax;
 use plasma_sim::{Family, Model, SimOptions, SimulatedUnit};
 
 use crate::decode::{FrameStream, lines};
@@ -21,13 +26,13 @@ use crate::serial::{Port, Rx, SerialError, describe};
 use crate::sim::parse_fault;
 
 /// How `pbtool unit` runs.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct UnitOptions {
-    /// The model.
-    pub model: Model,
-    /// A fault from the start.
+    /// The models on the line, unit 1 first.
+    pub models: Vec<Model>,
+    /// A fault on unit 1 from the start.
     pub fault: Option<u16>,
-    /// Simulator options (seed, Modbus address, HPR id).
+    /// Simulator options (seed; unit 1's Modbus address or HPR id, the others' follow).
     pub sim: SimOptions,
     /// Each frame, decoded, on the log.
     pub log: bool,
@@ -65,51 +70,106 @@ impl Control {
             ["ANSWER"] => Control::Silent(false),
             _ => {
                 return Err(format!(
-                    "unknown control {line:?}: FAULT CODE, CLEAR, POWER OFF|ON, SILENT, ANSWER"
+                    "unknown control {line:?}: FAULT CODE, CLEAR, POWER OFF|ON, SILENT, ANSWER \
+                     (@N first for unit N)"
                 ));
             }
         }))
     }
+
+    /// Parses a control line for one of `models` (unit 1 first): `@N ` first addresses unit
+    /// N, without it unit 1. Returns the unit's index (0 = unit 1) and the control.
+    pub fn parse_addressed(
+        models: &[Model],
+        line: &str,
+    ) -> Result<Option<(usize, Control)>, String> {
+        let line = line.trim_start();
+        let (index, rest) = match line.strip_prefix('@') {
+            Some(addressed) => {
+                let (number, rest) = addressed
+                    .split_once(|c: char| c.is_ascii_whitespace())
+                    .unwrap_or((addressed, ""));
+                match number.parse::<usize>() {
+                    Ok(n @ 1..) if n <= models.len() => (n - 1, rest),
+                    _ => {
+                        return Err(format!(
+                            "no unit @{number}: units are @1 to @{}",
+                            models.len()
+                        ));
+                    }
+                }
+            }
+            None => (0, line),
+        };
+        let Some(&model) = models.get(index) else {
+            return Err("no unit on the line".to_string());
+        };
+        Ok(Control::parse(model, rest)?.map(|control| (index, control)))
+    }
 }
 
-/// The unit on its port.
+/// The units on their port.
 pub struct UnitServer {
-    unit: Box<dyn SimulatedUnit>,
+    line: MultiDrop,
     port: Port,
     clock: Clock,
-    silent: bool,
     log: bool,
     framer: Framer,
     stream: FrameStream,
+    collisions: u64,
+}
+
+/// The units `options` name, on one line, or why they cannot share one.
+pub fn build_line(options: &UnitOptions) -> Result<MultiDrop, plasma_sim::multidrop::LineError> {
+    MultiDrop::new(units_for_one_line(&options.models, &options.sim)?)
 }
 
 impl UnitServer {
-    /// Builds the unit; `port` is its writing handle (a reader thread has the other). The
-    /// port is set to the unit's framing.
-    pub fn new(options: &UnitOptions, mut port: Port, clock: Clock) -> Result<Self, SerialError> {
-        let mut unit = options.model.build(&options.sim);
-        port.set_config(unit.port())?;
-        if let Some(code) = options.fault {
+    /// Serves `line`; `port` is its writing handle (a reader thread has the other). The port
+    /// is set to the units' framing.
+    pub fn new(
+        options: &UnitOptions,
+        mut line: MultiDrop,
+        mut port: Port,
+        clock: Clock,
+    ) -> Result<Self, SerialError> {
+        port.set_config(line.port())?;
+        if let (Some(code), Some(unit)) = (options.fault, line.unit_mut(0)) {
             unit.inject_fault(clock.now(), code);
         }
         Ok(UnitServer {
-            unit,
+            line,
             port,
             clock,
-            silent: false,
             log: options.log,
             framer: Framer::default(),
             stream: FrameStream::default(),
+            collisions: 0,
         })
     }
 
     /// A line saying what is served where.
     pub fn banner(&self) -> String {
+        let units: Vec<&dyn SimulatedUnit> = (0..self.line.len())
+            .filter_map(|i| self.line.unit(i))
+            .collect();
+        let what = match units.as_slice() {
+            [one] => format!("a simulated {}", one.model()),
+            several => format!(
+                "{} simulated units on one line: {}",
+                several.len(),
+                several
+                    .iter()
+                    .enumerate()
+                    .map(|(i, u)| format!("@{} {} ({})", i + 1, u.model(), address_of(*u)))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
+        };
         format!(
-            "pbtool unit: a simulated {} on {} at {}",
-            self.unit.model(),
+            "pbtool unit: {what} on {} at {}",
             self.port.name(),
-            describe(self.unit.port())
+            describe(self.line.port())
         )
     }
 
@@ -120,15 +180,18 @@ impl UnitServer {
         inbox: &Receiver<Arrival>,
         log: &mut dyn Write,
     ) -> Result<(), SerialError> {
+        let models: Vec<Model> = (0..self.line.len())
+            .filter_map(|i| self.line.unit(i).map(|u| u.model()))
+            .collect();
         loop {
-            let arrival = wait(inbox, &self.clock, self.unit.next_wakeup());
+            let arrival = wait(inbox, &self.clock, self.line.next_wakeup());
             let now = self.clock.now();
             match arrival {
                 Some(Arrival::Serial { rx, .. }) => self.received(now, &rx, log),
                 Some(Arrival::Line(line)) => {
                     let text = String::from_utf8_lossy(&line);
-                    match Control::parse(self.unit.model(), &text) {
-                        Ok(Some(control)) => self.control(now, control, log),
+                    match Control::parse_addressed(&models, &text) {
+                        Ok(Some((unit, control))) => self.control(now, unit, control, log),
                         Ok(None) => {}
                         Err(e) => {
                             let _ = writeln!(log, "pbtool unit: {e}");
@@ -138,25 +201,45 @@ impl UnitServer {
                 Some(Arrival::Failed(e)) => return Err(e),
                 Some(Arrival::EndOfInput) | None => {}
             }
-            self.unit.advance(now);
-            if let Some(bytes) = self.unit.poll_transmit(now)
-                && !self.silent
-            {
+            self.line.advance(now);
+            let bytes = self.line.poll_transmit(now);
+            for sent in self.line.take_transmissions() {
+                let direction = match self.line.len() {
+                    1 => "tx".to_string(),
+                    _ => format!("tx @{}", sent.unit + 1),
+                };
+                self.log_frame(
+                    sent.at,
+                    &direction,
+                    &String::from_utf8_lossy(&sent.bytes),
+                    log,
+                );
+            }
+            if let Some(bytes) = bytes {
                 self.port.write_all(&bytes)?;
-                self.log_frame(now, "tx", &String::from_utf8_lossy(&bytes), log);
+            }
+            let collisions = self.line.collisions();
+            if collisions > self.collisions {
+                let _ = writeln!(
+                    log,
+                    "pbtool unit: collision: two units answering at once ({collisions} \
+                     characters garbled so far)"
+                );
+                self.collisions = collisions;
             }
         }
     }
 
     fn received(&mut self, now: Instant, rx: &[Rx], log: &mut dyn Write) {
-        if self.silent {
+        if !(0..self.line.len()).any(|i| self.line.is_connected(i)) {
+            // Every unit's cable cut: nothing on this side of the cut hears it.
             return;
         }
         let mut pieces = Vec::new();
         for &item in rx {
             match item {
-                Rx::Byte(b) => self.unit.receive(now, b),
-                Rx::Error => self.unit.receive_error(now),
+                Rx::Byte(b) => self.line.receive(now, b),
+                Rx::Error => self.line.receive_error(now),
             }
             if self.log {
                 self.framer.push(now, item, &mut pieces);
@@ -167,35 +250,42 @@ impl UnitServer {
         }
     }
 
-    fn control(&mut self, now: Instant, control: Control, log: &mut dyn Write) {
+    fn control(&mut self, now: Instant, index: usize, control: Control, log: &mut dyn Write) {
+        if let Control::Silent(silent) = control {
+            self.line.set_connected(index, !silent);
+        }
+        let Some(unit) = self.line.unit_mut(index) else {
+            return;
+        };
         let said = match control {
             Control::Fault(code) => {
-                self.unit.inject_fault(now, code);
+                unit.inject_fault(now, code);
                 // As the unit's display and the manuals show it: 0-50-0, HPR error 44.
-                if self.unit.model().family() == Family::Hpr {
+                if unit.model().family() == Family::Hpr {
                     format!("error {code} raised")
                 } else {
                     format!("fault {} raised", FaultCode(code))
                 }
             }
             Control::Clear => {
-                self.unit.clear_fault(now);
+                unit.clear_fault(now);
                 "fault cleared".to_string()
             }
             Control::Power(on) => {
                 if on {
-                    self.unit.power_on(now);
+                    unit.power_on(now);
                 } else {
-                    self.unit.power_off(now);
+                    unit.power_off(now);
                 }
                 format!("power {}", if on { "on" } else { "off" })
             }
-            Control::Silent(silent) => {
-                self.silent = silent;
-                if silent { "silent" } else { "answering" }.to_string()
-            }
+            Control::Silent(silent) => if silent { "silent" } else { "answering" }.to_string(),
         };
-        let _ = writeln!(log, "pbtool unit: {said}");
+        let who = match self.line.len() {
+            1 => String::new(),
+            _ => format!("@{} ", index + 1),
+        };
+        let _ = writeln!(log, "pbtool unit: {who}{said}");
     }
 
     fn log_piece(&mut self, piece: &Piece, log: &mut dyn Write) {
@@ -233,6 +323,21 @@ impl UnitServer {
     }
 }
 
+/// How the unit is addressed on its line: `id 1` (HPR), `node 7` (Powermax).
+fn address_of(unit: &dyn SimulatedUnit) -> String {
+    if let Some(hpr) = unit.as_any().downcast_ref::<Hpr>() {
+        return format!("id {}", hpr.config().id);
+    }
+    match unit
+        .as_any()
+        .downcast_ref::<Powermax>()
+        .and_then(Powermax::address)
+    {
+        Some(node) => format!("node {node}"),
+        None => "node from the first request".to_string(),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -260,5 +365,29 @@ mod tests {
         assert_eq!(Control::parse(pm, "\n"), Ok(None));
         assert!(Control::parse(pm, "explode").is_err());
         assert!(Control::parse(Model::Hpr260, "fault 0-50-0").is_err());
+    }
+
+    #[test]
+    fn a_control_goes_to_unit_1_unless_at_n_names_another() {
+        let line = [Model::Hpr260, Model::Hpr400];
+        assert_eq!(
+            Control::parse_addressed(&line, "FAULT 44"),
+            Ok(Some((0, Control::Fault(44))))
+        );
+        assert_eq!(
+            Control::parse_addressed(&line, "@2 power off"),
+            Ok(Some((1, Control::Power(false))))
+        );
+        assert_eq!(
+            Control::parse_addressed(&line, " @1 silent"),
+            Ok(Some((0, Control::Silent(true))))
+        );
+        assert_eq!(Control::parse_addressed(&line, "@2"), Ok(None));
+        for bad in ["@3 clear", "@0 clear", "@x clear"] {
+            let e = Control::parse_addressed(&line, bad).unwrap_err();
+            assert!(e.contains("units are @1 to @2"), "{e}");
+        }
+        assert!(Control::parse_addressed(&[Model::Sync65], "@2 clear").is_err());
+        assert!(Control::parse_addressed(&line, "@2 explode").is_err());
     }
 }

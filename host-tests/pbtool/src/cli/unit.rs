@@ -6,7 +6,7 @@ use std::process::ExitCode;
 use clap::Args;
 use pbtool::realtime::{Clock, spawn_reader, spawn_stdin};
 use pbtool::serial::Port;
-use pbtool::unit::{UnitOptions, UnitServer};
+use pbtool::unit::{UnitOptions, UnitServer, build_line};
 use plasma_sim::{Family, SimOptions};
 
 use super::{USAGE, serial_failure, simulated_unit};
@@ -14,17 +14,21 @@ use super::{USAGE, serial_failure, simulated_unit};
 #[derive(Args)]
 pub struct ServeArgs {
     /// The simulated unit: sync45 sync65 sync85 sync105 pm45xp pm65 pm85 pm105 pm125 hpr130
-    /// hpr260 hpr400 hpr130xd hpr260xd hpr400xd maxpro200.
-    #[arg(long = "ps", value_name = "MODEL")]
-    model: String,
+    /// hpr260 hpr400 hpr130xd hpr260xd hpr400xd maxpro200. Given again, several units share
+    /// the port as one line: HPRs with ids in order (SLEEP/WAKE), Powermax units at node
+    /// addresses in order from --address.
+    #[arg(long = "ps", value_name = "MODEL", required = true)]
+    models: Vec<String>,
     /// The serial port (/dev/ttyUSB0, COM3).
     #[arg(long, value_name = "DEV")]
     port: String,
-    /// Start with a fault: Powermax `0-50-0` (or decimal `500`), HPR error number.
+    /// Start with a fault (on the first unit): Powermax `0-50-0` (or decimal `500`), HPR
+    /// error number.
     #[arg(long, value_name = "CODE")]
     fault: Option<String>,
-    /// Powermax: the Modbus node address (1-247; default: learnt from the first request).
-    /// HPR: the id switch (0-3, default 0).
+    /// Powermax: the Modbus node address (1-247; default: learnt from the first request,
+    /// for a single unit only). HPR: the id switch (0-3, default 0). The first unit's; the
+    /// others' follow.
     #[arg(long, value_name = "N", value_parser = unit_address)]
     address: Option<u8>,
     /// Each frame (time, direction, decoded) on stderr.
@@ -37,7 +41,14 @@ pub struct ServeArgs {
 
 /// Serves the unit until the port fails or the process is stopped.
 pub fn unit(args: &ServeArgs) -> ExitCode {
-    let (model, fault) = match simulated_unit("unit", &args.model, args.fault.as_deref()) {
+    let mut models = Vec::with_capacity(args.models.len());
+    for name in &args.models {
+        match simulated_unit("unit", name, None) {
+            Ok((model, _)) => models.push(model),
+            Err(status) => return status,
+        }
+    }
+    let (model, fault) = match simulated_unit("unit", &args.models[0], args.fault.as_deref()) {
         Ok(unit) => unit,
         Err(status) => return status,
     };
@@ -57,15 +68,22 @@ pub fn unit(args: &ServeArgs) -> ExitCode {
         }
     }
     let options = UnitOptions {
-        model,
+        models,
         fault,
         sim,
         log: args.log,
     };
+    let line = match build_line(&options) {
+        Ok(line) => line,
+        Err(e) => {
+            eprintln!("pbtool unit: {e}");
+            return ExitCode::from(USAGE);
+        }
+    };
     let clock = Clock::start();
-    let opened = Port::open(&args.port, model.build(&sim).port())
+    let opened = Port::open(&args.port, line.port())
         .and_then(|port| Ok((port.try_clone()?, port)))
-        .and_then(|(reader, port)| Ok((reader, UnitServer::new(&options, port, clock)?)));
+        .and_then(|(reader, port)| Ok((reader, UnitServer::new(&options, line, port, clock)?)));
     let (reader, mut server) = match opened {
         Ok(opened) => opened,
         Err(e) => return serial_failure("unit", &e),
