@@ -31,6 +31,7 @@
 //! With a single unit nothing can collide and its transmissions are handed over whole, exactly
 //! as the unit alone would send them.
 
+use std::collections::VecDeque;
 use std::fmt;
 
 use plasma_protocol::serial::PortConfig;
@@ -186,9 +187,13 @@ pub struct MultiDrop {
     busy_until_ns: Vec<u64>,
     /// When the last character handed to the line ends.
     wire_until_ns: u64,
-    transmissions: Vec<Transmission>,
+    /// The latest transmissions, for [`take_transmissions`](MultiDrop::take_transmissions).
+    transmissions: VecDeque<Transmission>,
     collisions: u64,
 }
+
+/// Transmissions kept for a caller that does not take them.
+const KEPT_TRANSMISSIONS: usize = 64;
 
 fn ns(t: Instant) -> u64 {
     t.as_micros().saturating_mul(1000)
@@ -213,7 +218,7 @@ impl MultiDrop {
             timeline: Vec::new(),
             busy_until_ns: vec![0; count],
             wire_until_ns: 0,
-            transmissions: Vec::new(),
+            transmissions: VecDeque::new(),
             collisions: 0,
         })
     }
@@ -261,9 +266,10 @@ impl MultiDrop {
         self.collisions
     }
 
-    /// The transmissions the units started since the last call, as each unit sent them.
+    /// The transmissions the units started since the last call (at most the latest 64), as
+    /// each unit sent them.
     pub fn take_transmissions(&mut self) -> Vec<Transmission> {
-        std::mem::take(&mut self.transmissions)
+        self.transmissions.drain(..).collect()
     }
 
     /// A character from the master arrived at `now`: every connected unit hears it.
@@ -379,7 +385,10 @@ impl MultiDrop {
             self.timeline.insert(at, c);
         }
         self.busy_until_ns[index] = start + bytes.len() as u64 * char_ns;
-        self.transmissions.push(Transmission {
+        if self.transmissions.len() == KEPT_TRANSMISSIONS {
+            self.transmissions.pop_front();
+        }
+        self.transmissions.push_back(Transmission {
             unit: index,
             at: instant_from_ns(start),
             bytes,

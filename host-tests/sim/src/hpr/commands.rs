@@ -117,9 +117,11 @@ impl Hpr {
                 }
                 None
             }
+            // "Disconnect their transmitters" (line 173): a reply not yet sent is not sent.
             86 if hpr => {
                 self.awake = false;
                 self.broadcast = false;
+                self.outbox.clear();
                 None
             }
             87 if hpr => {

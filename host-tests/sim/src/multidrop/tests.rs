@@ -137,6 +137,21 @@ fn sleep_then_wake_talks_to_one_unit_at_a_time() {
     assert_eq!(bench.hpr(0, ""), hello("260"));
 }
 
+// HPR manual line 173: SLEEP tells the systems to disconnect their transmitters, so a reply
+// still due when it arrives is never sent.
+#[test]
+fn a_sleep_right_after_a_request_stops_the_reply_still_due() {
+    let mut bench = two_hprs();
+    for &b in hpr_wire::encode(0, "")
+        .iter()
+        .chain(&hpr_wire::encode(86, ""))
+    {
+        bench.drop.receive(ms(10), b);
+    }
+    assert_eq!(bench.drop.poll_transmit(ms(30)), None);
+    assert!(bench.drop.take_transmissions().is_empty());
+}
+
 // HPR manual line 109: the SLEEP must be sent before the WAKE of the next system. A master
 // that forgets it has two transmitters on the line.
 #[test]
