@@ -321,15 +321,24 @@ impl MultiDrop {
     }
 
     /// The characters the line carries from `now` on, if any started by `now`.
+    ///
+    /// A caller that comes late (a real-time loop on a loaded machine) changes nothing: each
+    /// unit's transmission is laid on the timeline at the moment the unit asked for, so two
+    /// replies due 4 ms apart overlap however late the call.
     pub fn poll_transmit(&mut self, now: Instant) -> Option<Vec<u8>> {
-        let now_ns = ns(now);
-        for index in 0..self.units.len() {
-            while let Some(bytes) = self.units[index].poll_transmit(now) {
-                if !self.disconnected[index] {
-                    self.lay(index, now_ns, bytes);
-                }
-            }
+        let mut caught_up: Option<Instant> = None;
+        while let Some(due) = self
+            .units
+            .iter()
+            .filter_map(|u| u.next_wakeup())
+            .filter(|&t| t <= now && caught_up.is_none_or(|done| t > done))
+            .min()
+        {
+            self.lay_due(due);
+            caught_up = Some(due);
         }
+        self.lay_due(now);
+        let now_ns = ns(now);
         let lone = self.units.len() == 1;
         let mut out = Vec::new();
         for i in 0..self.timeline.len() {
@@ -363,6 +372,17 @@ impl MultiDrop {
         self.timeline
             .retain(|c| c.fate == Fate::Waiting || c.end_ns > now_ns);
         (!out.is_empty()).then_some(out)
+    }
+
+    /// Lays what each connected unit sends at `at`.
+    fn lay_due(&mut self, at: Instant) {
+        for index in 0..self.units.len() {
+            while let Some(bytes) = self.units[index].poll_transmit(at) {
+                if !self.disconnected[index] {
+                    self.lay(index, ns(at), bytes);
+                }
+            }
+        }
     }
 
     /// Puts unit `index`'s `bytes` on the timeline from `now_ns` (or after its own last

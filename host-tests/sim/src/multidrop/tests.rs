@@ -208,6 +208,24 @@ fn colliding_characters_read_as_the_and_of_both_and_a_late_start_is_lost() {
 }
 
 #[test]
+fn a_late_poll_lays_each_reply_where_it_was_due() {
+    let mut bench = two_hprs();
+    assert_eq!(bench.hpr(85, "1"), ">0851CE<");
+    bench.drop.take_transmissions();
+    for &b in &hpr_wire::encode(0, "") {
+        bench.drop.receive(ms(1_000), b);
+    }
+    // Both replies are due within 7 ms; the first poll comes 50 ms late.
+    let heard = bench.drop.poll_transmit(ms(1_050)).unwrap();
+    let sent = bench.drop.take_transmissions();
+    assert_eq!(sent.len(), 2);
+    assert!(sent.iter().all(|t| t.at < ms(1_008)), "{sent:?}");
+    assert!(bench.drop.collisions() > 0);
+    let heard = String::from_utf8_lossy(&heard).into_owned();
+    assert!(!heard.contains(&hello("260")) && !heard.contains(&hello("400")));
+}
+
+#[test]
 fn a_lone_unit_sounds_exactly_as_without_the_multi_drop() {
     let mut bench = Bench::of(&[Model::Hpr260], &SimOptions::default());
     let mut alone = Model::Hpr260.build(&SimOptions::default());
