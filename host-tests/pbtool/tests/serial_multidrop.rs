@@ -157,6 +157,50 @@ fn powermax_units_share_a_port_at_node_addresses_in_order() {
         banner.contains("@1 sync65 (node 5), @2 pm65 (node 6)"),
         "{banner}"
     );
+    let mut client = serialport::new(&cable.a, 19_200)
+        .parity(serialport::Parity::Even)
+        .timeout(Duration::from_millis(100))
+        .open()
+        .expect("the client's end opens");
+    // Each node's read of holding register 0x2093 is answered by that node alone; node 7 by
+    // nobody, so the node 5 reply after it is the next thing heard.
+    let mut heard = Vec::new();
+    for node in [5u8, 6, 7, 5] {
+        client
+            .write_all(&modbus_request(node, &[0x03, 0x20, 0x93, 0x00, 0x01]))
+            .expect("written");
+        if node == 7 {
+            continue;
+        }
+        let deadline = Instant::now() + LONG;
+        let mut buf = [0u8; 64];
+        while !heard.ends_with(b"\r\n") {
+            assert!(
+                Instant::now() < deadline,
+                "no reply from node {node}: {heard:?}"
+            );
+            match client.read(&mut buf) {
+                Ok(n) => heard.extend_from_slice(&buf[..n]),
+                Err(e) if e.kind() == std::io::ErrorKind::TimedOut => {}
+                Err(e) => panic!("the client's port failed: {e}"),
+            }
+        }
+        let reply = String::from_utf8_lossy(&heard).into_owned();
+        assert!(reply.starts_with(&format!(":{node:02X}03")), "{reply:?}");
+        heard.clear();
+    }
+}
+
+/// A Modbus ASCII request: `:`, address and PDU in hex, LRC (the two's complement of their
+/// sum), CR LF.
+fn modbus_request(node: u8, pdu: &[u8]) -> Vec<u8> {
+    let bytes: Vec<u8> = std::iter::once(node).chain(pdu.iter().copied()).collect();
+    let lrc = bytes
+        .iter()
+        .fold(0u8, |acc, &b| acc.wrapping_add(b))
+        .wrapping_neg();
+    let hex: String = bytes.iter().map(|b| format!("{b:02X}")).collect();
+    format!(":{hex}{lrc:02X}\r\n").into_bytes()
 }
 
 #[test]
