@@ -17,7 +17,15 @@ use plasma_protocol::serial::PortConfig;
 use crate::serial::{Port, Rx, SerialError};
 
 /// The columns every entry has, in the table's order; the event's own fields follow.
-pub const COLUMNS: [&str; 6] = ["seq", "boot", "uptime_ms", "clock", "family", "event"];
+pub const COLUMNS: [&str; 7] = [
+    "seq",
+    "boot",
+    "uptime_ms",
+    "clock",
+    "family",
+    "model",
+    "event",
+];
 
 /// The longest wait for the bridge's reply on a port.
 pub const PORT_REPLY_TIMEOUT: Duration = Duration::from_secs(2);
@@ -224,8 +232,8 @@ mod tests {
     use super::*;
 
     const LINES: [&str; 3] = [
-        "HISTORY seq=4 boot=1 uptime_ms=812 clock=- family=- event=RESET cause=power-on",
-        "HISTORY seq=3 boot=0 uptime_ms=2500 clock=2026-11-26T07:30:02 family=SYNC event=FAULT code=0-50-0 action=required",
+        "HISTORY seq=4 boot=1 uptime_ms=812 clock=- family=- model=- event=RESET cause=power-on",
+        "HISTORY seq=3 boot=0 uptime_ms=2500 clock=2026-11-26T07:30:02 family=SYNC model=Powermax65 event=FAULT code=0-50-0 action=required",
         "OK history=2 skipped=0",
     ];
 
@@ -235,15 +243,15 @@ mod tests {
         assert_eq!(rows.len(), 2);
         assert_eq!(
             table(&rows),
-            "seq  boot  uptime_ms  clock                family  event  details\n\
-             4    1     812        -                    -       RESET  cause=power-on\n\
-             3    0     2500       2026-11-26T07:30:02  SYNC    FAULT  code=0-50-0 action=required\n"
+            "seq  boot  uptime_ms  clock                family  model       event  details\n\
+             4    1     812        -                    -       -           RESET  cause=power-on\n\
+             3    0     2500       2026-11-26T07:30:02  SYNC    Powermax65  FAULT  code=0-50-0 action=required\n"
         );
         assert_eq!(
             csv(&rows),
-            "seq,boot,uptime_ms,clock,family,event,details\n\
-             4,1,812,-,-,RESET,cause=power-on\n\
-             3,0,2500,2026-11-26T07:30:02,SYNC,FAULT,\"code=0-50-0 action=required\"\n"
+            "seq,boot,uptime_ms,clock,family,model,event,details\n\
+             4,1,812,-,-,-,RESET,cause=power-on\n\
+             3,0,2500,2026-11-26T07:30:02,SYNC,Powermax65,FAULT,\"code=0-50-0 action=required\"\n"
         );
         let parsed: serde_json::Value = serde_json::from_str(&json(&rows)).unwrap();
         assert_eq!(parsed[1]["code"], "0-50-0");

@@ -94,12 +94,13 @@ enum Command {
     /// error.
     Config(cli::config::ConfigArgs),
     /// A live dashboard of a bridge: unit and link, process set and actual, the signals as
-    /// lamps, the active fault and its steps, events, and a plot of current and pressure.
+    /// lamps, the active fault and its steps, consumable life, the bridge's history, events,
+    /// and a plot of current and pressure.
     ///
     /// Attaches through the CNC text protocol to a board's CNC port (`--port DEV`), the
-    /// emulated board (`--emu`) or the simulator (`--sim MODEL`), and keeps reconnecting when
-    /// the port goes away or the child exits. Keys: g gas test on/off, r remote off, c clear
-    /// warnings, q quit. `--snapshot` prints one frame to stdout instead (for docs and bug
+    /// emulated board (`--emu`) or the simulator (`--sim MODEL`), sets the bridge's clock to
+    /// the PC's (`CLOCK`), and keeps reconnecting when the port goes away or the child exits.
+    /// Keys: g gas check, r remote off, c clear warnings, q quit. `--snapshot` prints one frame to stdout instead (for docs and bug
     /// reports).
     Monitor(cli::monitor::MonitorArgs),
     /// The bridge's event history (faults, link, resets, refused STARTs, process changes),

@@ -5,6 +5,7 @@ use std::path::Path;
 use std::process::Command;
 use std::time::{Duration, Instant};
 
+use pbtool::monitor::state::Command as Ask;
 use pbtool::monitor::transport::Source;
 use pbtool::monitor::{Dashboard, Session, screen_text};
 
@@ -13,29 +14,52 @@ const S: Duration = Duration::from_secs(1);
 // What `pbtool sim --ps sync65 --fault 0-50-0 --events` answers (10:00:00 UTC is the start).
 const STATUS_FAULT: &str = "OK link=UP model=Powermax65 family=SYNC remote=OFF mode=CUT amps=65 psi=72 out_amps=0 out_psi=0 fault=0-50-0 start=OFF motion=OFF arc_ok=OFF ready=OFF";
 const FAULT: &str = "OK fault=0-50-0 action=required text=The cartridge is off, the torch was disconnected when you set the plasma power supply to ON (I), or the torch was in the yellow lock (X) position during a restart.";
-const TEN_O_CLOCK: u64 = 10 * 3600;
+/// 2026-11-26T10:00:00 UTC.
+const TEN_O_CLOCK: u64 = 1_795_687_200;
 
-/// A dashboard connected to the simulator, its first replies (events on, no CONSUMABLES) in.
+/// A dashboard connected to the simulator, its first replies (events on, the clock set, no
+/// CONSUMABLES, the history of a bridge that has just started) in.
 fn connected() -> Dashboard {
     let mut dash = Dashboard::new("sim sync65", None, TEN_O_CLOCK);
     dash.connected(Duration::ZERO);
-    dash.apply_line(Duration::ZERO, "OK events=ON");
-    dash.apply_line(
-        Duration::ZERO,
+    for line in [
+        "OK events=ON",
+        "OK clock=2026-11-26T10:00:00",
         "ERR SYNTAX unknown command (HELP lists the commands)",
-    );
+        "HISTORY seq=1 boot=1 uptime_ms=3 clock=2026-11-26T10:00:00 family=- event=RESET cause=power-on",
+        "OK history=1 skipped=0",
+    ] {
+        dash.apply_line(Duration::ZERO, line);
+    }
     dash
+}
+
+/// Answers what `dash` asks at `now` as `pbtool sim --ps sync65 --fault 0-50-0` does.
+fn answer_with_fault(dash: &mut Dashboard, now: Duration) {
+    for command in dash.poll(now) {
+        let lines: &[&str] = match command {
+            Ask::Status => &[STATUS_FAULT],
+            Ask::Fault => &[FAULT],
+            Ask::Counters => &["OK link_ok=21 link_failed=0"],
+            // The fault is in the history.
+            Ask::History => &[
+                "HISTORY seq=2 boot=1 uptime_ms=1250 clock=2026-11-26T10:00:01 family=SYNC model=Powermax65 event=FAULT code=0-50-0 action=required",
+                "HISTORY seq=1 boot=1 uptime_ms=3 clock=2026-11-26T10:00:00 family=- model=- event=RESET cause=power-on",
+                "OK history=2 skipped=0",
+            ],
+            other => panic!("{other:?} not asked"),
+        };
+        for line in lines {
+            dash.apply_line(now, line);
+        }
+    }
 }
 
 fn with_fault() -> Dashboard {
     let mut dash = connected();
     dash.apply_line(S, "!LINK UP model=Powermax65/85/105 SYNC");
-    dash.poll(S);
-    dash.apply_line(S, STATUS_FAULT);
-    dash.apply_line(S, "OK link_ok=21 link_failed=0");
-    dash.poll(2 * S);
-    dash.apply_line(2 * S, STATUS_FAULT);
-    dash.apply_line(2 * S, FAULT);
+    answer_with_fault(&mut dash, S);
+    answer_with_fault(&mut dash, 2 * S);
     dash
 }
 
@@ -54,8 +78,11 @@ fn the_screen_for_a_fault() {
         "The cartridge is off",
         "not reported by this bridge",
         "10:00:01 LINK UP model=Powermax65",
-        "g gas test on/off | r remote off | c clear warnings | q quit",
+        "g gas check | r remote off | c clear warnings | q quit",
         "Actual current A and pressure psi",
+        "History (bridge, newest first)",
+        "11-26 10:00 FAULT code=0-50-0 action=required",
+        "11-26 10:00 RESET cause=power-on",
     ] {
         assert!(screen.contains(wanted), "{wanted:?} missing:\n{screen}");
     }
@@ -80,6 +107,69 @@ fn the_screen_for_a_lost_connection() {
     assert!(screen.contains("unknown: not connected"), "{screen}");
     assert!(screen.contains("? FAULT"), "{screen}");
     assert!(!screen.contains("● FAULT"), "{screen}");
+    // What the bridge kept stays: it happened.
+    assert!(screen.contains("11-26 10:00 FAULT code=0-50-0"), "{screen}");
+}
+
+/// A bridge that counts consumables: a set at 80 %, then the 90 % warning.
+#[test]
+fn the_screen_for_a_consumable_warning() {
+    let mut dash = Dashboard::new("sim pm65", None, TEN_O_CLOCK);
+    dash.connected(Duration::ZERO);
+    for line in [
+        "OK events=ON",
+        "OK clock=2026-11-26T10:00:00",
+        "OK CONSUMABLES source=COUNTED starts=120 arc_s=3400 start_limit=150 arc_limit_s=OFF used=80% wear_faults=0",
+        "OK history=0 skipped=0",
+    ] {
+        dash.apply_line(Duration::ZERO, line);
+    }
+    let before = screen_text(&dash, S, 100, 30);
+    assert!(before.contains("80 % used"), "{before}");
+    assert!(
+        before.contains("starts 120  arc 3400 s  COUNTED"),
+        "{before}"
+    );
+    assert!(!before.contains("WARN"), "{before}");
+    dash.apply_line(S, "!WARN CONSUMABLE used=90% starts=135 arc_s=3700");
+    for command in dash.poll(S) {
+        let reply = match command {
+            Ask::Status => "OK link=UP model=Powermax65 family=LEGACY remote=ON mode=CUT amps=65 psi=AUTO out_amps=0 out_psi=0 fault=none start=OFF motion=OFF arc_ok=OFF ready=ON".to_string(),
+            Ask::Counters => "OK link_ok=40 link_failed=0".to_string(),
+            Ask::Consumables => "OK CONSUMABLES source=COUNTED starts=135 arc_s=3700 start_limit=150 arc_limit_s=OFF used=90% wear_faults=0".to_string(),
+            Ask::History => "OK history=0 skipped=0".to_string(),
+            other => panic!("{other:?} not asked"),
+        };
+        dash.apply_line(S, &reply);
+    }
+    let screen = screen_text(&dash, S, 100, 30);
+    for wanted in [
+        "90 % used",
+        "starts 135  arc 3700 s",
+        "WARN CONSUMABLE used=90% starts=135",
+        "10:00:01 WARN CONSUMABLE used=90%",
+    ] {
+        assert!(screen.contains(wanted), "{wanted:?} missing:\n{screen}");
+    }
+}
+
+#[test]
+fn the_gas_checks_result_stays_on_screen() {
+    let mut dash = with_fault();
+    assert_eq!(
+        dash.key(3 * S, 'g'),
+        pbtool::monitor::state::KeyAction::Send(Ask::GasCheck)
+    );
+    dash.apply_line(
+        3 * S,
+        "OK GASTEST CHECK result=FAIL measured_psi=48 min_psi=65 max_psi=80",
+    );
+    let screen = screen_text(&dash, 3 * S, 100, 30);
+    assert!(screen.contains("gas FAIL 48 psi (65-80)"), "{screen}");
+    assert!(
+        screen.contains("GASTEST CHECK: OK GASTEST CHECK result=FAIL"),
+        "{screen}"
+    );
 }
 
 #[test]
@@ -100,7 +190,7 @@ fn a_small_terminal_gets_the_compact_layout() {
         "unit link UP",
         "● FAULT",
         "FAULT 0-50-0 (steps required)",
-        "g gas test on/off",
+        "g gas check",
     ] {
         assert!(screen.contains(wanted), "{wanted:?} missing:\n{screen}");
     }
@@ -288,10 +378,27 @@ fn readme_dashboard() -> (Dashboard, Duration) {
         let fault = if second >= 145 { "0-20-0" } else { "none" };
         for command in dash.poll(now) {
             let reply = match command {
-                pbtool::monitor::state::Command::Status => format!(
+                Ask::Status => format!(
                     "OK link=UP model=Powermax65 family=SYNC remote=ON mode=CUT amps=45 psi=72 out_amps={amps} out_psi={psi} fault={fault} start={on} motion={on} arc_ok={on} ready=ON"
                 ),
-                pbtool::monitor::state::Command::Fault => "OK fault=0-20-0 action=recommended text=The gas pressure is lower than the minimum pressure for the selected process, operating mode, torch, lead length, and cartridge type.".to_string(),
+                Ask::Fault => "OK fault=0-20-0 action=recommended text=The gas pressure is lower than the minimum pressure for the selected process, operating mode, torch, lead length, and cartridge type.".to_string(),
+                Ask::History => {
+                    // What the bridge kept: its start, the process set, the fault once it came.
+                    let mut entries = vec![
+                        "HISTORY seq=14 boot=3 uptime_ms=1250 clock=2026-11-26T10:00:01 family=SYNC model=Powermax65 event=PROCESS from_amps=65 to_amps=45 by=TEXT",
+                        "HISTORY seq=13 boot=3 uptime_ms=3 clock=2026-11-26T10:00:00 family=- model=- event=RESET cause=power-on",
+                        "HISTORY seq=12 boot=2 uptime_ms=5020410 clock=- family=SYNC model=Powermax65 event=FAULT_CLEARED code=0-50-0",
+                        "HISTORY seq=11 boot=2 uptime_ms=5012010 clock=- family=SYNC model=Powermax65 event=FAULT code=0-50-0 action=required",
+                    ];
+                    if second > 145 {
+                        entries.insert(0, "HISTORY seq=15 boot=3 uptime_ms=145250 clock=2026-11-26T10:02:25 family=SYNC model=Powermax65 event=FAULT code=0-20-0 action=recommended");
+                    }
+                    entries.truncate(6);
+                    for entry in &entries {
+                        dash.apply_line(now, entry);
+                    }
+                    format!("OK history={} skipped=0", entries.len())
+                }
                 _ => format!("OK link_ok={} link_failed={}", second * 20, second / 30),
             };
             dash.apply_line(now, &reply);

@@ -123,7 +123,7 @@ impl Session {
             return;
         };
         for command in commands {
-            if let Err(e) = connection.send(command.text()) {
+            if let Err(e) = connection.send(&command.text()) {
                 self.close(&e);
                 return;
             }

@@ -4,7 +4,10 @@
 use std::collections::VecDeque;
 use std::time::Duration;
 
+use plasma_protocol::cnc::clock::WallClock;
+
 use super::parse::{ActiveFault, Fields, Line};
+use crate::history::Row;
 
 /// How often STATUS (and FAULT while a fault is active) is asked.
 pub const STATUS_EVERY: Duration = Duration::from_millis(250);
@@ -16,6 +19,12 @@ pub const REPLY_TIMEOUT: Duration = Duration::from_secs(3);
 pub const PLOT_WINDOW: Duration = Duration::from_secs(300);
 /// How many events are kept.
 pub const EVENTS_KEPT: usize = 100;
+/// How many of the bridge's newest history entries the History panel asks for.
+pub const HISTORY_SHOWN: u8 = 6;
+/// The history is asked again after an event, but not more often than this.
+pub const HISTORY_EVERY: Duration = Duration::from_secs(1);
+/// How long `GASTEST CHECK` may take: the gas flows until the pressure settles.
+pub const GAS_CHECK_TIMEOUT: Duration = Duration::from_secs(30);
 
 /// A command the dashboard sends.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -28,10 +37,14 @@ pub enum Command {
     Fault,
     /// `COUNTERS`: the link counters.
     Counters,
-    /// `CONSUMABLES`, asked once per connection.
+    /// `CONSUMABLES`: at connect and after each `!WARN CONSUMABLE`.
     Consumables,
-    /// `GASTEST ON` / `GASTEST OFF`.
-    GasTest(bool),
+    /// `HISTORY` [`HISTORY_SHOWN`]: at connect and after events.
+    History,
+    /// `CLOCK <time>`: the bridge's wall clock set to this one (unix seconds, UTC) at connect.
+    Clock(u32),
+    /// `GASTEST CHECK`: the unit's gas test, measured against its permitted range.
+    GasCheck,
     /// `REMOTE OFF`.
     RemoteOff,
     /// `CLEARWARN`.
@@ -40,17 +53,37 @@ pub enum Command {
 
 impl Command {
     /// The command line, without its line end.
-    pub fn text(self) -> &'static str {
+    pub fn text(self) -> String {
+        match self {
+            Command::History => format!("HISTORY {HISTORY_SHOWN}"),
+            Command::Clock(unix_seconds) => {
+                format!("CLOCK {}", WallClock::from_unix_seconds(unix_seconds))
+            }
+            other => other.word().to_string(),
+        }
+    }
+
+    /// The command's word(s), as the screen names it.
+    pub fn word(self) -> &'static str {
         match self {
             Command::EventsOn => "EVENTS ON",
             Command::Status => "STATUS",
             Command::Fault => "FAULT",
             Command::Counters => "COUNTERS",
             Command::Consumables => "CONSUMABLES",
-            Command::GasTest(true) => "GASTEST ON",
-            Command::GasTest(false) => "GASTEST OFF",
+            Command::History => "HISTORY",
+            Command::Clock(_) => "CLOCK",
+            Command::GasCheck => "GASTEST CHECK",
             Command::RemoteOff => "REMOTE OFF",
             Command::ClearWarnings => "CLEARWARN",
+        }
+    }
+
+    /// How long its reply may take before it is taken as lost.
+    pub fn reply_timeout(self) -> Duration {
+        match self {
+            Command::GasCheck => GAS_CHECK_TIMEOUT,
+            _ => REPLY_TIMEOUT,
         }
     }
 }
@@ -81,6 +114,17 @@ pub enum Consumables {
     NotReported,
     /// Its reply.
     Reported(Fields),
+}
+
+/// The bridge's history as the History panel shows it.
+#[derive(Debug, Clone, PartialEq)]
+pub enum History {
+    /// Not asked yet.
+    Unknown,
+    /// The bridge does not answer `HISTORY` (or its history is not available): the reply.
+    NotReported(String),
+    /// The newest entries, newest first.
+    Entries(Vec<Row>),
 }
 
 /// What a key asks for.
@@ -122,8 +166,13 @@ pub struct Dashboard {
     pub fault: Option<ActiveFault>,
     /// Consumable life.
     pub consumables: Consumables,
-    /// Whether the gas test is on (as the last GASTEST reply said).
-    pub gas_test: bool,
+    /// The last `!WARN CONSUMABLE` event (the text after `!`), until a CONSUMABLES reply
+    /// says the set was changed (less used than at the warning).
+    pub consumable_warning: Option<String>,
+    /// The bridge's newest history entries.
+    pub history: History,
+    /// The last `GASTEST CHECK` reply (the text after `OK `/`ERR `), until the next.
+    pub gas_check: Option<String>,
     /// The latest events and the monitor's own notes, newest last, with their times.
     pub events: VecDeque<(Duration, String)>,
     /// The plot's points, oldest first, within [`PLOT_WINDOW`].
@@ -131,6 +180,11 @@ pub struct Dashboard {
     /// The reply to the last key's command (`REMOTE OFF: OK remote=OFF`).
     pub last_action: Option<String>,
     counters: VecDeque<(Duration, f64)>,
+    /// `HISTORY` lines of the reply under way.
+    history_lines: Vec<Row>,
+    history_wanted: bool,
+    history_asked: Option<Duration>,
+    consumables_wanted: bool,
     pending: VecDeque<Command>,
     pending_since: Duration,
     next_status: Duration,
@@ -148,11 +202,17 @@ impl Dashboard {
             status: None,
             fault: None,
             consumables: Consumables::Unknown,
-            gas_test: false,
+            consumable_warning: None,
+            history: History::Unknown,
+            gas_check: None,
             events: VecDeque::new(),
             samples: VecDeque::new(),
             last_action: None,
             counters: VecDeque::new(),
+            history_lines: Vec::new(),
+            history_wanted: false,
+            history_asked: None,
+            consumables_wanted: false,
             pending: VecDeque::new(),
             pending_since: Duration::ZERO,
             next_status: Duration::ZERO,
@@ -160,17 +220,33 @@ impl Dashboard {
         }
     }
 
-    /// The connection is up: what to send first (events on, whether consumables are reported).
+    /// The connection is up: what to send first (events on, the bridge's clock set to this
+    /// one, the consumables and the history).
     pub fn connected(&mut self, now: Duration) -> Vec<Command> {
         self.connection = Connection::Up;
         self.pending.clear();
         self.counters.clear();
+        self.history_lines.clear();
         self.note(now, format!("connected to {}", self.source));
         self.next_status = now;
         self.next_counters = now;
-        let first = vec![Command::EventsOn, Command::Consumables];
+        self.history_wanted = false;
+        self.history_asked = Some(now);
+        self.consumables_wanted = false;
+        let first = vec![
+            Command::EventsOn,
+            Command::Clock(self.wall_seconds(now)),
+            Command::Consumables,
+            Command::History,
+        ];
         self.sent(now, &first);
         first
+    }
+
+    /// Unix seconds (UTC) at `now`.
+    pub fn wall_seconds(&self, now: Duration) -> u32 {
+        let seconds = self.wall_origin_s.saturating_add(now.as_secs());
+        u32::try_from(seconds).unwrap_or(u32::MAX)
     }
 
     /// The port went away or the child exited.
@@ -191,12 +267,13 @@ impl Dashboard {
         if self.connection != Connection::Up {
             return Vec::new();
         }
-        if !self.pending.is_empty() {
-            if now.saturating_sub(self.pending_since) < REPLY_TIMEOUT {
+        if let Some(&awaited) = self.pending.front() {
+            if now.saturating_sub(self.pending_since) < awaited.reply_timeout() {
                 return Vec::new();
             }
-            self.note(now, format!("no reply to {}", self.pending[0].text()));
+            self.note(now, format!("no reply to {}", awaited.word()));
             self.pending.clear();
+            self.history_lines.clear();
         }
         let mut due = Vec::new();
         if now >= self.next_status {
@@ -210,25 +287,37 @@ impl Dashboard {
             due.push(Command::Counters);
             self.next_counters = now + COUNTERS_EVERY;
         }
+        if self.consumables_wanted {
+            due.push(Command::Consumables);
+            self.consumables_wanted = false;
+        }
+        let history_due = self
+            .history_asked
+            .is_none_or(|at| now.saturating_sub(at) >= HISTORY_EVERY);
+        if self.history_wanted && history_due {
+            due.push(Command::History);
+            self.history_wanted = false;
+            self.history_asked = Some(now);
+        }
         self.sent(now, &due);
         due
     }
 
-    /// A key pressed: `q` quits, `g` gas test on/off, `r` remote off, `c` clear warnings.
+    /// A key pressed: `q` quits, `g` gas check, `r` remote off, `c` clear warnings.
     pub fn key(&mut self, now: Duration, key: char) -> KeyAction {
         let command = match key {
             'q' | 'Q' => return KeyAction::Quit,
-            'g' | 'G' => Command::GasTest(!self.gas_test),
+            'g' | 'G' => Command::GasCheck,
             'r' | 'R' => Command::RemoteOff,
             'c' | 'C' => Command::ClearWarnings,
             _ => return KeyAction::Ignored,
         };
         if self.connection != Connection::Up {
-            self.last_action = Some(format!("{}: not connected", command.text()));
+            self.last_action = Some(format!("{}: not connected", command.word()));
             return KeyAction::Ignored;
         }
         self.sent(now, &[command]);
-        self.last_action = Some(format!("{}: sent", command.text()));
+        self.last_action = Some(format!("{}: sent", command.word()));
         KeyAction::Send(command)
     }
 
@@ -236,7 +325,11 @@ impl Dashboard {
     pub fn apply_line(&mut self, now: Duration, line: &str) {
         match Line::parse(line) {
             Line::Event(event) => self.event(now, event),
-            Line::Other(_) => {}
+            Line::Other(other) => {
+                if let Some(row) = Row::parse(&other) {
+                    self.history_lines.push(row);
+                }
+            }
             reply => {
                 // Replies come in order. One that names its command drops the commands
                 // before it (their replies were lost), and one that names a command not
@@ -296,32 +389,51 @@ impl Dashboard {
                 }
             }
             (Command::Consumables, Line::Ok(fields)) => {
+                // A set less used than at the warning is a new one: the warning is over.
+                let warned_at = self
+                    .consumable_warning
+                    .as_deref()
+                    .and_then(|w| used_percent(&Fields::parse(w)));
+                if warned_at.is_some_and(|warned| used_percent(&fields).is_none_or(|u| u < warned))
+                {
+                    self.consumable_warning = None;
+                }
                 self.consumables = Consumables::Reported(fields);
             }
             (Command::Consumables, _) => self.consumables = Consumables::NotReported,
-            (Command::Status | Command::Fault | Command::Counters | Command::EventsOn, _) => {}
+            (Command::History, Line::Ok(_)) => {
+                self.history = History::Entries(std::mem::take(&mut self.history_lines));
+            }
+            (Command::History, reply) => {
+                self.history_lines.clear();
+                self.history = History::NotReported(answer_text(reply));
+            }
+            // A bridge without CLOCK: its entries carry no wall-clock time, nothing else changes.
+            (
+                Command::Status
+                | Command::Fault
+                | Command::Counters
+                | Command::EventsOn
+                | Command::Clock(_),
+                _,
+            ) => {}
             (action, reply) => {
-                if let (Command::GasTest(_), Line::Ok(fields)) = (action, &reply)
-                    && let Some(state) = fields.get("gastest")
-                {
-                    self.gas_test = state == "ON";
+                let answer = answer_text(reply);
+                if action == Command::GasCheck {
+                    self.gas_check = Some(answer.clone());
                 }
-                let answer = match reply {
-                    Line::Ok(fields) => {
-                        let words: Vec<String> =
-                            fields.iter().map(|(k, v)| format!("{k}={v}")).collect();
-                        format!("OK {}", words.join(" "))
-                    }
-                    Line::Err(text) => format!("ERR {text}"),
-                    Line::Event(text) | Line::Other(text) => text,
-                };
-                self.last_action = Some(format!("{}: {answer}", action.text()));
+                self.last_action = Some(format!("{}: {answer}", action.word()));
             }
         }
     }
 
     fn event(&mut self, now: Duration, event: String) {
-        if let Some(code) = event.strip_prefix("FAULT CLEARED code=") {
+        // What happened is in the history now (or soon): the panel asks again.
+        self.history_wanted = true;
+        if event.starts_with("WARN CONSUMABLE") {
+            self.consumable_warning = Some(event.clone());
+            self.consumables_wanted = true;
+        } else if let Some(code) = event.strip_prefix("FAULT CLEARED code=") {
             if self.fault.as_ref().is_some_and(|f| f.code == code) {
                 self.fault = None;
             }
@@ -380,17 +492,45 @@ impl Dashboard {
     }
 }
 
-/// The command an `OK` reply answers, where its first field says so.
+/// The share of consumable life used (`used=NN%`); `None` for `OFF` (no limit set) or none.
+pub fn used_percent(fields: &Fields) -> Option<f64> {
+    fields.get("used")?.strip_suffix('%')?.parse().ok()
+}
+
+/// A reply as the screen shows it: `OK key=value ...` or `ERR CODE text`.
+fn answer_text(reply: Line) -> String {
+    match reply {
+        Line::Ok(fields) => {
+            let words: Vec<String> = fields
+                .iter()
+                .map(|(k, v)| {
+                    if v.is_empty() {
+                        k.to_string()
+                    } else {
+                        format!("{k}={v}")
+                    }
+                })
+                .collect();
+            format!("OK {}", words.join(" ")).trim_end().to_string()
+        }
+        Line::Err(text) => format!("ERR {text}"),
+        Line::Event(text) | Line::Other(text) => text,
+    }
+}
+
+/// The command an `OK` reply answers, where its first field says so. Commands that share a
+/// first field with another's reply are not named (they pair in order).
 fn answered_by(reply: &Line) -> Option<Command> {
     let Line::Ok(fields) = reply else {
         return None;
     };
-    let (first, value) = fields.iter().next()?;
+    let (first, _) = fields.iter().next()?;
     match first {
         "link" => Some(Command::Status),
         "fault" => Some(Command::Fault),
         "events" => Some(Command::EventsOn),
-        "gastest" => Some(Command::GasTest(value == "ON")),
+        "history" => Some(Command::History),
+        "GASTEST" => Some(Command::GasCheck),
         _ if fields.get("link_ok").is_some() => Some(Command::Counters),
         _ => None,
     }
@@ -402,18 +542,182 @@ mod tests {
 
     const S: Duration = Duration::from_secs(1);
 
+    /// 2026-11-26T07:30:00 UTC.
+    const WALL_ORIGIN: u64 = 1_795_678_200;
+
     fn up() -> Dashboard {
-        let mut dash = Dashboard::new("sim sync65", None, 0);
+        let mut dash = Dashboard::new("sim sync65", None, WALL_ORIGIN);
+        let first = dash.connected(Duration::ZERO);
         assert_eq!(
-            dash.connected(Duration::ZERO),
-            [Command::EventsOn, Command::Consumables]
+            first,
+            [
+                Command::EventsOn,
+                Command::Clock(1_795_678_200),
+                Command::Consumables,
+                Command::History
+            ]
         );
+        assert_eq!(first[1].text(), "CLOCK 2026-11-26T07:30:00");
+        assert_eq!(first[3].text(), "HISTORY 6");
+        dash.apply_line(Duration::ZERO, "OK events=ON");
+        dash.apply_line(Duration::ZERO, "OK clock=2026-11-26T07:30:00");
+        dash.apply_line(
+            Duration::ZERO,
+            "ERR SYNTAX unknown command (HELP lists the commands)",
+        );
+        dash.apply_line(
+            Duration::ZERO,
+            "HISTORY seq=2 boot=1 uptime_ms=800 clock=2026-11-26T07:29:59 family=- event=RESET cause=power-on",
+        );
+        dash.apply_line(Duration::ZERO, "OK history=1 skipped=0");
+        dash
+    }
+
+    #[test]
+    fn the_history_at_connect() {
+        let dash = up();
+        let History::Entries(rows) = &dash.history else {
+            panic!("{:?}", dash.history);
+        };
+        assert_eq!(rows.len(), 1);
+        assert_eq!(rows[0].get("event"), "RESET");
+        assert!(dash.pending.is_empty(), "{:?}", dash.pending);
+    }
+
+    #[test]
+    fn the_history_again_after_events_at_most_once_a_second() {
+        let mut dash = up();
+        dash.apply_line(
+            S / 2,
+            "!FAULT 0-50-0 action=required text=The cartridge is off.",
+        );
+        // Half a second after the last ask: not yet.
+        assert_eq!(
+            dash.poll(S / 2),
+            [Command::Status, Command::Fault, Command::Counters]
+        );
+        dash.apply_line(S / 2, "OK link=UP fault=0-50-0 out_amps=0 out_psi=0");
+        dash.apply_line(
+            S / 2,
+            "OK fault=0-50-0 action=required text=The cartridge is off.",
+        );
+        dash.apply_line(S / 2, "OK link_ok=3 link_failed=0");
+        assert_eq!(
+            dash.poll(S),
+            [Command::Status, Command::Fault, Command::History]
+        );
+        dash.apply_line(S, "OK link=UP fault=0-50-0 out_amps=0 out_psi=0");
+        dash.apply_line(
+            S,
+            "OK fault=0-50-0 action=required text=The cartridge is off.",
+        );
+        dash.apply_line(
+            S,
+            "HISTORY seq=3 boot=1 uptime_ms=1400 clock=2026-11-26T07:30:01 family=SYNC event=FAULT code=0-50-0 action=required",
+        );
+        // An event while the history's reply comes: asked again, a second later.
+        dash.apply_line(S, "!ARC OFF");
+        dash.apply_line(
+            S,
+            "HISTORY seq=2 boot=1 uptime_ms=800 clock=2026-11-26T07:29:59 family=- event=RESET cause=power-on",
+        );
+        dash.apply_line(S, "OK history=2 skipped=0");
+        let History::Entries(rows) = &dash.history else {
+            panic!("{:?}", dash.history);
+        };
+        assert_eq!(
+            rows.iter().map(|r| r.get("seq")).collect::<Vec<_>>(),
+            ["3", "2"]
+        );
+        assert_eq!(dash.poll(S + S / 2), [Command::Status, Command::Fault]);
+        dash.apply_line(S + S / 2, "OK link=UP fault=0-50-0 out_amps=0 out_psi=0");
+        dash.apply_line(
+            S + S / 2,
+            "OK fault=0-50-0 action=required text=The cartridge is off.",
+        );
+        assert_eq!(
+            dash.poll(2 * S),
+            [Command::Status, Command::Fault, Command::History]
+        );
+    }
+
+    #[test]
+    fn a_bridge_without_history_says_so() {
+        let mut dash = Dashboard::new("/dev/ttyACM0", None, 0);
+        dash.connected(Duration::ZERO);
         dash.apply_line(Duration::ZERO, "OK events=ON");
         dash.apply_line(
             Duration::ZERO,
             "ERR SYNTAX unknown command (HELP lists the commands)",
         );
-        dash
+        dash.apply_line(
+            Duration::ZERO,
+            "ERR SYNTAX unknown command (HELP lists the commands)",
+        );
+        dash.apply_line(Duration::ZERO, "ERR STORAGE history not available");
+        assert_eq!(
+            dash.history,
+            History::NotReported("ERR STORAGE history not available".into())
+        );
+        assert!(dash.pending.is_empty(), "{:?}", dash.pending);
+    }
+
+    #[test]
+    fn a_consumable_warning_asks_again_and_stays_until_a_new_set() {
+        let mut dash = Dashboard::new("sim pm65", None, 0);
+        dash.connected(Duration::ZERO);
+        for line in [
+            "OK events=ON",
+            "OK clock=1970-01-01T00:00:00",
+            "OK consumables source=COUNTED starts=120 arc_s=3400 start_limit=150 arc_limit_s=OFF used=80% wear_faults=0",
+            "OK history=0 skipped=0",
+        ] {
+            dash.apply_line(Duration::ZERO, line);
+        }
+        assert!(matches!(dash.consumables, Consumables::Reported(_)));
+        dash.apply_line(S, "!WARN CONSUMABLE used=90% starts=135 arc_s=3700");
+        assert_eq!(
+            dash.consumable_warning.as_deref(),
+            Some("WARN CONSUMABLE used=90% starts=135 arc_s=3700")
+        );
+        assert_eq!(
+            dash.poll(S),
+            [
+                Command::Status,
+                Command::Counters,
+                Command::Consumables,
+                Command::History
+            ]
+        );
+        dash.apply_line(S, "OK link=UP fault=none out_amps=0 out_psi=0");
+        dash.apply_line(S, "OK link_ok=3 link_failed=0");
+        dash.apply_line(S, "OK consumables source=COUNTED starts=135 arc_s=3700 start_limit=150 arc_limit_s=OFF used=90% wear_faults=0");
+        dash.apply_line(S, "OK history=0 skipped=0");
+        let Consumables::Reported(fields) = &dash.consumables else {
+            panic!("{:?}", dash.consumables);
+        };
+        assert_eq!(used_percent(fields), Some(90.0));
+        assert!(dash.consumable_warning.is_some());
+        // CONSUMABLES NEW: the next answer is a fresh set, the warning goes.
+        dash.apply_line(2 * S, "!CONSUMABLES NEW");
+        dash.poll(2 * S);
+        dash.apply_line(2 * S, "OK link=UP fault=none out_amps=0 out_psi=0");
+        dash.apply_line(2 * S, "OK history=0 skipped=0");
+        dash.apply_line(3 * S, "!WARN CONSUMABLE used=90% starts=135 arc_s=3700");
+        dash.poll(3 * S);
+        dash.apply_line(3 * S, "OK link=UP fault=none out_amps=0 out_psi=0");
+        dash.apply_line(3 * S, "OK consumables source=COUNTED starts=0 arc_s=0 start_limit=150 arc_limit_s=OFF used=0% wear_faults=0");
+        assert_eq!(dash.consumable_warning, None);
+    }
+
+    #[test]
+    fn used_share() {
+        assert_eq!(
+            used_percent(&Fields::parse("starts=3 used=45%")),
+            Some(45.0)
+        );
+        assert_eq!(used_percent(&Fields::parse("starts=3 used=OFF")), None);
+        assert_eq!(used_percent(&Fields::parse("starts=3")), None);
     }
 
     #[test]
@@ -523,12 +827,24 @@ mod tests {
     #[test]
     fn keys_send_and_show_the_reply() {
         let mut dash = up();
-        assert_eq!(dash.key(S, 'g'), KeyAction::Send(Command::GasTest(true)));
-        dash.apply_line(S, "OK gastest=ON");
-        assert!(dash.gas_test);
-        assert_eq!(dash.key(S, 'g'), KeyAction::Send(Command::GasTest(false)));
-        dash.apply_line(S, "OK gastest=OFF");
-        assert!(!dash.gas_test);
+        assert_eq!(dash.key(S, 'g'), KeyAction::Send(Command::GasCheck));
+        // The gas flows for a while: no "no reply" within the usual time.
+        assert_eq!(dash.poll(S + REPLY_TIMEOUT), []);
+        dash.apply_line(
+            S + REPLY_TIMEOUT,
+            "OK GASTEST CHECK result=PASS measured_psi=72 min_psi=65 max_psi=80",
+        );
+        assert_eq!(
+            dash.gas_check.as_deref(),
+            Some("OK GASTEST CHECK result=PASS measured_psi=72 min_psi=65 max_psi=80")
+        );
+        // It stays until the next check, whatever else is sent.
+        assert_eq!(dash.key(S, 'r'), KeyAction::Send(Command::RemoteOff));
+        dash.apply_line(S, "OK remote=OFF");
+        assert!(dash.gas_check.is_some());
+        assert_eq!(dash.key(S, 'g'), KeyAction::Send(Command::GasCheck));
+        dash.apply_line(S, "ERR BUSY the arc is on");
+        assert_eq!(dash.gas_check.as_deref(), Some("ERR BUSY the arc is on"));
         assert_eq!(dash.key(S, 'c'), KeyAction::Send(Command::ClearWarnings));
         dash.apply_line(S, "ERR UNSUPPORTED CLEARWARN is an HPR command");
         assert_eq!(

@@ -9,7 +9,8 @@ use ratatui::symbols::Marker;
 use ratatui::text::{Line, Span};
 use ratatui::widgets::{Axis, Block, Chart, Dataset, Gauge, GraphType, Paragraph, Wrap};
 
-use super::state::{Connection, Consumables, Dashboard, PLOT_WINDOW};
+use super::state::{Connection, Consumables, Dashboard, History, PLOT_WINDOW, used_percent};
+use crate::history::Row;
 
 /// The smallest area that gets the full layout.
 pub const FULL_WIDTH: u16 = 80;
@@ -17,7 +18,7 @@ pub const FULL_WIDTH: u16 = 80;
 pub const FULL_HEIGHT: u16 = 24;
 
 /// The keys, as the screen shows them.
-pub const KEYS: &str = "g gas test on/off | r remote off | c clear warnings | q quit";
+pub const KEYS: &str = "g gas check | r remote off | c clear warnings | q quit";
 
 /// Draws `dash` as at `now` on the whole frame.
 pub fn render(frame: &mut Frame, dash: &Dashboard, now: Duration) {
@@ -68,9 +69,14 @@ fn full(frame: &mut Frame, dash: &Dashboard, now: Duration, area: Rect) {
     );
     consumables_panel(frame, dash, consumables);
 
-    let [plot, events] =
+    let [plot, right] =
         Layout::horizontal([Constraint::Percentage(50), Constraint::Percentage(50)]).areas(bottom);
     chart(frame, dash, now, plot);
+    // The history's entries (and its border) first; the events take what is left.
+    let history_height = (u16::from(super::state::HISTORY_SHOWN) + 2).min(right.height / 2);
+    let [history, events] =
+        Layout::vertical([Constraint::Length(history_height), Constraint::Min(0)]).areas(right);
+    history_panel(frame, dash, history);
     let shown = usize::from(events.height.saturating_sub(2));
     let event_lines: Vec<Line> = dash
         .events
@@ -162,16 +168,49 @@ fn process_lines(dash: &Dashboard) -> Vec<Line<'static>> {
             field(dash, "out_amps"),
             field(dash, "out_psi")
         )),
-        Line::from(format!(
-            "remote {}  gas test {}",
-            field(dash, "remote"),
-            if dash.gas_test { "ON" } else { "OFF" }
-        )),
+        Line::from(format!("remote {}", field(dash, "remote"))),
     ];
     if let Some(state) = dash.status.as_ref().and_then(|s| s.get("state_name")) {
         lines.push(Line::from(format!("state {state}")));
     }
+    if let Some(check) = &dash.gas_check {
+        lines.push(gas_check_line(check));
+    }
     lines
+}
+
+/// The last gas check: `gas PASS 72 psi (60-80)`, other fields (an HPR's per gas) as
+/// they came, an error as it came.
+fn gas_check_line(reply: &str) -> Line<'static> {
+    let Some(fields) = reply.strip_prefix("OK ") else {
+        return Line::from(Span::styled(
+            format!("gas check {reply}"),
+            Style::new().fg(Color::Red),
+        ));
+    };
+    let fields = super::parse::Fields::parse(fields);
+    let result = fields.get("result").unwrap_or("-").to_string();
+    let style = match result.as_str() {
+        "PASS" => Style::new().fg(Color::Green),
+        _ => Style::new().fg(Color::Red).add_modifier(Modifier::BOLD),
+    };
+    let rest = match (
+        fields.get("measured_psi"),
+        fields.get("min_psi"),
+        fields.get("max_psi"),
+    ) {
+        (Some(psi), Some(min), Some(max)) => format!(" {psi} psi ({min}-{max})"),
+        _ => fields
+            .iter()
+            .filter(|(k, v)| !v.is_empty() && *k != "result")
+            .map(|(k, v)| format!(" {k}={v}"))
+            .collect(),
+    };
+    Line::from(vec![
+        Span::raw("gas "),
+        Span::styled(result, style),
+        Span::raw(rest),
+    ])
 }
 
 fn lamp(name: &str, on: Option<bool>, on_color: Color) -> Span<'static> {
@@ -246,16 +285,27 @@ fn consumables_panel(frame: &mut Frame, dash: &Dashboard, area: Rect) {
             area,
         ),
         Consumables::Reported(fields) => {
-            // The share of life used, where the reply gives one as a percentage.
-            let used = fields.iter().find_map(|(key, value)| {
-                (key.contains("used"))
-                    .then(|| value.trim_end_matches('%').parse::<f64>().ok())
-                    .flatten()
-            });
-            match used {
+            let inner = block.inner(area);
+            frame.render_widget(block, area);
+            let [counts, bar, warning] = Layout::vertical([
+                Constraint::Length(1),
+                Constraint::Length(1),
+                Constraint::Min(0),
+            ])
+            .areas(inner);
+            let value = |key: &str| fields.get(key).unwrap_or("-").to_string();
+            frame.render_widget(
+                Paragraph::new(format!(
+                    "starts {}  arc {} s  {}",
+                    value("starts"),
+                    value("arc_s"),
+                    value("source")
+                )),
+                counts,
+            );
+            match used_percent(fields) {
                 Some(percent) => frame.render_widget(
                     Gauge::default()
-                        .block(block)
                         .gauge_style(Style::new().fg(if percent >= 90.0 {
                             Color::Red
                         } else {
@@ -263,21 +313,60 @@ fn consumables_panel(frame: &mut Frame, dash: &Dashboard, area: Rect) {
                         }))
                         .ratio((percent / 100.0).clamp(0.0, 1.0))
                         .label(format!("{percent:.0} % used")),
-                    area,
+                    bar,
                 ),
-                None => {
-                    let words: Vec<String> =
-                        fields.iter().map(|(k, v)| format!("{k}={v}")).collect();
-                    frame.render_widget(
-                        Paragraph::new(words.join(" "))
-                            .wrap(Wrap { trim: true })
-                            .block(block),
-                        area,
-                    );
-                }
+                None => frame.render_widget(Paragraph::new("no limit set (used=OFF)"), bar),
+            }
+            if let Some(text) = &dash.consumable_warning {
+                frame.render_widget(
+                    Paragraph::new(Span::styled(
+                        text.clone(),
+                        Style::new().fg(Color::Red).add_modifier(Modifier::BOLD),
+                    ))
+                    .wrap(Wrap { trim: true }),
+                    warning,
+                );
             }
         }
     }
+}
+
+fn history_panel(frame: &mut Frame, dash: &Dashboard, area: Rect) {
+    let block = Block::bordered().title(" History (bridge, newest first) ");
+    let lines: Vec<Line> = match &dash.history {
+        History::Unknown => vec![Line::from("-")],
+        History::NotReported(reply) => vec![Line::from(format!("not available: {reply}"))],
+        History::Entries(rows) if rows.is_empty() => vec![Line::from("no entries")],
+        History::Entries(rows) => rows.iter().map(history_line).collect(),
+    };
+    frame.render_widget(Paragraph::new(lines).block(block), area);
+}
+
+/// An entry in one line: when (`11-26 07:30`, or the boot and the seconds since it), what,
+/// details. The minute is enough to tell last night from this morning; the order is the
+/// bridge's.
+fn history_line(row: &Row) -> Line<'static> {
+    let clock = row.get("clock");
+    let when = match clock.get(5..16).map(|rest| rest.replacen('T', " ", 1)) {
+        Some(month_to_minute) if clock != "-" => month_to_minute,
+        _ => format!(
+            "boot {} +{} s",
+            row.get("boot"),
+            row.get("uptime_ms")
+                .parse::<u64>()
+                .map_or(0, |ms| ms / 1000)
+        ),
+    };
+    let event = row.get("event").to_string();
+    let style = match event.as_str() {
+        "FAULT" | "LINK_LOST" | "START_REFUSED" | "DROPPED" => Style::new().fg(Color::Red),
+        _ => Style::new(),
+    };
+    Line::from(vec![
+        Span::raw(format!("{when} ")),
+        Span::styled(event, style),
+        Span::raw(format!(" {}", row.details())),
+    ])
 }
 
 fn chart(frame: &mut Frame, dash: &Dashboard, now: Duration, area: Rect) {
