@@ -68,13 +68,18 @@ impl Row {
     }
 }
 
-/// The PC's clock as the bridge's `CLOCK` command takes it.
-pub fn clock_command() -> String {
+/// The PC's clock now: unix seconds, UTC.
+pub fn pc_unix_seconds() -> u32 {
     let seconds = SystemTime::now()
         .duration_since(UNIX_EPOCH)
         .map_or(0, |d| d.as_secs());
-    let clock = WallClock::from_unix_seconds(u32::try_from(seconds).unwrap_or(u32::MAX));
-    format!("CLOCK {clock}")
+    u32::try_from(seconds).unwrap_or(u32::MAX)
+}
+
+/// The `CLOCK` command that sets the bridge's wall clock to `unix_seconds`
+/// (`CLOCK 2026-11-26T07:30:00`).
+pub fn clock_command(unix_seconds: u32) -> String {
+    format!("CLOCK {}", WallClock::from_unix_seconds(unix_seconds))
 }
 
 /// The entries among a reply's lines.
@@ -169,7 +174,7 @@ pub fn from_sim(model: Model, fault: Option<u16>, count: u8) -> (Vec<String>, St
     }
     let _ = world.wait_link_up(plasma_protocol::time::Duration::from_secs(5));
     world.run_for(plasma_protocol::time::Duration::from_millis(500));
-    world.cnc_line(&clock_command());
+    world.cnc_line(&clock_command(pc_unix_seconds()));
     let mark = world.cnc_output().len();
     let reply = world.cnc_line(&format!("HISTORY {count}"));
     let lines = world.cnc_output()[mark..]
@@ -223,7 +228,7 @@ pub fn over_port(
     count: u8,
 ) -> Result<(Vec<String>, String), String> {
     let mut port = Port::open(name, framing).map_err(|e| e.to_string())?;
-    port_command(&mut port, &clock_command())?;
+    port_command(&mut port, &clock_command(pc_unix_seconds()))?;
     port_command(&mut port, &format!("HISTORY {count}"))
 }
 

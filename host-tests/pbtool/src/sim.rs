@@ -88,6 +88,8 @@ pub struct Console {
     world: World<BridgeEndpoint>,
     verbose: bool,
     printed: usize,
+    /// The CNC bytes written before the console took over (not the CNC's to see).
+    before_console: usize,
     transitions_printed: usize,
     pacer: Pacer,
 }
@@ -116,6 +118,7 @@ impl Console {
             world,
             verbose: options.verbose,
             printed: 0,
+            before_console: 0,
             transitions_printed: 0,
             pacer: Pacer::default(),
         }
@@ -133,8 +136,24 @@ impl Console {
     pub fn boot_from_flash(&mut self, image: &[u8]) -> Result<(), String> {
         self.world.endpoint_mut().load_flash_image(image)?;
         self.world.power_cycle_bridge();
-        self.printed = self.world.cnc_output().len();
+        self.skip_output();
         Ok(())
+    }
+
+    /// Sets the bridge's wall clock to `unix_seconds` (as `CLOCK` from a CNC would; its
+    /// reply is not printed): `pbtool run` is the bridge, and its clock is the PC's.
+    pub fn set_clock(&mut self, unix_seconds: u32) -> String {
+        let reply = self
+            .world
+            .cnc_line(&crate::history::clock_command(unix_seconds));
+        self.skip_output();
+        reply
+    }
+
+    /// What the bridge wrote so far is not the console's to print or send.
+    fn skip_output(&mut self) {
+        self.printed = self.world.cnc_output().len();
+        self.before_console = self.world.cnc_bytes().len();
     }
 
     /// The bridge's flash now, for the file of `--flash`.
@@ -264,7 +283,7 @@ impl Console {
     /// port fails.
     pub fn run_cnc_port(&mut self, inbox: &Receiver<Arrival>, cnc: &mut Port) -> SerialError {
         let clock = Clock::start();
-        let mut sent = 0;
+        let mut sent = self.before_console;
         loop {
             let arrival = wait(inbox, &clock, self.world.next_wakeup());
             let due = clock.now().saturating_since(self.world.now());

@@ -236,3 +236,51 @@ fn the_flash_file_survives_a_restart_as_a_power_cycle() {
     );
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// `pbtool run --flash FILE` is the bridge on this PC with its flash in a file (the simulator,
+/// even where a board or QEMU is there: they keep their own), in real time with the PC's
+/// wall clock set at start. Set, quit, restart: the settings and the history are read back.
+#[test]
+fn run_keeps_its_flash_in_a_file_and_sets_its_clock() {
+    let dir = std::env::temp_dir().join(format!("pbtool-run-flash-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("bridge.flash");
+    let flash = file.to_str().unwrap();
+    let first = pbtool(
+        "run",
+        &["--ps", "sync65", "--fault", "0-50-0", "--flash", flash],
+        "CONFIG arc_ok_debounce_ms 7\nCONFIG SAVE\nCLOCK\n",
+    );
+    assert!(first.status.success(), "{first:?}");
+    let stderr = String::from_utf8_lossy(&first.stderr);
+    assert!(stderr.contains("running the simulator"), "{stderr}");
+    let lines = stdout_lines(&first);
+    assert_eq!(lines[..2], ["OK arc_ok_debounce_ms=7", "OK config=saved"]);
+    // The clock was set from the PC's: this year's, not `unset`.
+    assert!(lines[2].starts_with("OK clock=20"), "{lines:?}");
+
+    let second = pbtool(
+        "run",
+        &["--ps", "sync65", "--flash", flash],
+        "CONFIG arc_ok_debounce_ms\nHISTORY 16\n",
+    );
+    assert!(second.status.success(), "{second:?}");
+    let lines = stdout_lines(&second);
+    assert_eq!(lines[0], "OK arc_ok_debounce_ms=7", "{lines:?}");
+    let reset = lines
+        .iter()
+        .position(|l| l.ends_with(" event=RESET cause=power-on"))
+        .expect("the restart is a reset");
+    // This boot's clock is set: its reset has a time.
+    assert!(
+        lines[reset].contains(" boot=1 ") && !lines[reset].contains(" clock=- "),
+        "{lines:?}"
+    );
+    assert!(
+        lines[reset + 1..]
+            .iter()
+            .any(|l| l.contains(" boot=0 ") && l.contains(" event=FAULT code=0-50-0")),
+        "{lines:?}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -184,3 +184,46 @@ fn an_input_that_ends_before_any_command_ends_the_run_without_waiting_for_detect
         run.transcript()
     );
 }
+
+/// `run --ps-port DEV --flash FILE`: the settings saved and the history kept in the file;
+/// the next run boots from it as from a power cycle. Its clock is the PC's from the start.
+#[test]
+fn the_bridge_on_a_serial_line_keeps_its_flash_in_a_file() {
+    let dir = std::env::temp_dir().join(format!("pbtool-line-flash-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("bridge.flash");
+    let flash = file.to_str().unwrap();
+    let cable = Cable::new();
+    let mut unit = Pbtool::spawn(&["unit", "--ps", "sync65", "--port", &cable.b]);
+
+    let mut run = Pbtool::spawn(&["run", "--ps-port", &cable.a, "--flash", flash, "--events"]);
+    run.send("CLOCK");
+    let clock = run.expect_prefix("OK clock=");
+    assert!(clock.starts_with("OK clock=20"), "{clock}");
+    run.send("CONFIG arc_ok_debounce_ms 7");
+    run.expect_prefix("OK arc_ok_debounce_ms=7");
+    run.send("CONFIG SAVE");
+    run.expect_prefix("OK config=saved");
+    unit.send("FAULT 0-50-0");
+    run.expect_prefix("!FAULT 0-50-0");
+    run.close_stdin();
+    assert!(run.wait().success(), "{}", run.transcript());
+
+    let mut again = Pbtool::spawn(&["run", "--ps-port", &cable.a, "--flash", flash]);
+    again.send("CONFIG arc_ok_debounce_ms");
+    again.expect_prefix("OK arc_ok_debounce_ms=7");
+    again.send("HISTORY 3");
+    let reset = again.expect("the restart's reset", |l| {
+        l.starts_with("HISTORY ") && l.ends_with(" event=RESET cause=power-on")
+    });
+    assert!(reset.contains(" boot=1 "), "{reset}");
+    // The first run's fault, of boot 0, older than the reset.
+    let fault = again.expect("the first run's fault", |l| {
+        l.starts_with("HISTORY ") && l.contains(" event=FAULT code=0-50-0")
+    });
+    assert!(fault.contains(" boot=0 "), "{fault}");
+    again.expect_prefix("OK history=");
+    again.close_stdin();
+    assert!(again.wait().success(), "{}", again.transcript());
+    std::fs::remove_dir_all(&dir).unwrap();
+}

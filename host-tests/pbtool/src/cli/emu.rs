@@ -41,6 +41,9 @@ pub struct EmuArgs {
     /// (`CONFIG cnc_baud`, `cnc_parity`, `cnc_stop_bits`). 19200:8E1 for LinuxCNC's pmx485.
     #[arg(long, value_name = "FRAMING", default_value = "115200:8N1", value_parser = cnc_framing, requires = "cnc_port")]
     pub cnc_framing: PortConfig,
+    /// Set the board's wall clock to the PC's at start (`pbtool run`, which is the bridge).
+    #[arg(skip)]
+    pub own_clock: bool,
 }
 
 /// The firmware on the emulated board: the CNC console, or the measurements.
@@ -97,6 +100,7 @@ pub fn emu(args: &EmuArgs) -> ExitCode {
         unit,
         events: args.unit.events,
         log: args.log,
+        clock: args.own_clock.then(pbtool::history::pc_unix_seconds),
     };
     let mut out = io::stdout().lock();
     match pbtool::emu::console::run(&options, stdin_lines(), &mut out, &mut io::stderr()) {

@@ -1,6 +1,7 @@
 //! `pbtool run --ps-port DEV [--cnc-port DEV]`.
 
 use std::io::{self, IsTerminal};
+use std::path::Path;
 use std::process::ExitCode;
 
 use pbtool::realtime::{Clock, spawn_reader, spawn_stdin};
@@ -11,13 +12,30 @@ use plasma_protocol::serial::PortConfig;
 
 use super::serial_failure;
 
-/// The bridge on `ps_port`; the CNC protocol on `cnc_port` or on stdin/stdout.
-pub fn run_on_ports(
-    ps_port: &str,
-    cnc_port: Option<&str>,
-    cnc_framing: PortConfig,
-    events: bool,
-) -> ExitCode {
+/// What `pbtool run --ps-port` runs with.
+pub struct LineOptions<'a> {
+    /// The port wired to the power supply.
+    pub ps_port: &'a str,
+    /// The CNC's port; stdin/stdout without.
+    pub cnc_port: Option<&'a str>,
+    /// Its framing.
+    pub cnc_framing: PortConfig,
+    /// Event lines on from the start.
+    pub events: bool,
+    /// The file that keeps the bridge's flash (`--flash`).
+    pub flash: Option<&'a Path>,
+}
+
+/// The bridge on `ps_port`; the CNC protocol on `cnc_port` or on stdin/stdout. Its wall
+/// clock is the PC's from the start.
+pub fn run_on_ports(options: &LineOptions<'_>) -> ExitCode {
+    let LineOptions {
+        ps_port,
+        cnc_port,
+        cnc_framing,
+        events,
+        flash,
+    } = *options;
     let mut settings = Settings {
         events,
         ..Settings::default()
@@ -29,6 +47,15 @@ pub fn run_on_ports(
         Ok(opened) => opened,
         Err(e) => return serial_failure("run", &e),
     };
+    if let Some(path) = flash
+        && let Err(e) = bridge.keep_flash(path)
+    {
+        eprintln!("pbtool run: --flash {}: {e}", path.display());
+        return ExitCode::from(super::USAGE);
+    }
+    if let Err(e) = bridge.set_clock(pbtool::history::pc_unix_seconds()) {
+        return serial_failure("run", &e);
+    }
     let (inbox, arrivals) = std::sync::mpsc::channel();
     spawn_reader(ps_reader, 0, inbox.clone());
     let framing = describe(bridge.bridge().ps_port_config());
@@ -70,6 +97,10 @@ pub fn run_on_ports(
             )
         }
     };
+    let result = result.and_then(|()| {
+        let now = bridge.now();
+        Ok(bridge.write_flash(now, true)?)
+    });
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(Stop::Port(e)) => serial_failure("run", &e),

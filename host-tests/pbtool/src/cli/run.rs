@@ -10,7 +10,7 @@ use plasma_protocol::serial::PortConfig;
 use plasma_sim::Model;
 
 use super::emu::{EmuArgs, emu};
-use super::sim::{SimArgs, sim};
+use super::sim::{SimArgs, sim_bridge};
 
 #[derive(Args)]
 pub struct RunArgs {
@@ -26,19 +26,32 @@ pub struct RunArgs {
     sim_args: SimArgs,
 }
 
-/// The board when a probe is attached, the simulator otherwise.
+/// The board when a probe is attached, the simulator otherwise. `pbtool run` is the bridge:
+/// a bridge on this PC (the library on a serial port, the emulated board, the simulator in real
+/// time) gets the PC's wall clock at start, as a CNC would set it with `CLOCK`.
 pub fn run(args: &RunArgs) -> ExitCode {
+    let flash = args.sim_args.flash.as_deref();
     if let Some(ps_port) = &args.ps_port {
-        return super::line::run_on_ports(
+        return super::line::run_on_ports(&super::line::LineOptions {
             ps_port,
-            args.sim_args.cnc_port.as_deref(),
-            args.sim_args.cnc_framing,
-            args.sim_args.unit.events,
-        );
+            cnc_port: args.sim_args.cnc_port.as_deref(),
+            cnc_framing: args.sim_args.cnc_framing,
+            events: args.sim_args.unit.events,
+            flash,
+        });
     }
     // A CNC port without a PS port: the emulated board's CNC port on it (or the simulator's).
     let cnc_port = args.sim_args.cnc_port.as_deref();
-    if !args.sim {
+    if flash.is_some() && !args.sim {
+        // The board and the emulated board keep their flash themselves; only a bridge that
+        // is this process keeps it in a file.
+        eprintln!(
+            "pbtool run: --flash keeps the flash of the bridge on this PC in a file: running \
+             the simulator (pbtool sim --ps {} --flash ...)",
+            args.sim_args.unit.model
+        );
+    }
+    if !args.sim && flash.is_none() {
         let mut no_board = "no debug probe found";
         if cnc_port.is_none() {
             match find_probe() {
@@ -78,6 +91,7 @@ pub fn run(args: &RunArgs) -> ExitCode {
                         idle_windows: 0,
                         cnc_port: args.sim_args.cnc_port.clone(),
                         cnc_framing: args.sim_args.cnc_framing,
+                        own_clock: true,
                     });
                 }
                 Err(e) => eprintln!("pbtool run: no emulated board ({e})"),
@@ -89,7 +103,8 @@ pub fn run(args: &RunArgs) -> ExitCode {
             args.sim_args.unit.model,
         );
     }
-    sim(&args.sim_args)
+    // Virtual time (`--fast`) repeats its output exactly: no wall clock there.
+    sim_bridge(&args.sim_args, !args.sim_args.fast)
 }
 
 /// What `pbtool run` says when probe-rs cannot be run, before it falls back.

@@ -31,7 +31,9 @@ pub struct SimArgs {
     pub cnc_framing: PortConfig,
     /// Keep the bridge's flash (stored settings and history) in FILE: read at start (a power
     /// cycle of the board: settings and history as the last run left them), written when
-    /// the run ends. Restarting `pbtool sim --flash FILE` is a power cycle of the board.
+    /// the run ends (`run --ps-port`: also every second it changed). Restarting `pbtool sim
+    /// --flash FILE` or `pbtool run --flash FILE` is a power cycle of the board; `run` with
+    /// it runs the bridge on this PC (the simulator, or `--ps-port`), never a board.
     #[arg(long, value_name = "FILE")]
     pub flash: Option<std::path::PathBuf>,
     /// Log every change of the discrete outputs (START, ARC_OK, READY, FAULT) with its
@@ -41,6 +43,12 @@ pub struct SimArgs {
 }
 
 pub fn sim(args: &SimArgs) -> ExitCode {
+    sim_bridge(args, false)
+}
+
+/// `pbtool sim`, or `pbtool run` on the simulator: with `own_clock`, the bridge's wall clock
+/// is set to the PC's at start (after the boot from `--flash`, which clears it as a reset does).
+pub fn sim_bridge(args: &SimArgs, own_clock: bool) -> ExitCode {
     let (model, fault) = match simulated_unit("sim", &args.unit.model, args.unit.fault.as_deref()) {
         Ok(unit) => unit,
         Err(status) => return status,
@@ -58,6 +66,12 @@ pub fn sim(args: &SimArgs) -> ExitCode {
     {
         eprintln!("pbtool sim: --flash {}: {e}", path.display());
         return ExitCode::from(super::USAGE);
+    }
+    if own_clock {
+        let reply = console.set_clock(pbtool::history::pc_unix_seconds());
+        if args.verbose {
+            eprintln!("pbtool run: the bridge's clock from the PC's: {reply}");
+        }
     }
     if let Some(name) = &args.cnc_port {
         return on_cnc_port(&mut console, name, model);

@@ -41,6 +41,8 @@ pub struct EmuConsoleOptions {
     pub events: bool,
     /// The firmware's log on stderr.
     pub log: bool,
+    /// Set the board's wall clock to this (unix seconds, UTC) at start (`pbtool run`).
+    pub clock: Option<u32>,
 }
 
 /// What a console input line asks for.
@@ -95,6 +97,10 @@ pub fn run(
     // Events on before the link comes up, so that `!LINK UP` is among them.
     if options.events {
         board.command("EVENTS ON", REPLY_TIMEOUT)?;
+    }
+    if let Some(unix_seconds) = options.clock {
+        let command = crate::history::clock_command(unix_seconds);
+        board.command(&command, REPLY_TIMEOUT)?;
     }
     if !settle(&mut board)? {
         writeln!(

@@ -4,10 +4,8 @@
 use std::collections::VecDeque;
 use std::time::Duration;
 
-use plasma_protocol::cnc::clock::WallClock;
-
 use super::parse::{ActiveFault, Fields, Line};
-use crate::history::Row;
+use crate::history::{Row, clock_command};
 
 /// How often STATUS (and FAULT while a fault is active) is asked.
 pub const STATUS_EVERY: Duration = Duration::from_millis(250);
@@ -56,9 +54,7 @@ impl Command {
     pub fn text(self) -> String {
         match self {
             Command::History => format!("HISTORY {HISTORY_SHOWN}"),
-            Command::Clock(unix_seconds) => {
-                format!("CLOCK {}", WallClock::from_unix_seconds(unix_seconds))
-            }
+            Command::Clock(unix_seconds) => clock_command(unix_seconds),
             other => other.word().to_string(),
         }
     }

@@ -77,6 +77,8 @@ pub fn run_console(
             FirstCommand::AfterDetection => "the first command waits for it",
         }
     )?;
+    // What the bridge wrote before (the reply to setting its clock) is not the console's.
+    let printed = bridge.cnc_records().len();
     let mut console = Console {
         bridge,
         out,
@@ -86,7 +88,7 @@ pub fn run_console(
             FirstCommand::AtOnce => Settle::Ready,
             FirstCommand::AfterDetection => Settle::Waiting(None),
         },
-        printed: 0,
+        printed,
         lines: VecDeque::new(),
         pacer: Pacer::default(),
         waiting: None,
@@ -98,6 +100,7 @@ pub fn run_console(
         let now = console.bridge.now();
         console.take(now, arrival)?;
         console.bridge.service(now)?;
+        console.bridge.write_flash(now, false)?;
         console.print()?;
         console.settle(now)?;
         console.check_reply(now)?;

@@ -4,7 +4,8 @@
 //! [`LineBridge`] is what the board's tasks are around the [`Bridge`]: the PS port (its
 //! framing follows the link, 8E1/8O1/8N1 and two stop bits while detecting, 8N1 for an HPR;
 //! flagged characters counted as the link counts them), the CNC port, the settings store
-//! (in memory: a PC keeps nothing across runs), and the interlocks, which a PC has no pins
+//! (in memory, or with [`LineBridge::keep_flash`] in a file: restarting is a power cycle of
+//! the board), and the interlocks, which a PC has no pins
 //! for but which still decide READY and the STATUS fields. The CNC side is a console
 //! ([`run_console`]: stdin/stdout, paced like `pbtool sim`) or a second serial port
 //! ([`run_cnc_port`]: the bytes as they are).
@@ -14,6 +15,7 @@ mod console;
 pub use console::{FirstCommand, SETTLE_TIMEOUT, run_console};
 
 use std::io;
+use std::path::{Path, PathBuf};
 use std::sync::mpsc::Receiver;
 
 use host_tests::harness::{BridgeEndpoint, WorldEndpoint};
@@ -43,6 +45,17 @@ fn end_of_transmission(
     (handed_over + Duration::from_micros(wire_ns.div_ceil(1_000))).max(written)
 }
 
+/// How often the flash is written to its file when it changed (a run stopped with Ctrl-C
+/// loses at most this much).
+pub const FLASH_FILE_EVERY: Duration = Duration::from_secs(1);
+
+/// The file that keeps the bridge's flash (`--flash FILE`), and what it holds.
+struct FlashFile {
+    path: PathBuf,
+    written: Vec<u8>,
+    next_write: Instant,
+}
+
 /// The bridge with its PS port, in real time.
 pub struct LineBridge {
     endpoint: BridgeEndpoint,
@@ -50,6 +63,7 @@ pub struct LineBridge {
     supply: SupplyState,
     ps: Port,
     clock: Clock,
+    flash_file: Option<FlashFile>,
 }
 
 impl LineBridge {
@@ -64,7 +78,75 @@ impl LineBridge {
             supply: SupplyState::default(),
             ps,
             clock,
+            flash_file: None,
         })
+    }
+
+    /// Keeps the bridge's flash (stored settings and history) in the file at `path`: when
+    /// it exists, the bridge boots from it as the board does after a power cycle (stored
+    /// settings, a new boot in the history); from then on it is written every
+    /// [`FLASH_FILE_EVERY`] that it changed ([`LineBridge::write_flash`]).
+    pub fn keep_flash(&mut self, path: &Path) -> Result<(), String> {
+        let written = match std::fs::read(path) {
+            Ok(image) => {
+                self.endpoint.load_flash_image(&image)?;
+                let now = self.clock.now();
+                self.endpoint.power_cycle(now);
+                self.io = Interlocks::new(self.bridge().settings().io, now, Inputs::default());
+                self.supply = SupplyState::default();
+                let config = self.endpoint.bridge().ps_port_config();
+                self.ps.set_config(config).map_err(|e| e.to_string())?;
+                image
+            }
+            Err(e) if e.kind() == io::ErrorKind::NotFound => Vec::new(),
+            Err(e) => return Err(e.to_string()),
+        };
+        self.flash_file = Some(FlashFile {
+            path: path.to_path_buf(),
+            written,
+            next_write: self.clock.now(),
+        });
+        Ok(())
+    }
+
+    /// Writes the flash to its file (see [`LineBridge::keep_flash`]) if it changed since the
+    /// last write; `force` writes now, else only once [`FLASH_FILE_EVERY`] has passed.
+    pub fn write_flash(&mut self, now: Instant, force: bool) -> io::Result<()> {
+        let due = self
+            .flash_file
+            .as_ref()
+            .is_some_and(|file| force || now >= file.next_write);
+        if !due {
+            return Ok(());
+        }
+        let image = self.endpoint.flash_image();
+        let Some(file) = &mut self.flash_file else {
+            return Ok(());
+        };
+        file.next_write = now + FLASH_FILE_EVERY;
+        if image != file.written {
+            std::fs::write(&file.path, &image).map_err(|e| {
+                io::Error::new(e.kind(), format!("--flash {}: {e}", file.path.display()))
+            })?;
+            file.written = image;
+        }
+        Ok(())
+    }
+
+    /// Sets the bridge's wall clock to `unix_seconds`, as `CLOCK` from a CNC would; returns
+    /// its reply. The console and the CNC port show what the bridge writes after it.
+    pub fn set_clock(&mut self, unix_seconds: u32) -> Result<String, SerialError> {
+        let now = self.clock.now();
+        let before = self.cnc_records().len();
+        let line = format!("{}\r\n", crate::history::clock_command(unix_seconds));
+        self.endpoint.cnc_rx(now, line.as_bytes());
+        self.service(now)?;
+        Ok(self.cnc_records()[before..]
+            .iter()
+            .filter_map(|r| r.item.line())
+            .find(|l| host_tests::harness::is_reply_line(l))
+            .unwrap_or("no reply")
+            .to_string())
     }
 
     /// The bridge (read only).
@@ -185,7 +267,8 @@ pub fn run_cnc_port(
     inbox: &Receiver<Arrival>,
     cnc: &mut Port,
 ) -> Result<(), Stop> {
-    let mut sent = 0;
+    // What the bridge wrote before (the reply to setting its clock) is not the CNC's.
+    let mut sent = bridge.cnc_bytes().len();
     loop {
         let arrival = wait(inbox, &bridge.clock, bridge.wake());
         let now = bridge.now();
@@ -196,6 +279,7 @@ pub fn run_cnc_port(
             Some(Arrival::Line(_) | Arrival::EndOfInput) | None => {}
         }
         bridge.service(now)?;
+        bridge.write_flash(now, false)?;
         let raw = bridge.cnc_bytes();
         if raw.len() > sent {
             let fresh = raw[sent..].to_vec();
