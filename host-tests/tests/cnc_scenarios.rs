@@ -1381,7 +1381,8 @@ fn a_torch_on_wiring_change_during_a_cut_drops_start_until_released() {
 }
 
 /// The history survives the bridge's power cycle, and every family's faults go into it with
-/// their codes: a Powermax X-YY-Z, an HPR error number.
+/// their codes (a Powermax X-YY-Z, an HPR error number) and the unit's model, named as STATUS
+/// names it.
 #[test]
 fn the_history_keeps_faults_across_a_power_cycle_on_every_family() {
     for (model, code, written) in [
@@ -1392,6 +1393,14 @@ fn the_history_keeps_faults_across_a_power_cycle_on_every_family() {
     ] {
         let mut w = World::with_bridge(model, WorldOptions::default(), Settings::default());
         w.wait_link_up(Duration::from_secs(5)).unwrap();
+        w.run_for(Duration::from_millis(500));
+        let status = w.cnc_line("STATUS");
+        let named = status
+            .split(' ')
+            .find(|f| f.starts_with("model="))
+            .unwrap_or_else(|| panic!("{status}"))
+            .to_string();
+        assert_ne!(named, "model=-", "{status}");
         assert_eq!(
             w.cnc_line("CLOCK 2026-11-26T07:30:00"),
             "OK clock=2026-11-26T07:30:00"
@@ -1414,7 +1423,7 @@ fn the_history_keeps_faults_across_a_power_cycle_on_every_family() {
             .collect();
         assert!(
             lines[0].contains(" boot=1 ")
-                && lines[0].ends_with(" family=- event=RESET cause=power-on"),
+                && lines[0].ends_with(" family=- model=- event=RESET cause=power-on"),
             "{model:?}: {lines:?}"
         );
         assert!(
@@ -1429,6 +1438,9 @@ fn the_history_keeps_faults_across_a_power_cycle_on_every_family() {
             lines[2].contains(&format!(" event=FAULT code={written} action=")),
             "{model:?}: {lines:?}"
         );
+        for entry in &lines[1..3] {
+            assert!(entry.contains(&format!(" {named} ")), "{named}: {lines:?}");
+        }
         // The new boot's clock is unset until the CNC sets it again.
         assert_eq!(w.cnc_line("CLOCK"), "OK clock=unset");
     }

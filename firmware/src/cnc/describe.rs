@@ -4,15 +4,13 @@
 use core::fmt::{self, Display, Write};
 
 use plasma_protocol::cnc::Mode;
-use plasma_protocol::hpr::{StateCode, SystemId};
-use plasma_protocol::powermax::sync::Identification;
-use plasma_protocol::powermax::{
-    FaultCode, OperatingMode, PowerSupplyModel, StepsRequired, TorchKind,
-};
+use plasma_protocol::hpr::StateCode;
+use plasma_protocol::powermax::{FaultCode, OperatingMode, StepsRequired, TorchKind};
 
 use crate::io::Interlock;
+use crate::link::model_code::{model_code, model_name};
 use crate::link::{
-    ActiveFault, Family, Model, PowermaxProcess, ProcessFailure, TransactionError, UnitStatus,
+    ActiveFault, Family, PowermaxProcess, ProcessFailure, TransactionError, UnitStatus,
 };
 
 /// The family as one word: `SYNC`, `LEGACY`, `HPR`, `MAXPRO200`.
@@ -26,39 +24,13 @@ pub const fn family_word(family: Family) -> &'static str {
 }
 
 /// The unit's model without spaces (`Powermax65`, `Powermax65/85/105`, `HPR260XD`,
-/// `MaxPro200`); a SYNC unit is named by its exact size once 0x3000 has been read.
+/// `MaxPro200`; `-` while none is known): the name of its model code
+/// ([`model_code`](crate::link::model_code)), so `STATUS` and `HISTORY` name it alike.
 pub struct ModelName<'a>(pub &'a UnitStatus);
 
 impl Display for ModelName<'_> {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let status = self.0;
-        let size = status
-            .identification
-            .and_then(|Identification { model, .. }| model)
-            .map(|m| m.size());
-        match status.model {
-            None => f.write_str("-"),
-            Some(Model::Powermax(model)) => match (model, size) {
-                (
-                    PowerSupplyModel::Powermax65_85_105Sync | PowerSupplyModel::Powermax45Sync,
-                    Some(size),
-                ) => write!(f, "Powermax{size}"),
-                (PowerSupplyModel::Powermax45Xp, _) => f.write_str("Powermax45XP"),
-                (PowerSupplyModel::Powermax65_85_105, _)
-                | (PowerSupplyModel::Powermax65_85_105Sync, _) => f.write_str("Powermax65/85/105"),
-                (PowerSupplyModel::Powermax125, _) => f.write_str("Powermax125"),
-                (PowerSupplyModel::Powermax45Sync, _) => f.write_str("Powermax45"),
-            },
-            Some(Model::PowermaxUnidentified) => f.write_str("Powermax"),
-            Some(Model::Hpr(SystemId::MaxPro200)) => f.write_str("MaxPro200"),
-            Some(Model::Hpr(SystemId::Hpr { rating, xd, .. })) => {
-                write!(f, "HPR{}", rating.max_amps())?;
-                if xd {
-                    f.write_str("XD")?;
-                }
-                Ok(())
-            }
-        }
+        f.write_str(model_name(model_code(self.0)).unwrap_or("-"))
     }
 }
 

@@ -18,6 +18,7 @@ use super::describe::{FaultId, family_word, interlock_word, steps_of, steps_word
 
 use super::{Context, Pending as Waiting, ReplyLine, Session, err_line, line, ok_line, texts};
 use crate::io::{Interlock, IoEvent};
+use crate::link::model_code::{model_code, model_name};
 use crate::link::{LinkEvent, PsLink};
 use crate::settings::Process;
 use crate::storage::history::{
@@ -77,12 +78,11 @@ fn uptime_secs(now: Instant) -> u32 {
     u32::try_from(secs).unwrap_or(u32::MAX)
 }
 
-/// The unit an entry is about: the family on `link` (model code 0: entries name the family
-/// only).
+/// The unit an entry is about: the family and model on `link`.
 pub fn unit_on(link: &PsLink) -> Unit {
     Unit {
         family: link.status().family,
-        model: 0,
+        model: model_code(link.status()),
     }
 }
 
@@ -119,6 +119,7 @@ fn write_entry(l: &mut ReplyLine, entry: &Entry, clock: Option<WallClock>) -> fm
         Some(family) => w.field("family", family_word(family))?,
         None => w.field("family", "-")?,
     }
+    w.field("model", model_name(entry.unit.model).unwrap_or("-"))?;
     match entry.event {
         Event::FaultAppeared { fault, steps } => {
             w.field("event", "FAULT")?;
@@ -388,7 +389,7 @@ mod tests {
         let lines = history(&mut rig, "HISTORY");
         assert_eq!(lines.len(), 2, "{lines:?}");
         assert!(
-            lines[0].ends_with(" family=SYNC event=CLEARED"),
+            lines[0].ends_with(" family=SYNC model=Powermax65 event=CLEARED"),
             "{lines:?}"
         );
         assert_eq!(lines[1], "OK history=1 skipped=0");
@@ -418,7 +419,7 @@ mod tests {
         let lines = history(&mut rig, "HISTORY");
         assert_eq!(lines.len(), 2, "{lines:?}");
         assert!(
-            lines[0].ends_with(" family=- event=START_REFUSED reason=link_down"),
+            lines[0].ends_with(" family=- model=- event=START_REFUSED reason=link_down"),
             "{lines:?}"
         );
     }

@@ -105,6 +105,7 @@ pub(crate) mod diagnostics;
 pub(crate) mod event;
 pub(crate) mod hpr;
 pub(crate) mod kept;
+pub mod model_code;
 mod phase;
 pub(crate) mod powermax;
 mod receive;

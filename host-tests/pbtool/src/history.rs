@@ -1,6 +1,6 @@
 //! `pbtool history`: the bridge's event history (`HISTORY N`) as a table, JSON or CSV.
 //!
-//! The bridge writes one `HISTORY seq=.. boot=.. uptime_ms=.. clock=.. family=.. event=..`
+//! The bridge writes one `HISTORY seq=.. boot=.. uptime_ms=.. clock=.. family=.. model=.. event=..`
 //! line per entry, newest first, then `OK history=N skipped=K` (docs/cnc-protocol.md). Before
 //! reading, pbtool sets the bridge's clock (`CLOCK`) to the PC's, so that the entries of this
 //! boot carry the wall-clock time.
@@ -184,6 +184,29 @@ pub fn from_sim(model: Model, fault: Option<u16>, count: u8) -> (Vec<String>, St
         .map(str::to_string)
         .collect();
     (lines, reply)
+}
+
+/// The history of the firmware on the emulated board wired to `unit` (QEMU, real time), once
+/// the link is up, the clock set first.
+pub fn from_emu(unit: &crate::emu::EmuUnit, count: u8) -> Result<(Vec<String>, String), String> {
+    use crate::emu::console::{REPLY_TIMEOUT, settle};
+    let mut board = unit.boot().map_err(|e| e.to_string())?;
+    // A unit not found still leaves the bridge's own entries (its reset) to read.
+    settle(&mut board).map_err(|e| e.to_string())?;
+    board
+        .command(&clock_command(pc_unix_seconds()), REPLY_TIMEOUT)
+        .map_err(|e| e.to_string())?;
+    let cnc = board.cnc();
+    cnc.send(&format!("HISTORY {count}"))
+        .map_err(|e| e.to_string())?;
+    let mut lines = Vec::new();
+    loop {
+        let line = cnc.reply(REPLY_TIMEOUT).map_err(|e| e.to_string())?;
+        if is_reply_line(&line) {
+            return Ok((lines, line));
+        }
+        lines.push(line);
+    }
 }
 
 /// Sends `command` on `port`; the lines up to the reply (`OK`/`ERR`) and the reply. Lines

@@ -106,9 +106,12 @@ enum Command {
     /// The bridge's event history (faults, link, resets, refused STARTs, process changes),
     /// newest first, as a table (`--json`, `--csv` for a spreadsheet).
     ///
-    /// From the board's CNC port (`--port DEV`) or a simulated bridge (`--sim MODEL`). Sets
-    /// the bridge's clock to the PC's first (`CLOCK`), so this boot's entries carry the time.
-    /// Exit status 0 with the entries, 1 when the bridge refused, 2 on a port error.
+    /// From the board's CNC port (`--port DEV`), the emulated board (`--emu [--ps MODEL]`) or
+    /// a simulated bridge (`--sim MODEL`). Sets the bridge's clock to the PC's first
+    /// (`CLOCK`), so this boot's entries carry the time. Each entry names the unit's family
+    /// and model.
+    /// Exit status 0 with the entries, 1 when the bridge refused, 2 on a port error (or an
+    /// emulated board that cannot run).
     History(cli::history::HistoryArgs),
 }
 

@@ -64,7 +64,7 @@ fn emu_gives_the_cnc_console_of_the_emulated_board() {
 
 #[test]
 fn run_without_a_probe_boots_the_emulated_board() {
-    let output = pbtool(&["run", "--ps", "pm85"], "ID\n");
+    let output = pbtool(&["run", "--ps", "pm85"], "ID\nCLOCK\n");
     let stderr = String::from_utf8_lossy(&output.stderr);
     if stderr.contains("flashing the board image") {
         return; // A board is attached: `run` flashes it.
@@ -75,7 +75,43 @@ fn run_without_a_probe_boots_the_emulated_board() {
         "{stderr}"
     );
     let lines = lines(&output);
-    assert_eq!(lines.len(), 1, "{lines:?}");
+    assert_eq!(lines.len(), 2, "{lines:?}");
     assert!(lines[0].contains("family=LEGACY"), "{lines:?}");
     assert!(lines[0].contains("reset=power-on"), "{lines:?}");
+    // `run` is the bridge: the board's clock is the PC's from the start.
+    assert!(lines[1].starts_with("OK clock=20"), "{lines:?}");
+}
+
+#[test]
+fn history_from_the_emulated_board() {
+    let output = pbtool(
+        &[
+            "history", "--emu", "--ps", "sync65", "--fault", "0-50-0", "--csv",
+        ],
+        "",
+    );
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(output.status.success(), "{stderr}");
+    let lines = lines(&output);
+    assert_eq!(
+        lines[0], "seq,boot,uptime_ms,clock,family,model,event,details",
+        "{lines:?}"
+    );
+    // Newest first: the unit's fault, then the board's reset; both of this boot, whose clock
+    // pbtool set.
+    let fault = lines
+        .iter()
+        .position(|l| l.contains(",FAULT,\"code=0-50-0 action=required\""))
+        .unwrap_or_else(|| panic!("no fault entry: {lines:?}"));
+    assert!(
+        lines[fault].contains(",SYNC,Powermax65,"),
+        "{}",
+        lines[fault]
+    );
+    let reset = lines
+        .iter()
+        .position(|l| l.ends_with(",RESET,cause=power-on"))
+        .unwrap_or_else(|| panic!("no reset entry: {lines:?}"));
+    assert!(fault < reset, "{lines:?}");
+    assert!(!lines[reset].contains(",-,-,-,RESET"), "a clock: {lines:?}");
 }

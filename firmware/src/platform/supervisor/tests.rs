@@ -807,7 +807,7 @@ fn history_reaches_its_keeper_and_the_answer_the_cnc() {
     assert_eq!(recorded, 1);
     assert_eq!(
         cnc,
-        "HISTORY seq=0 boot=0 uptime_ms=0 clock=- family=- event=RESET cause=reset_pin\r\n\
+        "HISTORY seq=0 boot=0 uptime_ms=0 clock=- family=- model=- event=RESET cause=reset_pin\r\n\
          OK history=1 skipped=0\r\n"
     );
 }

@@ -1,9 +1,10 @@
-//! `pbtool history --sim MODEL | --port DEV`.
+//! `pbtool history --sim MODEL | --emu [--ps MODEL] | --port DEV`.
 
 use std::process::ExitCode;
 
 use clap::Args;
-use pbtool::history::{csv, from_sim, json, over_port, rows, table};
+use pbtool::emu::EmuUnit;
+use pbtool::history::{csv, from_emu, from_sim, json, over_port, rows, table};
 use plasma_protocol::cnc::HISTORY_MAX;
 use plasma_protocol::serial::PortConfig;
 
@@ -11,7 +12,7 @@ use super::sim::cnc_framing;
 use super::{USAGE, simulated_unit};
 
 #[derive(Args)]
-#[command(group(clap::ArgGroup::new("bridge").required(true).args(["port", "sim"])))]
+#[command(group(clap::ArgGroup::new("bridge").required(true).args(["port", "sim", "emu"])))]
 pub struct HistoryArgs {
     /// The board's CNC port.
     #[arg(long, value_name = "DEV")]
@@ -19,8 +20,19 @@ pub struct HistoryArgs {
     /// A simulated bridge against this simulated unit (sync65, hpr260, ...; virtual time).
     #[arg(long, value_name = "MODEL")]
     pub sim: Option<String>,
-    /// With `--sim`: the unit starts with this fault (`0-50-0`, HPR error number).
-    #[arg(long, value_name = "CODE", requires = "sim")]
+    /// The firmware on the emulated board (QEMU, real time) against a simulated unit.
+    #[arg(long)]
+    pub emu: bool,
+    /// With `--emu`: the simulated unit.
+    #[arg(
+        long = "ps",
+        value_name = "MODEL",
+        default_value = "sync65",
+        requires = "emu"
+    )]
+    pub emu_model: String,
+    /// With `--sim` or `--emu`: the unit starts with this fault (`0-50-0`, HPR error number).
+    #[arg(long, value_name = "CODE", conflicts_with = "port")]
     pub fault: Option<String>,
     /// The CNC port's framing, BAUD:8XY.
     #[arg(long, value_name = "FRAMING", default_value = "115200:8N1", value_parser = cnc_framing)]
@@ -50,6 +62,19 @@ pub fn history(args: &HistoryArgs) -> ExitCode {
                 Err(status) => return status,
             };
             Ok(from_sim(model, fault, args.count))
+        }
+        (None, None) if args.emu => {
+            let (model, fault) =
+                match simulated_unit("history", &args.emu_model, args.fault.as_deref()) {
+                    Ok(unit) => unit,
+                    Err(status) => return status,
+                };
+            let unit = EmuUnit {
+                model,
+                fault,
+                seed: 1,
+            };
+            from_emu(&unit, args.count)
         }
         (None, None) => return ExitCode::from(USAGE),
     };

@@ -19,7 +19,7 @@ use super::EmuUnit;
 /// The longest wait for the link (and the unit's limits) before the first command.
 pub(crate) const SETTLE_TIMEOUT: Duration = Duration::from_secs(10);
 /// The longest wait for one reply.
-pub(crate) const REPLY_TIMEOUT: Duration = Duration::from_secs(10);
+pub const REPLY_TIMEOUT: Duration = Duration::from_secs(10);
 /// How long `TORCH ON|OFF` waits for START to follow before it answers anyway.
 const TORCH_SETTLE: Duration = Duration::from_millis(200);
 /// How long the console keeps printing after the last reply at the end of input.
@@ -199,7 +199,7 @@ pub fn run(
 
 /// Waits until the link is up and the unit's limits (or an HPR's state) are read; false when
 /// that did not happen within [`SETTLE_TIMEOUT`].
-pub(crate) fn settle(board: &mut Board) -> Result<bool> {
+pub fn settle(board: &mut Board) -> Result<bool> {
     let began = Instant::now();
     while began.elapsed() < SETTLE_TIMEOUT {
         let status = board.command("STATUS", REPLY_TIMEOUT)?;
