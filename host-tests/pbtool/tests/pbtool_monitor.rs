@@ -316,6 +316,12 @@ fn snapshot_prints_one_frame() {
     );
     assert!(screen.contains("FAULT 0-50-0"), "{screen}");
     assert!(screen.contains("not reported by this bridge"), "{screen}");
+    // The simulator's history: the unit's fault, its time from the clock the monitor set.
+    let fault = screen
+        .lines()
+        .find(|l| l.contains(" FAULT code=0-50-0 action=required"))
+        .unwrap_or_else(|| panic!("no history entry for the fault:\n{screen}"));
+    assert!(!fault.contains("boot "), "a wall-clock time: {fault}");
 }
 
 #[test]

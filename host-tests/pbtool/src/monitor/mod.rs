@@ -22,7 +22,7 @@ use ratatui::backend::{Backend, TestBackend};
 use ratatui::crossterm::event::{self, Event, KeyCode, KeyEventKind, KeyModifiers};
 
 pub use state::Dashboard;
-use state::{Connection as Link, Consumables, KeyAction};
+use state::{Connection as Link, Consumables, History, KeyAction};
 use transport::{Connection, Incoming, Source};
 
 /// How long to wait between attempts to reopen a port or restart a child.
@@ -137,13 +137,14 @@ impl Session {
         self.next_attempt = now + RECONNECT_EVERY;
     }
 
-    /// Whether the dashboard has a complete picture: STATUS, the fault's steps (if any) and
-    /// the consumables' answer.
+    /// Whether the dashboard has a complete picture: STATUS, the fault's steps (if any), the
+    /// consumables' and the history's answers.
     pub fn settled(&self) -> bool {
         let dash = &self.dashboard;
         dash.connection == Link::Up
             && dash.status.is_some()
             && dash.consumables != Consumables::Unknown
+            && dash.history != History::Unknown
             && dash.fault.as_ref().is_none_or(|f| f.action != "-")
     }
 }
