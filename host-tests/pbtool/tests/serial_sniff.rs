@@ -5,8 +5,14 @@ mod common;
 
 use common::{Cable, Pbtool};
 
-/// A short session on `cable`, then the cable unplugged: the sniffer's whole output.
-fn sniff_a_session(cable: &mut Cable, model: &str, sniff_args: &[&str]) -> (Pbtool, String) {
+/// A short session on `cable`, then, once the sniffer's output shows what `heard` looks for,
+/// the cable unplugged: the sniffer's whole output.
+fn sniff_a_session(
+    cable: &mut Cable,
+    model: &str,
+    sniff_args: &[&str],
+    heard: impl Fn(&str) -> bool,
+) -> (Pbtool, String) {
     let mut args = vec!["sniff"];
     for tap in &cable.taps {
         args.extend(["--port", tap.as_str()]);
@@ -29,8 +35,17 @@ fn sniff_a_session(cable: &mut Cable, model: &str, sniff_args: &[&str]) -> (Pbto
     run.expect_prefix("OK link=UP");
     run.close_stdin();
     assert!(run.wait().success(), "{}", run.transcript());
-    // The last reply has passed the tap; the sniffer stops when its ports go away.
-    std::thread::sleep(std::time::Duration::from_millis(300));
+    // The last reply has passed the tap, but the sniffer may not have printed it yet: wait
+    // for what the test looks for, then unplug (the sniffer stops when its ports go away).
+    let deadline = std::time::Instant::now() + common::LONG;
+    while !heard(&sniff.transcript()) {
+        assert!(
+            std::time::Instant::now() < deadline,
+            "{}",
+            sniff.transcript()
+        );
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
     cable.unplug();
     let exit = sniff.wait();
     assert_eq!(exit.code(), Some(2), "{}", sniff.transcript());
@@ -41,7 +56,11 @@ fn sniff_a_session(cable: &mut Cable, model: &str, sniff_args: &[&str]) -> (Pbto
 #[test]
 fn a_4_wire_line_is_decoded_in_both_directions_with_replies_paired() {
     let mut cable = Cable::with_taps(2);
-    let (_, out) = sniff_a_session(&mut cable, "sync65", &[]);
+    let (_, out) = sniff_a_session(&mut cable, "sync65", &[], |out| {
+        out.contains("Read Device Identification, REPLY")
+            && out.contains("product code 081335")
+            && out.contains("reply to #1 after")
+    });
     let request_tap = format!("  {}  :", cable.taps[0]);
     let reply_tap = format!("  {}  :", cable.taps[1]);
     assert!(out.contains(&request_tap), "{out}");
@@ -59,7 +78,12 @@ fn a_4_wire_line_is_decoded_in_both_directions_with_replies_paired() {
 #[test]
 fn a_2_wire_bus_is_decoded_as_json_objects() {
     let mut cable = Cable::with_taps(1);
-    let (sniff, _) = sniff_a_session(&mut cable, "hpr260", &["--json", "--framing", "8N1"]);
+    let (sniff, _) = sniff_a_session(
+        &mut cable,
+        "hpr260",
+        &["--json", "--framing", "8N1"],
+        |out| out.contains(">000HYPERFORMANCE") && out.contains("got no reply"),
+    );
     let frames: Vec<serde_json::Value> = sniff
         .transcript()
         .lines()
