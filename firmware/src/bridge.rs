@@ -222,6 +222,8 @@ impl Bridge {
     /// The interlocks' inputs and outputs now (for STATUS).
     pub fn set_io_snapshot(&mut self, inputs: Inputs, outputs: Outputs) {
         self.io = Some((inputs, outputs));
+        let now = self.now;
+        self.session.io_changed(&mut ctx!(self, now));
     }
 
     /// Something the interlocks report (`!ARC ON`, `!START REFUSED ...` with events on).

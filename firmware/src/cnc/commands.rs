@@ -42,6 +42,7 @@ impl Session {
                 Some(family) => err_line(ErrorCode::Unsupported, UnsupportedText(*text, family)),
                 None => no_link(),
             }),
+            Route::GasCheck(steps) => self.start_gas_check(ctx, steps),
             Route::NoLink => Some(no_link()),
             Route::Session => self.session_command(ctx, command, family),
         }

@@ -20,6 +20,7 @@ impl Session {
     pub fn on_link_event(&mut self, ctx: &mut Context<'_>, event: &LinkEvent) {
         super::history::note_link_event(ctx, event);
         self.powermax.on_link_event(ctx, event);
+        self.gas_check_link_event(ctx, event);
         if let LinkEvent::CommandDone { ticket, result } = event {
             if let Some(Pending::Link {
                 ticket: t,

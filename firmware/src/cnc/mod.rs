@@ -36,6 +36,7 @@
 mod commands;
 mod describe;
 mod events;
+mod gas_check;
 pub mod history;
 mod input;
 pub mod powermax_port;
@@ -140,6 +141,7 @@ enum Pending {
         command: plasma_protocol::cnc::HistoryCommand,
         taken: bool,
     },
+    GasCheck(gas_check::GasCheck),
 }
 
 /// Output bytes, whole lines at a time.
@@ -247,6 +249,8 @@ pub struct Session {
     powermax: powermax_port::PowermaxPort,
     /// Who sent the command being carried out (for the history's process changes).
     origin: crate::storage::history::ChangedBy,
+    /// A gas check's stop that could not be sent (link lost): sent when the link is back.
+    gas_stop_owed: Option<crate::link::LinkCommand<'static>>,
 }
 
 impl Session {
@@ -274,6 +278,7 @@ impl Session {
             last_rx: Instant::ZERO,
             powermax: powermax_port::PowermaxPort::default(),
             origin: crate::storage::history::ChangedBy::Text,
+            gas_stop_owed: None,
         }
     }
 
@@ -339,6 +344,7 @@ impl Session {
     /// Let time pass: a Phoenix or Modbus frame idle for [`FRAME_IDLE_TIMEOUT`] is
     /// abandoned; a group of Modbus writes with nothing after it completes.
     pub fn poll(&mut self, ctx: &mut Context<'_>) {
+        self.gas_check_poll(ctx);
         if let Some(fault) = self.powermax.poll(ctx) {
             self.settings_refused_event(ctx, fault);
         }
@@ -357,10 +363,15 @@ impl Session {
     pub fn poll_at(&self) -> Option<Instant> {
         let frame = (self.deframer.in_frame() || self.powermax.in_frame())
             .then(|| self.last_rx + FRAME_IDLE_TIMEOUT);
-        match (frame, self.powermax.poll_at()) {
-            (Some(a), Some(b)) => Some(a.min(b)),
-            (a, b) => a.or(b),
-        }
+        [frame, self.powermax.poll_at(), self.gas_check_poll_at()]
+            .into_iter()
+            .flatten()
+            .min()
+    }
+
+    /// A new discrete-I/O snapshot: a gas check stops when the torch comes on.
+    pub fn io_changed(&mut self, ctx: &mut Context<'_>) {
+        self.gas_check_poll(ctx);
     }
 
     /// Answer waiting lines while no command is in progress.

@@ -31,7 +31,7 @@ const HELP_COMMANDS: &str = "HELP,ID,STATUS,LIMITS,FAULT,FAULTLOG,COUNTERS,CARTR
 /// The parser's [`SET_WORDS`](plasma_protocol::cnc::command::SET_WORDS) as HELP writes them.
 const HELP_SET: &str = "MODE,AMPS,PSI,PROCESS,HPR_PROCESS";
 /// The parser's [`GASTEST_WORDS`](plasma_protocol::cnc::command::GASTEST_WORDS).
-const HELP_GASTEST: &str = "ON,OFF,PREFLOW,CUTFLOW";
+const HELP_GASTEST: &str = "ON,OFF,PREFLOW,CUTFLOW,CHECK";
 
 pub(super) fn help(sim: bool) -> ReplyLine {
     ok_line(|w| {

@@ -51,10 +51,21 @@ pub(super) enum Route<'a> {
     Local,
     /// The family has no such function.
     Unsupported(&'static Unsupported),
+    /// `GASTEST CHECK`: these requests, one after the other (see `gas_check`).
+    GasCheck(GasCheckSteps),
     /// The command needs a unit and none is connected.
     NoLink,
     /// Answered by the session whatever is on the line (`HELP`, `CONFIG`, `RAW`, ...).
     Session,
+}
+
+/// The link requests of a `GASTEST CHECK`: start the gas test, read the pressure while the
+/// gas flows, end the test.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) struct GasCheckSteps {
+    pub start: LinkCommand<'static>,
+    pub read: LinkCommand<'static>,
+    pub stop: LinkCommand<'static>,
 }
 
 /// The table: what `command` becomes on `family` (`None`: no unit connected).
@@ -130,6 +141,24 @@ pub(super) fn route<'a>(command: &Command<'a>, family: Option<Family>) -> Route<
             Awaiting::GasFlowTest(flow, on),
         ),
         (Command::GasFlowTest { .. }, _) => No(&text::GAS_FLOW_TEST),
+        (Command::GasCheck, Some(Sync | Legacy)) => Route::GasCheck(GasCheckSteps {
+            start: L::GasTest { on: true },
+            read: L::ReadGasPressure,
+            stop: L::GasTest { on: false },
+        }),
+        // The cutflow test: the larger flow, the one that shows a supply that cannot keep up.
+        (Command::GasCheck, Some(Hpr)) => Route::GasCheck(GasCheckSteps {
+            start: L::HprGasTest {
+                cutflow: true,
+                on: true,
+            },
+            read: L::HprReadGasPressures,
+            stop: L::HprGasTest {
+                cutflow: true,
+                on: false,
+            },
+        }),
+        (Command::GasCheck, _) => No(&text::GAS_CHECK),
         // Quick restart (clears 0-50-0) exists on SYNC units only.
         (Command::Restart, Some(Sync)) => Send(L::QuickRestart, Awaiting::Restart),
         (Command::Restart, _) => No(&text::RESTART),
@@ -180,7 +209,7 @@ mod tests {
     ];
 
     /// One command of each kind the table routes to the unit.
-    fn unit_commands() -> [Command<'static>; 17] {
+    fn unit_commands() -> [Command<'static>; 18] {
         let amps = Amps::from_raw(45 * Amps::STEPS_PER_UNIT);
         [
             Command::SetMode(Mode::Cut),
@@ -198,6 +227,7 @@ mod tests {
             },
             Command::RemoteOff,
             Command::GasTest(true),
+            Command::GasCheck,
             Command::GasFlowTest {
                 flow: GasFlow::Cutflow,
                 on: true,
@@ -221,7 +251,12 @@ mod tests {
     fn the_table_sends_a_family_only_requests_its_driver_runs() {
         for family in FAMILIES {
             for command in unit_commands() {
-                if let Route::Send(request, _) = route(&command, Some(family)) {
+                let requests = match route(&command, Some(family)) {
+                    Route::Send(request, _) => [Some(request), None, None],
+                    Route::GasCheck(steps) => [Some(steps.start), Some(steps.read), Some(steps.stop)],
+                    _ => [None; 3],
+                };
+                for request in requests.into_iter().flatten() {
                     assert!(
                         request.runs_on(family),
                         "{command:?} on {family:?} becomes {request:?}"

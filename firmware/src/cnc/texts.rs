@@ -67,6 +67,19 @@ pub fn not_saved(error: SaveError) -> ReplyLine {
     )
 }
 
+/// `GASTEST CHECK` while TORCH_ON, START or MOTION is on.
+pub const GAS_CHECK_TORCH_ON: &str = "GASTEST CHECK refused: the torch is on (TORCH_ON, START or MOTION)";
+/// `GASTEST CHECK` with a fault active (its code follows).
+pub const GAS_CHECK_FAULTED: &str = "GASTEST CHECK refused: the unit has a fault,";
+/// TORCH_ON or START came on during `GASTEST CHECK`.
+pub const GAS_CHECK_STOPPED_TORCH: &str =
+    "GASTEST CHECK stopped: the torch came on; the gas test was ended";
+/// The link was lost during `GASTEST CHECK`.
+pub const GAS_CHECK_LINK_LOST: &str =
+    "GASTEST CHECK stopped: the link was lost; the gas test is ended when the unit answers again";
+/// `GASTEST CHECK` ended without a reading.
+pub const GAS_CHECK_NO_READING: &str = "GASTEST CHECK: the unit gave no pressure reading";
+
 /// `HISTORY` when the history's flash could not be read or erased (or the board keeps none).
 pub const HISTORY_UNAVAILABLE: &str = "history not available";
 
@@ -155,6 +168,12 @@ pub mod unsupported {
     pub const GAS_FLOW_TEST: Unsupported = words(
         "GASTEST PREFLOW|CUTFLOW is an HPR command (064-067 gas tests), not available on ",
         "; GASTEST ON|OFF runs the unit's gas test",
+    );
+    /// `GASTEST CHECK` on a MaxPro200: its 079 has the pressure set points, not measured
+    /// pressures (HPR manual line 168).
+    pub const GAS_CHECK: Unsupported = words(
+        "GASTEST CHECK needs a measured gas pressure, which ",
+        " does not report in 079 (set points only); GASTEST ON|OFF runs its test gas",
     );
     /// `CLEARWARN` on anything but an HPR.
     pub const CLEAR_WARN: Unsupported = words(

@@ -78,6 +78,11 @@ pub enum LinkCommand<'a> {
         /// Start or stop.
         on: bool,
     },
+    /// Powermax: read the actual gas pressure (SYNC 0x3019, legacy 0x204C) now, not at the
+    /// next poll: the gas check's reading while the gas flows.
+    ReadGasPressure,
+    /// HPR: read the measured pressures (079) now: the gas check's reading.
+    HprReadGasPressures,
     /// HPR: read the error log (134).
     HprReadErrorLog,
     /// HPR: read the timers and counters (125).
@@ -96,7 +101,8 @@ impl LinkCommand<'_> {
         match self {
             LinkCommand::ApplyProcess { .. }
             | LinkCommand::ExitRemote
-            | LinkCommand::GasTest { .. } => powermax,
+            | LinkCommand::GasTest { .. }
+            | LinkCommand::ReadGasPressure => powermax,
             // Quick restart (clears 0-50-0) exists on SYNC units only.
             LinkCommand::QuickRestart => matches!(family, Family::PowermaxSync),
             // Every family's slow data can be read again (a MaxPro200 has none: done at once).
@@ -108,6 +114,7 @@ impl LinkCommand<'_> {
             LinkCommand::HprSetCornerCurrent { .. }
             | LinkCommand::HprClearWarnings
             | LinkCommand::HprGasTest { .. }
+            | LinkCommand::HprReadGasPressures
             | LinkCommand::HprReadErrorLog
             | LinkCommand::HprReadTimers => matches!(family, Family::Hpr),
             LinkCommand::MaxProTestGas { .. } | LinkCommand::MaxProSetProcess { .. } => {

@@ -2,7 +2,7 @@
 
 use heapless::Deque;
 use plasma_protocol::hpr::{ErrorCode, StateCode};
-use plasma_protocol::powermax::FaultCode;
+use plasma_protocol::powermax::{FaultCode, Psi};
 
 use crate::link::command::Refusal;
 use crate::link::diagnostics::Diagnostics;
@@ -68,6 +68,15 @@ pub enum CommandOutput {
     Value(u16),
     /// HPR error log, most recent first.
     ErrorLog([ErrorCode; 4]),
+    /// A Powermax's actual gas pressure.
+    Pressure(Psi),
+    /// An HPR's measured cutflow pressures (079), psi.
+    HprPressures {
+        /// Plasma cutflow (`PC`).
+        plasma: u16,
+        /// Shield cutflow (`SC`).
+        shield: u16,
+    },
     /// A RAW command's reply: `len` bytes, available from `PsLink::raw_reply` until the next
     /// RAW command completes.
     Raw {

@@ -377,6 +377,9 @@ pub enum Command<'a> {
     RemoteOff,
     /// `GASTEST ON|OFF`: the unit's gas test (HPR: preflow, MaxPro200: 143 test gas).
     GasTest(bool),
+    /// `GASTEST CHECK`: run the gas test, read the pressure while the gas flows, compare it
+    /// with the permitted range, end the test.
+    GasCheck,
     /// `GASTEST PREFLOW|CUTFLOW ON|OFF`: one HPR gas flow test (064-067).
     GasFlowTest {
         /// Which flow.
@@ -715,15 +718,17 @@ pub const COMMAND_WORDS: [&str; 22] = [
 pub const SET_WORDS: [&str; 5] = ["MODE", "AMPS", "PSI", "PROCESS", "HPR_PROCESS"];
 
 /// The words that may follow `GASTEST`.
-pub const GASTEST_WORDS: [&str; 4] = ["ON", "OFF", "PREFLOW", "CUTFLOW"];
+pub const GASTEST_WORDS: [&str; 5] = ["ON", "OFF", "PREFLOW", "CUTFLOW", "CHECK"];
 
-/// `GASTEST ON|OFF` or `GASTEST PREFLOW|CUTFLOW ON|OFF`.
+/// `GASTEST ON|OFF|CHECK` or `GASTEST PREFLOW|CUTFLOW ON|OFF`.
 fn gas_test(args: &mut Args<'_>) -> Result<Command<'static>, ParseError> {
     const WHAT: &str = "GASTEST argument";
-    let [on_word, off_word, preflow, cutflow] = GASTEST_WORDS;
+    let [on_word, off_word, preflow, cutflow, check] = GASTEST_WORDS;
     let word = args.expect(WHAT)?;
     let flow = if is(word, on_word) || is(word, off_word) {
         return Ok(Command::GasTest(is(word, on_word)));
+    } else if is(word, check) {
+        return Ok(Command::GasCheck);
     } else if is(word, preflow) {
         GasFlow::Preflow
     } else if is(word, cutflow) {
@@ -731,7 +736,7 @@ fn gas_test(args: &mut Args<'_>) -> Result<Command<'static>, ParseError> {
     } else {
         return Err(ParseError::BadKeyword {
             what: WHAT,
-            expected: "ON|OFF|PREFLOW|CUTFLOW",
+            expected: "ON|OFF|PREFLOW|CUTFLOW|CHECK",
         });
     };
     let on = on_off(args, WHAT)?;
@@ -1162,6 +1167,8 @@ mod tests {
         assert_eq!(err("REMOTE OFF NOW"), ParseError::UnexpectedArgument);
         assert_eq!(Command::parse("gastest on"), Ok(Command::GasTest(true)));
         assert_eq!(Command::parse("GASTEST OFF"), Ok(Command::GasTest(false)));
+        assert_eq!(Command::parse("gastest check"), Ok(Command::GasCheck));
+        assert_eq!(err("GASTEST CHECK NOW"), ParseError::UnexpectedArgument);
         assert_eq!(
             Command::parse("GASTEST cutflow ON"),
             Ok(Command::GasFlowTest {
@@ -1178,7 +1185,7 @@ mod tests {
         );
         assert_eq!(
             text(err("GASTEST maybe")),
-            "SYNTAX GASTEST argument: expected ON|OFF|PREFLOW|CUTFLOW"
+            "SYNTAX GASTEST argument: expected ON|OFF|PREFLOW|CUTFLOW|CHECK"
         );
         assert_eq!(
             text(err("GASTEST CUTFLOW")),

@@ -233,7 +233,7 @@ fn every_command_on_a_sync_unit() {
         rig.cmd("HELP"),
         "OK commands=HELP,ID,STATUS,LIMITS,FAULT,FAULTLOG,COUNTERS,CARTRIDGE,SET,REMOTE,\
          GASTEST,POWER,RESTART,GASES,CORNER,RESET,CLEARWARN,EVENTS,CONFIG,HISTORY,CLOCK,RAW \
-         set=MODE,AMPS,PSI,PROCESS,HPR_PROCESS remote=OFF gastest=ON,OFF,PREFLOW,CUTFLOW \
+         set=MODE,AMPS,PSI,PROCESS,HPR_PROCESS remote=OFF gastest=ON,OFF,PREFLOW,CUTFLOW,CHECK \
          config=SAVE history=CLEAR simulator_only=TORCH simulator=NO"
     );
     assert_eq!(

@@ -280,6 +280,14 @@ impl HprDriver {
                 core.status.hpr.error_log = Some(*log);
                 Ok(CommandOutput::ErrorLog(*log))
             }
+            // The gas check's reading: the freshest 079 the link has, too.
+            (_, Some(Reply::PsInfo(info))) => {
+                core.status.hpr.ps_info = Some(*info);
+                Ok(CommandOutput::HprPressures {
+                    plasma: info.pressures.plasma_cutflow,
+                    shield: info.pressures.shield_cutflow,
+                })
+            }
             (_, Some(Reply::TimerCounter(t))) => {
                 core.status.hpr.timers = Some(*t);
                 Ok(CommandOutput::Done)

@@ -141,6 +141,7 @@ impl HprDriver {
                     TestMode::None
                 })
             }
+            LinkCommand::HprReadGasPressures => Request::GetPsInfo,
             LinkCommand::HprReadErrorLog => Request::ReadErrorLog,
             LinkCommand::HprReadTimers => Request::GetTimerCounter,
             // `runs_on` lets no other command through to an HPR or MaxPro200.

@@ -2,6 +2,7 @@
 //! last one means (a command's result, a setting confirmed or refused).
 
 use plasma_protocol::modbus_ascii::Response;
+use plasma_protocol::powermax::Psi;
 use plasma_protocol::time::Instant;
 
 use super::process::legacy_writes;
@@ -9,7 +10,7 @@ use super::{Active, Job, MbPurpose, PowermaxDriver, REAPPLY_BACKOFF, Variant};
 use crate::link::core::Core;
 use crate::link::event::{CommandFailure, CommandOutput, LinkEvent, ProcessFailure};
 use crate::link::powermax::legacy;
-use crate::link::powermax::modbus::MbRequest;
+use crate::link::powermax::modbus::{MbRequest, read_values};
 use crate::link::powermax::sync;
 use crate::link::transaction::TransactionError;
 
@@ -72,6 +73,13 @@ impl PowermaxDriver {
             (Job::Exit, Variant::Legacy) => legacy::exit_writes().get(step).cloned(),
             (Job::GasTest(on), Variant::Sync) => (step == 0).then(|| sync::gas_test(*on)),
             (Job::GasTest(on), Variant::Legacy) => (step == 0).then(|| legacy::gas_test(*on)),
+            (Job::ReadPressure, variant) => (step == 0).then(|| MbRequest::ReadInput {
+                start: match variant {
+                    Variant::Sync => plasma_protocol::powermax::sync::ACTUAL_PRESSURE,
+                    Variant::Legacy => plasma_protocol::powermax::legacy::ACTUAL_PRESSURE,
+                },
+                quantity: 1,
+            }),
             (Job::QuickRestart, _) => (step == 0).then(sync::quick_restart).flatten(),
             (Job::Raw(request), _) => (step == 0).then(|| request.clone()),
         }
@@ -107,6 +115,12 @@ impl PowermaxDriver {
                 is_final.then(|| self.remote_exited(core))
             }
             Job::GasTest(_) => Some(Ok(CommandOutput::Done)),
+            Job::ReadPressure => Some(
+                read_values(response)
+                    .and_then(|values| values.get(0))
+                    .map(|raw| CommandOutput::Pressure(Psi::from_raw(raw)))
+                    .ok_or(CommandFailure::Transaction(TransactionError::Malformed)),
+            ),
             Job::QuickRestart => {
                 self.start_blackout(now, core);
                 Some(Ok(CommandOutput::Done))

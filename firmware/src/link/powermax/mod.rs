@@ -95,6 +95,7 @@ enum Job {
     Apply(DesiredProcess),
     Exit,
     GasTest(bool),
+    ReadPressure,
     QuickRestart,
     Raw(MbRequest),
 }

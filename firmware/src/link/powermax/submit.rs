@@ -49,6 +49,7 @@ impl PowermaxDriver {
             }
             LinkCommand::ExitRemote => Job::Exit,
             LinkCommand::GasTest { on } => Job::GasTest(*on),
+            LinkCommand::ReadGasPressure => Job::ReadPressure,
             LinkCommand::QuickRestart => self.quick_restart_job(core)?,
             LinkCommand::RefreshSlowData => return self.refresh_slow_data(now, ticket, core),
             LinkCommand::Raw(bytes) => {
