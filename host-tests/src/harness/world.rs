@@ -375,6 +375,19 @@ impl<E: WorldEndpoint> World<E> {
             .expect("the simulator is not of this type")
     }
 
+    /// The unit's gas supply delivers at most `psi` from now on (`None`: ample): a Powermax's
+    /// actual pressure, an HPR's measured pressures stay below it.
+    pub fn set_gas_supply(&mut self, psi: Option<u16>) {
+        let unit = self.unit.as_any_mut();
+        if let Some(powermax) = unit.downcast_mut::<plasma_sim::powermax::Powermax>() {
+            powermax.set_supply_psi(psi);
+        } else if let Some(hpr) = unit.downcast_mut::<plasma_sim::hpr::Hpr>() {
+            hpr.set_supply_psi(psi);
+        } else {
+            panic!("the simulator has no gas supply");
+        }
+    }
+
     /// Raise a fault on the unit now (Powermax decimal code, HPR error id).
     pub fn inject_fault(&mut self, code: u16) {
         let now = self.now;

@@ -84,7 +84,7 @@ impl Hpr {
             }
             72 if hpr => reply("1200".into()),
             79 if hpr => {
-                let [pc, pp, sc, sp, _, _] = self.flows;
+                let [pc, pp, sc, sp, _, _] = self.flows.map(|f| self.measured_psi(f));
                 let measured = |v: u16| if auto { v } else { 0 };
                 reply(format!(
                     "PC{pc:04} PP{pp:04} SC{sc:04} SP{sp:04} CS{:04} ST{:04} ER{:04} CG{:04} CG{:04} MV{:04} MV{:04}",
@@ -129,7 +129,7 @@ impl Hpr {
                 None
             }
             94 if hpr => {
-                let [pc, pp, sc, sp, n2, g2] = self.flows;
+                let [pc, pp, sc, sp, n2, g2] = self.flows.map(|f| self.measured_psi(f));
                 let m = |v: u16| if auto { v } else { 0 };
                 reply(format!(
                     "PC{pc:04} PP{pp:04} SC{sc:04} SP{sp:04} CG{:04} CG{:04} MV{:04} MV{:04}",

@@ -97,6 +97,9 @@ pub struct Hpr {
     gases: (u16, u16),
     /// Plasma cutflow, plasma preflow, shield cutflow, shield preflow, N2 mix, gas 2 mix (psi).
     flows: [u16; 6],
+    /// The inlet supply's pressure, psi (`None`: ample); the measured pressures (079, 094)
+    /// stay below it.
+    supply_psi: Option<u16>,
     counters: HprCounters,
     noise: Vec<(Instant, Duration)>,
     received: Vec<u16>,
@@ -128,6 +131,7 @@ impl Hpr {
             corner_pct: 100,
             gases: (1, 5),
             flows: [55, 45, 35, 25, 0, 0],
+            supply_psi: None,
             counters: HprCounters::default(),
             noise: Vec::new(),
             received: Vec::new(),
@@ -135,6 +139,17 @@ impl Hpr {
         };
         unit.power_on(Instant::ZERO);
         unit
+    }
+
+    /// The gas supply delivers at most `psi` (`None`: as much as the unit asks for): the
+    /// measured pressures of 079 and 094 (HPR manual lines 168, 177) stay below it.
+    pub fn set_supply_psi(&mut self, psi: Option<u16>) {
+        self.supply_psi = psi;
+    }
+
+    /// A channel's measured pressure: its set point, held below the supply's.
+    pub(super) fn measured_psi(&self, set: u16) -> u16 {
+        set.min(self.supply_psi.unwrap_or(u16::MAX))
     }
 
     /// The configuration.

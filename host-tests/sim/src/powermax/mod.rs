@@ -27,7 +27,10 @@
 //! - Power cycling clears the active fault (0-50-0 comes back without a cartridge, 0-51-0 with
 //!   Start held on); an injected hardware fault must be injected again if it should persist.
 //! - Actual current (0x3018) reads the set current while transferred and 0 otherwise; actual
-//!   pressure reads the set (or automatic) pressure while gas flows and 0 otherwise.
+//!   pressure reads the set (or automatic) pressure while gas flows and 0 otherwise; a gas
+//!   supply below that pressure ([`Powermax::set_supply_psi`]) holds it at the supply's, as
+//!   a compressor that cannot keep up does in the SYNC manual's gas test figure (Figure 16,
+//!   "gas test to check air supply capacity").
 //!
 //! By job: `config` what makes a unit, `arc` the arc sequence, faults and counters, `remote`
 //! remote mode and the quick restart, `server` the Modbus server; this file the unit's state
@@ -72,6 +75,8 @@ pub struct Powermax {
     arc: ArcState,
     arc_since: Instant,
     gas_test: bool,
+    /// The inlet supply's pressure while gas flows, psi (`None`: ample).
+    supply_psi: Option<u16>,
     fault: u16,
     counters: Counters,
     cartridge: Option<Cartridge>,
@@ -99,6 +104,7 @@ impl Powermax {
             arc: ArcState::Idle,
             arc_since: Instant::ZERO,
             gas_test: false,
+            supply_psi: None,
             fault: 0,
             counters: Counters::default(),
             cartridge,
@@ -191,6 +197,12 @@ impl Powermax {
         self.gas_test
     }
 
+    /// The gas supply delivers at most `psi` while gas flows (`None`: as much as the unit
+    /// asks for): a weak compressor or a long, thin hose.
+    pub fn set_supply_psi(&mut self, psi: Option<u16>) {
+        self.supply_psi = psi;
+    }
+
     /// The installed cartridge (SYNC).
     pub fn cartridge(&self) -> Option<&Cartridge> {
         self.cartridge.as_ref()
@@ -270,7 +282,8 @@ impl Powermax {
 
     pub(crate) fn actual_pressure(&self) -> u16 {
         if self.gas_test || self.arc != ArcState::Idle {
-            self.effective_pressure()
+            let supply = self.supply_psi.map_or(u16::MAX, |psi| psi.saturating_mul(128));
+            self.effective_pressure().min(supply)
         } else {
             0
         }
