@@ -72,7 +72,10 @@ enum Phase {
 enum Reading {
     Powermax(Psi),
     /// An HPR's plasma and shield cutflow pressures, whole psi.
-    Hpr { plasma: u16, shield: u16 },
+    Hpr {
+        plasma: u16,
+        shield: u16,
+    },
 }
 
 /// What the check ends with.
@@ -153,12 +156,6 @@ impl Session {
 
     /// A link event while a check runs: the answer to its request, or the link lost.
     pub(super) fn gas_check_link_event(&mut self, ctx: &mut Context<'_>, event: &LinkEvent) {
-        if let LinkEvent::LinkUp { .. } = event
-            && let Some(stop) = self.gas_stop_owed.take()
-        {
-            // The answer is nobody's: the check that owed it has replied.
-            let _ = ctx.link.submit(ctx.now, stop);
-        }
         let Some(check) = self.gas_check() else {
             return;
         };
@@ -189,9 +186,11 @@ impl Session {
             (Phase::Ending, Err(failure)) => {
                 // The test may still run: the stop is sent again once the link answers.
                 self.gas_stop_owed = Some(check.steps.stop);
-                if check.outcome != Outcome::LinkLost {
-                    check.outcome = Outcome::Failed(failure);
-                }
+                check.outcome = match failure {
+                    CommandFailure::LinkDown => Outcome::LinkLost,
+                    _ if check.outcome == Outcome::Measured => Outcome::Failed(failure),
+                    _ => check.outcome,
+                };
                 self.gas_check_reply(ctx, check);
             }
             (Phase::Starting, Ok(_)) => {
@@ -237,8 +236,16 @@ impl Session {
         }
     }
 
-    /// Time passes: a settled flow is read.
+    /// Time passes: a settled flow is read, a stop owed is sent, the torch on stops the check.
     pub(super) fn gas_check_poll(&mut self, ctx: &mut Context<'_>) {
+        // A stop owed is sent once the link is up; its answer is nobody's (the check that
+        // owed it has replied).
+        if let Some(stop) = self.gas_stop_owed
+            && ctx.link.status().link_up
+            && ctx.link.submit(ctx.now, stop).is_ok()
+        {
+            self.gas_stop_owed = None;
+        }
         let Some(check) = self.gas_check() else {
             return;
         };
@@ -424,7 +431,9 @@ impl Verdict {
         w.word("CHECK")?;
         w.field("result", if self.passed() { "PASS" } else { "FAIL" })?;
         match self.shield {
-            None => self.first.write(&mut w, ["measured_psi", "min_psi", "max_psi"])?,
+            None => self
+                .first
+                .write(&mut w, ["measured_psi", "min_psi", "max_psi"])?,
             Some(shield) => {
                 let plasma = ["plasma_psi", "plasma_min_psi", "plasma_max_psi"];
                 self.first.write(&mut w, plasma)?;

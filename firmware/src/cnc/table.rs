@@ -253,7 +253,9 @@ mod tests {
             for command in unit_commands() {
                 let requests = match route(&command, Some(family)) {
                     Route::Send(request, _) => [Some(request), None, None],
-                    Route::GasCheck(steps) => [Some(steps.start), Some(steps.read), Some(steps.stop)],
+                    Route::GasCheck(steps) => {
+                        [Some(steps.start), Some(steps.read), Some(steps.stop)]
+                    }
                     _ => [None; 3],
                 };
                 for request in requests.into_iter().flatten() {

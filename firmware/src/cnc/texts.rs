@@ -68,7 +68,8 @@ pub fn not_saved(error: SaveError) -> ReplyLine {
 }
 
 /// `GASTEST CHECK` while TORCH_ON, START or MOTION is on.
-pub const GAS_CHECK_TORCH_ON: &str = "GASTEST CHECK refused: the torch is on (TORCH_ON, START or MOTION)";
+pub const GAS_CHECK_TORCH_ON: &str =
+    "GASTEST CHECK refused: the torch is on (TORCH_ON, START or MOTION)";
 /// `GASTEST CHECK` with a fault active (its code follows).
 pub const GAS_CHECK_FAULTED: &str = "GASTEST CHECK refused: the unit has a fault,";
 /// TORCH_ON or START came on during `GASTEST CHECK`.

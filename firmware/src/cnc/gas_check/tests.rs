@@ -187,7 +187,10 @@ fn a_pressure_that_never_settles_fails_once_the_flow_time_is_up() {
         rig.run(100);
     }
     let reply = rig.received.iter().find(|t| is_reply(t)).expect("a reply");
-    assert!(reply.starts_with("OK GASTEST CHECK result=FAIL "), "{reply}");
+    assert!(
+        reply.starts_with("OK GASTEST CHECK result=FAIL "),
+        "{reply}"
+    );
     assert!(reply.ends_with(" settled=NO"), "{reply}");
     assert!(!rig.ps().powermax().gas_test_active());
 }

@@ -282,7 +282,9 @@ impl Powermax {
 
     pub(crate) fn actual_pressure(&self) -> u16 {
         if self.gas_test || self.arc != ArcState::Idle {
-            let supply = self.supply_psi.map_or(u16::MAX, |psi| psi.saturating_mul(128));
+            let supply = self
+                .supply_psi
+                .map_or(u16::MAX, |psi| psi.saturating_mul(128));
             self.effective_pressure().min(supply)
         } else {
             0
