@@ -98,8 +98,8 @@ fn torch_on(ctx: &Context<'_>) -> bool {
 }
 
 impl Session {
-    /// `GASTEST CHECK`: refused while the torch is on or the unit is faulted, else the test
-    /// starts; `None` while it runs.
+    /// `GASTEST CHECK`: refused while the torch is on or a fault requires action, else the
+    /// test starts; `None` while it runs.
     pub(super) fn start_gas_check(
         &mut self,
         ctx: &mut Context<'_>,
@@ -109,7 +109,9 @@ impl Session {
         if torch_on(ctx) {
             return Some(err_line(ErrorCode::State, texts::GAS_CHECK_TORCH_ON));
         }
-        if let Some(fault) = status.active_fault {
+        // A low-pressure fault (0-12-1, 0-20-0, HPR 044) is what a check looks into: only a
+        // fault that requires action refuses it.
+        if let Some(fault) = status.active_fault.filter(|f| f.action_required()) {
             return Some(err_line(
                 ErrorCode::State,
                 format_args!(

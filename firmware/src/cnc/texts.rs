@@ -70,8 +70,9 @@ pub fn not_saved(error: SaveError) -> ReplyLine {
 /// `GASTEST CHECK` while TORCH_ON, START or MOTION is on.
 pub const GAS_CHECK_TORCH_ON: &str =
     "GASTEST CHECK refused: the torch is on (TORCH_ON, START or MOTION)";
-/// `GASTEST CHECK` with a fault active (its code follows).
-pub const GAS_CHECK_FAULTED: &str = "GASTEST CHECK refused: the unit has a fault,";
+/// `GASTEST CHECK` with a fault that requires action (its code follows).
+pub const GAS_CHECK_FAULTED: &str =
+    "GASTEST CHECK refused: the unit has a fault that requires action,";
 /// TORCH_ON or START came on during `GASTEST CHECK`.
 pub const GAS_CHECK_STOPPED_TORCH: &str =
     "GASTEST CHECK stopped: the torch came on; the gas test was ended";

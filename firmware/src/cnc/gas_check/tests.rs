@@ -79,7 +79,7 @@ fn refused_while_the_torch_is_on_and_nothing_is_sent() {
 }
 
 #[test]
-fn refused_while_the_unit_has_a_fault() {
+fn refused_while_a_fault_requires_action_not_for_a_low_pressure_warning() {
     let mut rig = Rig::sync65(Settings::default());
     rig.fault(500);
     rig.run(300);
@@ -92,6 +92,14 @@ fn refused_while_the_unit_has_a_fault() {
         )
     );
     assert!(gas_test_writes(&mut rig).is_empty());
+    // 0-12-1 "the gas pressure output is low", "No, but recommended" (SYNC manual line 945).
+    rig.fault(0);
+    rig.fault(121);
+    rig.run(300);
+    assert!(
+        rig.cmd("GASTEST CHECK")
+            .starts_with("OK GASTEST CHECK result=")
+    );
 }
 
 #[test]
