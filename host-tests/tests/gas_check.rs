@@ -1,12 +1,13 @@
-//! `GASTEST CHECK` end to end on every family that reports a measured pressure: the bridge in
-//! the scenario `World` with the discrete I/O and the safety monitor in the loop (checked
-//! after every step), against the simulated SYNC, legacy Powermax and HPR units with an ample
-//! and a weak gas supply.
+//! `GASTEST CHECK` end to end on every family: the bridge in the scenario `World` with the
+//! discrete I/O and the safety monitor in the loop (checked after every step), against the
+//! simulated SYNC, legacy Powermax, HPR and MaxPro200 units with an ample and a weak gas
+//! supply.
 //!
 //! Manuals: SYNC manual (000_dd931256418ae627.txt) lines 531-532 (the gas-test coil 0x3180,
 //! legacy 0x0832), 1278-1282 (0x3019 actual pressure), 441 (legacy 0x204C), 752-754
 //! (0x3004/0x3005 permitted pressure); HPR manual (002_72b43a5685974c77.txt) lines 154-155
-//! (066/067 the cutflow test), 168 (079 measured pressures), 382-389 (the pressure limits).
+//! (066/067 the cutflow test), 168 (079 measured pressures; a MaxPro200's set points only),
+//! 281 (141, a MaxPro200's measured pressures), 283 (143 test gas), 382-389 (the limits).
 
 mod common;
 
@@ -19,14 +20,14 @@ use plasma_sim::Model;
 use plasma_sim::hpr::Hpr;
 use plasma_sim::powermax::Powermax;
 
-const FAMILIES: [Model; 3] = [Model::Sync65, Model::Pm65, Model::Hpr130];
+const FAMILIES: [Model; 4] = [Model::Sync65, Model::Pm65, Model::Hpr130, Model::MaxPro200];
 
 /// HPR state 12: TEST CUTFLOW (HPR manual line 468).
 const HPR_TEST_CUTFLOW: u16 = 12;
 
 fn world(model: Model) -> World<BridgeEndpoint> {
     match model {
-        Model::Hpr130 => ready_hpr(model),
+        Model::Hpr130 | Model::MaxPro200 => ready_hpr(model),
         _ => bridge_world(model),
     }
 }
@@ -35,6 +36,7 @@ fn world(model: Model) -> World<BridgeEndpoint> {
 fn gas_flowing(w: &World<BridgeEndpoint>) -> bool {
     match w.unit_ref().model() {
         Model::Hpr130 => w.sim_ref::<Hpr>().state_code() == HPR_TEST_CUTFLOW,
+        Model::MaxPro200 => w.sim_ref::<Hpr>().test_gas(),
         _ => w.sim_ref::<Powermax>().gas_test_active(),
     }
 }
@@ -75,7 +77,7 @@ fn a_weak_supply_fails_on_every_family_and_the_test_is_ended() {
     for model in FAMILIES {
         let mut w = world(model);
         // Below every permitted range: the SYNC cartridge's 58 psi, the legacy unit's 63 psi,
-        // the HPR's 50 psi plasma cutflow.
+        // the HPR's and MaxPro200's 50 psi plasma.
         w.set_gas_supply(Some(30));
         let reply = w.cnc_line("GASTEST CHECK");
         assert!(
@@ -83,7 +85,7 @@ fn a_weak_supply_fails_on_every_family_and_the_test_is_ended() {
             "{model:?}: {reply}"
         );
         let measured = match model {
-            Model::Hpr130 => field(&reply, "plasma_psi"),
+            Model::Hpr130 | Model::MaxPro200 => field(&reply, "plasma_psi"),
             _ => field(&reply, "measured_psi"),
         };
         assert_eq!(measured, Some("30"), "{model:?}: {reply}");

@@ -33,9 +33,9 @@ pub const SETTLED_BAND_PSI: u16 = 2;
 /// The gas flows at most this long: a pressure still moving by then is a FAIL (`settled=NO`).
 pub const MAX_FLOW_TIME: Duration = Duration::from_secs(10);
 
-/// An HPR's permitted plasma cutflow pressure, psi: error 044 "under lower limit (15 psi
-/// preflow, 50 psi outflow)" and 045 "over upper limit (110 psi)" (HPR manual,
-/// 002_72b43a5685974c77.txt lines 382-383).
+/// An HPR's or MaxPro200's permitted plasma pressure while it flows, psi (the manual's one
+/// error table for both): error 044 "under lower limit (15 psi preflow, 50 psi outflow)" and
+/// 045 "over upper limit (110 psi)" (HPR manual, 002_72b43a5685974c77.txt lines 382-383).
 pub const HPR_PLASMA_PSI: (u16, u16) = (50, 110);
 /// An HPR's permitted shield pressure, psi: errors 053 "under lower limit (2 psi)" and 054
 /// "over upper limit (110 psi)" (lines 388-389).
@@ -71,7 +71,8 @@ enum Phase {
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum Reading {
     Powermax(Psi),
-    /// An HPR's plasma and shield cutflow pressures, whole psi.
+    /// An HPR's plasma and shield cutflow pressures (079), a MaxPro200's measured ones (141),
+    /// whole psi.
     Hpr {
         plasma: u16,
         shield: u16,

@@ -158,7 +158,12 @@ pub(super) fn route<'a>(command: &Command<'a>, family: Option<Family>) -> Route<
                 on: false,
             },
         }),
-        (Command::GasCheck, _) => No(&text::GAS_CHECK),
+        // 143 test gas: "plasma and shield gases flow at set value" (HPR manual line 283).
+        (Command::GasCheck, Some(MaxPro200)) => Route::GasCheck(GasCheckSteps {
+            start: L::MaxProTestGas { on: true },
+            read: L::MaxProReadGasPressures,
+            stop: L::MaxProTestGas { on: false },
+        }),
         // Quick restart (clears 0-50-0) exists on SYNC units only.
         (Command::Restart, Some(Sync)) => Send(L::QuickRestart, Awaiting::Restart),
         (Command::Restart, _) => No(&text::RESTART),

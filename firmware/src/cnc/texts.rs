@@ -171,12 +171,6 @@ pub mod unsupported {
         "GASTEST PREFLOW|CUTFLOW is an HPR command (064-067 gas tests), not available on ",
         "; GASTEST ON|OFF runs the unit's gas test",
     );
-    /// `GASTEST CHECK` on a MaxPro200: its 079 has the pressure set points, not measured
-    /// pressures (HPR manual line 168).
-    pub const GAS_CHECK: Unsupported = words(
-        "GASTEST CHECK needs a measured gas pressure, which ",
-        " does not report in 079 (set points only); GASTEST ON|OFF runs its test gas",
-    );
     /// `CLEARWARN` on anything but an HPR.
     pub const CLEAR_WARN: Unsupported = words(
         "CLEARWARN is an HPR command (131 clear warnings), not available on ",

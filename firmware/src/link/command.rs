@@ -83,6 +83,9 @@ pub enum LinkCommand<'a> {
     ReadGasPressure,
     /// HPR: read the measured pressures (079) now: the gas check's reading.
     HprReadGasPressures,
+    /// MaxPro200: read the measured pressures (141 GET MFG DATA1; its 079 has set points
+    /// only) now: the gas check's reading.
+    MaxProReadGasPressures,
     /// HPR: read the error log (134).
     HprReadErrorLog,
     /// HPR: read the timers and counters (125).
@@ -117,7 +120,9 @@ impl LinkCommand<'_> {
             | LinkCommand::HprReadGasPressures
             | LinkCommand::HprReadErrorLog
             | LinkCommand::HprReadTimers => matches!(family, Family::Hpr),
-            LinkCommand::MaxProTestGas { .. } | LinkCommand::MaxProSetProcess { .. } => {
+            LinkCommand::MaxProTestGas { .. }
+            | LinkCommand::MaxProSetProcess { .. }
+            | LinkCommand::MaxProReadGasPressures => {
                 matches!(family, Family::MaxPro200)
             }
         }

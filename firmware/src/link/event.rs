@@ -70,11 +70,12 @@ pub enum CommandOutput {
     ErrorLog([ErrorCode; 4]),
     /// A Powermax's actual gas pressure.
     Pressure(Psi),
-    /// An HPR's measured cutflow pressures (079), psi.
+    /// An HPR's measured cutflow pressures (079) or a MaxPro200's measured pressures (141),
+    /// psi.
     HprPressures {
-        /// Plasma cutflow (`PC`).
+        /// Plasma (`PC`, `plap`).
         plasma: u16,
-        /// Shield cutflow (`SC`).
+        /// Shield (`SC`, `shap`).
         shield: u16,
     },
     /// A RAW command's reply: `len` bytes, available from `PsLink::raw_reply` until the next

@@ -5,8 +5,9 @@
 //! Every tagged field is a tag and four digits (`CAT0482`, `flow0100`), as the manual's
 //! samples and field lists show them; the values are kept raw, in the unit the manual gives.
 //!
-//! Only host tools read these (the bridge never sends the commands), so they are behind the
-//! `diagnostics` feature: the board image leaves them out (1.6 KB of flash).
+//! Only host tools read most of these, so they are behind the `diagnostics` feature: the board
+//! image leaves them out (1.6 KB of flash). 141 is the exception: the bridge reads the
+//! MaxPro200's measured gas pressures from it (`GASTEST CHECK`).
 
 use super::command::id;
 use super::field::{DataWriter, Fields};
@@ -17,16 +18,21 @@ use crate::{Error, Result};
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum DiagnosticRead {
     /// 100 GET_CONTROL_DATA.
+    #[cfg(feature = "diagnostics")]
     ControlData,
     /// 117 READ_GAS_INPUTS_FROM_PS.
+    #[cfg(feature = "diagnostics")]
     GasInputs,
     /// 132 READ COOLANT PRESSURE (HPR260).
+    #[cfg(feature = "diagnostics")]
     CoolantPressure,
     /// 133 GET CONTROL DATA3 (HPR400).
+    #[cfg(feature = "diagnostics")]
     ControlData3,
     /// 141 GET MFG DATA1 (MaxPro200).
     MfgData1,
     /// 142 GET MFG DATA2 (MaxPro200).
+    #[cfg(feature = "diagnostics")]
     MfgData2,
 }
 
@@ -34,11 +40,16 @@ impl DiagnosticRead {
     /// The command id.
     pub const fn id(self) -> u16 {
         match self {
+            #[cfg(feature = "diagnostics")]
             DiagnosticRead::ControlData => id::GET_CONTROL_DATA,
+            #[cfg(feature = "diagnostics")]
             DiagnosticRead::GasInputs => id::READ_GAS_INPUTS_FROM_PS,
+            #[cfg(feature = "diagnostics")]
             DiagnosticRead::CoolantPressure => id::READ_COOLANT_PRESSURE,
+            #[cfg(feature = "diagnostics")]
             DiagnosticRead::ControlData3 => id::GET_CONTROL_DATA3,
             DiagnosticRead::MfgData1 => id::GET_MFG_DATA1,
+            #[cfg(feature = "diagnostics")]
             DiagnosticRead::MfgData2 => id::GET_MFG_DATA2,
         }
     }
@@ -46,11 +57,16 @@ impl DiagnosticRead {
     /// The read with command id `command`, if it is one.
     pub const fn from_id(command: u16) -> Option<Self> {
         Some(match command {
+            #[cfg(feature = "diagnostics")]
             id::GET_CONTROL_DATA => DiagnosticRead::ControlData,
+            #[cfg(feature = "diagnostics")]
             id::READ_GAS_INPUTS_FROM_PS => DiagnosticRead::GasInputs,
+            #[cfg(feature = "diagnostics")]
             id::READ_COOLANT_PRESSURE => DiagnosticRead::CoolantPressure,
+            #[cfg(feature = "diagnostics")]
             id::GET_CONTROL_DATA3 => DiagnosticRead::ControlData3,
             id::GET_MFG_DATA1 => DiagnosticRead::MfgData1,
+            #[cfg(feature = "diagnostics")]
             id::GET_MFG_DATA2 => DiagnosticRead::MfgData2,
             _ => return None,
         })
@@ -62,18 +78,24 @@ impl DiagnosticRead {
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum DiagnosticReply {
     /// 100, HPR form: chopper, line and coolant readings.
+    #[cfg(feature = "diagnostics")]
     ControlData(ControlData),
     /// 100, MaxPro200 form: 141's and 142's fields.
+    #[cfg(feature = "diagnostics")]
     MaxProControlData(MaxProControlData),
     /// 117: the gas console's inputs.
+    #[cfg(feature = "diagnostics")]
     GasConsoleInputs(GasConsoleInputs),
     /// 132: coolant pressure, raw A/D counts.
+    #[cfg(feature = "diagnostics")]
     CoolantPressure(CoolantCounts),
     /// 133: the HPR400's third and fourth choppers.
+    #[cfg(feature = "diagnostics")]
     ControlData3(ControlData3),
     /// 141: the first half of the MaxPro200's control data.
     MfgData1(MfgData1),
     /// 142: the second half of the MaxPro200's control data.
+    #[cfg(feature = "diagnostics")]
     MfgData2(MfgData2),
 }
 
@@ -81,13 +103,18 @@ impl DiagnosticReply {
     /// The command id the reply echoes.
     pub const fn id(&self) -> u16 {
         match self {
+            #[cfg(feature = "diagnostics")]
             DiagnosticReply::ControlData(_) | DiagnosticReply::MaxProControlData(_) => {
                 id::GET_CONTROL_DATA
             }
+            #[cfg(feature = "diagnostics")]
             DiagnosticReply::GasConsoleInputs(_) => id::READ_GAS_INPUTS_FROM_PS,
+            #[cfg(feature = "diagnostics")]
             DiagnosticReply::CoolantPressure(_) => id::READ_COOLANT_PRESSURE,
+            #[cfg(feature = "diagnostics")]
             DiagnosticReply::ControlData3(_) => id::GET_CONTROL_DATA3,
             DiagnosticReply::MfgData1(_) => id::GET_MFG_DATA1,
+            #[cfg(feature = "diagnostics")]
             DiagnosticReply::MfgData2(_) => id::GET_MFG_DATA2,
         }
     }
@@ -95,34 +122,48 @@ impl DiagnosticReply {
     /// The reply of `command` from its `data` (whose fields `f` reads); the caller checks
     /// that every field was used. [`Error::Unsupported`] for another command.
     pub(super) fn parse(command: u16, data: &[u8], f: &mut Fields<'_>) -> Result<Self> {
+        #[cfg(not(feature = "diagnostics"))]
+        let _ = data;
         let read = DiagnosticRead::from_id(command).ok_or(Error::Unsupported)?;
         Ok(match read {
+            #[cfg(feature = "diagnostics")]
             // Told apart like 079: the MaxPro200's tags are lower case.
             DiagnosticRead::ControlData if data.first().is_some_and(u8::is_ascii_lowercase) => {
                 DiagnosticReply::MaxProControlData(MaxProControlData::parse(f)?)
             }
+            #[cfg(feature = "diagnostics")]
             DiagnosticRead::ControlData => DiagnosticReply::ControlData(ControlData::parse(f)?),
+            #[cfg(feature = "diagnostics")]
             DiagnosticRead::GasInputs => {
                 DiagnosticReply::GasConsoleInputs(GasConsoleInputs::parse(f)?)
             }
+            #[cfg(feature = "diagnostics")]
             DiagnosticRead::CoolantPressure => {
                 DiagnosticReply::CoolantPressure(CoolantCounts(f.number(4, 0, 9999)?))
             }
+            #[cfg(feature = "diagnostics")]
             DiagnosticRead::ControlData3 => DiagnosticReply::ControlData3(ControlData3::parse(f)?),
             DiagnosticRead::MfgData1 => DiagnosticReply::MfgData1(MfgData1::parse(f)?),
+            #[cfg(feature = "diagnostics")]
             DiagnosticRead::MfgData2 => DiagnosticReply::MfgData2(MfgData2::parse(f)?),
         })
     }
 
     pub(super) fn write(&self, w: &mut DataWriter) -> Result<()> {
         match self {
+            #[cfg(feature = "diagnostics")]
             DiagnosticReply::ControlData(d) => d.write(w),
+            #[cfg(feature = "diagnostics")]
             DiagnosticReply::MaxProControlData(d) => d.write(w),
+            #[cfg(feature = "diagnostics")]
             DiagnosticReply::GasConsoleInputs(inputs) => inputs.write(w),
+            #[cfg(feature = "diagnostics")]
             // Unpadded, as the sample `>13280FE<` (80 counts).
             DiagnosticReply::CoolantPressure(counts) => w.field(counts.0.into(), 1, 4),
+            #[cfg(feature = "diagnostics")]
             DiagnosticReply::ControlData3(d) => d.write(w),
             DiagnosticReply::MfgData1(d) => d.write(w),
+            #[cfg(feature = "diagnostics")]
             DiagnosticReply::MfgData2(d) => d.write(w),
         }
     }
@@ -158,6 +199,7 @@ macro_rules! tagged_reply {
     };
 }
 
+#[cfg(feature = "diagnostics")]
 tagged_reply! {
     /// 100 GET_CONTROL_DATA reply, HPR form (the same for an HPR130 and an HPR260; chopper B
     /// can be ignored on an HPR130). Units as the manual's field list gives them.
@@ -191,6 +233,7 @@ tagged_reply! {
     }
 }
 
+#[cfg(feature = "diagnostics")]
 tagged_reply! {
     /// 133 GET CONTROL DATA3 reply (HPR400): the third and fourth choppers.
     ControlData3 {
@@ -224,6 +267,7 @@ tagged_reply! {
     }
 }
 
+#[cfg(feature = "diagnostics")]
 tagged_reply! {
     /// 142 GET MFG DATA2 reply (MaxPro200): the second half of its 100 reply.
     MfgData2 {
@@ -242,6 +286,7 @@ tagged_reply! {
     }
 }
 
+#[cfg(feature = "diagnostics")]
 /// 100 GET_CONTROL_DATA reply, MaxPro200 form: 141's fields then 142's ("Command #ID 100
 /// was split into 2 parts (ID# 141,142)").
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
@@ -253,6 +298,7 @@ pub struct MaxProControlData {
     pub second: MfgData2,
 }
 
+#[cfg(feature = "diagnostics")]
 impl MaxProControlData {
     pub(super) fn parse(f: &mut Fields<'_>) -> Result<Self> {
         Ok(MaxProControlData {
@@ -267,6 +313,7 @@ impl MaxProControlData {
     }
 }
 
+#[cfg(feature = "diagnostics")]
 /// 117 READ_GAS_INPUTS_FROM_PS reply: the gas console's inputs, one `1` (on) or `0` (off)
 /// each, in the manual's order (first character = first input listed).
 ///
@@ -281,6 +328,7 @@ pub struct GasConsoleInputs {
     count: u8,
 }
 
+#[cfg(feature = "diagnostics")]
 /// The manual's input list for a manual gas console, in reply order.
 pub const MANUAL_CONSOLE_INPUTS: [&str; 7] = [
     "error select",
@@ -292,6 +340,7 @@ pub const MANUAL_CONSOLE_INPUTS: [&str; 7] = [
     "serial ID bit 2",
 ];
 
+#[cfg(feature = "diagnostics")]
 /// The manual's input list for an automatic gas console, in reply order.
 pub const AUTO_CONSOLE_INPUTS: [&str; 8] = [
     "metering dipswitch 2",
@@ -304,6 +353,7 @@ pub const AUTO_CONSOLE_INPUTS: [&str; 8] = [
     "metering dipswitch 1",
 ];
 
+#[cfg(feature = "diagnostics")]
 impl GasConsoleInputs {
     /// From the inputs in reply order; [`Error::Malformed`] unless there are 7 or 8.
     pub fn new(inputs: &[bool]) -> Result<Self> {
@@ -369,11 +419,13 @@ impl GasConsoleInputs {
     }
 }
 
+#[cfg(feature = "diagnostics")]
 /// 132 READ COOLANT PRESSURE reply (HPR260): the raw A/D value.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct CoolantCounts(pub u16);
 
+#[cfg(feature = "diagnostics")]
 impl CoolantCounts {
     /// The pressure in tenths of a psi, on the line through the manual's two points "83
     /// counts = 225 psi, 73 counts = 200 psi" (2.5 psi a count, 17.5 psi at 0 counts). The

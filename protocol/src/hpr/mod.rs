@@ -30,7 +30,6 @@
 //! ```
 
 pub mod command;
-#[cfg(feature = "diagnostics")]
 mod diagnostics;
 pub mod error_codes;
 mod field;
@@ -51,9 +50,10 @@ pub use command::{
 };
 #[cfg(feature = "diagnostics")]
 pub use diagnostics::{
-    AUTO_CONSOLE_INPUTS, ControlData, ControlData3, CoolantCounts, DiagnosticRead, DiagnosticReply,
-    GasConsoleInputs, MANUAL_CONSOLE_INPUTS, MaxProControlData, MfgData1, MfgData2,
+    AUTO_CONSOLE_INPUTS, ControlData, ControlData3, CoolantCounts, GasConsoleInputs,
+    MANUAL_CONSOLE_INPUTS, MaxProControlData, MfgData2,
 };
+pub use diagnostics::{DiagnosticRead, DiagnosticReply, MfgData1};
 pub use error_codes::ErrorCode;
 pub use frame::{Decoder, Frame, MAX_DATA_LEN, MAX_FRAME_LEN, checksum};
 pub use gas::GasCode;

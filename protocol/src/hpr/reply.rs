@@ -8,7 +8,6 @@
 //! flags and 121's test time without padding. Parsing accepts shorter fields too.
 
 use super::command::id;
-#[cfg(feature = "diagnostics")]
 use super::diagnostics::{DiagnosticRead, DiagnosticReply};
 use super::error_codes::ErrorCode;
 use super::field::{DataWriter, Fields};
@@ -243,8 +242,7 @@ pub enum Reply<'a> {
     /// 145: torch id.
     TorchId(TorchId),
     /// 100, 117, 132, 133, 141, 142: a diagnostic read (host tools only, feature
-    /// `diagnostics`).
-    #[cfg(feature = "diagnostics")]
+    /// `diagnostics`, except 141).
     Diagnostic(DiagnosticReply),
     /// 500: the command had a bad checksum.
     BadChecksum,
@@ -408,7 +406,6 @@ impl<'a> Reply<'a> {
             Reply::LeakCheck(_) => id::LEAK_CHECK_MODE,
             Reply::GasSwitch(_) => id::READ_GAS_SWITCH,
             Reply::TimerCounter(_) => id::GET_TIMER_COUNTER,
-            #[cfg(feature = "diagnostics")]
             Reply::Diagnostic(d) => d.id(),
             Reply::ErrorLog(_) => id::READ_ERROR_LOG,
             Reply::ReadyForStart(_) => id::IS_SYSTEM_READY_FOR_START,
@@ -471,7 +468,6 @@ impl<'a> Reply<'a> {
                 }
                 Reply::GasFlows(GasFlows::from_array(v))
             }
-            #[cfg(feature = "diagnostics")]
             command if DiagnosticRead::from_id(command).is_some() => {
                 Reply::Diagnostic(DiagnosticReply::parse(command, data, &mut f)?)
             }
@@ -593,7 +589,6 @@ impl<'a> Reply<'a> {
             Reply::ReadyForStart(ready) => w.field((*ready).into(), 1, 1),
             Reply::SetTestMode(v) => w.field((*v).into(), 1, 1),
             Reply::TorchId(t) => four(w, t.0),
-            #[cfg(feature = "diagnostics")]
             Reply::Diagnostic(d) => d.write(w),
             Reply::BadChecksum | Reply::UnknownCommand => Ok(()),
         }

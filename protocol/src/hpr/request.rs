@@ -8,7 +8,6 @@
 //! refused both ways with [`Error::Malformed`], so the bridge cannot send them.
 
 use super::command::id;
-#[cfg(feature = "diagnostics")]
 use super::diagnostics::DiagnosticRead;
 use super::field::{DataWriter, Fields, field_count};
 use super::frame::Frame;
@@ -128,8 +127,7 @@ pub enum Request {
     /// 145 READ TORCH ID (MaxPro200).
     ReadTorchId,
     /// 100, 117, 132, 133, 141, 142: a diagnostic read (host tools only, feature
-    /// `diagnostics`).
-    #[cfg(feature = "diagnostics")]
+    /// `diagnostics`, except 141: the bridge reads a MaxPro200's measured pressures).
     ReadDiagnostic(DiagnosticRead),
 }
 
@@ -232,7 +230,6 @@ impl Request {
             Request::IsSystemReadyForStart => id::IS_SYSTEM_READY_FOR_START,
             Request::SetTestMode(_) => id::SET_TEST_MODE,
             Request::ReadTorchId => id::READ_TORCH_ID,
-            #[cfg(feature = "diagnostics")]
             Request::ReadDiagnostic(read) => read.id(),
         }
     }
@@ -394,13 +391,10 @@ impl Request {
                 Request::SetTestMode(TestMode::from_code(code).ok_or(Error::Malformed)?)
             }
             id::READ_TORCH_ID => Request::ReadTorchId,
-            #[cfg(feature = "diagnostics")]
             command => match DiagnosticRead::from_id(command) {
                 Some(read) => Request::ReadDiagnostic(read),
                 None => return Err(Error::Unsupported),
             },
-            #[cfg(not(feature = "diagnostics"))]
-            _ => return Err(Error::Unsupported),
         };
         if req.has_data() {
             f.end()?;

@@ -172,13 +172,23 @@ fn an_hpr_with_a_weak_supply_fails_on_its_plasma() {
     assert_eq!(rig.hpr_commands().last(), Some(&67));
 }
 
+/// HPR manual: 143 mode 1 "Test Gas" and mode 0 (line 283); 079 has only the set points on
+/// a MaxPro200 (line 168), 141 the measured pressures `plap`/`shap` (line 281).
 #[test]
-fn a_maxpro200_has_no_measured_pressure_to_check() {
+fn a_maxpro200_reads_its_measured_pressures_during_the_test_gas() {
     let mut rig = Rig::hpr("maxpro200");
-    assert!(
-        rig.cmd("GASTEST CHECK")
-            .starts_with("ERR UNSUPPORTED GASTEST CHECK needs a measured gas pressure")
+    rig.ps().hpr().set_supply_psi(Some(42));
+    let reply = rig.cmd("GASTEST CHECK");
+    assert_eq!(
+        reply,
+        "OK GASTEST CHECK result=FAIL plasma_psi=42 plasma_min_psi=50 plasma_max_psi=110 \
+         shield_psi=35 shield_min_psi=2 shield_max_psi=110"
     );
+    let sent = rig.hpr_commands();
+    let start = sent.iter().position(|&id| id == 143).expect("143 sent");
+    assert!(sent[start..].contains(&141), "{sent:?}");
+    assert_eq!(sent.last(), Some(&143));
+    assert!(!rig.ps().hpr().test_gas());
 }
 
 #[test]

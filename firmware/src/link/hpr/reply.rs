@@ -2,7 +2,7 @@
 //! the pilot-arc pause, errors, a restart the link did not see), and the reply to the active
 //! job decides whether a setting took effect.
 
-use plasma_protocol::hpr::{Acceptance, ErrorCode, Reply, Request, StateCode};
+use plasma_protocol::hpr::{Acceptance, DiagnosticReply, ErrorCode, Reply, Request, StateCode};
 use plasma_protocol::time::Instant;
 
 use super::kept::sets;
@@ -286,6 +286,12 @@ impl HprDriver {
                 Ok(CommandOutput::HprPressures {
                     plasma: info.pressures.plasma_cutflow,
                     shield: info.pressures.shield_cutflow,
+                })
+            }
+            (_, Some(Reply::Diagnostic(DiagnosticReply::MfgData1(d)))) => {
+                Ok(CommandOutput::HprPressures {
+                    plasma: d.plasma_pressure,
+                    shield: d.shield_pressure,
                 })
             }
             (_, Some(Reply::TimerCounter(t))) => {

@@ -142,6 +142,9 @@ impl HprDriver {
                 })
             }
             LinkCommand::HprReadGasPressures => Request::GetPsInfo,
+            LinkCommand::MaxProReadGasPressures => {
+                Request::ReadDiagnostic(hpr::DiagnosticRead::MfgData1)
+            }
             LinkCommand::HprReadErrorLog => Request::ReadErrorLog,
             LinkCommand::HprReadTimers => Request::GetTimerCounter,
             // `runs_on` lets no other command through to an HPR or MaxPro200.

@@ -233,6 +233,17 @@ impl Hpr {
             )),
             // 143 SET TEST MODE: 1 Test Gas only in state 3, 0 stops it (line 283). The reply
             // echoes the mode taken, as the manual's sample (`>1431C9<` to `>1431C9<`).
+            // 141 GET MFG DATA1: the measured pressures while gas flows (the 143 test gas or a
+            // cut), 0 otherwise (HPR manual line 281); the other readings are not modelled.
+            141 if !hpr => {
+                let flowing = self.test_gas || self.cutting();
+                let psi = |set: u16| if flowing { self.measured_psi(set) } else { 0 };
+                reply(format!(
+                    "plap{:04} shap{:04} icrp0000 colt0000 chpt0000 chac0000",
+                    psi(self.flows[0]),
+                    psi(self.flows[2]),
+                ))
+            }
             143 if !hpr => match data {
                 "1" if self.phase == Phase::Ready && !self.error_blocks_start() => {
                     self.test_gas = true;

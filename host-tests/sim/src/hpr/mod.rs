@@ -97,8 +97,8 @@ pub struct Hpr {
     gases: (u16, u16),
     /// Plasma cutflow, plasma preflow, shield cutflow, shield preflow, N2 mix, gas 2 mix (psi).
     flows: [u16; 6],
-    /// The inlet supply's pressure, psi (`None`: ample); the measured pressures (079, 094)
-    /// stay below it.
+    /// The inlet supply's pressure, psi (`None`: ample); the measured pressures (079, 094,
+    /// 141) stay below it.
     supply_psi: Option<u16>,
     counters: HprCounters,
     noise: Vec<(Instant, Duration)>,
@@ -142,7 +142,8 @@ impl Hpr {
     }
 
     /// The gas supply delivers at most `psi` (`None`: as much as the unit asks for): the
-    /// measured pressures of 079 and 094 (HPR manual lines 168, 177) stay below it.
+    /// measured pressures of 079, 094 and the MaxPro200's 141 (HPR manual lines 168, 177,
+    /// 281) stay below it.
     pub fn set_supply_psi(&mut self, psi: Option<u16>) {
         self.supply_psi = psi;
     }
