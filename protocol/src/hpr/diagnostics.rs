@@ -435,7 +435,7 @@ impl CoolantCounts {
     }
 }
 
-#[cfg(test)]
+#[cfg(all(test, feature = "diagnostics"))]
 mod tests {
     use super::*;
 
