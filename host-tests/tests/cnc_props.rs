@@ -33,6 +33,7 @@ const LINES: &[&str] = &[
     "REMOTE OFF",
     "GASTEST ON",
     "GASTEST OFF",
+    "GASTEST CHECK",
     "RESTART",
     "GASES O2 AIR",
     "CORNER 70",
