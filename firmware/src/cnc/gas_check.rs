@@ -242,10 +242,13 @@ impl Session {
     /// Time passes: a settled flow is read, a stop owed is sent, the torch on stops the check.
     pub(super) fn gas_check_poll(&mut self, ctx: &mut Context<'_>) {
         // A stop owed is sent once the link is up; its answer is nobody's (the check that
-        // owed it has replied).
+        // owed it has replied). Another family on the line now has no such test running.
         if let Some(stop) = self.gas_stop_owed
             && ctx.link.status().link_up
-            && ctx.link.submit(ctx.now, stop).is_ok()
+            && matches!(
+                ctx.link.submit(ctx.now, stop),
+                Ok(_) | Err(Refusal::NotSupported { .. })
+            )
         {
             self.gas_stop_owed = None;
         }
