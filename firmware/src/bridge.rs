@@ -259,6 +259,11 @@ impl Bridge {
         self.history.take()
     }
 
+    /// Whether events are still waiting for the history's writer.
+    pub fn history_drafts_waiting(&self) -> bool {
+        self.history.has_drafts()
+    }
+
     /// After `HISTORY`: what to read or erase (once). Serve it ([`serve`](crate::storage::history::serve)) and call
     /// [`Bridge::history_finished`].
     pub fn take_history_request(&mut self) -> Option<HistoryRequest> {

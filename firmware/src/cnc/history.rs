@@ -64,6 +64,11 @@ impl HistoryLog {
         self.pending.take()
     }
 
+    /// Whether drafts wait for the writer.
+    pub fn has_drafts(&self) -> bool {
+        !self.pending.is_empty()
+    }
+
     /// The wall clock now, if set.
     fn clock(&self, now: Instant) -> Option<WallClock> {
         self.clock_at_boot

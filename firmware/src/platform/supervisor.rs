@@ -71,6 +71,8 @@ pub trait BridgeEndpoint: PsEndpoint {
     fn save_finished(&mut self, now: Instant, result: Result<(), Self::SaveError>);
     /// The oldest event waiting for the history.
     fn take_history_draft(&mut self) -> Option<Draft>;
+    /// Whether events are still waiting for the history.
+    fn history_drafts_waiting(&self) -> bool;
     /// What `HISTORY` asks of the history's store.
     fn take_history_request(&mut self) -> Option<HistoryRequest>;
     /// The store's answer.
@@ -114,6 +116,9 @@ impl BridgeEndpoint for Bridge {
     fn take_history_draft(&mut self) -> Option<Draft> {
         Bridge::take_history_draft(self)
     }
+    fn history_drafts_waiting(&self) -> bool {
+        Bridge::history_drafts_waiting(self)
+    }
     fn take_history_request(&mut self) -> Option<HistoryRequest> {
         Bridge::take_history_request(self)
     }
@@ -156,6 +161,11 @@ pub trait HistoryKeeper {
     fn start(&mut self, request: HistoryRequest);
     /// Completes with the answer to the request started last (cancel-safe).
     fn finished(&mut self) -> impl Future<Output = HistoryAnswer>;
+    /// Whether it keeps drafts at all (a `HISTORY` waits for the drafts noted before it only
+    /// then).
+    fn keeps_drafts(&self) -> bool {
+        true
+    }
 }
 
 /// No history kept: drafts stay in the bridge's bounded queue (dropped and counted when it
@@ -171,6 +181,9 @@ impl HistoryKeeper for NoHistory {
     fn start(&mut self, _request: HistoryRequest) {}
     async fn finished(&mut self) -> HistoryAnswer {
         Err(HistoryUnavailable)
+    }
+    fn keeps_drafts(&self) -> bool {
+        false
     }
 }
 
@@ -385,7 +398,9 @@ where
     }
 
     /// Drafts to the keeper while it has room (the rest wait in the bridge's bounded queue),
-    /// and a `HISTORY` request when none is under way.
+    /// and a `HISTORY` request when none is under way and every draft noted before it has been
+    /// handed over, so that the answer shows them (a keeper with no room, as the board's
+    /// channel at boot while its history task scans the flash, only delays the request).
     fn exchange_history<B: BridgeEndpoint>(&mut self, bridge: &mut B) {
         while self.history.has_room() {
             let Some(draft) = bridge.take_history_draft() else {
@@ -393,7 +408,9 @@ where
             };
             self.history.record(draft);
         }
+        let drafts_first = self.history.keeps_drafts() && bridge.history_drafts_waiting();
         if !self.reading_history
+            && !drafts_first
             && let Some(request) = bridge.take_history_request()
         {
             self.history.start(request);

@@ -309,6 +309,9 @@ impl BridgeEndpoint for FakeBridge {
     fn take_history_draft(&mut self) -> Option<crate::storage::history::Draft> {
         None
     }
+    fn history_drafts_waiting(&self) -> bool {
+        false
+    }
     fn take_history_request(&mut self) -> Option<crate::storage::history::HistoryRequest> {
         None
     }
@@ -727,15 +730,18 @@ struct RamHistory {
     >,
     answer: Option<crate::storage::history::HistoryAnswer>,
     recorded: usize,
+    /// Drafts it takes before it is full (the board's channel).
+    room: usize,
 }
 
 impl HistoryKeeper for RamHistory {
     fn has_room(&self) -> bool {
-        true
+        self.room > 0
     }
     fn record(&mut self, draft: Draft) {
         block_on(self.store.record(draft)).unwrap();
         self.recorded += 1;
+        self.room -= 1;
     }
     fn start(&mut self, request: HistoryRequest) {
         let answer = block_on(crate::storage::history::serve(&mut self.store, request));
@@ -780,6 +786,7 @@ fn history_reaches_its_keeper_and_the_answer_the_cnc() {
             store,
             answer: None,
             recorded: 0,
+            room: usize::MAX,
         };
         let recorded = if with_keeper {
             let mut sup = sup.with_history(keeper);
@@ -810,4 +817,52 @@ fn history_reaches_its_keeper_and_the_answer_the_cnc() {
         "HISTORY seq=0 boot=0 uptime_ms=0 clock=- family=- model=- event=RESET cause=reset_pin\r\n\
          OK history=1 skipped=0\r\n"
     );
+}
+
+/// `HISTORY` shows everything noted before it, also what the keeper had no room for when it
+/// came (the board's channel is full at boot while its history task scans the flash).
+#[test]
+fn history_waits_for_the_drafts_its_keeper_had_no_room_for() {
+    use crate::bridge::Bridge;
+    use crate::platform::safe_state::ResetCause;
+    use crate::settings::{SaveError, Settings};
+    use crate::storage::ram_flash::{PAGE_SIZE, RamFlash};
+
+    let world: Shared = Rc::default();
+    let clock = FakeClock(world.clone());
+    let mut bridge = Bridge::new(Settings::default(), Instant::ZERO);
+    for cause in [ResetCause::PowerOn, ResetCause::Pin, ResetCause::Software] {
+        bridge.record_reset(Instant::ZERO, cause);
+    }
+    cnc_rx(&world, 10, b"HISTORY\r\n");
+    let mut store = crate::storage::history::HistoryStore::new(
+        RamFlash::<{ 8 * PAGE_SIZE }>::new(),
+        0..(8 * PAGE_SIZE) as u32,
+    )
+    .unwrap();
+    block_on(store.scan()).unwrap();
+    let keeper = RamHistory {
+        store,
+        answer: None,
+        recorded: 0,
+        room: 1,
+    };
+    let mut sup = supervisor(
+        &world,
+        64,
+        FakeSaver::<Settings, SaveError>::new(&world, |_| Ok(())),
+    )
+    .with_history(keeper);
+    block_on(async {
+        while clock.now() < Instant::from_millis(400) {
+            sup.turn(&mut bridge, &clock).await.unwrap();
+            // One draft's room per turn from 100 ms on: the request came with two waiting.
+            if clock.now() >= Instant::from_millis(100) {
+                sup.history.room = 1;
+            }
+        }
+    });
+    assert_eq!(sup.history.recorded, 3);
+    let cnc = String::from_utf8_lossy(&world.borrow().written(CNC)).into_owned();
+    assert!(cnc.ends_with("OK history=3 skipped=0\r\n"), "{cnc}");
 }
