@@ -242,6 +242,12 @@ impl<T> Transaction<T> {
         self.expects_reply && matches!(self.phase, Phase::AwaitingReply { .. })
     }
 
+    /// True while an attempt is on the wire, whether its reply or only the quiet after it
+    /// (a request without reply) is awaited.
+    pub(crate) fn is_on_wire(&self) -> bool {
+        matches!(self.phase, Phase::AwaitingReply { .. })
+    }
+
     /// The next time this transaction needs attention: the send time or the deadline.
     pub(crate) fn poll_at(&self) -> Instant {
         match self.phase {

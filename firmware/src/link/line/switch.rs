@@ -1,0 +1,239 @@
+//! Passing an HPR line to another unit: SLEEP (086) puts every unit to sleep, WAKE (085)
+//! with an id wakes that one, which echoes the WAKE (HPR manual, 002_72b43a5685974c77.txt,
+//! lines 107-109 and 172-173). Only a unit with id 0 powers up awake (lines 107-108), and a
+//! unit woken by an earlier master may still be: so at start the line is taken to be in an
+//! unknown state and a SLEEP goes before the first WAKE.
+//!
+//! [`Awake`] is what the arbiter knows of the line; [`Switch`] is one hand-over in progress.
+//! The rule that keeps two transmitters off the line: a WAKE goes out only when no unit can
+//! be awake (after a SLEEP, with no WAKE since) or the unit it wakes is the one awake.
+
+use heapless::Vec;
+use plasma_protocol::hpr::Request;
+use plasma_protocol::time::{Duration, Instant};
+
+use crate::link::transaction::SLEEP_QUIET;
+
+/// Longest SLEEP or WAKE frame (`>0851CE<`).
+pub(super) const CONTROL_CAPACITY: usize = 8;
+
+/// What the arbiter knows about which unit has its transmitter enabled.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum Awake {
+    /// Any unit may be (power-up, a WAKE whose echo never came).
+    Unknown,
+    /// None: a SLEEP went out and no WAKE since.
+    Nobody,
+    /// At most this id.
+    Unit(u8),
+}
+
+/// What a switch puts on the line next.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum SwitchOut {
+    /// Nothing yet: the quiet after SLEEP or the WAKE echo is awaited.
+    Wait,
+    /// SLEEP to every unit.
+    Sleep,
+    /// WAKE this id.
+    Wake(u8),
+    /// The line is the unit's: its attempt goes out.
+    Held,
+    /// The WAKE was not answered by its time-out: the unit is not listening.
+    Failed,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Step {
+    Sleep,
+    /// SLEEP handed out: the line stays quiet until then.
+    Quiet {
+        until: Instant,
+    },
+    Wake,
+    /// WAKE handed out: its echo is awaited until `deadline`.
+    Echo {
+        deadline: Instant,
+        echoes: u8,
+        heard_other: bool,
+    },
+    Held,
+}
+
+/// One hand-over of the line to the unit `target` (SLEEP first when some unit may be awake).
+/// `target` None: SLEEP only, the unit's own WAKE follows (its detection sends one).
+#[derive(Debug, Clone)]
+pub(super) struct Switch {
+    target: Option<u8>,
+    step: Step,
+    /// The WAKE's reply time-out (the target unit's).
+    timeout: Duration,
+    /// Copies of the WAKE to hear: 2 on a line that echoes our own requests.
+    echoes_needed: u8,
+    /// The frame being received while the echo is awaited.
+    rx: Vec<u8, CONTROL_CAPACITY>,
+    at: Instant,
+}
+
+impl Switch {
+    /// What must go out, with the line in state `awake`, before unit `id` sends a request
+    /// (`own_wake`: before it sends its own WAKE, as its detection does). None when nothing.
+    pub(super) fn plan(
+        awake: Awake,
+        id: u8,
+        own_wake: bool,
+        timeout: Duration,
+        line_echoes: bool,
+        now: Instant,
+    ) -> Option<Switch> {
+        let (target, step) = match (awake, own_wake) {
+            (Awake::Unit(a), _) if a == id => return None,
+            (Awake::Nobody, true) => return None,
+            (_, true) => (None, Step::Sleep),
+            (Awake::Nobody, false) => (Some(id), Step::Wake),
+            (_, false) => (Some(id), Step::Sleep),
+        };
+        Some(Switch {
+            target,
+            step,
+            timeout,
+            echoes_needed: if line_echoes { 2 } else { 1 },
+            rx: Vec::new(),
+            at: now,
+        })
+    }
+
+    /// What goes on the line now.
+    pub(super) fn poll(&mut self, now: Instant) -> SwitchOut {
+        self.at = now;
+        match self.step {
+            Step::Sleep => {
+                self.step = Step::Quiet {
+                    until: now + SLEEP_QUIET,
+                };
+                SwitchOut::Sleep
+            }
+            Step::Quiet { until } if now < until => SwitchOut::Wait,
+            Step::Quiet { .. } | Step::Wake => match self.target {
+                Some(id) => {
+                    self.rx.clear();
+                    self.step = Step::Echo {
+                        deadline: now + self.timeout,
+                        echoes: 0,
+                        heard_other: false,
+                    };
+                    SwitchOut::Wake(id)
+                }
+                None => {
+                    self.step = Step::Held;
+                    SwitchOut::Held
+                }
+            },
+            Step::Echo {
+                echoes,
+                heard_other,
+                deadline,
+            } => {
+                if echoes >= self.echoes_needed || (heard_other && !self.in_frame()) {
+                    // A damaged echo still shows a unit that listens: its reply tells.
+                    self.step = Step::Held;
+                    SwitchOut::Held
+                } else if now >= deadline {
+                    if heard_other {
+                        self.step = Step::Held;
+                        SwitchOut::Held
+                    } else {
+                        SwitchOut::Failed
+                    }
+                } else {
+                    SwitchOut::Wait
+                }
+            }
+            Step::Held => SwitchOut::Held,
+        }
+    }
+
+    /// When [`Switch::poll`] has something to do.
+    pub(super) fn poll_at(&self) -> Instant {
+        match self.step {
+            Step::Quiet { until } => until,
+            Step::Echo { deadline, .. } => deadline,
+            Step::Sleep | Step::Wake | Step::Held => self.at,
+        }
+    }
+
+    /// The frame handed out last left the wire at `at`: the quiet or the echo's time-out
+    /// runs from there (never earlier). True when it was the WAKE.
+    pub(super) fn transmitted(&mut self, at: Instant) -> bool {
+        match &mut self.step {
+            Step::Quiet { until } => {
+                *until = (*until).max(at + SLEEP_QUIET);
+                false
+            }
+            Step::Echo { deadline, .. } => {
+                *deadline = (*deadline).max(at + self.timeout);
+                true
+            }
+            _ => false,
+        }
+    }
+
+    /// Bytes heard: while the echo is awaited, a frame equal to the WAKE counts as its echo,
+    /// any other frame as a damaged one. Returns the bytes heard outside that (stray).
+    pub(super) fn hear(&mut self, bytes: &[u8], wake: &[u8]) -> usize {
+        let Step::Echo {
+            echoes,
+            heard_other,
+            ..
+        } = &mut self.step
+        else {
+            return bytes.len();
+        };
+        let mut stray = 0;
+        for &byte in bytes {
+            if byte == b'>' {
+                if !self.rx.is_empty() {
+                    *heard_other = true;
+                }
+                self.rx.clear();
+            } else if self.rx.is_empty() {
+                stray += 1;
+                continue;
+            }
+            if self.rx.push(byte).is_err() {
+                *heard_other = true;
+                self.rx.clear();
+                continue;
+            }
+            if byte == b'<' {
+                if self.rx.as_slice() == wake {
+                    *echoes = echoes.saturating_add(1);
+                } else {
+                    *heard_other = true;
+                }
+                self.rx.clear();
+            }
+        }
+        stray
+    }
+
+    /// A character received in error while the echo is awaited: a damaged echo.
+    pub(super) fn hear_error(&mut self) {
+        if let Step::Echo { heard_other, .. } = &mut self.step {
+            *heard_other = true;
+        }
+    }
+
+    fn in_frame(&self) -> bool {
+        !self.rx.is_empty()
+    }
+}
+
+/// The SLEEP frame, or WAKE `id`, into `out`; its length (0 if it does not fit).
+pub(super) fn emit_control(sleep_or_wake: Option<u8>, out: &mut [u8; CONTROL_CAPACITY]) -> usize {
+    let request = match sleep_or_wake {
+        None => Request::Sleep,
+        Some(system_id) => Request::Wake { system_id },
+    };
+    request.emit(out).unwrap_or(0)
+}

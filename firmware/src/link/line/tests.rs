@@ -1,0 +1,305 @@
+//! The arbiter against simulated units sharing one line ([`MultiDrop`], which counts two
+//! transmitters at once as collisions), byte by byte in virtual time.
+
+use std::vec::Vec;
+
+use plasma_protocol::time::{Duration, Instant};
+use plasma_sim::clock::earliest;
+use plasma_sim::multidrop::{MultiDrop, units_for_one_line};
+use plasma_sim::{Model, SimOptions};
+
+use super::*;
+use crate::link::test_support::{hf, ms};
+use crate::link::{ConfigError, Family};
+
+const SLEEP: &[u8] = b">0869E<";
+
+fn wake(id: u8) -> Vec<u8> {
+    hf(85, &std::format!("{id}"))
+}
+
+/// The arbiter on a line of simulated units.
+struct LineBench {
+    line: SharedLine,
+    units: MultiDrop,
+    now: Instant,
+    /// Every frame the arbiter sent, with the instant it began.
+    sent: Vec<(Instant, Vec<u8>)>,
+}
+
+impl LineBench {
+    fn new(models: &[Model], addresses: &[LineUnit]) -> Self {
+        let options = SimOptions {
+            modbus_address: 1,
+            ..SimOptions::default()
+        };
+        let units = MultiDrop::new(units_for_one_line(models, &options).unwrap()).unwrap();
+        let line = SharedLine::new(LinkConfig::default(), addresses, Instant::ZERO).unwrap();
+        LineBench {
+            line,
+            units,
+            now: Instant::ZERO,
+            sent: Vec::new(),
+        }
+    }
+
+    fn hprs(count: u8) -> Self {
+        let models: Vec<Model> = (0..count).map(|_| Model::Hpr260).collect();
+        let ids: Vec<LineUnit> = (0..count).map(|id| LineUnit::Hpr { id }).collect();
+        Self::new(&models, &ids)
+    }
+
+    fn run(&mut self, until: Instant) {
+        loop {
+            let now = self.now;
+            self.units.advance(now);
+            if let Some(bytes) = self.units.poll_transmit(now) {
+                self.line.handle_rx(now, &bytes);
+            }
+            while let Some(frame) = self.line.poll_transmit(self.now).map(<[u8]>::to_vec) {
+                // The master is busy until its last stop bit; the units hear the frame then.
+                let end = self.now
+                    + Duration::from_micros(
+                        frame.len() as u64 * self.units.port().char_time_ns() / 1000,
+                    );
+                self.sent.push((self.now, frame.clone()));
+                self.units.advance(end);
+                for &byte in &frame {
+                    self.units.receive(end, byte);
+                }
+                self.now = end;
+                self.line.handle_transmitted(end);
+            }
+            let at = self.line.poll_at();
+            if let Some(at) = at {
+                assert!(at > self.now, "poll_at {at:?} not after {:?}", self.now);
+            }
+            match earliest(at, self.units.next_wakeup()) {
+                Some(next) if next <= until => self.now = self.now.max(next),
+                _ => break,
+            }
+        }
+        self.now = self.now.max(until);
+    }
+
+    fn all_up(&self) -> bool {
+        (0..self.line.len()).all(|i| self.line.unit(i).unwrap().status().link_up)
+    }
+
+    fn fault(&mut self, unit: usize, code: u16) {
+        let now = self.now;
+        self.units.unit_mut(unit).unwrap().inject_fault(now, code);
+    }
+
+    /// Requests (not SLEEP / WAKE) sent since `from`, each with the id awake when it went
+    /// out, as the line's own SLEEP / WAKE traffic says.
+    fn requests_by_unit(&self, from: Instant) -> Vec<(Instant, u8)> {
+        let mut awake = None;
+        let mut out = Vec::new();
+        for (at, frame) in &self.sent {
+            if frame == SLEEP {
+                awake = None;
+            } else if frame.starts_with(b">085") {
+                awake = Some(frame[4] - b'0');
+            } else if *at >= from {
+                out.push((*at, awake.expect("a request with no unit awake")));
+            }
+        }
+        out
+    }
+}
+
+#[test]
+fn a_sleep_goes_before_the_first_wake() {
+    let mut bench = LineBench::hprs(2);
+    bench.run(ms(2000));
+    assert_eq!(bench.sent[0].1, SLEEP, "id 0 powers up awake");
+    assert_eq!(bench.sent[1].1, wake(0));
+    assert!(bench.all_up());
+    assert_eq!(bench.units.collisions(), 0);
+}
+
+#[test]
+fn every_wake_follows_a_sleep_and_wakes_another_unit() {
+    let mut bench = LineBench::hprs(4);
+    bench.run(ms(5000));
+    assert!(bench.all_up(), "{:?}", bench.line);
+    // The first WAKE follows the first SLEEP; after a WAKE, another needs a SLEEP first.
+    let mut asleep = false;
+    for (_, frame) in &bench.sent {
+        if frame == SLEEP {
+            asleep = true;
+        } else if frame.starts_with(b">085") {
+            assert!(asleep, "a WAKE with a unit possibly awake");
+            asleep = false;
+        }
+    }
+    assert_eq!(bench.units.collisions(), 0);
+    for index in 0..4 {
+        let status = bench.line.unit(index).unwrap().status();
+        assert_eq!(status.family, Some(Family::Hpr));
+    }
+}
+
+#[test]
+fn the_units_take_turns_one_attempt_each() {
+    let mut bench = LineBench::hprs(4);
+    bench.run(ms(6000));
+    assert!(bench.all_up());
+    let requests = bench.requests_by_unit(ms(4000));
+    // Round robin: while every unit polls continuously, the turns go 0, 1, 2, 3, 0...
+    for pair in requests.windows(2) {
+        assert_eq!((pair[0].1 + 1) % 4, pair[1].1, "{requests:?}");
+    }
+    // One switch per turn: as many WAKEs as requests.
+    let wakes = bench
+        .sent
+        .iter()
+        .filter(|(at, f)| *at >= ms(4000) && f.starts_with(b">085"))
+        .count();
+    assert!(
+        wakes.abs_diff(requests.len()) <= 1,
+        "{wakes} for {}",
+        requests.len()
+    );
+}
+
+#[test]
+fn a_unit_alone_keeps_the_line_without_switching() {
+    let mut bench = LineBench::hprs(1);
+    bench.run(ms(5000));
+    assert!(bench.all_up());
+    let stats = bench.line.stats();
+    assert_eq!((stats.sleeps, stats.wakes), (1, 1), "{stats:?}");
+    assert!(bench.requests_by_unit(ms(1000)).len() > 20);
+}
+
+#[test]
+fn a_unit_that_comes_later_is_detected_without_a_collision() {
+    // Unit 1's detection sends its own SLEEP and WAKE: with unit 0 awake, a SLEEP goes first.
+    let mut bench = LineBench::hprs(2);
+    bench.units.set_connected(1, false);
+    bench.run(ms(3000));
+    assert!(bench.line.unit(0).unwrap().status().link_up);
+    assert!(!bench.line.unit(1).unwrap().status().link_up);
+    bench.units.set_connected(1, true);
+    bench.run(ms(8000));
+    assert!(bench.all_up());
+    assert_eq!(bench.units.collisions(), 0);
+}
+
+#[test]
+fn a_reply_reaches_the_unit_that_asked() {
+    let mut bench = LineBench::hprs(3);
+    bench.run(ms(4000));
+    assert!(bench.all_up());
+    bench.fault(1, 44);
+    bench.run(ms(5000));
+    let fault = |i: usize| bench.line.unit(i).unwrap().status().active_fault;
+    assert!(fault(1).is_some(), "unit 1's fault seen");
+    assert_eq!((fault(0), fault(2)), (None, None));
+}
+
+#[test]
+fn a_silent_unit_costs_the_others_one_time_out_per_round() {
+    let mut bench = LineBench::hprs(3);
+    bench.units.set_connected(1, false);
+    bench.run(ms(4000));
+    assert!(bench.line.unit(0).unwrap().status().link_up);
+    assert!(bench.line.unit(2).unwrap().status().link_up);
+    let from = ms(4000);
+    bench.run(ms(14000));
+    let timeout = LinkConfig::default().response_timeout;
+    // Between two polls of unit 0: unit 2's turn (a switch and its poll, under 100 ms),
+    // and at most one WAKE of unit 1 nobody echoes (a switch and one time-out).
+    let polls: Vec<Instant> = bench
+        .requests_by_unit(from)
+        .into_iter()
+        .filter(|&(_, id)| id == 0)
+        .map(|(at, _)| at)
+        .collect();
+    let longest = polls
+        .windows(2)
+        .map(|w| w[1].saturating_since(w[0]))
+        .max()
+        .unwrap();
+    assert!(
+        longest <= Duration::from_millis(2 * 100) + timeout + Duration::from_millis(100),
+        "{longest:?}"
+    );
+    for index in [0, 2] {
+        let link = bench.line.unit(index).unwrap();
+        assert!(link.status().link_up);
+        assert_eq!(link.diagnostics().link_downs, 0, "unit {index}");
+    }
+    assert!(!bench.line.unit(1).unwrap().status().link_up);
+    assert!(bench.line.stats().unanswered_wakes > 0);
+    assert_eq!(bench.units.collisions(), 0);
+}
+
+#[test]
+fn powermax_units_share_by_node_address_without_switching() {
+    let mut bench = LineBench::new(
+        &[Model::Sync65, Model::Sync65],
+        &[
+            LineUnit::Powermax { node: 1 },
+            LineUnit::Powermax { node: 2 },
+        ],
+    );
+    bench.run(ms(3000));
+    assert!(bench.all_up());
+    assert_eq!(bench.line.stats(), LineStats::default());
+    bench.fault(0, 300);
+    bench.run(ms(4000));
+    assert!(bench.line.unit(0).unwrap().status().active_fault.is_some());
+    assert!(bench.line.unit(1).unwrap().status().active_fault.is_none());
+    assert_eq!(bench.units.collisions(), 0);
+}
+
+#[test]
+fn units_that_cannot_share_a_line_are_refused() {
+    let base = LinkConfig::default();
+    let new = |units: &[LineUnit]| SharedLine::new(base, units, Instant::ZERO).map(|_| ());
+    let hpr = |id| LineUnit::Hpr { id };
+    let pm = |node| LineUnit::Powermax { node };
+    assert_eq!(new(&[]), Err(LineError::NoUnits));
+    assert_eq!(
+        new(&[hpr(0), hpr(1), hpr(2), hpr(3), hpr(0)]),
+        Err(LineError::TooManyUnits { count: 5 })
+    );
+    assert_eq!(
+        new(&[hpr(0), pm(1)]),
+        Err(LineError::MixedProtocols { unit: 1 })
+    );
+    assert_eq!(
+        new(&[pm(1), LineUnit::MaxPro200]),
+        Err(LineError::MixedProtocols { unit: 1 })
+    );
+    assert_eq!(
+        new(&[hpr(0), LineUnit::MaxPro200]),
+        Err(LineError::NoMultiDrop)
+    );
+    assert_eq!(
+        new(&[hpr(1), hpr(2), hpr(1)]),
+        Err(LineError::SameAddress {
+            first: 0,
+            second: 2
+        })
+    );
+    assert_eq!(
+        new(&[hpr(0), hpr(4)]),
+        Err(LineError::Link {
+            unit: 1,
+            error: ConfigError::HprIdOutOfRange { id: 4 }
+        })
+    );
+    assert_eq!(
+        new(&[pm(0), pm(1)]),
+        Err(LineError::Link {
+            unit: 0,
+            error: ConfigError::NodeAddressZero
+        })
+    );
+    assert_eq!(new(&[LineUnit::MaxPro200]), Ok(()));
+    assert_eq!(new(&[pm(1), pm(2), pm(3), pm(4)]), Ok(()));
+}

@@ -1,0 +1,36 @@
+//! What the arbiter needs of a [`PsLink`] that waits for its turn on a shared line. A link
+//! alone never calls these: its behaviour is unchanged.
+
+use plasma_protocol::time::Instant;
+
+use crate::link::PsLink;
+
+impl PsLink {
+    /// True while an attempt of this link is on the wire (its reply, or the quiet after a
+    /// request nothing answers, is awaited): the line is this link's.
+    pub(super) fn holds_line(&self) -> bool {
+        self.txn.as_ref().is_some_and(|txn| txn.is_on_wire())
+    }
+
+    /// The frame of the attempt on the wire, as [`PsLink::poll_transmit`] handed it out.
+    pub(super) fn frame_on_wire(&self) -> Option<&[u8]> {
+        self.txn
+            .as_ref()
+            .filter(|txn| txn.is_on_wire())
+            .map(|txn| txn.frame())
+    }
+
+    /// Time passes for a link that waits for its turn or its reply: the reply time-out of an
+    /// attempt on the wire is checked, nothing new is started. Waiting for the line is no
+    /// silence: only an attempt that went out can time out.
+    pub(super) fn handle_time(&mut self, now: Instant) {
+        self.now = now;
+        self.handle_timeout(now);
+        self.core.status.update_ready(now);
+    }
+
+    /// The line has been heard echoing this link's requests.
+    pub(super) fn hears_line_echo(&self) -> bool {
+        self.line_echoes
+    }
+}
