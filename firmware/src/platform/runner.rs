@@ -31,8 +31,8 @@ use embedded_io_async::{Error as _, ErrorKind, Read, ReadReady, Write};
 use heapless::Vec;
 
 use crate::bridge::Bridge;
-use crate::link::PsLink;
 use crate::link::transaction::TX_CAPACITY;
+use crate::link::{PsLink, SharedLine};
 use plasma_protocol::serial::PortConfig;
 use plasma_protocol::time::{Duration, Instant};
 
@@ -56,8 +56,8 @@ pub trait ConfigurablePort: Read + ReadReady + Write {
 }
 
 /// What a driver of the power-supply port drives: the [`Bridge`] (the board's tasks, pbtool,
-/// the scenario harness, the fuzz target) or a bare [`PsLink`] (the link's own tests and
-/// scenarios). The one trait for it: a loop that moves bytes between a port (a UART, a
+/// the scenario harness, the fuzz target), a bare [`PsLink`] (the link's own tests and
+/// scenarios) or a [`SharedLine`] of several links. The one trait for it: a loop that moves bytes between a port (a UART, a
 /// simulated line) and an endpoint is written against this, whatever it runs on.
 pub trait PsEndpoint {
     /// Bytes received from the supply.
@@ -100,6 +100,32 @@ impl PsEndpoint for PsLink {
 
     fn poll_at(&self) -> Option<Instant> {
         PsLink::poll_at(self)
+    }
+}
+
+impl PsEndpoint for SharedLine {
+    fn handle_ps_rx(&mut self, now: Instant, bytes: &[u8]) {
+        self.handle_rx(now, bytes);
+    }
+
+    fn handle_ps_rx_error(&mut self, now: Instant) {
+        self.handle_rx_error(now);
+    }
+
+    fn poll_ps_transmit(&mut self, now: Instant) -> Option<&[u8]> {
+        self.poll_transmit(now)
+    }
+
+    fn ps_transmitted(&mut self, at: Instant) {
+        self.handle_transmitted(at);
+    }
+
+    fn ps_port_config(&self) -> PortConfig {
+        self.port_config()
+    }
+
+    fn poll_at(&self) -> Option<Instant> {
+        SharedLine::poll_at(self)
     }
 }
 

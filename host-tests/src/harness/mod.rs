@@ -46,11 +46,13 @@ mod bridge;
 mod endpoint;
 pub mod measure;
 mod options;
+mod shared;
 mod trace;
 mod world;
 
 pub use bridge::{BridgeEndpoint, CNC_REPLY_TIMEOUT, CncItem, CncRecord, is_reply_line};
 pub use endpoint::WorldEndpoint;
 pub use options::{RxErrors, WorldOptions};
+pub use shared::SharedLineError;
 pub use trace::{Direction, TraceFrame, WireTrace};
 pub use world::{Timeout, World, WorldStats};
