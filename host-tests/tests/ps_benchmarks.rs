@@ -1,6 +1,7 @@
 //! The benchmark goals, asserted where they are met (virtual time, so deterministic). The full
 //! table comes from `cargo bench -p host-tests --bench bus`.
 
+use host_tests::harness::measure::shared_line::shared_line;
 use host_tests::harness::measure::{
     Load, PMX485_CHARS_PER_CYCLE, PMX485_REQUESTS_PER_CYCLE, Setup, bus_efficiency, fault_latency,
 };
@@ -142,6 +143,53 @@ fn a_new_fault_is_known_within_250_ms_p99_on_a_powermax_while_commands_are_in_fl
             l.counters.max() <= Duration::from_millis(600),
             "{setup:?}: {:?}",
             l.counters.max()
+        );
+    }
+}
+
+#[test]
+fn on_a_line_of_one_or_two_hprs_each_units_fault_is_known_within_250_ms_p99() {
+    for units in [1, 2] {
+        let line = shared_line(units, None, 100, Duration::from_secs(5), 5);
+        for (unit, faults) in line.faults.iter().enumerate() {
+            let p99 = faults.quantile(0.99);
+            assert!(
+                p99 <= Duration::from_millis(250),
+                "{units} units, unit {unit}: p99 {} ms",
+                p99.as_millis()
+            );
+        }
+    }
+}
+
+#[test]
+fn on_a_line_of_four_hprs_a_silent_unit_costs_the_others_at_most_one_time_out_per_round() {
+    // The goal of 250 ms p99 with four units is not met (README, benchmarks): each
+    // unit waits for three GET_PS_INFO polls of 52 ms of wire and their hand-overs. What
+    // holds: every fault within a second, and a silent unit's turn costs at most its one
+    // reply time-out.
+    let full = shared_line(4, None, 50, Duration::from_secs(10), 5);
+    let silent = shared_line(4, Some(2), 50, Duration::from_secs(10), 5);
+    let timeout_s = LinkConfig::default().response_timeout.as_micros() as f64 / 1e6;
+    for unit in 0..4 {
+        assert!(
+            full.faults[unit].max() <= Duration::from_secs(1),
+            "{full:?}"
+        );
+        if unit == 2 {
+            assert_eq!(silent.cycles_per_s[unit], 0.0);
+            continue;
+        }
+        assert!(
+            silent.faults[unit].max() <= Duration::from_secs(1),
+            "{silent:?}"
+        );
+        // One round is the time between two status cycles of a unit.
+        let round = 1.0 / full.cycles_per_s[unit];
+        let round_with_silent = 1.0 / silent.cycles_per_s[unit];
+        assert!(
+            round_with_silent <= round + timeout_s,
+            "unit {unit}: {round_with_silent} s per round, {round} s without the silent unit"
         );
     }
 }

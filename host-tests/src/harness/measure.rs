@@ -16,6 +16,8 @@
 //! - A *fault check* is a read of the fault register alone between two status cycles; it is
 //!   no status-cycle request and counts apart from the other traffic.
 
+pub mod shared_line;
+
 use plasma_firmware::link::{LinkCommand, LinkConfig, LinkEvent, Ticket};
 use plasma_protocol::powermax::{Amps, OperatingMode, Pressure};
 use plasma_protocol::time::{Duration, Instant};
@@ -617,5 +619,6 @@ pub fn report() -> String {
             e.chars_per_cycle * e.char_time_us / 1000.0
         );
     }
+    shared_line::report(&mut out);
     out
 }

@@ -40,7 +40,8 @@
 //! // Any unit may be awake at power-up: SLEEP first, then WAKE 0.
 //! assert_eq!(line.poll_transmit(Instant::ZERO).unwrap(), b">0869E<");
 //! line.handle_transmitted(Instant::from_millis(4));
-//! assert_eq!(line.poll_transmit(Instant::from_millis(24)).unwrap(), b">0850CD<");
+//! // WAKE 0 as soon as the SLEEP has left the wire.
+//! assert_eq!(line.poll_transmit(Instant::from_millis(4)).unwrap(), b">0850CD<");
 //! ```
 
 mod config;

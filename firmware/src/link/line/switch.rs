@@ -7,12 +7,16 @@
 //! [`Awake`] is what the arbiter knows of the line; [`Switch`] is one hand-over in progress.
 //! The rule that keeps two transmitters off the line: a WAKE goes out only when no unit can
 //! be awake (after a SLEEP, with no WAKE since) or the unit it wakes is the one awake.
+//!
+//! The WAKE follows the SLEEP as soon as the SLEEP has left the wire: the manual asks for no
+//! pause, a unit handles the frames in the order they arrive, and the WAKE's own eight
+//! characters (4 ms at 19200 baud) give every unit the time to handle the SLEEP before the
+//! WAKE is complete. (A link's own SLEEP, in its detection, waits `SLEEP_QUIET` as a
+//! request without reply; on a shared line that wait would be paid at every hand-over.)
 
 use heapless::Vec;
 use plasma_protocol::hpr::Request;
 use plasma_protocol::time::{Duration, Instant};
-
-use crate::link::transaction::SLEEP_QUIET;
 
 /// Longest SLEEP or WAKE frame (`>0851CE<`).
 pub(super) const CONTROL_CAPACITY: usize = 8;
@@ -31,7 +35,7 @@ pub(super) enum Awake {
 /// What a switch puts on the line next.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(super) enum SwitchOut {
-    /// Nothing yet: the quiet after SLEEP or the WAKE echo is awaited.
+    /// Nothing yet: the SLEEP is still on the wire, or the WAKE echo is awaited.
     Wait,
     /// SLEEP to every unit.
     Sleep,
@@ -46,8 +50,8 @@ pub(super) enum SwitchOut {
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum Step {
     Sleep,
-    /// SLEEP handed out: the line stays quiet until then.
-    Quiet {
+    /// SLEEP handed out: it is on the wire until then.
+    Sleeping {
         until: Instant,
     },
     Wake,
@@ -108,13 +112,11 @@ impl Switch {
         self.at = now;
         match self.step {
             Step::Sleep => {
-                self.step = Step::Quiet {
-                    until: now + SLEEP_QUIET,
-                };
+                self.step = Step::Sleeping { until: now };
                 SwitchOut::Sleep
             }
-            Step::Quiet { until } if now < until => SwitchOut::Wait,
-            Step::Quiet { .. } | Step::Wake => match self.target {
+            Step::Sleeping { until } if now < until => SwitchOut::Wait,
+            Step::Sleeping { .. } | Step::Wake => match self.target {
                 Some(id) => {
                     self.rx.clear();
                     self.step = Step::Echo {
@@ -156,18 +158,18 @@ impl Switch {
     /// When [`Switch::poll`] has something to do.
     pub(super) fn poll_at(&self) -> Instant {
         match self.step {
-            Step::Quiet { until } => until,
+            Step::Sleeping { until } => until,
             Step::Echo { deadline, .. } => deadline,
             Step::Sleep | Step::Wake | Step::Held => self.at,
         }
     }
 
-    /// The frame handed out last left the wire at `at`: the quiet or the echo's time-out
-    /// runs from there (never earlier). True when it was the WAKE.
+    /// The frame handed out last left the wire at `at`: the WAKE follows the SLEEP from
+    /// there, the echo's time-out runs from there (never earlier). True when it was the WAKE.
     pub(super) fn transmitted(&mut self, at: Instant) -> bool {
         match &mut self.step {
-            Step::Quiet { until } => {
-                *until = (*until).max(at + SLEEP_QUIET);
+            Step::Sleeping { until } => {
+                *until = (*until).max(at);
                 false
             }
             Step::Echo { deadline, .. } => {
