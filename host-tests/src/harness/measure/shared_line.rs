@@ -151,7 +151,7 @@ pub fn report(out: &mut String) {
     );
     let _ = writeln!(
         out,
-        "{:<18} {:>6} {:>8} {:>8} {:>8} {:>8} {:>9}",
+        "{:<22} {:>6} {:>8} {:>8} {:>8} {:>8} {:>9}",
         "line", "unit", "p50 ms", "p99 ms", "max ms", "c/s", "wakes/s"
     );
     for (units, silent) in LINES {
@@ -173,7 +173,7 @@ pub fn report(out: &mut String) {
             };
             let _ = writeln!(
                 out,
-                "{:<18} {:>6} {} {:>8.2} {:>9}",
+                "{:<22} {:>6} {} {:>8.2} {:>9}",
                 if unit == 0 { label.as_str() } else { "" },
                 unit + 1,
                 figures,
