@@ -288,7 +288,8 @@ impl SharedLine {
             let Some(link) = self.links.get_mut(index) else {
                 continue;
             };
-            if !link.poll_at().is_some_and(|at| at <= now) || link.poll_transmit(now).is_none() {
+            let due = link.poll_at().is_some_and(|at| at <= now);
+            if !due || link.poll_transmit(now).is_none() {
                 continue;
             }
             self.owner = index;
