@@ -239,3 +239,103 @@ pub(super) fn emit_control(sleep_or_wake: Option<u8>, out: &mut [u8; CONTROL_CAP
     };
     request.emit(out).unwrap_or(0)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const T100: Duration = Duration::from_millis(100);
+    const WAKE_1: &[u8] = b">0851CE<";
+
+    fn ms(v: u64) -> Instant {
+        Instant::from_millis(v)
+    }
+
+    fn to_unit_1(awake: Awake, line_echoes: bool) -> Switch {
+        Switch::plan(awake, 1, false, T100, line_echoes, ms(0)).expect("a switch")
+    }
+
+    #[test]
+    fn the_frames_a_switch_needs_follow_from_what_may_be_awake() {
+        let plan = |awake, own_wake| Switch::plan(awake, 1, own_wake, T100, false, ms(0));
+        assert!(plan(Awake::Unit(1), false).is_none(), "already awake");
+        assert!(plan(Awake::Unit(1), true).is_none());
+        assert!(plan(Awake::Nobody, true).is_none(), "its own WAKE may go");
+        let mut sleep_only = plan(Awake::Unit(0), true).unwrap();
+        assert_eq!(sleep_only.poll(ms(0)), SwitchOut::Sleep);
+        sleep_only.transmitted(ms(4));
+        assert_eq!(sleep_only.poll(ms(4)), SwitchOut::Held);
+        assert_eq!(
+            plan(Awake::Nobody, false).unwrap().poll(ms(0)),
+            SwitchOut::Wake(1)
+        );
+        for awake in [Awake::Unknown, Awake::Unit(0)] {
+            assert_eq!(plan(awake, false).unwrap().poll(ms(0)), SwitchOut::Sleep);
+        }
+    }
+
+    #[test]
+    fn the_wake_follows_the_sleep_once_it_has_left_the_wire() {
+        let mut switch = to_unit_1(Awake::Unknown, false);
+        assert_eq!(switch.poll(ms(0)), SwitchOut::Sleep);
+        assert!(!switch.transmitted(ms(4)));
+        assert_eq!(switch.poll_at(), ms(4));
+        assert_eq!(switch.poll(ms(3)), SwitchOut::Wait);
+        assert_eq!(switch.poll(ms(4)), SwitchOut::Wake(1));
+        assert!(switch.transmitted(ms(8)), "the WAKE");
+        assert_eq!(switch.poll_at(), ms(108), "its time-out runs from its end");
+        assert_eq!(switch.hear(WAKE_1, WAKE_1), 0);
+        assert_eq!(switch.poll(ms(13)), SwitchOut::Held);
+    }
+
+    #[test]
+    fn an_unanswered_wake_fails_at_its_time_out() {
+        let mut switch = to_unit_1(Awake::Nobody, false);
+        assert_eq!(switch.poll(ms(0)), SwitchOut::Wake(1));
+        switch.transmitted(ms(4));
+        assert_eq!(switch.poll(ms(103)), SwitchOut::Wait);
+        assert_eq!(switch.poll(ms(104)), SwitchOut::Failed);
+    }
+
+    #[test]
+    fn on_a_line_that_echoes_the_units_echo_is_the_second_copy() {
+        let mut switch = to_unit_1(Awake::Nobody, true);
+        assert_eq!(switch.poll(ms(0)), SwitchOut::Wake(1));
+        switch.transmitted(ms(4));
+        switch.hear(WAKE_1, WAKE_1);
+        assert_eq!(switch.poll(ms(4)), SwitchOut::Wait, "our own WAKE");
+        switch.hear(&WAKE_1[..3], WAKE_1);
+        switch.hear(&WAKE_1[3..], WAKE_1);
+        assert_eq!(switch.poll(ms(10)), SwitchOut::Held);
+    }
+
+    #[test]
+    fn a_damaged_echo_still_hands_the_line_over_once_complete() {
+        let mut switch = to_unit_1(Awake::Nobody, false);
+        assert_eq!(switch.poll(ms(0)), SwitchOut::Wake(1));
+        switch.transmitted(ms(4));
+        // Noise before the frame is stray; a wrong checksum is a damaged echo.
+        assert_eq!(switch.hear(b"\x00\x00>0851", WAKE_1), 2);
+        assert_eq!(switch.poll(ms(6)), SwitchOut::Wait);
+        switch.hear(b"CF<", WAKE_1);
+        assert_eq!(switch.poll(ms(8)), SwitchOut::Held);
+        // A character received in error, and nothing after it: at the time-out.
+        let mut switch = to_unit_1(Awake::Nobody, false);
+        switch.poll(ms(0));
+        switch.transmitted(ms(4));
+        switch.hear(b">08", WAKE_1);
+        switch.hear_error();
+        assert_eq!(switch.poll(ms(50)), SwitchOut::Wait);
+        assert_eq!(switch.poll(ms(104)), SwitchOut::Held);
+    }
+
+    #[test]
+    fn the_control_frames_are_the_manuals() {
+        // HPR manual lines 172-173: >0850CD< and >0869E<.
+        let mut out = [0; CONTROL_CAPACITY];
+        let len = emit_control(Some(0), &mut out);
+        assert_eq!(&out[..len], b">0850CD<");
+        let len = emit_control(None, &mut out);
+        assert_eq!(&out[..len], b">0869E<");
+    }
+}

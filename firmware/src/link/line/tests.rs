@@ -120,7 +120,7 @@ fn a_sleep_goes_before_the_first_wake() {
 }
 
 #[test]
-fn every_wake_follows_a_sleep_and_wakes_another_unit() {
+fn every_wake_follows_a_sleep() {
     let mut bench = LineBench::hprs(4);
     bench.run(ms(5000));
     assert!(bench.all_up(), "{:?}", bench.line);
@@ -172,6 +172,31 @@ fn a_unit_alone_keeps_the_line_without_switching() {
     let stats = bench.line.stats();
     assert_eq!((stats.sleeps, stats.wakes), (1, 1), "{stats:?}");
     assert!(bench.requests_by_unit(ms(1000)).len() > 20);
+}
+
+#[test]
+fn a_unit_with_work_while_the_others_have_none_keeps_the_line() {
+    // Unit 1 is not there: between its probes (detection pauses, retry gaps) unit 0 polls on
+    // without a hand-over.
+    let mut bench = LineBench::hprs(2);
+    bench.units.set_connected(1, false);
+    bench.run(ms(6000));
+    let requests = bench.requests_by_unit(ms(3000));
+    let mut run = 0;
+    let mut longest = 0;
+    let mut last_wake_count = 0;
+    for (at, _) in &requests {
+        let wakes = bench
+            .sent
+            .iter()
+            .filter(|(t, f)| t <= at && f.starts_with(b">085"))
+            .count();
+        run = if wakes == last_wake_count { run + 1 } else { 1 };
+        last_wake_count = wakes;
+        longest = longest.max(run);
+    }
+    assert!(longest >= 3, "{requests:?}");
+    assert_eq!(bench.units.collisions(), 0);
 }
 
 #[test]
