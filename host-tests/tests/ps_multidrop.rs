@@ -113,6 +113,45 @@ fn a_silent_unit_leaves_the_others_their_status() {
 }
 
 #[test]
+fn a_unit_that_falls_silent_goes_down_alone() {
+    let mut world = line(&[Model::Hpr260; 3]);
+    world.connect_unit(1, false);
+    world
+        .run_until(|w| !w.unit_status(1).link_up, secs(10))
+        .expect("unit 1's link goes down");
+    world.run_for(secs(5));
+    for unit in [0, 2] {
+        let link = world.endpoint().unit(unit).unwrap();
+        assert!(link.status().link_up, "unit {unit}");
+        assert_eq!(link.diagnostics().link_downs, 0, "unit {unit}");
+    }
+    world.inject_fault_on(2, HPR_FAULT);
+    world
+        .run_until(|w| w.unit_status(2).active_fault.is_some(), secs(1))
+        .expect("unit 2's fault seen with unit 1 silent");
+    assert_eq!(world.collisions(), 0);
+}
+
+#[test]
+fn hprs_on_a_two_wire_line_that_echoes_the_bridge() {
+    // The bridge hears its own WAKE before the unit's echo: on a line known to echo, the
+    // second copy hands the line over.
+    let options = WorldOptions {
+        wiring: plasma_sim::line::Wiring::TwoWire { master_echo: true },
+        ..WorldOptions::default()
+    };
+    let mut world = World::on_one_line(&[Model::Hpr260; 2], options).unwrap();
+    world.wait_all_up(secs(10)).expect("both detected");
+    world.run_for(secs(10));
+    for unit in 0..2 {
+        let link = world.endpoint().unit(unit).unwrap();
+        assert_eq!(link.diagnostics().link_downs, 0, "unit {unit}");
+    }
+    each_fault_is_seen_on_its_unit(&mut world, HPR_FAULT);
+    assert_eq!(world.collisions(), 0);
+}
+
+#[test]
 fn two_powermax_sync_units_are_each_detected_and_each_fault_is_seen() {
     let mut world = line(&[Model::Sync65, Model::Sync65]);
     for unit in 0..2 {

@@ -29,7 +29,9 @@
 //! A WAKE nobody echoes costs the waiting unit's attempt: its time-out runs from the WAKE,
 //! and the line state is unknown again (a SLEEP goes first next time). A unit's own SLEEP and
 //! WAKE (its detection sends them) go out as they are, a SLEEP before its WAKE if another
-//! unit may be awake. Powermax units share by node address: no switching.
+//! unit may be awake. On a line that echoes our own frames (2-wire, receiver on), told by a
+//! copy of the SLEEP nobody answers, the unit's WAKE echo is the second copy; every unit's
+//! link is told the line echoes. Powermax units share by node address: no switching.
 //!
 //! ```
 //! use plasma_firmware::link::{LinkConfig, LineUnit, SharedLine};
@@ -90,6 +92,8 @@ pub struct SharedLine {
     /// An HPR line: units share it by SLEEP / WAKE.
     switching: bool,
     awake: Awake,
+    /// The line echoes our own frames: heard by a switch (a copy of its SLEEP) or a link.
+    line_echoes: bool,
     switch: Option<Switch>,
     out: Option<Out>,
     control: [u8; CONTROL_CAPACITY],
@@ -116,6 +120,7 @@ impl SharedLine {
             owner: units.len().saturating_sub(1),
             switching: units.iter().all(|u| matches!(u, LineUnit::Hpr { .. })),
             awake: Awake::Unknown,
+            line_echoes: false,
             switch: None,
             out: None,
             control: [0; CONTROL_CAPACITY],
@@ -166,12 +171,14 @@ impl SharedLine {
     /// switched, otherwise the reply of the unit whose attempt is on the wire.
     pub fn handle_rx(&mut self, now: Instant, bytes: &[u8]) {
         if let Some(switch) = &mut self.switch {
-            let wake = self.control.get(..self.control_len).unwrap_or(&[]);
-            let stray = switch.hear(bytes, wake);
+            let stray = switch.hear(bytes);
             self.stats.stray = self
                 .stats
                 .stray
                 .saturating_add(u32::try_from(stray).unwrap_or(u32::MAX));
+            if switch.line_echoes() && !self.line_echoes {
+                self.learn_line_echo();
+            }
         } else if let Some(link) = self.links.get_mut(self.owner) {
             link.handle_rx(now, bytes);
         }
@@ -316,8 +323,10 @@ impl SharedLine {
         let wake_len = emit_control(Some(id), &mut control);
         let own_wake = Some(frame) == control.get(..wake_len);
         let timeout = link.config().response_timeout;
-        let line_echoes = self.links.iter().any(PsLink::hears_line_echo);
-        match Switch::plan(self.awake, id, own_wake, timeout, line_echoes, now) {
+        if !self.line_echoes && self.links.iter().any(PsLink::hears_line_echo) {
+            self.learn_line_echo();
+        }
+        match Switch::plan(self.awake, id, own_wake, timeout, self.line_echoes, now) {
             None => {
                 if own_wake {
                     self.awake = Awake::Unit(id);
@@ -328,6 +337,15 @@ impl SharedLine {
                 self.switch = Some(switch);
                 self.next_out(now)
             }
+        }
+    }
+
+    /// The line echoes our own frames (2-wire, receiver on): every unit's link is told, as
+    /// they all share the one line.
+    fn learn_line_echo(&mut self) {
+        self.line_echoes = true;
+        for link in &mut self.links {
+            link.learn_line_echo();
         }
     }
 

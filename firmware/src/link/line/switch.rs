@@ -72,8 +72,8 @@ pub(super) struct Switch {
     step: Step,
     /// The WAKE's reply time-out (the target unit's).
     timeout: Duration,
-    /// Copies of the WAKE to hear: 2 on a line that echoes our own requests.
-    echoes_needed: u8,
+    /// The line echoes our own frames: the WAKE's first copy is ours.
+    line_echoes: bool,
     /// The frame being received while the echo is awaited.
     rx: Vec<u8, CONTROL_CAPACITY>,
     at: Instant,
@@ -101,7 +101,7 @@ impl Switch {
             target,
             step,
             timeout,
-            echoes_needed: if line_echoes { 2 } else { 1 },
+            line_echoes,
             rx: Vec::new(),
             at: now,
         })
@@ -118,7 +118,6 @@ impl Switch {
             Step::Sleeping { until } if now < until => SwitchOut::Wait,
             Step::Sleeping { .. } | Step::Wake => match self.target {
                 Some(id) => {
-                    self.rx.clear();
                     self.step = Step::Echo {
                         deadline: now + self.timeout,
                         echoes: 0,
@@ -136,7 +135,8 @@ impl Switch {
                 heard_other,
                 deadline,
             } => {
-                if echoes >= self.echoes_needed || (heard_other && !self.in_frame()) {
+                let needed = if self.line_echoes { 2 } else { 1 };
+                if echoes >= needed || (heard_other && !self.in_frame()) {
                     // A damaged echo still shows a unit that listens: its reply tells.
                     self.step = Step::Held;
                     SwitchOut::Held
@@ -180,22 +180,16 @@ impl Switch {
         }
     }
 
-    /// Bytes heard: while the echo is awaited, a frame equal to the WAKE counts as its echo,
-    /// any other frame as a damaged one. Returns the bytes heard outside that (stray).
-    pub(super) fn hear(&mut self, bytes: &[u8], wake: &[u8]) -> usize {
-        let Step::Echo {
-            echoes,
-            heard_other,
-            ..
-        } = &mut self.step
-        else {
-            return bytes.len();
-        };
+    /// Bytes heard. A copy of the SLEEP (which no unit answers) is the line echoing our own
+    /// requests (2-wire, receiver on): the WAKE's first copy is then ours, the unit's echo is
+    /// the second. While the echo is awaited, a frame equal to the WAKE counts as an echo, any
+    /// other frame as a damaged one. Returns the characters heard outside a frame (stray).
+    pub(super) fn hear(&mut self, bytes: &[u8]) -> usize {
         let mut stray = 0;
         for &byte in bytes {
             if byte == b'>' {
                 if !self.rx.is_empty() {
-                    *heard_other = true;
+                    self.heard_other();
                 }
                 self.rx.clear();
             } else if self.rx.is_empty() {
@@ -203,20 +197,51 @@ impl Switch {
                 continue;
             }
             if self.rx.push(byte).is_err() {
-                *heard_other = true;
+                self.heard_other();
                 self.rx.clear();
                 continue;
             }
             if byte == b'<' {
-                if self.rx.as_slice() == wake {
-                    *echoes = echoes.saturating_add(1);
-                } else {
-                    *heard_other = true;
-                }
+                self.heard_frame();
                 self.rx.clear();
             }
         }
         stray
+    }
+
+    /// A whole frame is in `rx`.
+    fn heard_frame(&mut self) {
+        let mut control = [0u8; CONTROL_CAPACITY];
+        let sleep_len = emit_control(None, &mut control);
+        if Some(self.rx.as_slice()) == control.get(..sleep_len) {
+            self.line_echoes = true;
+            return;
+        }
+        let wake_len = emit_control(self.target, &mut control);
+        let is_wake = self.target.is_some() && Some(self.rx.as_slice()) == control.get(..wake_len);
+        if let Step::Echo {
+            echoes,
+            heard_other,
+            ..
+        } = &mut self.step
+        {
+            if is_wake {
+                *echoes = echoes.saturating_add(1);
+            } else {
+                *heard_other = true;
+            }
+        }
+    }
+
+    fn heard_other(&mut self) {
+        if let Step::Echo { heard_other, .. } = &mut self.step {
+            *heard_other = true;
+        }
+    }
+
+    /// True once the line has been heard echoing our own frames.
+    pub(super) fn line_echoes(&self) -> bool {
+        self.line_echoes
     }
 
     /// A character received in error while the echo is awaited: a damaged echo.
@@ -284,7 +309,7 @@ mod tests {
         assert_eq!(switch.poll(ms(4)), SwitchOut::Wake(1));
         assert!(switch.transmitted(ms(8)), "the WAKE");
         assert_eq!(switch.poll_at(), ms(108), "its time-out runs from its end");
-        assert_eq!(switch.hear(WAKE_1, WAKE_1), 0);
+        assert_eq!(switch.hear(WAKE_1), 0);
         assert_eq!(switch.poll(ms(13)), SwitchOut::Held);
     }
 
@@ -302,11 +327,26 @@ mod tests {
         let mut switch = to_unit_1(Awake::Nobody, true);
         assert_eq!(switch.poll(ms(0)), SwitchOut::Wake(1));
         switch.transmitted(ms(4));
-        switch.hear(WAKE_1, WAKE_1);
+        switch.hear(WAKE_1);
         assert_eq!(switch.poll(ms(4)), SwitchOut::Wait, "our own WAKE");
-        switch.hear(&WAKE_1[..3], WAKE_1);
-        switch.hear(&WAKE_1[3..], WAKE_1);
+        switch.hear(&WAKE_1[..3]);
+        switch.hear(&WAKE_1[3..]);
         assert_eq!(switch.poll(ms(10)), SwitchOut::Held);
+    }
+
+    #[test]
+    fn a_copy_of_the_sleep_shows_a_line_that_echoes() {
+        // Nobody answers SLEEP: a copy is our own, so the WAKE's first copy will be too.
+        let mut switch = to_unit_1(Awake::Unknown, false);
+        assert_eq!(switch.poll(ms(0)), SwitchOut::Sleep);
+        switch.transmitted(ms(4));
+        assert_eq!(switch.poll(ms(4)), SwitchOut::Wake(1));
+        // A board hands the received characters over after its writes: both copies late.
+        switch.hear(b">0869E<>0851CE<");
+        assert!(switch.line_echoes());
+        assert_eq!(switch.poll(ms(9)), SwitchOut::Wait);
+        switch.hear(WAKE_1);
+        assert_eq!(switch.poll(ms(13)), SwitchOut::Held);
     }
 
     #[test]
@@ -315,15 +355,15 @@ mod tests {
         assert_eq!(switch.poll(ms(0)), SwitchOut::Wake(1));
         switch.transmitted(ms(4));
         // Noise before the frame is stray; a wrong checksum is a damaged echo.
-        assert_eq!(switch.hear(b"\x00\x00>0851", WAKE_1), 2);
+        assert_eq!(switch.hear(b"\x00\x00>0851"), 2);
         assert_eq!(switch.poll(ms(6)), SwitchOut::Wait);
-        switch.hear(b"CF<", WAKE_1);
+        switch.hear(b"CF<");
         assert_eq!(switch.poll(ms(8)), SwitchOut::Held);
         // A character received in error, and nothing after it: at the time-out.
         let mut switch = to_unit_1(Awake::Nobody, false);
         switch.poll(ms(0));
         switch.transmitted(ms(4));
-        switch.hear(b">08", WAKE_1);
+        switch.hear(b">08");
         switch.hear_error();
         assert_eq!(switch.poll(ms(50)), SwitchOut::Wait);
         assert_eq!(switch.poll(ms(104)), SwitchOut::Held);

@@ -33,4 +33,10 @@ impl PsLink {
     pub(super) fn hears_line_echo(&self) -> bool {
         self.line_echoes
     }
+
+    /// The line echoes our requests (heard by the arbiter or another unit's link): a reply
+    /// that repeats its request is then the second copy from the first attempt on.
+    pub(super) fn learn_line_echo(&mut self) {
+        self.line_echoes = true;
+    }
 }
