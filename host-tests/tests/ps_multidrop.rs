@@ -113,6 +113,37 @@ fn a_silent_unit_leaves_the_others_their_status() {
 }
 
 #[test]
+fn one_unit_cuts_through_its_hf_ignition_while_the_other_keeps_its_link() {
+    // The world's one set of discrete I/O drives unit 1 (index 0), under the safety monitor;
+    // its pilot arc's HF noise reaches the whole line.
+    let mut world = line(&[Model::Hpr260, Model::Hpr260]);
+    world
+        .run_until(|w| w.unit_status(0).ready, secs(10))
+        .expect("unit 1 ready");
+    world.set_torch(true);
+    world
+        .run_until(|w| w.unit_ref().motion(), secs(3))
+        .expect("unit 1's arc transfers");
+    world.run_for(secs(2));
+    world.set_torch(false);
+    world.run_for(secs(3));
+    assert!(
+        !world.noise_bursts().is_empty(),
+        "the HF ignition was on the line"
+    );
+    for unit in 0..2 {
+        let link = world.endpoint().unit(unit).unwrap();
+        assert!(link.status().link_up, "unit {unit}");
+        assert_eq!(link.diagnostics().link_downs, 0, "unit {unit}");
+    }
+    assert!(
+        !world.units().unit(1).unwrap().motion(),
+        "unit 2 never started"
+    );
+    assert_eq!(world.collisions(), 0);
+}
+
+#[test]
 fn a_unit_that_falls_silent_goes_down_alone() {
     let mut world = line(&[Model::Hpr260; 3]);
     world.connect_unit(1, false);
