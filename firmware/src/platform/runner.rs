@@ -57,8 +57,9 @@ pub trait ConfigurablePort: Read + ReadReady + Write {
 
 /// What a driver of the power-supply port drives: the [`Bridge`] (the board's tasks, pbtool,
 /// the scenario harness, the fuzz target), a bare [`PsLink`] (the link's own tests and
-/// scenarios) or a [`SharedLine`] of several links. The one trait for it: a loop that moves bytes between a port (a UART, a
-/// simulated line) and an endpoint is written against this, whatever it runs on.
+/// scenarios) or a [`SharedLine`] of several links. The one trait for it: a loop that moves
+/// bytes between a port (a UART, a simulated line) and an endpoint is written against this,
+/// whatever it runs on.
 pub trait PsEndpoint {
     /// Bytes received from the supply.
     fn handle_ps_rx(&mut self, now: Instant, bytes: &[u8]);
@@ -77,57 +78,39 @@ pub trait PsEndpoint {
     fn poll_at(&self) -> Option<Instant>;
 }
 
-impl PsEndpoint for PsLink {
-    fn handle_ps_rx(&mut self, now: Instant, bytes: &[u8]) {
-        self.handle_rx(now, bytes);
-    }
+/// A link, or a line of links, is an endpoint through its own methods of the same names
+/// (`handle_rx`, `poll_transmit`, ...): the one forwarding, written once for both.
+macro_rules! endpoint_by_link_names {
+    ($($link:ty),+) => {$(
+        impl PsEndpoint for $link {
+            fn handle_ps_rx(&mut self, now: Instant, bytes: &[u8]) {
+                self.handle_rx(now, bytes);
+            }
 
-    fn handle_ps_rx_error(&mut self, now: Instant) {
-        self.handle_rx_error(now);
-    }
+            fn handle_ps_rx_error(&mut self, now: Instant) {
+                self.handle_rx_error(now);
+            }
 
-    fn poll_ps_transmit(&mut self, now: Instant) -> Option<&[u8]> {
-        self.poll_transmit(now)
-    }
+            fn poll_ps_transmit(&mut self, now: Instant) -> Option<&[u8]> {
+                self.poll_transmit(now)
+            }
 
-    fn ps_transmitted(&mut self, at: Instant) {
-        self.handle_transmitted(at);
-    }
+            fn ps_transmitted(&mut self, at: Instant) {
+                self.handle_transmitted(at);
+            }
 
-    fn ps_port_config(&self) -> PortConfig {
-        self.port_config()
-    }
+            fn ps_port_config(&self) -> PortConfig {
+                self.port_config()
+            }
 
-    fn poll_at(&self) -> Option<Instant> {
-        PsLink::poll_at(self)
-    }
+            fn poll_at(&self) -> Option<Instant> {
+                <$link>::poll_at(self)
+            }
+        }
+    )+};
 }
 
-impl PsEndpoint for SharedLine {
-    fn handle_ps_rx(&mut self, now: Instant, bytes: &[u8]) {
-        self.handle_rx(now, bytes);
-    }
-
-    fn handle_ps_rx_error(&mut self, now: Instant) {
-        self.handle_rx_error(now);
-    }
-
-    fn poll_ps_transmit(&mut self, now: Instant) -> Option<&[u8]> {
-        self.poll_transmit(now)
-    }
-
-    fn ps_transmitted(&mut self, at: Instant) {
-        self.handle_transmitted(at);
-    }
-
-    fn ps_port_config(&self) -> PortConfig {
-        self.port_config()
-    }
-
-    fn poll_at(&self) -> Option<Instant> {
-        SharedLine::poll_at(self)
-    }
-}
+endpoint_by_link_names!(PsLink, SharedLine);
 
 impl PsEndpoint for Bridge {
     fn handle_ps_rx(&mut self, now: Instant, bytes: &[u8]) {
