@@ -733,25 +733,6 @@ fn without_a_unit_commands_that_need_one_answer_err_link() {
     w.cnc_line("TORCH OFF");
 }
 
-#[test]
-fn a_full_queue_answers_busy_at_once_and_the_rest_in_order() {
-    let mut w = bridge_world(Model::Sync65);
-    w.cnc_send(b"SET PROCESS CUT 45 AUTO\r\nFAULT\r\nLIMITS\r\nFLY\r\nEVENTS OFF\r\nFAULT\r\n");
-    w.wait_cnc_replies(6, Duration::from_secs(2)).unwrap();
-    let replies: Vec<&str> = w.cnc_replies().collect();
-    assert_eq!(
-        replies,
-        [
-            err(ErrorCode::Busy, texts::QUEUE_FULL).as_str(),
-            "OK mode=CUT amps=45 psi=AUTO",
-            "OK fault=none",
-            "OK modes=CUT,EXPANDED amps=20..65 psi=58..78 scope=cartridge",
-            parse_err(ParseError::UnknownCommand).as_str(),
-            "OK events=OFF",
-        ]
-    );
-}
-
 // --- events --------------------------------------------------------------------------------
 
 #[test]
@@ -944,73 +925,8 @@ fn hpr_events_report_state_changes_and_a_transfer_timeout() {
 }
 
 // --- Phoenix serial messaging ----------------------------------------------------------------
-
-#[test]
-fn phoenix_messages_get_ack_or_nak_then_their_reply() {
-    let mut w = bridge_world(Model::Sync65);
-    let fault = phoenix_113("FAULT", None);
-    assert_eq!(
-        *fault.last().unwrap(),
-        0x4A,
-        "the manual's example check byte"
-    );
-
-    let mark = w.cnc_output().len();
-    w.cnc_send(&fault);
-    w.wait_cnc_replies(1, Duration::from_secs(1)).unwrap();
-    assert_eq!(
-        w.cnc_output()[mark..]
-            .iter()
-            .map(|r| r.item.clone())
-            .collect::<Vec<_>>(),
-        [CncItem::Ack, CncItem::Line("OK fault=none".into())]
-    );
-    assert_eq!(w.cnc_bytes(), b"\x06OK fault=none\r\n");
-
-    // Wrong check byte: NAK, then why.
-    w.cnc_send(&phoenix_113("FAULT", Some(0x4B)));
-    w.wait_cnc_replies(2, Duration::from_secs(1)).unwrap();
-    // Not a command: NAK.
-    w.cnc_send(&phoenix_113("FLY", None));
-    w.wait_cnc_replies(3, Duration::from_secs(1)).unwrap();
-    // A command that needs the unit: ACK at once, the reply when the unit confirmed.
-    let mark = w.cnc_output().len();
-    w.cnc_send(&phoenix_113("SET PROCESS CUT 45 AUTO", None));
-    assert_eq!(
-        w.cnc_output()[mark..].first().map(|r| &r.item),
-        Some(&CncItem::Ack)
-    );
-    let acked_at = w.cnc_output()[mark].at;
-    w.wait_cnc_replies(4, Duration::from_secs(2)).unwrap();
-    let reply = w.cnc_output().last().unwrap();
-    assert!(
-        reply.at > acked_at,
-        "the reply follows after the unit answered"
-    );
-    // A text line between messages works as ever.
-    assert_eq!(
-        w.cnc_line("LIMITS"),
-        "OK modes=CUT,EXPANDED amps=20..65 psi=58..78 scope=cartridge"
-    );
-
-    let items: Vec<CncItem> = w.cnc_output().iter().map(|r| r.item.clone()).collect();
-    assert_eq!(
-        items,
-        [
-            CncItem::Ack,
-            CncItem::Line("OK fault=none".into()),
-            CncItem::Nak,
-            CncItem::Line(frame_err(0x4A, 0x4B).as_str().into()),
-            CncItem::Nak,
-            CncItem::Line(parse_err(ParseError::UnknownCommand).as_str().into()),
-            CncItem::Ack,
-            CncItem::Line("OK mode=CUT amps=45 psi=AUTO".into()),
-            CncItem::Line("OK modes=CUT,EXPANDED amps=20..65 psi=58..78 scope=cartridge".into()),
-        ]
-    );
-    assert_eq!(w.bridge().session_stats().acks, 2);
-    assert_eq!(w.bridge().session_stats().naks, 2);
-}
+// ACK/NAK, the formats, bad input and the queue are the session's rules, tested next to it
+// (firmware/src/cnc/input/tests.rs); here only what needs the clock: a message cut off.
 
 #[test]
 fn a_phoenix_message_that_stops_arriving_is_naked_and_text_goes_on() {
@@ -1093,64 +1009,6 @@ fn raw_refuses_a_modbus_write_to_an_undocumented_register_and_it_never_reaches_t
             || f.starts_with(b":02")),
         "never on the wire"
     );
-}
-
-// --- bad input -------------------------------------------------------------------------------
-
-#[test]
-fn overlong_lines_binary_garbage_and_half_lines_get_a_clear_err_and_the_session_goes_on() {
-    let mut w = bridge_world(Model::Sync65);
-    let long = "A".repeat(200);
-    assert_eq!(w.cnc_line(&long), parse_err(ParseError::TooLong).as_str());
-    assert_eq!(w.cnc_line("ID").split(' ').next(), Some("OK"));
-
-    w.cnc_send(b"\x80\xff\x00junk\x1b[A\r\n");
-    w.wait_cnc_replies(3, Duration::from_secs(1)).unwrap();
-    assert_eq!(
-        w.cnc_replies().nth(2),
-        Some(parse_err(ParseError::Binary).as_str())
-    );
-
-    // A half line waits for the rest.
-    w.cnc_send(b"FAU");
-    w.run_for(ms(500));
-    assert_eq!(w.cnc_reply_count(), 3);
-    w.cnc_send(b"LT\r");
-    w.wait_cnc_replies(4, Duration::from_secs(1)).unwrap();
-    assert_eq!(w.cnc_replies().nth(3), Some("OK fault=none"));
-    // LF after the CR is the same line end, not an empty line.
-    w.cnc_send(b"\n");
-    w.run_for(ms(100));
-    assert_eq!(w.cnc_reply_count(), 4);
-
-    // A text line cut by a Phoenix message.
-    w.cnc_send(b"SET AMP");
-    w.cnc_send(&phoenix_113("FAULT", None));
-    w.wait_cnc_replies(6, Duration::from_secs(1)).unwrap();
-    let replies: Vec<&str> = w.cnc_replies().skip(4).collect();
-    assert_eq!(
-        replies,
-        [
-            err(ErrorCode::Syntax, texts::LINE_INTERRUPTED).as_str(),
-            "OK fault=none"
-        ]
-    );
-
-    // A burst of random bytes without SOH/STX: each line gets at most one ERR.
-    let garbage: Vec<u8> = (0..2_000u32)
-        .map(|i| (i.wrapping_mul(2_654_435_761) >> 13) as u8)
-        .filter(|b| *b != 0x01 && *b != 0x02)
-        .collect();
-    w.cnc_send(&garbage);
-    w.cnc_send(b"\r\n");
-    w.run_for(ms(2_000));
-    let after = w.cnc_reply_count();
-    assert!(after > 6);
-    assert!(w.cnc_replies().skip(6).all(|l| l.starts_with("ERR ")));
-    assert!(w.cnc_line("ID").starts_with("OK bridge=plasma-bridge"));
-    for line in w.cnc_lines() {
-        assert!(well_formed(line), "{line:?}");
-    }
 }
 
 // --- CONFIG, SAVE, power cycles ------------------------------------------------------------

@@ -21,7 +21,14 @@ use plasma_protocol::cnc::{ErrorCode, ParseError};
 #[test]
 fn phoenix_messages_are_acked_or_naked_then_answered() {
     let mut rig = Rig::sync65(Settings::default());
-    let tokens = rig.send_bytes(&framed(113, b"FAULT"), 1);
+    let fault = framed(113, b"FAULT");
+    assert_eq!(
+        *fault.last().unwrap(),
+        0x4A,
+        "the manual's example check byte"
+    );
+    // The ACK byte on its own, then the reply line (the rig checks every line ends CR LF).
+    let tokens = rig.send_bytes(&fault, 1);
     assert_eq!(tokens, [ACK_TOKEN, "OK fault=none"]);
     // A wrong check byte: NAK, and the line says why.
     let mut bad = framed(113, b"FAULT");
@@ -34,9 +41,20 @@ fn phoenix_messages_are_acked_or_naked_then_answered() {
         tokens,
         [NAK_TOKEN, parse_err(ParseError::UnknownCommand).as_str()]
     );
-    // A command that waits for the unit: ACK at once, the reply after the read-back.
-    let tokens = rig.send_bytes(&framed(113, b"SET PROCESS CUT 45 AUTO"), 1);
-    assert_eq!(tokens, [ACK_TOKEN, "OK mode=CUT amps=45 psi=AUTO"]);
+    // A command that waits for the unit: ACK at once, before any time passes or any frame
+    // goes to the unit; the reply only after the read-back.
+    let sent = rig.ps().sent.len();
+    let tokens = rig.send_bytes(&framed(113, b"SET PROCESS CUT 45 AUTO"), 0);
+    assert_eq!(tokens, [ACK_TOKEN]);
+    assert_eq!(rig.ps().sent.len(), sent, "acked before the unit is asked");
+    let acked_at = rig.now;
+    let tokens = rig.send_bytes(b"", 1);
+    assert_eq!(tokens, ["OK mode=CUT amps=45 psi=AUTO"]);
+    assert!(
+        rig.now > acked_at,
+        "the reply follows after the unit answered"
+    );
+    assert!(rig.ps().sent.len() > sent, "the unit was asked");
     // Text lines still work around frames.
     assert_eq!(rig.cmd("FAULT"), "OK fault=none");
     // Another format, set by CONFIG.
@@ -58,6 +76,7 @@ fn phoenix_messages_are_acked_or_naked_then_answered() {
             "OK fault=none"
         ]
     );
+    assert_eq!(rig.bridge.session_stats().acks, 5);
     assert_eq!(rig.bridge.session_stats().naks, 3);
 }
 
@@ -146,14 +165,38 @@ fn overlong_lines_binary_garbage_and_half_lines_get_an_error_and_the_session_goe
             "OK fault=none"
         ]
     );
-    // A half line that goes on in the next chunk is one line.
+    // A half line waits for the rest, however long, and goes on in the next chunk as one line.
     assert!(rig.send_bytes(b"FAU", 0).is_empty());
+    let waiting = rig.received.len();
+    rig.run(500);
+    assert_eq!(
+        rig.received.len(),
+        waiting,
+        "{:?}",
+        &rig.received[waiting..]
+    );
     assert_eq!(rig.send_bytes(b"LT\r", 1), ["OK fault=none"]);
     // LF after CR is part of the same line end; blank lines get no reply.
     assert_eq!(
         rig.send_bytes(b"\n\r\n  \t\r\nFAULT\n", 1),
         ["OK fault=none"]
     );
+    // A burst of noise without SOH/STX: each line it makes gets one ERR, nothing else.
+    let garbage: Vec<u8> = (0..2_000u32)
+        .map(|i| (i.wrapping_mul(2_654_435_761) >> 13) as u8)
+        .filter(|b| *b != 0x01 && *b != 0x02)
+        .collect();
+    let start = rig.received.len();
+    rig.send_bytes(&garbage, 0);
+    rig.send_bytes(b"\r\n", 0);
+    rig.run(2_000);
+    let replies: Vec<&Token> = rig.received[start..]
+        .iter()
+        .filter(|t| is_reply(t))
+        .collect();
+    assert!(!replies.is_empty());
+    assert!(replies.iter().all(|l| l.starts_with("ERR ")), "{replies:?}");
+    assert_eq!(rig.cmd("FAULT"), "OK fault=none");
 }
 
 #[test]
