@@ -4,16 +4,13 @@
 
 mod common;
 
-use common::{
-    bridge_world, bridge_world_with, field, hpr, modbus, phoenix_113, ready_hpr, settle,
-    well_formed,
-};
+use common::{bridge_world, bridge_world_with, field, hpr, modbus, ready_hpr, settle, well_formed};
 use host_tests::harness::{CncItem, World, WorldOptions};
 use plasma_firmware::io::{Input, Interlock, IoEvent, Output, Reason};
 use plasma_firmware::link::{Family, Refusal};
 use plasma_firmware::settings::{SaveError, Settings};
 use plasma_firmware::texts::{self, UnsupportedText, unsupported};
-use plasma_protocol::cnc::{ErrorCode, ParseError};
+use plasma_protocol::cnc::ErrorCode;
 use plasma_protocol::time::{Duration, Instant};
 use plasma_sim::Model;
 use plasma_sim::hpr::Hpr;
@@ -62,17 +59,6 @@ fn assert_err(reply: &str, pattern: &str) {
 /// An `ERR` line with `code` and `text` (texts taken from where the bridge writes them).
 fn err(code: ErrorCode, text: impl std::fmt::Display) -> String {
     format!("ERR {code} {text}")
-}
-
-/// The `ERR` line of a line that did not parse (the protocol crate's text).
-fn parse_err(error: ParseError) -> String {
-    err(error.code(), error)
-}
-
-/// The `ERR` line of a Phoenix message with a wrong check byte.
-fn frame_err(expected: u8, found: u8) -> String {
-    let error = plasma_protocol::Error::BadChecksum { expected, found };
-    texts::frame_error(error).trim_end().to_string()
 }
 
 /// The `ERR` line of a command the link refused.
@@ -232,126 +218,8 @@ fn hold_from_the_cnc_keeps_the_hpr_in_preflow() {
 }
 
 // --- every command, OK and ERR -------------------------------------------------------------
-
-#[test]
-fn sync_commands_ok_and_err() {
-    let mut w = bridge_world(Model::Sync65);
-    expect_all(
-        &mut w,
-        &[
-            ("HELP", "OK commands=HELP,ID,STATUS,*"),
-            ("help", "OK commands=HELP,ID,STATUS,*"),
-            (
-                "ID",
-                "OK bridge=plasma-bridge version=0.1.0 reset=unknown link=UP model=Powermax65 family=SYNC product=081335 torch=MACHINE lead_ft=25",
-            ),
-            ("ID now", parse_err(ParseError::UnexpectedArgument).as_str()),
-            (
-                "STATUS",
-                "OK link=UP model=Powermax65 family=SYNC remote=OFF *",
-            ),
-            (
-                "LIMITS",
-                "OK modes=CUT,EXPANDED amps=20..65 psi=58..78 scope=cartridge",
-            ),
-            ("FAULT", "OK fault=none"),
-            ("FAULTLOG", "OK log=none"),
-            (
-                "COUNTERS",
-                "OK starts=0 pilot_arc_s=0 transfers=0 transfer_s=0 link_ok=*",
-            ),
-            (
-                "CARTRIDGE",
-                "OK uid=E00401D0036FB25D part=428930 rev=1 nominal_amps=65 *",
-            ),
-            ("SET PROCESS CUT 45 AUTO", "OK mode=CUT amps=45 psi=AUTO"),
-            ("SET PROCESS CUT 120 AUTO", "ERR RANGE *120*20..65*"),
-            ("SET PROCESS CUT 45 80", "ERR RANGE *80*58..78*"),
-            (
-                "SET PROCESS GOUGE 45 AUTO",
-                "ERR RANGE *GOUGE*CUT*EXPANDED*",
-            ),
-            (
-                "SET PROCESS CUT 500 AUTO",
-                "ERR RANGE amps out of range 20..65 for this cartridge",
-            ),
-            ("SET PROCESS CUT 45.01 AUTO", "ERR RANGE *1/64*"),
-            (
-                "SET PROCESS FLY 45 AUTO",
-                "ERR SYNTAX *CUT|CPA|EXPANDED|GOUGE*",
-            ),
-            ("SET PROCESS CUT 45", "ERR SYNTAX missing *"),
-            ("SET AMPS 40", "OK mode=CUT amps=40 psi=AUTO"),
-            ("SET AMPS 66", "ERR RANGE *66*20..65*"),
-            ("SET AMPS", "ERR SYNTAX missing *"),
-            ("SET AMPS forty", "ERR SYNTAX *"),
-            ("SET PSI 70.5", "OK mode=CUT amps=40 psi=70.5"),
-            ("SET PSI AUTO", "OK mode=CUT amps=40 psi=AUTO"),
-            ("SET PSI 10", "ERR RANGE *10*58..78*"),
-            ("SET MODE EXPANDED", "OK mode=EXPANDED amps=40 psi=AUTO"),
-            ("SET MODE GOUGE", "ERR RANGE mode GOUGE not permitted *"),
-            ("SET MODE", "ERR SYNTAX missing *"),
-            ("SET", "ERR SYNTAX missing *"),
-            ("GASTEST ON", "OK gastest=ON"),
-            ("GASTEST OFF", "OK gastest=OFF"),
-            ("GASTEST MAYBE", "ERR SYNTAX *"),
-            ("RESTART", "ERR STATE *0-50-0*"),
-            (
-                "GASES O2 AIR",
-                err(
-                    ErrorCode::Unsupported,
-                    UnsupportedText(unsupported::GASES, Family::PowermaxSync),
-                )
-                .as_str(),
-            ),
-            (
-                "CORNER 80",
-                err(
-                    ErrorCode::Unsupported,
-                    UnsupportedText(unsupported::CORNER, Family::PowermaxSync),
-                )
-                .as_str(),
-            ),
-            (
-                "RESET",
-                "ERR UNSUPPORTED RESET is an HPR/MaxPro200 command *",
-            ),
-            (
-                "CLEARWARN",
-                err(
-                    ErrorCode::Unsupported,
-                    UnsupportedText(unsupported::CLEAR_WARN, Family::PowermaxSync),
-                )
-                .as_str(),
-            ),
-            ("EVENTS ON", "OK events=ON"),
-            ("EVENTS OFF", "OK events=OFF"),
-            ("EVENTS MAYBE", "ERR SYNTAX *EVENTS*ON|OFF*"),
-            (
-                "CONFIG",
-                "OK protocol=AUTO address=1 parity=EVEN stop_bits=1 timeout_ms=100 *",
-            ),
-            ("CONFIG timeout_ms", "OK timeout_ms=100"),
-            ("CONFIG timeout_ms 30", "ERR RANGE *30*60..1000*"),
-            ("CONFIG parity mark", "ERR SYNTAX *NONE|EVEN|ODD*"),
-            ("CONFIG baud 9600", "ERR SYNTAX *SAVE*CONFIG*"),
-            ("CONFIG SAVE", "OK config=saved"),
-            ("RAW :0104301A0001B0", "OK reply=:010402*"),
-            (
-                "RAW",
-                parse_err(ParseError::MissingArgument { what: "frame" }).as_str(),
-            ),
-            ("RAW :0104301A0001B1", "ERR REFUSED *B0*B1*"),
-            ("TORCH MAYBE", "ERR SYNTAX *"),
-            ("REMOTE OFF", "OK remote=OFF"),
-            ("REMOTE ON", "ERR SYNTAX *"),
-            ("FLY", parse_err(ParseError::UnknownCommand).as_str()),
-        ],
-    );
-    assert!(!w.unit_ref().in_remote_mode());
-    // The failing settings commands sent nothing: the unit is as REMOTE OFF left it.
-    assert_eq!(w.sim_ref::<Powermax>().force_registers().current, 0);
-}
+// The SYNC and HPR replies, byte for byte, are the session's tests
+// (firmware/src/cnc/commands/tests.rs); here what needs the unit over time.
 
 #[test]
 fn sync_restart_clears_0_50_0_and_keeps_start_off_through_the_quiet_time() {
@@ -464,115 +332,12 @@ fn legacy_commands_ok_and_err() {
     );
 }
 
+/// An HPR error above 79 shuts the unit down, and RESET (068) is allowed then: the unit over
+/// time. Every command's reply text on each family is the session's test
+/// (firmware/src/cnc/commands/tests.rs, `every_command_on_a_sync_unit`, `every_command_on_an_hpr`).
 #[test]
-fn hpr_commands_ok_and_err() {
+fn an_hpr_shut_down_by_an_error_above_79_is_reset_from_the_cnc() {
     let mut w = ready_hpr(Model::Hpr260);
-    expect_all(
-        &mut w,
-        &[
-            (
-                "ID",
-                "OK bridge=plasma-bridge version=0.1.0 reset=unknown link=UP model=HPR260 family=HPR",
-            ),
-            (
-                "STATUS",
-                "OK link=UP model=HPR260 family=HPR remote=* state=3 state_name=IDLE2 \
-                 console=AUTO plasma_cutflow_psi=55 plasma_preflow_psi=45 shield_cutflow_psi=35 \
-                 shield_preflow_psi=25",
-            ),
-            ("LIMITS", "OK amps=5..260 corner=50..100 console=AUTO"),
-            ("FAULT", "OK fault=none"),
-            ("FAULTLOG", "OK log=none"),
-            (
-                "COUNTERS",
-                "OK arc_s=0 system_min=0 starts=0 start_errors=0 rampdown_errors=0 link_ok=*",
-            ),
-            (
-                "CARTRIDGE",
-                err(
-                    ErrorCode::Unsupported,
-                    UnsupportedText(unsupported::CARTRIDGE, Family::Hpr),
-                )
-                .as_str(),
-            ),
-            ("SET AMPS 130", "OK amps=130"),
-            ("SET AMPS 261", "ERR RANGE *261*5..260*"),
-            ("SET AMPS 45.5", "ERR RANGE *45.5*"),
-            (
-                "SET MODE CUT",
-                err(
-                    ErrorCode::Unsupported,
-                    UnsupportedText(unsupported::SET_MODE, Family::Hpr),
-                )
-                .as_str(),
-            ),
-            (
-                "SET PSI 70",
-                err(
-                    ErrorCode::Unsupported,
-                    UnsupportedText(unsupported::SET_PSI, Family::Hpr),
-                )
-                .as_str(),
-            ),
-            (
-                "SET PROCESS CUT 45 AUTO",
-                err(
-                    ErrorCode::Unsupported,
-                    UnsupportedText(unsupported::SET_PROCESS, Family::Hpr),
-                )
-                .as_str(),
-            ),
-            (
-                "REMOTE OFF",
-                err(
-                    ErrorCode::Unsupported,
-                    UnsupportedText(unsupported::REMOTE_OFF, Family::Hpr),
-                )
-                .as_str(),
-            ),
-            (
-                "RESTART",
-                err(
-                    ErrorCode::Unsupported,
-                    UnsupportedText(unsupported::RESTART, Family::Hpr),
-                )
-                .as_str(),
-            ),
-            ("CORNER 80", "OK corner=80"),
-            (
-                "SET HPR_PROCESS 100 O2 AIR",
-                err(
-                    ErrorCode::Unsupported,
-                    UnsupportedText(unsupported::HPR_PROCESS, Family::Hpr),
-                )
-                .as_str(),
-            ),
-            ("CORNER 120", "ERR RANGE *50..100*"),
-            ("CORNER", "ERR SYNTAX missing *"),
-            ("GASES O2", "ERR SYNTAX missing *"),
-            (
-                "GASES XE AIR",
-                "ERR SYNTAX *O2|CH4|H35|H5|AIR|N2|AR|N95|F5*",
-            ),
-            ("RESET", "ERR STATE *3*IDLE2*000*NO*ERROR*"),
-            ("CLEARWARN", "OK clearwarn=done"),
-            ("GASTEST ON", "OK gastest=ON"),
-            ("GASTEST OFF", "OK gastest=OFF"),
-            ("GASTEST PREFLOW ON", "OK gastest=ON flow=PREFLOW"),
-            ("GASTEST PREFLOW OFF", "OK gastest=OFF flow=PREFLOW"),
-            ("GASTEST CUTFLOW ON", "OK gastest=ON flow=CUTFLOW"),
-            ("GASTEST CUTFLOW OFF", "OK gastest=OFF flow=CUTFLOW"),
-            ("GASTEST CUTFLOW", "ERR SYNTAX missing GASTEST argument"),
-            ("RAW >00292<", "OK reply=>002*"),
-            (
-                "RAW >00293<",
-                "ERR REFUSED raw frame rejected: bad checksum*",
-            ),
-        ],
-    );
-    assert_eq!(w.sim_ref::<Hpr>().nominal_amps(), 130);
-
-    // An error above 79 shuts the unit down; RESET (068) is allowed then.
     w.inject_fault(80);
     w.run_until(
         |w| w.bridge().status().hpr.state.is_some_and(|s| s.0 == 14),
@@ -942,6 +707,9 @@ fn a_phoenix_message_that_stops_arriving_is_naked_and_text_goes_on() {
 }
 
 // --- the allow-list --------------------------------------------------------------------------
+// What a refusal says is the session's test (`raw_replies_carry_the_units_answer_or_say_why_
+// the_frame_is_refused`, firmware/src/cnc/commands/tests.rs); here that a refused frame never
+// reaches the unit or the wire.
 
 #[test]
 fn raw_refuses_dangerous_hpr_commands_and_they_never_reach_the_unit() {

@@ -236,10 +236,20 @@ fn every_command_on_a_sync_unit() {
          set=MODE,AMPS,PSI,PROCESS,HPR_PROCESS remote=OFF gastest=ON,OFF,PREFLOW,CUTFLOW,CHECK \
          config=SAVE history=CLEAR simulator_only=TORCH simulator=NO"
     );
+    assert!(rig.cmd("help").starts_with("OK commands=HELP,ID,STATUS,"));
     assert_eq!(
         rig.cmd("ID"),
         "OK bridge=plasma-bridge version=0.1.0 reset=unknown link=UP model=Powermax65 \
          family=SYNC product=081335 torch=MACHINE lead_ft=25"
+    );
+    assert_eq!(rig.cmd("ID now"), parse_err(ParseError::UnexpectedArgument));
+    assert!(
+        rig.cmd("STATUS")
+            .starts_with("OK link=UP model=Powermax65 family=SYNC remote=OFF ")
+    );
+    assert_eq!(
+        rig.cmd("LIMITS"),
+        "OK modes=CUT,EXPANDED amps=20..65 psi=58..78 scope=cartridge"
     );
     assert_eq!(rig.cmd("FAULT"), "OK fault=none");
     assert_eq!(rig.cmd("FAULTLOG"), "OK log=0-20-0,0-50-0");
@@ -259,6 +269,7 @@ fn every_command_on_a_sync_unit() {
     );
     assert_eq!(rig.cmd("GASTEST ON"), "OK gastest=ON");
     assert_eq!(rig.cmd("GASTEST OFF"), "OK gastest=OFF");
+    assert_err(&rig.cmd("GASTEST MAYBE"), "ERR SYNTAX *");
     assert_err(&rig.cmd("RESTART"), "ERR STATE *0-50-0*");
     rig.fault(500);
     rig.run(300);
@@ -301,14 +312,49 @@ fn every_command_on_a_sync_unit() {
             UnsupportedText(unsupported::CLEAR_WARN, Family::PowermaxSync)
         )
     );
-    assert_eq!(
-        rig.cmd("SET PROCESS GOUGE 45 AUTO").split(' ').next(),
-        Some("ERR")
+    assert_err(
+        &rig.cmd("SET PROCESS GOUGE 45 AUTO"),
+        "ERR RANGE *GOUGE*CUT*EXPANDED*",
     );
+    assert_err(
+        &rig.cmd("SET PROCESS CUT 120 AUTO"),
+        "ERR RANGE *120*20..65*",
+    );
+    assert_err(&rig.cmd("SET PROCESS CUT 45 80"), "ERR RANGE *80*58..78*");
+    assert_eq!(
+        rig.cmd("SET PROCESS CUT 500 AUTO"),
+        "ERR RANGE amps out of range 20..65 for this cartridge"
+    );
+    assert_err(&rig.cmd("SET PROCESS CUT 45.01 AUTO"), "ERR RANGE *1/64*");
+    assert_err(
+        &rig.cmd("SET PROCESS FLY 45 AUTO"),
+        "ERR SYNTAX *CUT|CPA|EXPANDED|GOUGE*",
+    );
+    assert_err(&rig.cmd("SET PROCESS CUT 45"), "ERR SYNTAX missing *");
     assert_eq!(
         rig.cmd("SET PROCESS CUT 45 AUTO"),
         "OK mode=CUT amps=45 psi=AUTO"
     );
+    assert_eq!(rig.cmd("SET AMPS 40"), "OK mode=CUT amps=40 psi=AUTO");
+    assert_err(&rig.cmd("SET AMPS 66"), "ERR RANGE *66*20..65*");
+    assert_err(&rig.cmd("SET AMPS"), "ERR SYNTAX missing *");
+    assert_err(&rig.cmd("SET AMPS forty"), "ERR SYNTAX *");
+    assert_eq!(rig.cmd("SET PSI 70.5"), "OK mode=CUT amps=40 psi=70.5");
+    assert_eq!(rig.cmd("SET PSI AUTO"), "OK mode=CUT amps=40 psi=AUTO");
+    assert_err(&rig.cmd("SET PSI 10"), "ERR RANGE *10*58..78*");
+    assert_eq!(
+        rig.cmd("SET MODE EXPANDED"),
+        "OK mode=EXPANDED amps=40 psi=AUTO"
+    );
+    assert_err(
+        &rig.cmd("SET MODE GOUGE"),
+        "ERR RANGE mode GOUGE not permitted *",
+    );
+    assert_err(&rig.cmd("SET MODE"), "ERR SYNTAX missing *");
+    assert_err(&rig.cmd("SET"), "ERR SYNTAX missing *");
+    assert_eq!(rig.cmd("EVENTS ON"), "OK events=ON");
+    assert_eq!(rig.cmd("EVENTS OFF"), "OK events=OFF");
+    assert_err(&rig.cmd("EVENTS MAYBE"), "ERR SYNTAX *EVENTS*ON|OFF*");
     assert_eq!(rig.cmd("REMOTE OFF"), "OK remote=OFF");
     assert_eq!(rig.writes().last(), Some(&(0x3080, std::vec![0, 0, 0])));
     assert_eq!(rig.bridge.settings().process, None);
@@ -316,12 +362,19 @@ fn every_command_on_a_sync_unit() {
         rig.cmd("TORCH ON"),
         err(ErrorCode::Unsupported, texts::TORCH_SIMULATOR_ONLY)
     );
+    assert_err(&rig.cmd("TORCH MAYBE"), "ERR SYNTAX *");
     assert_err(&rig.cmd("REMOTE ON"), "ERR SYNTAX *REMOTE*OFF*");
     assert_eq!(rig.cmd("FLY"), parse_err(ParseError::UnknownCommand));
+    // The failing commands sent nothing: the unit is as REMOTE OFF left it.
+    assert_eq!(rig.writes().last(), Some(&(0x3080, std::vec![0, 0, 0])));
+    assert_eq!(rig.ps().powermax().force_registers().current, 0);
 }
 
+/// What RAW answers: the unit's reply, or why the allow-list refused the frame. That refused
+/// frames never reach the unit or the wire, on each family, is the harness's scenario
+/// (`raw_refuses_*` in host-tests/tests/cnc_scenarios.rs).
 #[test]
-fn raw_frames_are_forwarded_or_refused_by_the_allow_list() {
+fn raw_replies_carry_the_units_answer_or_say_why_the_frame_is_refused() {
     let mut rig = Rig::sync65(Settings::default());
     // Read the active fault register 0x301A.
     let read = mb(&[0x04, 0x30, 0x1A, 0x00, 0x01]);
@@ -350,6 +403,12 @@ fn raw_frames_are_forwarded_or_refused_by_the_allow_list() {
 fn every_command_on_an_hpr() {
     let mut rig = Rig::hpr("hpr130");
     assert_eq!(
+        rig.cmd("ID"),
+        "OK bridge=plasma-bridge version=0.1.0 reset=unknown link=UP model=HPR130 family=HPR"
+    );
+    assert_eq!(rig.cmd("FAULT"), "OK fault=none");
+    assert_eq!(rig.cmd("FAULTLOG"), "OK log=none");
+    assert_eq!(
         rig.cmd("STATUS"),
         "OK link=UP model=HPR130 family=HPR remote=OFF mode=- amps=130 psi=- out_amps=0 \
          out_psi=55 fault=none start=OFF motion=OFF arc_ok=OFF ready=ON state=3 \
@@ -361,6 +420,7 @@ fn every_command_on_an_hpr() {
         "OK amps=5..130 corner=50..100 console=AUTO"
     );
     assert_eq!(rig.cmd("SET AMPS 100"), "OK amps=100");
+    assert_eq!(rig.ps().hpr().nominal_amps(), 100);
     let requests = rig.hpr_commands();
     let set = requests.iter().position(|&id| id == 58).unwrap();
     assert_eq!(requests[set - 1], 4, "REMOTE_MODE before the first setting");
@@ -390,6 +450,20 @@ fn every_command_on_an_hpr() {
     assert_eq!(rig.cmd("GASES O2 AIR"), "OK plasma=O2 shield=AIR");
     assert_eq!(rig.cmd("CORNER 80"), "OK corner=80");
     assert_err(&rig.cmd("CORNER 40"), "ERR RANGE *50..100*");
+    assert_err(&rig.cmd("CORNER 120"), "ERR RANGE *50..100*");
+    assert_err(&rig.cmd("CORNER"), "ERR SYNTAX missing *");
+    assert_err(&rig.cmd("GASES O2"), "ERR SYNTAX missing *");
+    assert_err(
+        &rig.cmd("GASES XE AIR"),
+        "ERR SYNTAX *O2|CH4|H35|H5|AIR|N2|AR|N95|F5*",
+    );
+    assert_eq!(
+        rig.cmd("SET HPR_PROCESS 100 O2 AIR"),
+        err(
+            ErrorCode::Unsupported,
+            UnsupportedText(unsupported::HPR_PROCESS, Family::Hpr)
+        )
+    );
     assert_eq!(rig.cmd("CLEARWARN"), "OK clearwarn=done");
     assert_eq!(rig.cmd("GASTEST ON"), "OK gastest=ON");
     assert_eq!(rig.cmd("GASTEST OFF"), "OK gastest=OFF");
@@ -404,6 +478,15 @@ fn every_command_on_an_hpr() {
         .filter(|id| (64..=67).contains(id))
         .collect();
     assert_eq!(tests, [64, 65, 66, 67]);
+    assert_eq!(rig.cmd("GASTEST PREFLOW ON"), "OK gastest=ON flow=PREFLOW");
+    assert_eq!(
+        rig.cmd("GASTEST PREFLOW OFF"),
+        "OK gastest=OFF flow=PREFLOW"
+    );
+    assert_eq!(
+        rig.cmd("GASTEST CUTFLOW"),
+        "ERR SYNTAX missing GASTEST argument"
+    );
     // The next poll sees the unit back in IDLE2.
     rig.run(300);
     assert_err(&rig.cmd("RESET"), "ERR STATE *3*IDLE2*000*NO*ERROR*");
@@ -445,6 +528,10 @@ fn every_command_on_an_hpr() {
     );
     assert_eq!(rig.cmd("RAW >00292<"), "OK reply=>002000355<");
     assert_err(&rig.cmd("RAW >12093<"), "ERR REFUSED *120*");
+    assert_err(
+        &rig.cmd("RAW >00293<"),
+        "ERR REFUSED raw frame rejected: bad checksum*",
+    );
     rig.fault(44);
     rig.run(300);
     assert_eq!(
