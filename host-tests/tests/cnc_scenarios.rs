@@ -500,8 +500,12 @@ fn without_a_unit_commands_that_need_one_answer_err_link() {
 
 // --- events --------------------------------------------------------------------------------
 
+/// Events as the unit, the torch and the cable make them over time, with the I/O they drive.
+/// Each line's exact text is the session's test
+/// (`event_lines_say_exactly_what_happened_and_events_off_silences_them`,
+/// firmware/src/cnc/events/tests.rs).
 #[test]
-fn events_report_link_fault_remote_and_arc() {
+fn events_follow_the_unit_the_torch_and_the_cable_over_time() {
     let mut w = World::with_bridge(
         Model::Sync65,
         WorldOptions::default(),
@@ -833,6 +837,10 @@ fn a_config_change_of_an_io_key_applies_live() {
     w.cnc_line("TORCH OFF");
 }
 
+/// A power cycle of the whole installation: each layer's saved keys (I/O, link, session) come
+/// back and the process is applied again. The CONFIG text and the record codec themselves are
+/// the session's test (`config_get_set_and_save_round_trip_through_the_settings_record`,
+/// firmware/src/cnc/commands/tests.rs).
 #[test]
 fn config_save_and_a_power_cycle_keep_the_config_and_reapply_the_process() {
     let mut w = bridge_world(Model::Sync65);
@@ -842,12 +850,22 @@ fn config_save_and_a_power_cycle_keep_the_config_and_reapply_the_process() {
             ("SET PROCESS CUT 40 AUTO", "OK mode=CUT amps=40 psi=AUTO"),
             ("CONFIG arc_ok_debounce_ms 7", "OK arc_ok_debounce_ms=7"),
             ("EVENTS ON", "OK events=ON"),
+            (
+                "CONFIG reapply_after_power_cycle on",
+                "OK reapply_after_power_cycle=ON",
+            ),
+            (
+                "CONFIG timeout_ms 250",
+                "OK timeout_ms=250 link=redetecting",
+            ),
             ("CONFIG SAVE", "OK config=saved"),
         ],
     );
     let saved = w.saved_settings().expect("stored");
     assert!(saved.events);
     assert_eq!(saved.io.arc_ok_debounce, ms(7));
+    assert_eq!(saved.link.response_timeout, ms(250));
+    assert!(saved.link.reapply_after_power_cycle);
     assert_eq!(saved.process.map(|p| p.amps.raw()), Some(40 * 64));
 
     // The whole installation loses power; the bridge comes back first.
@@ -869,6 +887,11 @@ fn config_save_and_a_power_cycle_keep_the_config_and_reapply_the_process() {
         "OK arc_ok_debounce_ms=7"
     );
     assert_eq!(w.cnc_line("CONFIG events"), "OK events=ON");
+    assert_eq!(w.cnc_line("CONFIG timeout_ms"), "OK timeout_ms=250");
+    assert_eq!(
+        w.cnc_line("CONFIG reapply_after_power_cycle"),
+        "OK reapply_after_power_cycle=ON"
+    );
 
     // Unsaved changes do not survive.
     assert_eq!(
@@ -1008,7 +1031,8 @@ fn a_torch_on_wiring_change_during_a_cut_drops_start_until_released() {
 
 /// The history survives the bridge's power cycle, and every family's faults go into it with
 /// their codes (a Powermax X-YY-Z, an HPR error number) and the unit's model, named as STATUS
-/// names it.
+/// names it. The entries' order, numbering and link events are the session's test
+/// (firmware/src/cnc/history.rs, `faults_the_link_and_a_reset_are_kept_newest_first`).
 #[test]
 fn the_history_keeps_faults_across_a_power_cycle_on_every_family() {
     for (model, code, written) in [

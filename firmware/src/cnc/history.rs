@@ -306,6 +306,10 @@ mod tests {
         lines
     }
 
+    /// The entries of one SYNC unit: order, `seq`, `boot`, the link's loss and return, the
+    /// reset's cause. Every family's codes and models, and the flash across a power cycle of
+    /// the board, are the harness's scenario
+    /// (`the_history_keeps_faults_across_a_power_cycle_on_every_family`).
     #[test]
     fn faults_the_link_and_a_reset_are_kept_newest_first() {
         let mut rig = Rig::sync65(Settings::default());

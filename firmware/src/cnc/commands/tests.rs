@@ -543,6 +543,8 @@ fn every_command_on_an_hpr() {
 // ---------------------------------------------------------------------------------------
 // CONFIG
 
+/// The CONFIG text interface and the save: every key's reply, the errors, which change
+/// redetects or reaches the I/O, SAVE's queueing, and the record decoding to the same settings.
 #[test]
 fn config_get_set_and_save_round_trip_through_the_settings_record() {
     let mut rig = Rig::sync65(Settings::default());
@@ -612,14 +614,8 @@ fn config_get_set_and_save_round_trip_through_the_settings_record() {
     // A failed store.
     rig.save_result = Some(Err(SaveError::Flash));
     assert_err(&rig.cmd("CONFIG SAVE"), "ERR STORAGE *");
-    // After a power cycle the bridge runs with what was saved.
-    let mut rig = Rig::new(restored, Some("sync65"));
-    assert_eq!(rig.cmd("CONFIG timeout_ms"), "OK timeout_ms=80");
-    assert_eq!(rig.cmd("CONFIG events"), "OK events=ON");
-    assert_eq!(
-        rig.cmd("CONFIG reapply_after_power_cycle"),
-        "OK reapply_after_power_cycle=ON"
-    );
+    // That a power cycle brings these keys back is the harness's scenario
+    // (`config_save_and_a_power_cycle_keep_the_config_and_reapply_the_process`).
 }
 
 // ---------------------------------------------------------------------------------------

@@ -45,8 +45,12 @@ fn fault_events_say_what_action_the_fault_needs() {
     }
 }
 
+/// Each event line's exact text, and EVENTS OFF silencing them. Events caused by the unit,
+/// the torch and the cable over time (the fault output, ARC from a real transfer, START
+/// DELAYED, the process applied again after a pulled cable) are the harness's scenario
+/// (`events_follow_the_unit_the_torch_and_the_cable_over_time`, host-tests/tests/cnc_scenarios.rs).
 #[test]
-fn events_report_link_faults_settings_and_arc_when_on() {
+fn event_lines_say_exactly_what_happened_and_events_off_silences_them() {
     let mut rig = Rig::new(events_on(), Some("sync65"));
     rig.run(600);
     assert!(
