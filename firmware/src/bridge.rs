@@ -16,7 +16,8 @@
 //!   [`Bridge::ps_port_config`]);
 //! - bytes from the CNC → [`Bridge::handle_cnc_rx`]; bytes for it ← [`Bridge::poll_cnc_output`];
 //! - [`Bridge::poll`] no later than [`Bridge::poll_at`];
-//! - after `CONFIG SAVE`: [`Bridge::take_save_request`], store, [`Bridge::save_finished`];
+//! - after `CONFIG SAVE`, and when the consumable record is due: [`Bridge::take_save_request`],
+//!   store, [`Bridge::save_finished`] (at boot, [`Bridge::restore_consumables`]);
 //! - the history: write every [`Bridge::take_history_draft`] in the background; after
 //!   `HISTORY`: [`Bridge::take_history_request`], read or erase,
 //!   [`Bridge::history_finished`] (both with [`serve`](crate::storage::history::serve) and its store);
@@ -38,6 +39,7 @@
 //! ```
 
 use crate::cnc::history::HistoryLog;
+use crate::consumables::{ConsumableSet, Consumables};
 use crate::cnc::{Context, Session, SessionStats};
 pub use crate::cnc::{FRAME_IDLE_TIMEOUT, MAX_REPLY_LEN, OUTPUT_CAPACITY, SimCommand};
 use crate::io::{Inputs, IoConfig, IoEvent, Outputs, SupplyState};
@@ -58,7 +60,20 @@ pub struct Bridge {
     io: Option<(Inputs, Outputs)>,
     boot_report: Option<&'static str>,
     history: HistoryLog,
+    consumables: Consumables,
+    /// The save under way is the consumable record's.
+    saving_consumables: bool,
     now: Instant,
+}
+
+/// What [`Bridge::take_save_request`] asks the board to store.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum SaveRequest {
+    /// The settings, under [`SETTINGS_KEY`](crate::storage::SETTINGS_KEY) (`CONFIG SAVE`).
+    Settings(Settings),
+    /// The consumable record, under [`CONSUMABLES_KEY`](crate::storage::CONSUMABLES_KEY).
+    Consumables(ConsumableSet),
 }
 
 /// A [`Context`] of `$bridge` at `$now` (a macro, so that the session can be borrowed at the
@@ -72,6 +87,7 @@ macro_rules! ctx {
             io: $bridge.io,
             boot_report: $bridge.boot_report,
             history: &mut $bridge.history,
+            consumables: &mut $bridge.consumables,
         }
     };
 }
@@ -92,6 +108,8 @@ impl Bridge {
             io: None,
             boot_report: None,
             history: HistoryLog::default(),
+            consumables: Consumables::default(),
+            saving_consumables: false,
             now,
         }
     }
@@ -233,14 +251,33 @@ impl Bridge {
 
     // --- persistence --------------------------------------------------------------------
 
-    /// After `CONFIG SAVE`: the settings to store (once). The board writes them to flash and
-    /// calls [`Bridge::save_finished`].
-    pub fn take_save_request(&mut self) -> Option<Settings> {
-        self.session.take_save_request().then_some(self.settings)
+    /// The consumable record kept in flash ([`CONSUMABLES_KEY`](crate::storage::CONSUMABLES_KEY)),
+    /// once at boot; without one the bridge starts a new set.
+    pub fn restore_consumables(&mut self, set: ConsumableSet) {
+        self.consumables.restore(set);
     }
 
-    /// The store finished: answers `CONFIG SAVE` (`OK config=saved` or `ERR STORAGE ...`).
+    /// What to store now (once each): the settings after `CONFIG SAVE`, or the consumable
+    /// record when it is due ([`crate::consumables`] says how often). The board writes it to
+    /// flash and calls [`Bridge::save_finished`] before it asks again.
+    pub fn take_save_request(&mut self) -> Option<SaveRequest> {
+        if self.session.take_save_request() {
+            return Some(SaveRequest::Settings(self.settings));
+        }
+        let set = self.consumables.take_save(self.now)?;
+        self.saving_consumables = true;
+        Some(SaveRequest::Consumables(set))
+    }
+
+    /// The store finished: answers `CONFIG SAVE` (`OK config=saved` or `ERR STORAGE ...`); a
+    /// consumable record that was not stored is offered again later.
     pub fn save_finished(&mut self, now: Instant, result: Result<(), SaveError>) {
+        if core::mem::take(&mut self.saving_consumables) {
+            if result.is_err() {
+                self.consumables.save_failed();
+            }
+            return;
+        }
         self.session.save_finished(&mut ctx!(self, now), result);
         self.service(now);
     }

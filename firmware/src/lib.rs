@@ -64,6 +64,7 @@ macro_rules! log_texts {
 }
 
 pub mod bridge;
+pub mod consumables;
 mod cnc;
 pub mod io;
 pub mod link;

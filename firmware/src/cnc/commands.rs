@@ -69,6 +69,7 @@ impl Session {
             Command::Raw(frame) => return self.raw(ctx, frame),
             Command::History(history) => return self.history(history),
             Command::Clock(set) => Session::clock(ctx, set),
+            Command::Consumables(command) => Session::consumables(ctx, command),
             // The table routes every other command to the unit.
             _ => no_link(),
         })

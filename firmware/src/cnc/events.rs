@@ -19,6 +19,7 @@ impl Session {
     /// A link event: the reply of the command in progress, and/or an event line.
     pub fn on_link_event(&mut self, ctx: &mut Context<'_>, event: &LinkEvent) {
         super::history::note_link_event(ctx, event);
+        super::consumables::note_link_event(ctx, event);
         self.powermax.on_link_event(ctx, event);
         self.gas_check_link_event(ctx, event);
         if let LinkEvent::CommandDone { ticket, result } = event {
@@ -63,6 +64,7 @@ impl Session {
     /// A discrete-I/O event: an event line.
     pub fn on_io_event(&mut self, ctx: &mut Context<'_>, event: IoEvent) {
         super::history::note_io_event(ctx, event);
+        super::consumables::note_io_event(ctx, event);
         let now = ctx.now;
         self.event(ctx, |l| match event {
             IoEvent::ArcOn => l.write_str("!ARC ON\r\n"),

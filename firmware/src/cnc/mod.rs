@@ -34,6 +34,7 @@
 //! `ERR UNSUPPORTED TORCH is a simulator command`.
 
 mod commands;
+mod consumables;
 mod describe;
 mod events;
 mod gas_check;
@@ -67,9 +68,9 @@ pub const QUEUE_CAPACITY: usize = 4;
 /// Bytes of output (replies, events, ACK/NAK) held until the driver takes them.
 pub const OUTPUT_CAPACITY: usize = 4096;
 /// Longest reply or event line, CR LF included: room for `CONFIG`'s list of every key
-/// (about 700 bytes with the wiring keys). A line is built on the stack and copied into the
-/// output buffer, so the size costs no static RAM.
-pub const MAX_REPLY_LEN: usize = 800;
+/// (about 840 bytes with the wiring keys and the consumable limits). A line is built on the
+/// stack and copied into the output buffer, so the size costs no static RAM.
+pub const MAX_REPLY_LEN: usize = 900;
 /// Simulator commands held until the driver takes them.
 pub const SIM_QUEUE_CAPACITY: usize = 4;
 /// A Phoenix frame that stops arriving for this long is abandoned (NAK): the CNC sends a
@@ -108,6 +109,8 @@ pub struct Context<'a> {
     pub boot_report: Option<&'static str>,
     /// The history's queue and the wall clock.
     pub history: &'a mut history::HistoryLog,
+    /// The consumable set in use.
+    pub consumables: &'a mut crate::consumables::Consumables,
 }
 
 /// Counters of the CNC side.
@@ -348,6 +351,7 @@ impl Session {
         if let Some(fault) = self.powermax.poll(ctx) {
             self.settings_refused_event(ctx, fault);
         }
+        self.follow_consumables(ctx);
         if ctx.now < self.last_rx + FRAME_IDLE_TIMEOUT {
             return;
         }

@@ -27,7 +27,7 @@ use plasma_protocol::powermax::FaultCode;
 /// `help_is_the_parsers_word_lists` ties the two.
 const HELP_COMMANDS: &str = "HELP,ID,STATUS,LIMITS,FAULT,FAULTLOG,COUNTERS,CARTRIDGE,SET,REMOTE,\
                              GASTEST,POWER,RESTART,GASES,CORNER,RESET,CLEARWARN,EVENTS,CONFIG,HISTORY,\
-                             CLOCK,RAW";
+                             CLOCK,CONSUMABLES,RAW";
 /// The parser's [`SET_WORDS`](plasma_protocol::cnc::command::SET_WORDS) as HELP writes them.
 const HELP_SET: &str = "MODE,AMPS,PSI,PROCESS,HPR_PROCESS";
 /// The parser's [`GASTEST_WORDS`](plasma_protocol::cnc::command::GASTEST_WORDS).
@@ -42,6 +42,7 @@ pub(super) fn help(sim: bool) -> ReplyLine {
         w.field("gastest", HELP_GASTEST)?;
         w.field("config", "SAVE")?;
         w.field("history", "CLEAR")?;
+        w.field("consumables", "NEW")?;
         w.field("simulator_only", "TORCH")?;
         w.field("simulator", if sim { "YES" } else { "NO" })
     })
@@ -137,6 +138,10 @@ pub(super) fn status_line(ctx: &Context<'_>, refused: Option<FaultCode>) -> Repl
         }
         if outputs.remote_power {
             w.field("power", "ON")?;
+        }
+        // Only with a limit set: without one there is no share of life to show.
+        if let Some(used) = super::consumables::used_percent(ctx) {
+            w.field("consumables", format_args!("{used}%"))?;
         }
         if let Some(state) = status.hpr.state.filter(|_| hpr) {
             w.field("state", state.0)?;

@@ -14,7 +14,7 @@ use plasma_protocol::modbus_ascii::{self, Request};
 
 use embassy_futures::block_on;
 
-use crate::bridge::Bridge;
+use crate::bridge::{Bridge, SaveRequest};
 use crate::link::ProtocolChoice;
 use crate::platform::safe_state::ResetCause;
 use crate::settings::{SaveError, Settings};
@@ -51,6 +51,8 @@ pub(crate) struct Rig {
     pub save_result: Option<Result<(), SaveError>>,
     /// What a save stored.
     pub saved: Option<Vec<u8>>,
+    /// The consumable record a save stored last.
+    pub saved_consumables: Option<crate::consumables::ConsumableSet>,
     /// The history, in 8 pages of RAM flash: every draft is written at the next step.
     pub history: HistoryStore<RamFlash<HISTORY_BYTES>>,
 }
@@ -73,6 +75,7 @@ impl Rig {
             partial: Vec::new(),
             save_result: Some(Ok(())),
             saved: None,
+            saved_consumables: None,
             history: new_history(RamFlash::new()),
         }
     }
@@ -155,11 +158,16 @@ impl Rig {
     /// (at most `limit`). Returns false when time reached `limit`.
     fn step(&mut self, limit: Instant) -> bool {
         if let Some(result) = self.save_result
-            && let Some(settings) = self.bridge.take_save_request()
+            && let Some(request) = self.bridge.take_save_request()
         {
-            let mut record = [0u8; crate::storage::MAX_PAYLOAD];
-            let len = settings.encode(&mut record);
-            self.saved = Some(record[..len].to_vec());
+            match request {
+                SaveRequest::Settings(settings) => {
+                    let mut record = [0u8; crate::storage::MAX_PAYLOAD];
+                    let len = settings.encode(&mut record);
+                    self.saved = Some(record[..len].to_vec());
+                }
+                SaveRequest::Consumables(set) => self.saved_consumables = Some(set),
+            }
             self.bridge.save_finished(self.now, result);
         }
         self.serve_history();
@@ -203,6 +211,9 @@ impl Rig {
         let flash = core::mem::replace(&mut self.history, new_history(RamFlash::new()));
         self.history = new_history(flash.into_flash());
         self.bridge = Bridge::new(settings, self.now);
+        if let Some(set) = self.saved_consumables {
+            self.bridge.restore_consumables(set);
+        }
         self.bridge.record_reset(self.now, cause);
     }
 

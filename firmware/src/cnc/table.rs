@@ -4,7 +4,7 @@
 //! without the function. This is the only place that maps CNC commands to link requests; the
 //! link checks each request against the family once ([`LinkCommand::runs_on`]).
 
-use plasma_protocol::cnc::{Amps, Command, Gas, GasFlow, Mode, Pressure};
+use plasma_protocol::cnc::{Amps, Command, ConsumablesCommand, Gas, GasFlow, Mode, Pressure};
 use plasma_protocol::hpr::{GasCode, GasPair};
 
 use super::texts::{Unsupported, unsupported};
@@ -91,10 +91,15 @@ pub(super) fn route<'a>(command: &Command<'a>, family: Option<Family>) -> Route<
             | Command::Torch(_)
             | Command::History(_)
             | Command::Clock(_)
+            | Command::Consumables(ConsumablesCommand::Show)
             | Command::Power(_)
             | Command::Raw(_),
             _,
         ) => Route::Session,
+        // A SYNC cartridge names its set: another cartridge is a new set by itself.
+        (Command::Consumables(ConsumablesCommand::New), Some(Sync)) => No(&text::CONSUMABLES_NEW),
+        // Without a unit the operator may still have fitted new consumables.
+        (Command::Consumables(_), _) => Route::Session,
         // Without a unit, COUNTERS still has the link's own counters.
         (Command::Counters, None) => Local,
         (_, None) => Route::NoLink,

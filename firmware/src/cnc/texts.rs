@@ -186,6 +186,11 @@ pub mod unsupported {
         "CARTRIDGE is a Powermax SYNC function; ",
         " has no cartridge data",
     );
+    /// `CONSUMABLES NEW` on a SYNC.
+    pub const CONSUMABLES_NEW: Unsupported = words(
+        "CONSUMABLES NEW is not taken on a ",
+        ": its cartridge keeps its own counts and another cartridge starts a new record by itself",
+    );
     /// Any other command a family lacks, and a request the link
     /// refuses for the family (`Refusal::NotSupported`).
     pub const NOT_SUPPORTED: Unsupported = words("not supported by ", "");

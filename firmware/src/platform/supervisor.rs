@@ -31,13 +31,13 @@ use embassy_futures::select::{Either6, select6};
 use embassy_futures::yield_now;
 use embedded_io_async::Read;
 
-use crate::bridge::Bridge;
+use crate::bridge::{Bridge, SaveRequest};
 use crate::io::{Inputs, IoConfig, IoEvent, Outputs, SupplyState};
 use crate::platform::runner::{
     Clock, ConfigurablePort, MAX_WAIT, PS_RX_CHUNK, PortError, PsEndpoint, PsPort,
     UnsupportedConfig,
 };
-use crate::settings::{SaveError, Settings};
+use crate::settings::SaveError;
 use crate::storage::history::{Draft, HistoryAnswer, HistoryRequest, HistoryUnavailable};
 use plasma_protocol::serial::PortConfig;
 use plasma_protocol::time::Instant;
@@ -80,7 +80,7 @@ pub trait BridgeEndpoint: PsEndpoint {
 }
 
 impl BridgeEndpoint for Bridge {
-    type Saved = Settings;
+    type Saved = SaveRequest;
     type SaveError = SaveError;
 
     fn handle_cnc_rx(&mut self, now: Instant, bytes: &[u8]) {
@@ -107,7 +107,7 @@ impl BridgeEndpoint for Bridge {
     fn on_io_event(&mut self, now: Instant, event: IoEvent) {
         Bridge::on_io_event(self, now, event);
     }
-    fn take_save_request(&mut self) -> Option<Settings> {
+    fn take_save_request(&mut self) -> Option<SaveRequest> {
         Bridge::take_save_request(self)
     }
     fn save_finished(&mut self, now: Instant, result: Result<(), SaveError>) {

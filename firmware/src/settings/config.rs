@@ -12,6 +12,7 @@ use super::{
     ARC_OK_DEBOUNCE_MS, CNC_BAUDS, CncPort, Settings, TRANSFER_TIMEOUT_MS, ms, stop_bits_number,
     wiring,
 };
+use crate::consumables::Limits;
 use crate::link::{LinkConfig, ProtocolChoice};
 
 const CNC_BAUD_WORDS: &str = "1200|2400|4800|9600|19200|38400|57600|115200";
@@ -139,6 +140,25 @@ impl fmt::Display for ConfigValue {
 }
 
 const ON_OFF: &str = "ON|OFF";
+/// A consumable limit: OFF or `1..Limits::MAX` (a test ties the two).
+const LIMIT_WORDS: &str = "OFF|1..1000000";
+
+fn limit(value: Option<u32>) -> ConfigValue {
+    value.map_or(ConfigValue::Word("OFF"), ConfigValue::Number)
+}
+
+fn parse_limit(key: ConfigKey, text: &str) -> Result<Option<u32>, SetError<'_>> {
+    if text.eq_ignore_ascii_case("OFF") {
+        return Ok(None);
+    }
+    match parse_number(key, text, (1, Limits::MAX)) {
+        Err(SetError::NotANumber { .. }) => Err(SetError::BadWord {
+            key,
+            expected: LIMIT_WORDS,
+        }),
+        other => other.map(Some),
+    }
+}
 
 fn on_off(value: bool) -> ConfigValue {
     ConfigValue::Word(if value { "ON" } else { "OFF" })
@@ -258,6 +278,8 @@ impl Settings {
             ConfigKey::CncStopBits => {
                 ConfigValue::Number(u32::from(stop_bits_number(self.cnc.framing.stop_bits)))
             }
+            ConfigKey::ConsumableStartLimit => limit(self.consumable_limits.starts),
+            ConfigKey::ConsumableArcLimitS => limit(self.consumable_limits.arc_seconds),
             // The wiring keys (`wiring::KEYS`); every other key has its arm above.
             other => wiring::get(io, other).unwrap_or(ConfigValue::Number(0)),
         }
@@ -277,6 +299,9 @@ impl Settings {
             | ConfigKey::ReapplyAfterPowerCycle
             | ConfigKey::Events => Accepted::Words(ON_OFF),
             ConfigKey::PhoenixFormat => Accepted::Words(PHOENIX_FORMAT_WORDS),
+            ConfigKey::ConsumableStartLimit | ConfigKey::ConsumableArcLimitS => {
+                Accepted::Words(LIMIT_WORDS)
+            }
             other => wiring::accepted(other).unwrap_or_else(|| {
                 let (min, max) = range_of(other);
                 Accepted::Range(min, max)
@@ -340,6 +365,12 @@ impl Settings {
             ConfigKey::CncBaud => self.cnc.framing.baud = parse_cnc_baud(key, text)?,
             ConfigKey::CncParity => self.cnc.framing.parity = parse_parity(key, text)?,
             ConfigKey::CncStopBits => self.cnc.framing.stop_bits = parse_stop_bits(key, text)?,
+            ConfigKey::ConsumableStartLimit => {
+                self.consumable_limits.starts = parse_limit(key, text)?;
+            }
+            ConfigKey::ConsumableArcLimitS => {
+                self.consumable_limits.arc_seconds = parse_limit(key, text)?;
+            }
             // The wiring keys (`wiring::KEYS`); every other key has its arm above.
             other => return wiring::set(io, other, text).unwrap_or(Ok(())),
         }
@@ -394,6 +425,29 @@ mod tests {
         assert_eq!(err.to_string(), "cnc_address 0 outside 1..247");
         assert!(s.set(ConfigKey::CncStopBits, "3").is_err());
         assert_eq!(s.cnc_port_config(), PortConfig::MODBUS_DEFAULT);
+    }
+
+    #[test]
+    fn the_consumable_limits_are_off_or_a_number() {
+        let mut s = Settings::default();
+        let key = ConfigKey::ConsumableStartLimit;
+        assert_eq!(s.get(key).to_string(), "OFF");
+        s.set(key, "500").unwrap();
+        s.set(ConfigKey::ConsumableArcLimitS, "7200").unwrap();
+        assert_eq!(s.get(key).to_string(), "500");
+        assert_eq!(s.consumable_limits.arc_seconds, Some(7200));
+        let err = s.set(key, "lots").unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            "consumable_start_limit: expected OFF|1..1000000"
+        );
+        let err = s.set(key, "0").unwrap_err();
+        assert_eq!(err.to_string(), "consumable_start_limit 0 outside 1..1000000");
+        s.set(key, "off").unwrap();
+        assert_eq!(s.consumable_limits.starts, None);
+        let mut words = std::string::String::new();
+        core::fmt::Write::write_fmt(&mut words, format_args!("OFF|1..{}", Limits::MAX)).unwrap();
+        assert_eq!(words, LIMIT_WORDS);
     }
 
     #[test]

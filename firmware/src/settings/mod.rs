@@ -135,6 +135,8 @@ pub struct Settings {
     pub process: Option<Process>,
     /// The CNC port's framing and Powermax node address.
     pub cnc: CncPort,
+    /// The limits of a consumable set (OFF by default: no manual gives a figure).
+    pub consumable_limits: crate::consumables::Limits,
 }
 
 impl Default for Settings {
@@ -146,6 +148,7 @@ impl Default for Settings {
             phoenix_format: Format::from_value(DEFAULT_PHOENIX_FORMAT).unwrap_or(Format::PLAIN),
             process: None,
             cnc: CncPort::DEFAULT,
+            consumable_limits: crate::consumables::Limits::default(),
         }
     }
 }

@@ -1,5 +1,5 @@
-//! The settings record the store keeps: a fixed layout, version 3 (version 2 is its first 45
-//! bytes, version 1 its first 29, and both still load). Decoding is strict: a wrong length, an unknown code, a value out of
+//! The settings record the store keeps: a fixed layout, version 4 (version 3 is its first 46
+//! bytes, version 2 its first 45, version 1 its first 29, and all still load). Decoding is strict: a wrong length, an unknown code, a value out of
 //! range or a reserved bit set gives `None`, and the store falls back to the defaults.
 
 use plasma_protocol::cnc::phoenix::Format;
@@ -9,6 +9,7 @@ use plasma_protocol::time::Duration;
 
 use super::{CncPort, Process, Settings, ms, stop_bits_number, wiring};
 use crate::io::{InputConfig, IoConfig, MIN_START_GAP, OutputConfig};
+use crate::consumables::Limits;
 use crate::link::{LinkConfig, ProtocolChoice};
 use crate::storage;
 
@@ -17,11 +18,15 @@ pub const RECORD_V1_LEN: usize = 29;
 /// Length of the version-2 record: version 1, the CNC's wiring, then the CNC port block.
 pub const RECORD_V2_LEN: usize = RECORD_V1_LEN + wiring::RECORD_LEN + CNC_BLOCK_LEN;
 /// Length of the version-3 record: version 2, then the wiring of the inputs added since.
-pub const RECORD_LEN: usize = RECORD_V2_LEN + wiring::TAIL_LEN;
+pub const RECORD_V3_LEN: usize = RECORD_V2_LEN + wiring::TAIL_LEN;
+/// Length of the version-4 record: version 3, then the consumable limits.
+pub const RECORD_LEN: usize = RECORD_V3_LEN + LIMITS_BLOCK_LEN;
+/// Bytes of the consumable limits: starts, arc seconds (LE u32 each, 0 = OFF).
+const LIMITS_BLOCK_LEN: usize = 8;
 /// Bytes of the CNC port block in the record: address, baud (LE u32), parity, stop bits.
 const CNC_BLOCK_LEN: usize = 7;
 
-// --- record layout, version 3 (version 2 is its first 45 bytes, version 1 its first 29) ----
+// --- record layout, version 4 (version 3 is its first 46 bytes, 2 its first 45, 1 its 29) ---
 // 0 protocol | 1 node address | 2 parity | 3 stop bits | 4-5 response time-out ms (LE)
 // 6 retries | 7-8 poll ms | 9-12 slow-data ms | 13 HPR id | 14 failures before down
 // 15-16 start gap ms | 17-18 ARC_OK debounce ms | 19-20 transfer time-out ms | 21 flags
@@ -30,6 +35,7 @@ const CNC_BLOCK_LEN: usize = 7;
 // 30-36 debounce ms of the first seven inputs | 37 inverted outputs
 // 38 CNC address | 39-42 CNC baud (LE) | 43 CNC parity | 44 CNC stop bits
 // 45 SYSTEM_ERROR debounce ms (version 3)
+// 46-49 consumable start limit (LE, 0 = OFF) | 50-53 consumable arc limit s (LE, 0 = OFF) (v4)
 
 const FLAG_ARC_OK_REQUIRES_START: u8 = 1 << 0;
 const FLAG_DROP_START_ON_TRANSFER_TIMEOUT: u8 = 1 << 1;
@@ -99,7 +105,7 @@ impl CncPort {
 }
 
 impl storage::Persistent for Settings {
-    const VERSION: u8 = 3;
+    const VERSION: u8 = 4;
 
     fn encode(&self, out: &mut [u8]) -> usize {
         let mut r = [0u8; RECORD_LEN];
@@ -141,10 +147,12 @@ impl storage::Persistent for Settings {
         }
         let (wiring_bytes, wiring_tail) = wiring::encode(io);
         let (wiring_slot, rest) = r[RECORD_V1_LEN..].split_at_mut(wiring::RECORD_LEN);
-        let (cnc, tail) = rest.split_at_mut(CNC_BLOCK_LEN);
+        let (cnc, rest) = rest.split_at_mut(CNC_BLOCK_LEN);
+        let (tail, limits) = rest.split_at_mut(wiring::TAIL_LEN);
         wiring_slot.copy_from_slice(&wiring_bytes);
         cnc.copy_from_slice(&self.cnc.encode());
         tail.copy_from_slice(&wiring_tail);
+        limits.copy_from_slice(&encode_limits(self.consumable_limits));
         match out.get_mut(..RECORD_LEN) {
             Some(slot) => {
                 slot.copy_from_slice(&r);
@@ -156,21 +164,54 @@ impl storage::Persistent for Settings {
     }
 
     fn decode(payload: &[u8]) -> Option<Self> {
-        let (v2, tail) = payload.split_at_checked(RECORD_V2_LEN)?;
-        decode_v2(v2, |wiring_bytes| {
-            wiring::decode(wiring_bytes, tail.try_into().ok()?)
+        let (v3, limits) = payload.split_at_checked(RECORD_V3_LEN)?;
+        Some(Settings {
+            consumable_limits: decode_limits(limits.try_into().ok()?)?,
+            ..decode_v3(v3)?
         })
     }
 
     /// Version 1 had neither the wiring nor the CNC port block: both keep their defaults.
     /// Version 2 had no SYSTEM_ERROR input: it keeps the reference board's wiring.
+    /// Version 3 had no consumable limits: they are OFF.
     fn migrate(version: u8, payload: &[u8]) -> Option<Self> {
         match version {
             1 => decode_v1(payload),
             2 => decode_v2(payload, wiring::decode_v2),
+            3 => decode_v3(payload),
             _ => None,
         }
     }
+}
+
+fn encode_limits(limits: Limits) -> [u8; LIMITS_BLOCK_LEN] {
+    let mut block = [0u8; LIMITS_BLOCK_LEN];
+    let (starts, arc) = block.split_at_mut(4);
+    starts.copy_from_slice(&limits.starts.unwrap_or(0).to_le_bytes());
+    arc.copy_from_slice(&limits.arc_seconds.unwrap_or(0).to_le_bytes());
+    block
+}
+
+/// A limit of 0 is OFF; one above [`Limits::MAX`] was not written by this code: `None`.
+fn decode_limits(block: &[u8; LIMITS_BLOCK_LEN]) -> Option<Limits> {
+    let [a0, a1, a2, a3, b0, b1, b2, b3] = *block;
+    let limit = |v: u32| match v {
+        0 => Some(None),
+        1..=Limits::MAX => Some(Some(v)),
+        _ => None,
+    };
+    Some(Limits {
+        starts: limit(u32::from_le_bytes([a0, a1, a2, a3]))?,
+        arc_seconds: limit(u32::from_le_bytes([b0, b1, b2, b3]))?,
+    })
+}
+
+/// The version-3 record (also the first part of version 4).
+fn decode_v3(payload: &[u8]) -> Option<Settings> {
+    let (v2, tail) = payload.split_at_checked(RECORD_V2_LEN)?;
+    decode_v2(v2, |wiring_bytes| {
+        wiring::decode(wiring_bytes, tail.try_into().ok()?)
+    })
 }
 
 /// The version-2 record (also the first part of version 3), its wiring read by `wiring`.
@@ -247,6 +288,7 @@ fn decode_v1(payload: &[u8]) -> Option<Settings> {
         phoenix_format: Format::from_value(r[22]).ok()?,
         process,
         cnc: CncPort::DEFAULT,
+        consumable_limits: Limits::default(),
     };
     settings.is_valid().then_some(settings)
 }
@@ -299,6 +341,8 @@ mod tests {
             (ConfigKey::CncBaud, "19200"),
             (ConfigKey::CncParity, "even"),
             (ConfigKey::CncStopBits, "2"),
+            (ConfigKey::ConsumableStartLimit, "600"),
+            (ConfigKey::ConsumableArcLimitS, "1000000"),
         ] {
             s.set(key, value).unwrap();
         }
@@ -356,7 +400,7 @@ mod tests {
         s.set(ConfigKey::SystemErrorDebounceMs, "40").unwrap();
         let mut out = [0u8; storage::MAX_PAYLOAD];
         let len = s.encode(&mut out);
-        assert_eq!((len, RECORD_V2_LEN + 1), (RECORD_LEN, 46));
+        assert_eq!((len, RECORD_V2_LEN + 1), (RECORD_LEN, RECORD_V3_LEN));
         assert_eq!(out[45], 40);
         // A version-2 record is the first 45 bytes of a version-3 one, SYSTEM_ERROR's
         // active-high bit clear (version 2 never set it).
@@ -393,6 +437,22 @@ mod tests {
     }
 
     #[test]
+    fn a_version_3_record_loads_with_the_consumable_limits_off() {
+        let mut s = Settings::default();
+        s.set(ConfigKey::HprId, "2").unwrap();
+        s.set(ConfigKey::ConsumableStartLimit, "800").unwrap();
+        let mut out = [0u8; storage::MAX_PAYLOAD];
+        let len = s.encode(&mut out);
+        assert_eq!((len, RECORD_V3_LEN), (54, 46));
+        assert_eq!(out[46..50], 800u32.to_le_bytes());
+        let v3 = &out[..RECORD_V3_LEN];
+        assert_eq!(Settings::decode(v3), None, "not a version-4 record");
+        let migrated = Settings::migrate(3, v3).unwrap();
+        assert_eq!(migrated.link.hpr_id, 2);
+        assert_eq!(migrated.consumable_limits, Limits::default());
+    }
+
+    #[test]
     fn decode_is_strict() {
         let mut out = [0u8; 64];
         let len = Settings::default().encode(&mut out);
@@ -425,6 +485,7 @@ mod tests {
         assert_eq!(corrupt(39, 0x81), None, "CNC baud not one of the five");
         assert_eq!(corrupt(43, 3), None, "unknown CNC parity");
         assert_eq!(corrupt(44, 3), None, "three CNC stop bits");
+        assert_eq!(corrupt(49, 1), None, "a start limit above 1000000");
         let with_process = Settings {
             process: Some(Process {
                 mode: Mode::Cut,

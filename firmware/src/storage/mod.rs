@@ -69,8 +69,13 @@ use sequential_storage::map::{MapConfig, MapStorage};
 
 pub use record::{MAX_PAYLOAD, Record, RecordError};
 
-/// The map key of the settings record. Other keys are free for later use (counters, logs).
+/// The map key of the settings record.
 pub const SETTINGS_KEY: u8 = 1;
+/// The map key of the consumable record ([`crate::consumables`]), beside the settings in the
+/// same two copies.
+pub const CONSUMABLES_KEY: u8 = 2;
+/// Every key the store keeps (a copy rebuilt after damage takes the others from its twin).
+const KEYS: [u8; 2] = [SETTINGS_KEY, CONSUMABLES_KEY];
 
 /// Work buffer for sequential-storage: key + largest record, rounded up to its largest word
 /// size (32 bytes) so it suits any flash.
@@ -263,9 +268,9 @@ impl<F: NorFlash> SettingsStore<F> {
         MapStorage::new(flash, MapConfig::new(copy), Cache::new_uncached())
     }
 
-    async fn read_copy(&mut self, copy: usize) -> CopyState<F::Error> {
+    async fn read_copy(&mut self, copy: usize, key: u8) -> CopyState<F::Error> {
         let fetched = Self::map(&mut self.flash, self.copies[copy].clone())
-            .fetch_item::<&[u8]>(&mut self.work.0, &SETTINGS_KEY)
+            .fetch_item::<&[u8]>(&mut self.work.0, &key)
             .await;
         match fetched {
             Ok(None) => CopyState::Empty,
@@ -284,9 +289,9 @@ impl<F: NorFlash> SettingsStore<F> {
         }
     }
 
-    /// Reads both copies: their states and the index of the newest valid one.
-    async fn read_copies(&mut self) -> ([CopyState<F::Error>; 2], Option<usize>) {
-        let states = [self.read_copy(0).await, self.read_copy(1).await];
+    /// Reads `key` in both copies: their states and the index of the newest valid one.
+    async fn read_copies(&mut self, key: u8) -> ([CopyState<F::Error>; 2], Option<usize>) {
+        let states = [self.read_copy(0, key).await, self.read_copy(1, key).await];
         let newest = match states {
             [CopyState::Valid(a), CopyState::Valid(b)] => Some(if b > a { 1 } else { 0 }),
             [CopyState::Valid(_), _] => Some(0),
@@ -300,7 +305,12 @@ impl<F: NorFlash> SettingsStore<F> {
     /// damaged, that damage is the error ([`StoreError::Corrupted`] for a record this code
     /// did not write, [`StoreError::Flash`] if the flash failed).
     pub async fn load(&mut self) -> Result<Option<Record<'_>>, StoreError<F::Error>> {
-        let (states, newest) = self.read_copies().await;
+        self.load_key(SETTINGS_KEY).await
+    }
+
+    /// [`SettingsStore::load`] of the record under `key`.
+    pub async fn load_key(&mut self, key: u8) -> Result<Option<Record<'_>>, StoreError<F::Error>> {
+        let (states, newest) = self.read_copies(key).await;
         match newest {
             Some(copy) => Ok(self.content[copy].record()),
             None => match states {
@@ -317,10 +327,20 @@ impl<F: NorFlash> SettingsStore<F> {
     /// is erased and written again once: at that moment the other copy holds the newest
     /// settings, old or new, so nothing is lost.
     pub async fn save(&mut self, version: u8, payload: &[u8]) -> Result<(), StoreError<F::Error>> {
+        self.save_key(SETTINGS_KEY, version, payload).await
+    }
+
+    /// [`SettingsStore::save`] of the record under `key`.
+    pub async fn save_key(
+        &mut self,
+        key: u8,
+        version: u8,
+        payload: &[u8],
+    ) -> Result<(), StoreError<F::Error>> {
         if payload.len() > MAX_PAYLOAD {
             return Err(StoreError::TooLarge);
         }
-        let (states, newest) = self.read_copies().await;
+        let (states, newest) = self.read_copies(key).await;
         let sequence = match newest {
             Some(copy) => match states[copy] {
                 CopyState::Valid(sequence) => sequence.wrapping_add(1),
@@ -342,23 +362,35 @@ impl<F: NorFlash> SettingsStore<F> {
             Some(copy) => 1 - copy,
             None => 0,
         };
-        self.write_copy(first, record).await?;
-        self.write_copy(1 - first, record).await
+        self.write_copy(first, key, record).await?;
+        self.write_copy(1 - first, key, record).await
     }
 
-    async fn write_copy(&mut self, copy: usize, record: &[u8]) -> Result<(), StoreError<F::Error>> {
+    async fn write_copy(
+        &mut self,
+        copy: usize,
+        key: u8,
+        record: &[u8],
+    ) -> Result<(), StoreError<F::Error>> {
         let mut map = Self::map(&mut self.flash, self.copies[copy].clone());
-        if map
-            .store_item(&mut self.work.0, &SETTINGS_KEY, &record)
-            .await
-            .is_ok()
-        {
+        if map.store_item(&mut self.work.0, &key, &record).await.is_ok() {
             return Ok(());
         }
         map.erase_all().await?;
-        Ok(map
-            .store_item(&mut self.work.0, &SETTINGS_KEY, &record)
-            .await?)
+        map.store_item(&mut self.work.0, &key, &record).await?;
+        // The erase took the other keys' records of this copy: they come back from the twin,
+        // so that each record is in both copies again before the twin is written.
+        for other in KEYS.into_iter().filter(|&k| k != key) {
+            if let CopyState::Valid(_) = self.read_copy(1 - copy, other).await {
+                let content = self.content[1 - copy];
+                if let Some(bytes) = content.bytes.get(..content.len) {
+                    Self::map(&mut self.flash, self.copies[copy].clone())
+                        .store_item(&mut self.work.0, &other, &bytes)
+                        .await?;
+                }
+            }
+        }
+        Ok(())
     }
 
     /// Erases the whole region: the next load finds nothing.
@@ -371,7 +403,12 @@ impl<F: NorFlash> SettingsStore<F> {
 
     /// Loads settings of type `S`, falling back to `S::default()` and saying why.
     pub async fn load_settings<S: Persistent>(&mut self) -> LoadedSettings<S> {
-        let (settings, outcome) = match self.load().await {
+        self.load_record(SETTINGS_KEY).await
+    }
+
+    /// [`SettingsStore::load_settings`] of the record under `key`.
+    pub async fn load_record<S: Persistent>(&mut self, key: u8) -> LoadedSettings<S> {
+        let (settings, outcome) = match self.load_key(key).await {
             Ok(None) => (None, LoadOutcome::Empty),
             Ok(Some(record)) if record.version == S::VERSION => {
                 (S::decode(record.payload), LoadOutcome::Loaded)
@@ -411,10 +448,19 @@ impl<F: NorFlash> SettingsStore<F> {
         &mut self,
         settings: &S,
     ) -> Result<(), StoreError<F::Error>> {
+        self.save_record(SETTINGS_KEY, settings).await
+    }
+
+    /// [`SettingsStore::save_settings`] under `key`.
+    pub async fn save_record<S: Persistent>(
+        &mut self,
+        key: u8,
+        settings: &S,
+    ) -> Result<(), StoreError<F::Error>> {
         let mut payload = [0u8; MAX_PAYLOAD];
         let len = settings.encode(&mut payload);
         let payload = payload.get(..len).ok_or(StoreError::TooLarge)?;
-        self.save(S::VERSION, payload).await
+        self.save_key(key, S::VERSION, payload).await
     }
 
     /// The flash, to use it for something else.

@@ -210,11 +210,14 @@ pub enum ConfigKey {
     CncBaud,
     CncParity,
     CncStopBits,
+    // Consumable life: the limits of one set (OFF or a number).
+    ConsumableStartLimit,
+    ConsumableArcLimitS,
 }
 
 impl ConfigKey {
     /// Every key, in the order `CONFIG` lists them.
-    pub const ALL: [ConfigKey; 39] = [
+    pub const ALL: [ConfigKey; 41] = [
         ConfigKey::Protocol,
         ConfigKey::Address,
         ConfigKey::Parity,
@@ -254,6 +257,8 @@ impl ConfigKey {
         ConfigKey::CncBaud,
         ConfigKey::CncParity,
         ConfigKey::CncStopBits,
+        ConfigKey::ConsumableStartLimit,
+        ConfigKey::ConsumableArcLimitS,
     ];
 
     /// The key as written in commands and replies (lower case, `snake_case`).
@@ -298,6 +303,8 @@ impl ConfigKey {
             ConfigKey::CncBaud => "cnc_baud",
             ConfigKey::CncParity => "cnc_parity",
             ConfigKey::CncStopBits => "cnc_stop_bits",
+            ConfigKey::ConsumableStartLimit => "consumable_start_limit",
+            ConfigKey::ConsumableArcLimitS => "consumable_arc_limit_s",
         }
     }
 
@@ -418,6 +425,18 @@ pub enum Command<'a> {
     History(HistoryCommand),
     /// `CLOCK <YYYY-MM-DDTHH:MM:SS>` sets the wall clock (UTC); `CLOCK` alone reports it.
     Clock(Option<WallClock>),
+    /// `CONSUMABLES`: the consumable set's life; `CONSUMABLES NEW`: a new set is fitted.
+    Consumables(ConsumablesCommand),
+}
+
+/// The forms of `CONSUMABLES`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum ConsumablesCommand {
+    /// `CONSUMABLES`: starts, arc seconds, limits and the share of life used.
+    Show,
+    /// `CONSUMABLES NEW`: the operator fitted a new set; the counts start from zero.
+    New,
 }
 
 /// The forms of `HISTORY`.
@@ -675,6 +694,17 @@ fn history(args: &mut Args<'_>) -> Result<HistoryCommand, ParseError> {
     }
 }
 
+fn consumables(args: &mut Args<'_>) -> Result<ConsumablesCommand, ParseError> {
+    match args.next() {
+        None => Ok(ConsumablesCommand::Show),
+        Some(word) if is(word, "NEW") => Ok(ConsumablesCommand::New),
+        Some(_) => Err(ParseError::BadKeyword {
+            what: "CONSUMABLES argument",
+            expected: "NEW",
+        }),
+    }
+}
+
 fn clock(args: &mut Args<'_>) -> Result<Option<WallClock>, ParseError> {
     let Some(word) = args.next() else {
         return Ok(None);
@@ -689,7 +719,7 @@ fn clock(args: &mut Args<'_>) -> Result<Option<WallClock>, ParseError> {
 
 /// The first word of every command a CNC program may send, in the order HELP lists them
 /// (`TORCH`, which only the simulator runs, is listed apart by HELP).
-pub const COMMAND_WORDS: [&str; 22] = [
+pub const COMMAND_WORDS: [&str; 23] = [
     "HELP",
     "ID",
     "STATUS",
@@ -711,6 +741,7 @@ pub const COMMAND_WORDS: [&str; 22] = [
     "CONFIG",
     "HISTORY",
     "CLOCK",
+    "CONSUMABLES",
     "RAW",
 ];
 
@@ -815,6 +846,8 @@ impl<'a> Command<'a> {
             Command::History(history(&mut args)?)
         } else if is(word, "CLOCK") {
             Command::Clock(clock(&mut args)?)
+        } else if is(word, "CONSUMABLES") {
+            Command::Consumables(consumables(&mut args)?)
         } else if is(word, "RAW") {
             let frame = args.remainder();
             if frame.is_empty() {
@@ -948,6 +981,7 @@ mod tests {
             "CONFIG SAVE",
             "HISTORY 5",
             "CLOCK 2026-11-26T07:30:00",
+            "CONSUMABLES NEW",
             "RAW 01030000",
             "TORCH ON",
         ];
@@ -956,6 +990,23 @@ mod tests {
             let first = line.split(' ').next().unwrap_or(line);
             assert!(COMMAND_WORDS.contains(&first) || first == "TORCH", "{line}");
         }
+    }
+
+    #[test]
+    fn consumables() {
+        assert_eq!(
+            Command::parse("CONSUMABLES"),
+            Ok(Command::Consumables(ConsumablesCommand::Show))
+        );
+        assert_eq!(
+            Command::parse("consumables new"),
+            Ok(Command::Consumables(ConsumablesCommand::New))
+        );
+        assert_eq!(
+            text(err("CONSUMABLES RESET")),
+            "SYNTAX CONSUMABLES argument: expected NEW"
+        );
+        assert_eq!(err("CONSUMABLES NEW 2"), ParseError::UnexpectedArgument);
     }
 
     #[test]

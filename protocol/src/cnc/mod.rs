@@ -64,8 +64,9 @@ pub mod reply;
 
 pub use crate::units::{Amps, Pressure, Psi};
 pub use command::{
-    AMPS_ARGUMENT, AMPS_MAX, AMPS_MIN, AMPS_RANGE_TEXT, Command, ConfigCommand, ConfigKey, Gas,
-    GasFlow, HISTORY_DEFAULT, HISTORY_MAX, HistoryCommand, Mode, PSI_MAX, PSI_MIN, PSI_RANGE_TEXT,
+    AMPS_ARGUMENT, AMPS_MAX, AMPS_MIN, AMPS_RANGE_TEXT, Command, ConfigCommand, ConfigKey,
+    ConsumablesCommand, Gas, GasFlow, HISTORY_DEFAULT, HISTORY_MAX, HistoryCommand, Mode, PSI_MAX,
+    PSI_MIN, PSI_RANGE_TEXT,
 };
 pub use error::{ErrorCode, ParseError};
 pub use line::{LineAssembler, LineError, MAX_LINE_LEN};

@@ -232,9 +232,9 @@ fn every_command_on_a_sync_unit() {
     assert_eq!(
         rig.cmd("HELP"),
         "OK commands=HELP,ID,STATUS,LIMITS,FAULT,FAULTLOG,COUNTERS,CARTRIDGE,SET,REMOTE,\
-         GASTEST,POWER,RESTART,GASES,CORNER,RESET,CLEARWARN,EVENTS,CONFIG,HISTORY,CLOCK,RAW \
+         GASTEST,POWER,RESTART,GASES,CORNER,RESET,CLEARWARN,EVENTS,CONFIG,HISTORY,CLOCK,CONSUMABLES,RAW \
          set=MODE,AMPS,PSI,PROCESS,HPR_PROCESS remote=OFF gastest=ON,OFF,PREFLOW,CUTFLOW,CHECK \
-         config=SAVE history=CLEAR simulator_only=TORCH simulator=NO"
+         config=SAVE history=CLEAR consumables=NEW simulator_only=TORCH simulator=NO"
     );
     assert!(rig.cmd("help").starts_with("OK commands=HELP,ID,STATUS,"));
     assert_eq!(
@@ -561,7 +561,7 @@ fn config_get_set_and_save_round_trip_through_the_settings_record() {
          motion_debounce_ms=0 not_ready_active=LOW not_ready_debounce_ms=5 \
          rampdown_error_active=LOW rampdown_error_debounce_ms=5 system_error_active=LOW system_error_debounce_ms=5 ps_hold_active=HIGH \
          fault_active=HIGH cnc_address=1 cnc_baud=115200 cnc_parity=NONE \
-         cnc_stop_bits=1"
+         cnc_stop_bits=1 consumable_start_limit=OFF consumable_arc_limit_s=OFF"
     );
     assert_eq!(rig.cmd("CONFIG timeout_ms"), "OK timeout_ms=100");
     assert_err(&rig.cmd("CONFIG timeout_ms 30"), "ERR RANGE *30*60..1000*");
@@ -601,7 +601,10 @@ fn config_get_set_and_save_round_trip_through_the_settings_record() {
     rig.save_result = None;
     let tokens = rig.send_bytes(b"CONFIG SAVE\r\nCONFIG hpr_id\r\n", 0);
     assert!(tokens.iter().all(|t| !is_reply(t)), "{tokens:?}");
-    let settings = rig.bridge.take_save_request().unwrap();
+    let Some(crate::bridge::SaveRequest::Settings(settings)) = rig.bridge.take_save_request()
+    else {
+        panic!("a settings save")
+    };
     assert_eq!(rig.bridge.take_save_request(), None, "once");
     let mut record = [0u8; 64];
     let len = settings.encode(&mut record);

@@ -384,8 +384,11 @@ fn supervisor<S, E>(
 /// A save through the boards' store (read-back flash) on a flash whose programs report success
 /// and store nothing, as embassy-stm32 0.6.0's L4 driver reports a failed program.
 fn save_on_silently_failing_flash(
-    settings: &crate::settings::Settings,
+    request: &crate::bridge::SaveRequest,
 ) -> core::result::Result<(), crate::settings::SaveError> {
+    let crate::bridge::SaveRequest::Settings(settings) = request else {
+        return Ok(());
+    };
     use crate::storage::SettingsStore;
     use crate::storage::ram_flash::{PAGE_SIZE, RamFlash};
     use crate::storage::verified::VerifiedFlash;
@@ -407,7 +410,10 @@ fn a_flash_that_fails_silently_makes_config_save_fail() {
     let mut sup = supervisor(
         &world,
         64,
-        FakeSaver::<Settings, SaveError>::new(&world, save_on_silently_failing_flash),
+        FakeSaver::<crate::bridge::SaveRequest, SaveError>::new(
+            &world,
+            save_on_silently_failing_flash,
+        ),
     );
     let mut bridge = Bridge::new(Settings::default(), Instant::ZERO);
     cnc_rx(&world, 50, b"CONFIG SAVE\r\n");
@@ -688,7 +694,7 @@ fn drives_the_real_bridge_end_to_end() {
     let mut sup = supervisor(
         &world,
         64,
-        FakeSaver::<Settings, SaveError>::new(&world, |_| Ok(())),
+        FakeSaver::<crate::bridge::SaveRequest, SaveError>::new(&world, |_| Ok(())),
     );
     let mut bridge = Bridge::new(Settings::default(), Instant::ZERO);
     // A Powermax SYNC answers the first detection request; the CNC saves the settings.
@@ -771,7 +777,7 @@ fn history_reaches_its_keeper_and_the_answer_the_cnc() {
         let sup = supervisor(
             &world,
             64,
-            FakeSaver::<Settings, SaveError>::new(&world, |_| Ok(())),
+            FakeSaver::<crate::bridge::SaveRequest, SaveError>::new(&world, |_| Ok(())),
         );
         let mut bridge = Bridge::new(Settings::default(), Instant::ZERO);
         bridge.record_reset(Instant::ZERO, ResetCause::Pin);

@@ -1,0 +1,162 @@
+//! Consumable life as the session sees it: `CONSUMABLES [NEW]`, the `!WARN CONSUMABLE`
+//! events, STATUS's `consumables=` field, and what of the link's and the I/O's events the
+//! record ([`crate::consumables`]) counts.
+
+use core::fmt::Write as _;
+
+use plasma_protocol::cnc::ConsumablesCommand;
+use plasma_protocol::cnc::reply::ReplyWriter;
+
+use super::{Context, ReplyLine, Session, ok_line};
+use crate::consumables::{Source, Usage};
+use crate::io::IoEvent;
+use crate::link::{ActiveFault, Family, LinkEvent};
+use crate::storage::history::Event;
+
+/// A UID of all zeros: the unit could not read the cartridge (SYNC manual
+/// 000_dd931256418ae627.txt line 1431), not a cartridge of its own.
+const UNREADABLE_UID: [u8; 16] = [0; 16];
+
+/// The counts of the set in use now: a SYNC's cartridge, else the bridge's.
+pub(super) fn usage(ctx: &Context<'_>) -> Usage {
+    let status = ctx.link.status();
+    let cartridge = status
+        .cartridge
+        .as_ref()
+        .filter(|c| status.family == Some(Family::PowermaxSync) && c.uid.0 != UNREADABLE_UID);
+    ctx.consumables.usage(ctx.now, cartridge)
+}
+
+/// The share of life used, percent, for STATUS (`None`: both limits OFF).
+pub(super) fn used_percent(ctx: &Context<'_>) -> Option<u32> {
+    usage(ctx).used_percent(ctx.settings.consumable_limits)
+}
+
+/// What of an I/O event the record counts.
+pub(super) fn note_io_event(ctx: &mut Context<'_>, event: IoEvent) {
+    let c = &mut *ctx.consumables;
+    match event {
+        IoEvent::ArcOn => c.arc_on(ctx.now),
+        IoEvent::ArcOff => c.arc_off(ctx.now),
+        IoEvent::TransferTimeout => c.start_without_transfer(),
+        IoEvent::RampdownError => c.rampdown_error(),
+        _ => {}
+    }
+}
+
+/// What of a link event the record counts: a 0-32-x fault.
+pub(super) fn note_link_event(ctx: &mut Context<'_>, event: &LinkEvent) {
+    if let LinkEvent::FaultRaised {
+        code: ActiveFault::Powermax(code),
+        ..
+    } = *event
+    {
+        ctx.consumables.fault(code);
+    }
+}
+
+/// Writes a percentage, `OFF` when there is none.
+struct Percent(Option<u32>);
+
+impl core::fmt::Display for Percent {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self.0 {
+            Some(p) => write!(f, "{p}%"),
+            None => f.write_str("OFF"),
+        }
+    }
+}
+
+/// A limit, `OFF` when there is none.
+struct Limit(Option<u32>);
+
+impl core::fmt::Display for Limit {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self.0 {
+            Some(n) => write!(f, "{n}"),
+            None => f.write_str("OFF"),
+        }
+    }
+}
+
+/// A cartridge UID as its 16 characters (hex digits in the manual's example).
+struct Uid([u8; 16]);
+
+impl core::fmt::Display for Uid {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        for &b in &self.0 {
+            let c = if b.is_ascii_alphanumeric() { b } else { b'?' };
+            f.write_char(char::from(c))?;
+        }
+        Ok(())
+    }
+}
+
+fn source_word(source: Source) -> &'static str {
+    match source {
+        Source::Cartridge => "cartridge",
+        Source::Bridge => "bridge",
+    }
+}
+
+impl Session {
+    /// `CONSUMABLES`: the set in use; `CONSUMABLES NEW`: a new set (the table refuses it on a
+    /// SYNC, whose cartridge names its set).
+    pub(super) fn consumables(ctx: &mut Context<'_>, command: ConsumablesCommand) -> ReplyLine {
+        if command == ConsumablesCommand::New {
+            ctx.consumables.new_set(ctx.now, None);
+            super::history::note(ctx, Event::ConsumableChanged);
+        }
+        let usage = usage(ctx);
+        let limits = ctx.settings.consumable_limits;
+        let set = *ctx.consumables.set();
+        ok_line(|w| {
+            w.field("source", source_word(usage.source))?;
+            w.field("starts", usage.starts)?;
+            w.field("arc_s", usage.arc_seconds)?;
+            w.field("start_limit", Limit(limits.starts))?;
+            w.field("arc_limit_s", Limit(limits.arc_seconds))?;
+            w.field("used", Percent(usage.used_percent(limits)))?;
+            w.field("wear_faults", set.wear_faults)?;
+            let hpr = matches!(
+                ctx.link.status().family,
+                Some(Family::Hpr | Family::MaxPro200)
+            );
+            if hpr || set.rampdown_errors > 0 {
+                w.field("rampdown_errors", set.rampdown_errors)?;
+            }
+            if let Some(uid) = set.uid {
+                w.field("uid", Uid(uid))?;
+            }
+            Ok(())
+        })
+    }
+
+    /// Follows the set in use: another SYNC cartridge starts a new record (and a history
+    /// entry); a warning due goes out as `!WARN CONSUMABLE`.
+    pub(super) fn follow_consumables(&mut self, ctx: &mut Context<'_>) {
+        let status = ctx.link.status();
+        if status.family == Some(Family::PowermaxSync)
+            && let Some(uid) = status.cartridge.map(|c| c.uid.0)
+            && uid != UNREADABLE_UID
+            && ctx.consumables.cartridge_seen(ctx.now, uid)
+        {
+            super::history::note(ctx, Event::ConsumableChanged);
+        }
+        let usage = usage(ctx);
+        let limits = ctx.settings.consumable_limits;
+        let Some(warning) = ctx.consumables.warning_due(&usage, limits) else {
+            return;
+        };
+        self.event(ctx, |l| {
+            let mut w = ReplyWriter::event(l, "WARN")?;
+            w.word("CONSUMABLE")?;
+            w.field("used", Percent(Some(warning.used_percent)))?;
+            w.field("threshold", Percent(Some(warning.threshold)))?;
+            w.field("source", source_word(usage.source))?;
+            w.field("starts", usage.starts)?;
+            w.field("arc_s", usage.arc_seconds)?;
+            w.finish().map(|_| ())
+        });
+    }
+}
