@@ -39,9 +39,9 @@
 //! ```
 
 use crate::cnc::history::HistoryLog;
-use crate::consumables::{ConsumableSet, Consumables};
 use crate::cnc::{Context, Session, SessionStats};
 pub use crate::cnc::{FRAME_IDLE_TIMEOUT, MAX_REPLY_LEN, OUTPUT_CAPACITY, SimCommand};
+use crate::consumables::{ConsumableSet, Consumables};
 use crate::io::{Inputs, IoConfig, IoEvent, Outputs, SupplyState};
 use crate::link::{Diagnostics, PowermaxProcess, PsLink, UnitStatus};
 use crate::platform::safe_state::ResetCause;

@@ -64,8 +64,8 @@ macro_rules! log_texts {
 }
 
 pub mod bridge;
-pub mod consumables;
 mod cnc;
+pub mod consumables;
 pub mod io;
 pub mod link;
 pub mod platform;

@@ -39,7 +39,8 @@ mod supply_rules;
 use libfuzzer_sys::arbitrary::{self, Arbitrary};
 use libfuzzer_sys::fuzz_target;
 
-use plasma_firmware::bridge::Bridge;
+use plasma_firmware::bridge::{Bridge, SaveRequest};
+use plasma_firmware::consumables::ConsumableSet;
 use plasma_firmware::bridge::{FRAME_IDLE_TIMEOUT, MAX_REPLY_LEN, OUTPUT_CAPACITY};
 use plasma_firmware::io::{DiscreteIo, Input, InputConfig, PinLevels, SafetyMonitor, SupplyState};
 // The board's own figures: the supervisor's and the PS port's read sizes, frames per turn and
@@ -460,21 +461,34 @@ impl Board {
                 self.monitor.torch_on_redefined(active);
             }
         }
-        if let Some(settings) = self.bridge.take_save_request() {
-            let mut payload = [0u8; MAX_PAYLOAD];
-            let len = settings.encode(&mut payload);
-            assert!(
-                len <= MAX_PAYLOAD,
-                "settings record over {MAX_PAYLOAD} bytes"
-            );
-            assert_eq!(
-                Settings::decode(&payload[..len]),
-                Some(settings),
-                "saved settings load back different"
-            );
-            let result = core::mem::replace(&mut self.next_save, Ok(()));
-            self.bridge.save_finished(now, result);
-            self.drain_cnc_output();
+        match self.bridge.take_save_request() {
+            Some(SaveRequest::Settings(settings)) => {
+                let mut payload = [0u8; MAX_PAYLOAD];
+                let len = settings.encode(&mut payload);
+                assert!(
+                    len <= MAX_PAYLOAD,
+                    "settings record over {MAX_PAYLOAD} bytes"
+                );
+                assert_eq!(
+                    Settings::decode(&payload[..len]),
+                    Some(settings),
+                    "saved settings load back different"
+                );
+                let result = core::mem::replace(&mut self.next_save, Ok(()));
+                self.bridge.save_finished(now, result);
+                self.drain_cnc_output();
+            }
+            Some(SaveRequest::Consumables(set)) => {
+                let mut payload = [0u8; MAX_PAYLOAD];
+                let len = set.encode(&mut payload);
+                assert_eq!(
+                    ConsumableSet::decode(&payload[..len]),
+                    Some(set),
+                    "saved consumable record loads back different"
+                );
+                self.bridge.save_finished(now, Ok(()));
+            }
+            None => {}
         }
 
         // The I/O task.

@@ -105,7 +105,10 @@ mod tests {
             warned_100: true,
         };
         let r = encoded(&set);
-        assert_eq!(r[..16], [1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16]);
+        assert_eq!(
+            r[..16],
+            [1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16]
+        );
         assert_eq!(r[16], FLAG_UID | FLAG_WARNED_100);
         assert_eq!(r[17..], [0x41; 16]);
     }

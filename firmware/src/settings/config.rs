@@ -442,7 +442,10 @@ mod tests {
             "consumable_start_limit: expected OFF|1..1000000"
         );
         let err = s.set(key, "0").unwrap_err();
-        assert_eq!(err.to_string(), "consumable_start_limit 0 outside 1..1000000");
+        assert_eq!(
+            err.to_string(),
+            "consumable_start_limit 0 outside 1..1000000"
+        );
         s.set(key, "off").unwrap();
         assert_eq!(s.consumable_limits.starts, None);
         let mut words = std::string::String::new();

@@ -8,8 +8,8 @@ use plasma_protocol::serial::{Parity, PortConfig, StopBits};
 use plasma_protocol::time::Duration;
 
 use super::{CncPort, Process, Settings, ms, stop_bits_number, wiring};
-use crate::io::{InputConfig, IoConfig, MIN_START_GAP, OutputConfig};
 use crate::consumables::Limits;
+use crate::io::{InputConfig, IoConfig, MIN_START_GAP, OutputConfig};
 use crate::link::{LinkConfig, ProtocolChoice};
 use crate::storage;
 

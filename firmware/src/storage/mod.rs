@@ -373,7 +373,11 @@ impl<F: NorFlash> SettingsStore<F> {
         record: &[u8],
     ) -> Result<(), StoreError<F::Error>> {
         let mut map = Self::map(&mut self.flash, self.copies[copy].clone());
-        if map.store_item(&mut self.work.0, &key, &record).await.is_ok() {
+        if map
+            .store_item(&mut self.work.0, &key, &record)
+            .await
+            .is_ok()
+        {
             return Ok(());
         }
         map.erase_all().await?;

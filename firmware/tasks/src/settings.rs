@@ -11,11 +11,13 @@ use embassy_futures::select::{Either, select};
 use embassy_sync::blocking_mutex::raw::CriticalSectionRawMutex;
 use embassy_sync::signal::Signal;
 use embassy_time::Timer;
+use plasma_firmware::bridge::SaveRequest;
+use plasma_firmware::consumables::ConsumableSet;
 use plasma_firmware::platform::supervisor::SettingsSaver;
 use plasma_firmware::platform::watchdog::TaskId;
 use plasma_firmware::settings::{SaveError, Settings};
 use plasma_firmware::storage::verified::VerifiedFlash;
-use plasma_firmware::storage::{LoadOutcome, LoadedSettings, SettingsStore};
+use plasma_firmware::storage::{CONSUMABLES_KEY, LoadOutcome, LoadedSettings, SettingsStore};
 
 use crate::Board;
 use crate::progress::report;
@@ -68,6 +70,16 @@ pub async fn load<B: Board>(store: Option<&mut Store<B>>) -> LoadedSettings<Sett
     loaded
 }
 
+/// Loads the consumable record at boot (`None` when none was kept: the bridge starts a new
+/// set; a damaged one is logged).
+pub async fn load_consumables<B: Board>(store: Option<&mut Store<B>>) -> Option<ConsumableSet> {
+    let loaded = store?.load_record::<ConsumableSet>(CONSUMABLES_KEY).await;
+    if loaded.outcome.is_problem() {
+        warn!("consumable record: {}", loaded.outcome);
+    }
+    (!loaded.outcome.is_defaults()).then_some(loaded.settings)
+}
+
 /// The loaded settings as this boot runs them ([`Settings::at_boot`]): with the user button
 /// held at reset, the CNC port's default framing, logged.
 pub fn at_boot(loaded: Settings, user_button_held: bool) -> Settings {
@@ -94,18 +106,18 @@ pub const fn outcome_word(outcome: LoadOutcome) -> &'static str {
     }
 }
 
-/// Settings to store (bridge → settings task).
-static SAVE_REQUEST: Signal<CriticalSectionRawMutex, Settings> = Signal::new();
+/// Settings or the consumable record to store (bridge → settings task).
+static SAVE_REQUEST: Signal<CriticalSectionRawMutex, SaveRequest> = Signal::new();
 /// How it went (settings task → bridge).
 static SAVE_RESULT: Signal<CriticalSectionRawMutex, Result<(), SaveError>> = Signal::new();
 
 /// The bridge task's handle on the settings task.
 pub struct BoardSaver;
 
-impl SettingsSaver<Settings, SaveError> for BoardSaver {
-    fn start(&mut self, settings: Settings) {
+impl SettingsSaver<SaveRequest, SaveError> for BoardSaver {
+    fn start(&mut self, request: SaveRequest) {
         SAVE_RESULT.reset();
-        SAVE_REQUEST.signal(settings);
+        SAVE_REQUEST.signal(request);
     }
 
     fn finished(&mut self) -> impl Future<Output = Result<(), SaveError>> {
@@ -113,25 +125,30 @@ impl SettingsSaver<Settings, SaveError> for BoardSaver {
     }
 }
 
-/// Writes settings to flash when the bridge asks (`CONFIG SAVE`). The body of the board's
-/// settings task.
+/// Writes settings to flash when the bridge asks (`CONFIG SAVE`), and the consumable record
+/// when it is due. The body of the board's settings task.
 pub async fn run<B: Board>(mut store: Option<Store<B>>, progress: TaskId) {
     loop {
         let request = select(SAVE_REQUEST.wait(), Timer::after_millis(250)).await;
         report(progress);
-        let Either::First(settings) = request else {
+        let Either::First(request) = request else {
             continue;
         };
+        let what = match request {
+            SaveRequest::Settings(_) => "settings",
+            SaveRequest::Consumables(_) => "consumable record",
+        };
         let result = match store.as_mut() {
-            Some(store) => store
-                .save_settings(&settings)
-                .await
-                .map_err(SaveError::from),
+            Some(store) => match request {
+                SaveRequest::Settings(settings) => store.save_settings(&settings).await,
+                SaveRequest::Consumables(set) => store.save_record(CONSUMABLES_KEY, &set).await,
+            }
+            .map_err(SaveError::from),
             None => Err(SaveError::Flash),
         };
         match result {
-            Ok(()) => info!("settings saved"),
-            Err(e) => warn!("settings not saved: {}", defmt::Display2Format(&e)),
+            Ok(()) => debug!("{=str} saved", what),
+            Err(e) => warn!("{=str} not saved: {}", what, defmt::Display2Format(&e)),
         }
         report_flash_errors::<B>();
         SAVE_RESULT.signal(result);

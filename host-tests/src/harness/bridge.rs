@@ -22,8 +22,9 @@ use plasma_firmware::platform::safe_state::ResetCause;
 use plasma_firmware::storage::history::{HistoryStore, serve};
 use plasma_firmware::storage::ram_flash::{PAGE_SIZE, RamFlash};
 
-use plasma_firmware::bridge::Bridge;
 use plasma_firmware::bridge::SimCommand;
+use plasma_firmware::bridge::{Bridge, SaveRequest};
+use plasma_firmware::consumables::ConsumableSet;
 use plasma_firmware::io::{Inputs, IoConfig, IoEvent, Outputs};
 use plasma_firmware::link::{Diagnostics, LinkEvent, UnitStatus};
 use plasma_firmware::platform::PsEndpoint;
@@ -155,6 +156,8 @@ pub struct BridgeEndpoint {
     torch: VecDeque<bool>,
     /// The stored record payload (what the flash would hold).
     stored: Option<Vec<u8>>,
+    /// The consumable record stored last (saved by the bridge itself, at most once a minute).
+    stored_consumables: Option<ConsumableSet>,
     /// The history, in flash as the board's; it survives [`BridgeEndpoint::power_cycle`].
     history: HistoryStore<HistoryFlash>,
     saves: u32,
@@ -176,6 +179,7 @@ impl BridgeEndpoint {
             partial: Vec::new(),
             torch: VecDeque::new(),
             stored: None,
+            stored_consumables: None,
             history: open_history(HistoryFlash::new()),
             saves: 0,
             next_save: SaveOutcome::Store,
@@ -219,9 +223,15 @@ impl BridgeEndpoint {
         self.saves
     }
 
+    /// The consumable record the bridge stored last.
+    pub fn saved_consumables(&self) -> Option<ConsumableSet> {
+        self.stored_consumables
+    }
+
     /// The bridge's flash as a file keeps it (`pbtool sim --flash`): [`FLASH_IMAGE_MAGIC`],
     /// the stored settings payload (length as u16 little endian, `0xFFFF`: none saved, then
-    /// the bytes), then the history region's bytes.
+    /// the bytes), then the history region's bytes, then (when one was stored) the consumable
+    /// record's payload (an image without it loads as before).
     pub fn flash_image(&mut self) -> Vec<u8> {
         self.serve_history(Instant::ZERO);
         let mut image = FLASH_IMAGE_MAGIC.to_vec();
@@ -233,6 +243,11 @@ impl BridgeEndpoint {
             None => image.extend_from_slice(&u16::MAX.to_le_bytes()),
         }
         image.extend_from_slice(self.history.flash().bytes());
+        if let Some(set) = self.stored_consumables {
+            let mut payload = [0u8; MAX_PAYLOAD];
+            let len = set.encode(&mut payload);
+            image.extend_from_slice(&payload[..len]);
+        }
         image
     }
 
@@ -252,16 +267,24 @@ impl BridgeEndpoint {
                 (Some(payload.to_vec()), rest)
             }
         };
-        if rest.len() != HISTORY_BYTES {
+        let Some((history, consumables)) = rest.split_at_checked(HISTORY_BYTES) else {
             return Err(format!(
                 "flash image: history region of {} bytes, expected {HISTORY_BYTES}",
                 rest.len()
             ));
-        }
+        };
+        let stored_consumables = match consumables {
+            [] => None,
+            payload => Some(
+                ConsumableSet::decode(payload)
+                    .ok_or("flash image: the consumable record is damaged")?,
+            ),
+        };
         let mut flash = HistoryFlash::new();
-        flash.bytes_mut().copy_from_slice(rest);
+        flash.bytes_mut().copy_from_slice(history);
         self.history = open_history(flash);
         self.stored = stored;
+        self.stored_consumables = stored_consumables;
         Ok(())
     }
 
@@ -278,6 +301,9 @@ impl BridgeEndpoint {
         let flash = std::mem::replace(&mut self.history, open_history(HistoryFlash::new()));
         self.history = open_history(flash.into_flash());
         self.bridge = Bridge::new(settings, now);
+        if let Some(set) = self.stored_consumables {
+            self.bridge.restore_consumables(set);
+        }
         self.bridge.record_reset(now, ResetCause::PowerOn);
         if self.sim_commands {
             self.bridge.enable_sim_commands();
@@ -301,11 +327,17 @@ impl BridgeEndpoint {
             if self.serve_history(now) {
                 continue;
             }
-            let Some(settings) = self.bridge.take_save_request() else {
-                break;
+            let result = match self.bridge.take_save_request() {
+                None => break,
+                Some(SaveRequest::Settings(settings)) => {
+                    self.saves += 1;
+                    self.store(&settings)
+                }
+                Some(SaveRequest::Consumables(set)) => {
+                    self.stored_consumables = Some(set);
+                    Ok(())
+                }
             };
-            let result = self.store(&settings);
-            self.saves += 1;
             self.bridge.save_finished(now, result);
         }
     }
