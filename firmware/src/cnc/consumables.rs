@@ -160,3 +160,97 @@ impl Session {
         });
     }
 }
+
+#[cfg(test)]
+mod tests {
+    extern crate std;
+    use std::string::String;
+
+    use crate::cnc::rig::{Rig, events_on};
+    use crate::io::IoEvent;
+    use crate::platform::safe_state::ResetCause;
+
+    fn cut(rig: &mut Rig, arc_ms: u64) {
+        rig.bridge.on_io_event(rig.now, IoEvent::ArcOn);
+        rig.run(arc_ms);
+        rig.bridge.on_io_event(rig.now, IoEvent::ArcOff);
+        rig.run(200);
+    }
+
+    fn warnings(rig: &Rig) -> std::vec::Vec<&String> {
+        rig.received
+            .iter()
+            .filter(|l| l.starts_with("!WARN CONSUMABLE"))
+            .collect()
+    }
+
+    #[test]
+    fn an_hpr_counts_its_cuts_warns_once_each_and_keeps_the_set_across_a_reset() {
+        let mut rig = Rig::hpr("HPR260XD");
+        rig.bridge.on_io_event(rig.now, IoEvent::RampdownError);
+        assert_eq!(
+            rig.cmd("CONSUMABLES"),
+            "OK source=bridge starts=0 arc_s=0 start_limit=OFF arc_limit_s=OFF used=OFF \
+             wear_faults=0 rampdown_errors=1"
+        );
+        assert_eq!(rig.cmd("EVENTS ON"), "OK events=ON");
+        assert!(rig.cmd("CONFIG consumable_start_limit 10").ends_with("=10"));
+        for _ in 0..8 {
+            cut(&mut rig, 1500);
+        }
+        assert!(warnings(&rig).is_empty());
+        assert!(rig.cmd("STATUS").contains(" consumables=80%"));
+        cut(&mut rig, 1500);
+        cut(&mut rig, 1500);
+        cut(&mut rig, 1500);
+        assert_eq!(
+            warnings(&rig),
+            [
+                // Given as the start that reaches the share begins: its arc is not counted yet.
+                "!WARN CONSUMABLE used=90% threshold=90% source=bridge starts=9 arc_s=12",
+                "!WARN CONSUMABLE used=100% threshold=100% source=bridge starts=10 arc_s=13"
+            ]
+        );
+        let saved = rig
+            .saved_consumables
+            .expect("the warnings were saved at once");
+        assert!(saved.warned_100);
+        // After a reset with what was saved: no warning again, the counts go on.
+        let settings = *rig.bridge.settings();
+        rig.reboot(settings, ResetCause::PowerOn);
+        rig.received.clear();
+        cut(&mut rig, 1500);
+        assert!(warnings(&rig).is_empty(), "{:?}", rig.received);
+        assert!(
+            rig.cmd("CONSUMABLES")
+                .starts_with("OK source=bridge starts=11 ")
+        );
+        // A new set: from zero, history entry, and warned again when worn.
+        let reply = rig.cmd("CONSUMABLES NEW");
+        assert!(
+            reply.starts_with("OK source=bridge starts=0 arc_s=0 "),
+            "{reply}"
+        );
+        assert!(reply.contains(" used=0% "), "{reply}");
+        let tokens = rig.send_bytes(b"HISTORY 1\r\n", 1);
+        assert!(
+            tokens[0].ends_with(" family=HPR event=CONSUMABLES_CHANGED"),
+            "{tokens:?}"
+        );
+    }
+
+    #[test]
+    fn a_sync_shows_its_cartridge_and_refuses_new() {
+        let mut rig = Rig::sync65(events_on());
+        rig.run(600);
+        let reply = rig.cmd("CONSUMABLES");
+        assert!(reply.starts_with("OK source=cartridge starts="), "{reply}");
+        assert!(reply.ends_with(" uid=E00401D0036FB25D"), "{reply}");
+        let refused = rig.cmd("CONSUMABLES NEW");
+        assert_eq!(
+            refused,
+            "ERR UNSUPPORTED CONSUMABLES NEW is not taken on a Powermax SYNC: its cartridge \
+             keeps its own counts and another cartridge starts a new record by itself"
+        );
+    }
+}

@@ -188,7 +188,7 @@ pub mod unsupported {
     );
     /// `CONSUMABLES NEW` on a SYNC.
     pub const CONSUMABLES_NEW: Unsupported = words(
-        "CONSUMABLES NEW is not taken on a ",
+        "CONSUMABLES NEW is not taken on ",
         ": its cartridge keeps its own counts and another cartridge starts a new record by itself",
     );
     /// Any other command a family lacks, and a request the link

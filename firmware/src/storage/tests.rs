@@ -433,3 +433,53 @@ fn a_flash_that_stores_nothing_fails_the_save() {
         Err(StoreError::Flash(super::verified::VerifyError::Mismatch))
     ));
 }
+
+/// The consumable record under its own key, saved many times beside the settings: a cut at
+/// every step of every consumable save leaves the settings as they were, and the record
+/// old or new.
+#[test]
+fn power_cut_at_every_step_of_consumable_saves_keeps_the_settings() {
+    use super::CONSUMABLES_KEY;
+    use crate::consumables::ConsumableSet;
+    let settings = TestConfig::new(7, 100);
+    let set = |starts: u32| ConsumableSet {
+        starts,
+        ..ConsumableSet::default()
+    };
+    let mut s = store(Flash::new());
+    save(&mut s, &settings).unwrap();
+    let mut base = s.into_flash();
+    // 48-byte records: the pages of both copies fill and are collected several times.
+    for prior in 0..120u32 {
+        let mut probe = store(base.clone());
+        let before = probe.flash().steps();
+        block_on(probe.save_record(CONSUMABLES_KEY, &set(prior))).unwrap();
+        let total = probe.flash().steps() - before;
+        for cut in 0..total {
+            let mut flash = base.clone();
+            flash.cut_power_after(cut, prior.wrapping_mul(31).wrapping_add(cut));
+            let mut s = store(flash);
+            assert!(block_on(s.save_record(CONSUMABLES_KEY, &set(prior))).is_err());
+            let mut flash = s.into_flash();
+            flash.power_cycle();
+            let mut rebooted = store(flash);
+            let loaded = load(&mut rebooted);
+            assert_eq!(
+                (loaded.outcome, &loaded.settings),
+                (LoadOutcome::Loaded, &settings),
+                "prior {prior}, cut after {cut}/{total}"
+            );
+            let record = block_on(rebooted.load_record::<ConsumableSet>(CONSUMABLES_KEY));
+            let starts = record.settings.starts;
+            let old = if prior == 0 { 0 } else { prior - 1 };
+            assert!(
+                starts == prior || starts == old,
+                "prior {prior}, cut after {cut}/{total}: {starts} starts ({:?})",
+                record.outcome
+            );
+        }
+        let mut s = store(base);
+        block_on(s.save_record(CONSUMABLES_KEY, &set(prior))).unwrap();
+        base = s.into_flash();
+    }
+}
