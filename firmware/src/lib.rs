@@ -8,6 +8,7 @@
 //! - [`cnc`]: the CNC side: the text protocol, Phoenix serial messaging, the Powermax-speaking
 //!   port and the one command table.
 //! - [`settings`]: what survives a power cycle, and the `CONFIG` keys.
+//! - [`consumables`]: consumable life, one record per set, kept across power cycles.
 //! - [`link`]: the power-supply link (Modbus ASCII and HPR).
 //! - [`io`]: all of the torch-safe discrete I/O: the CNC's wiring (input polarity and
 //!   debounce, output levels), the START interlocks, ARC_OK, READY, FAULT, the board's
