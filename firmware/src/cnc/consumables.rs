@@ -133,7 +133,8 @@ impl Session {
     }
 
     /// Follows the set in use: another SYNC cartridge starts a new record (and a history
-    /// entry); a warning due goes out as `!WARN CONSUMABLE`.
+    /// entry; the first one the bridge sees only a record); a warning due goes out as
+    /// `!WARN CONSUMABLE`.
     pub(super) fn follow_consumables(&mut self, ctx: &mut Context<'_>) {
         let status = ctx.link.status();
         if status.family == Some(Family::PowermaxSync)

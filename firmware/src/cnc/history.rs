@@ -324,7 +324,7 @@ mod tests {
         assert!(rig.bridge.status().link_up);
         rig.reboot(Settings::default(), ResetCause::IndependentWatchdog);
         rig.run(600);
-        let lines = history(&mut rig, "HISTORY 7");
+        let lines = history(&mut rig, "HISTORY 6");
         let events: Vec<&str> = lines
             .iter()
             .map(|l| l.split(" event=").nth(1).unwrap_or(l))
@@ -337,20 +337,18 @@ mod tests {
                 "LINK_LOST",
                 "FAULT_CLEARED code=0-50-0",
                 "FAULT code=0-50-0 action=required",
-                // The first cartridge the bridge reads starts the first consumable record.
-                "CONSUMABLES_CHANGED",
-                "OK history=6 skipped=0",
+                "OK history=5 skipped=0",
             ],
             "{lines:?}"
         );
         assert!(
-            lines[1].starts_with("HISTORY seq=4 boot=0 uptime_ms="),
+            lines[1].starts_with("HISTORY seq=3 boot=0 uptime_ms="),
             "{}",
             lines[1]
         );
         assert!(lines[1].contains(" clock=- family=SYNC "), "{}", lines[1]);
         assert!(
-            lines[0].starts_with("HISTORY seq=5 boot=1 "),
+            lines[0].starts_with("HISTORY seq=4 boot=1 "),
             "{}",
             lines[0]
         );

@@ -199,14 +199,16 @@ impl Consumables {
         self.urgent = true;
     }
 
-    /// A SYNC cartridge was read: true when it is another set than the record's, which
-    /// then starts anew for it.
+    /// A SYNC cartridge was read: a record for another cartridge (or none) starts anew for
+    /// this one. True when it replaced another cartridge's record: the first cartridge a
+    /// bridge sees is not a change of consumables.
     pub fn cartridge_seen(&mut self, now: Instant, uid: [u8; 16]) -> bool {
         if self.set.uid == Some(uid) {
             return false;
         }
+        let replaced = self.set.uid.is_some();
         self.new_set(now, Some(uid));
-        true
+        replaced
     }
 
     /// The counts of the set in use: the cartridge's when one was read, else the bridge's.
@@ -399,9 +401,12 @@ mod tests {
                 transfer_time_counts: 2447,
             },
         };
-        assert!(c.cartridge_seen(at(5000), cartridge.uid.0));
+        assert!(!c.cartridge_seen(at(5000), cartridge.uid.0), "the first one");
         assert_eq!(c.set().wear_faults, 0, "a new set");
+        assert_eq!(c.set().uid, Some(cartridge.uid.0));
         assert!(!c.cartridge_seen(at(6000), cartridge.uid.0));
+        assert!(c.cartridge_seen(at(7000), *b"E00401D0036FB25E"), "another one");
+        assert!(!c.cartridge_seen(at(8000), *b"E00401D0036FB25E"));
         assert_eq!(
             c.usage(at(6000), Some(&cartridge)),
             Usage {

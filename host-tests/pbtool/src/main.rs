@@ -64,7 +64,8 @@ enum Command {
     ///
     /// The port takes the unit's framing (Powermax 19200 8E1, HPR 19200 8N1). Lines on stdin
     /// control it while it runs: `FAULT CODE`, `CLEAR`, `POWER OFF`, `POWER ON`, `SILENT`
-    /// (as if the cable were cut), `ANSWER`. Runs until stopped (Ctrl-C) or the port goes
+    /// (as if the cable were cut), `ANSWER`, and on a SYNC `CARTRIDGE UID` (another
+    /// cartridge). Runs until stopped (Ctrl-C) or the port goes
     /// away (exit status 2).
     Unit(cli::unit::ServeArgs),
     /// Listen to a live line and explain every frame; never transmits.

@@ -17,6 +17,7 @@ use plasma_protocol::time::Instant;
 use plasma_sim::hpr::Hpr;
 use plasma_sim::multidrop::{MultiDrop, units_for_one_line};
 use plasma_sim::powermax::Powermax;
+use plasma_sim::sync::Cartridge;
 use plasma_sim::{Family, Model, SimOptions, SimulatedUnit};
 
 use crate::decode::{FrameStream, lines};
@@ -50,6 +51,9 @@ pub enum Control {
     /// `SILENT` (the cable cut: the unit neither hears nor answers, and keeps its state) /
     /// `ANSWER` (mended).
     Silent(bool),
+    /// `CARTRIDGE UID` (SYNC): another cartridge of the same kind, with this UID (up to 16
+    /// characters) and fresh counters, is put on the torch.
+    Cartridge([u8; 16]),
 }
 
 impl Control {
@@ -68,10 +72,18 @@ impl Control {
             ["POWER", "ON"] => Control::Power(true),
             ["SILENT"] => Control::Silent(true),
             ["ANSWER"] => Control::Silent(false),
+            ["CARTRIDGE", uid] if model.family() == Family::Sync => {
+                Control::Cartridge(parse_uid(uid)?)
+            }
             _ => {
+                let cartridge = if model.family() == Family::Sync {
+                    ", CARTRIDGE UID"
+                } else {
+                    ""
+                };
                 return Err(format!(
-                    "unknown control {line:?}: FAULT CODE, CLEAR, POWER OFF|ON, SILENT, ANSWER \
-                     (@N first for unit N)"
+                    "unknown control {line:?}: FAULT CODE, CLEAR, POWER OFF|ON, SILENT, \
+                     ANSWER{cartridge} (@N first for unit N)"
                 ));
             }
         }))
@@ -106,6 +118,19 @@ impl Control {
         };
         Ok(Control::parse(model, rest)?.map(|control| (index, control)))
     }
+}
+
+/// A cartridge UID as typed: 1 to 16 ASCII letters and digits (the SYNC manual's UIDs are
+/// 16 hex digits, 000_dd931256418ae627.txt line 1460), zero padded.
+fn parse_uid(text: &str) -> Result<[u8; 16], String> {
+    if text.is_empty() || text.len() > 16 || !text.bytes().all(|b| b.is_ascii_alphanumeric()) {
+        return Err(format!(
+            "cartridge UID {text:?}: 1 to 16 letters and digits"
+        ));
+    }
+    let mut uid = [0u8; 16];
+    uid[..text.len()].copy_from_slice(text.as_bytes());
+    Ok(uid)
 }
 
 /// The units on their port.
@@ -280,6 +305,22 @@ impl UnitServer {
                 format!("power {}", if on { "on" } else { "off" })
             }
             Control::Silent(silent) => if silent { "silent" } else { "answering" }.to_string(),
+            Control::Cartridge(uid) => {
+                let model = unit.model();
+                match unit.as_any_mut().downcast_mut::<Powermax>() {
+                    Some(pm) => {
+                        let kind = pm
+                            .cartridge()
+                            .map_or(Cartridge::default_for(model).kind, |c| c.kind);
+                        let mut cartridge = Cartridge::new(kind, "");
+                        cartridge.uid = uid;
+                        pm.install_cartridge(now, cartridge);
+                        let typed = String::from_utf8_lossy(&uid);
+                        format!("cartridge {} installed", typed.trim_end_matches('\0'))
+                    }
+                    None => "not a Powermax: no cartridge".to_string(),
+                }
+            }
         };
         let who = match self.line.len() {
             1 => String::new(),
@@ -363,6 +404,12 @@ mod tests {
             Ok(Some(Control::Silent(false)))
         );
         assert_eq!(Control::parse(pm, "\n"), Ok(None));
+        assert_eq!(
+            Control::parse(pm, "cartridge E00401D0036FB25E"),
+            Ok(Some(Control::Cartridge(*b"E00401D0036FB25E")))
+        );
+        assert!(Control::parse(pm, "cartridge E00401D0036FB25E0").is_err());
+        assert!(Control::parse(Model::Pm65, "cartridge A1").is_err());
         assert!(Control::parse(pm, "explode").is_err());
         assert!(Control::parse(Model::Hpr260, "fault 0-50-0").is_err());
     }
