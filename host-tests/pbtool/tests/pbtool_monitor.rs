@@ -248,10 +248,13 @@ fn the_real_simulator_through_the_transport() {
     let fault = dash.fault.as_ref().expect("fault");
     assert_eq!(fault.code, "0-50-0");
     assert!(fault.text.starts_with("The cartridge is off"), "{fault:?}");
-    assert_eq!(
-        dash.consumables,
-        pbtool::monitor::state::Consumables::NotReported
-    );
+    // The bridge answers CONSUMABLES: a SYNC's cartridge, no limit set.
+    let pbtool::monitor::state::Consumables::Reported(consumables) = &dash.consumables else {
+        panic!("CONSUMABLES answered: {:?}", dash.consumables)
+    };
+    assert_eq!(consumables.get("source"), Some("cartridge"));
+    assert_eq!(consumables.get("uid"), Some("E00401D0036FB25D"));
+    assert_eq!(consumables.get("used"), Some("OFF"));
     assert!(
         dash.events.iter().any(|(_, e)| e.starts_with("LINK UP ")),
         "{:?}",
@@ -315,7 +318,8 @@ fn snapshot_prints_one_frame() {
         "{screen}"
     );
     assert!(screen.contains("FAULT 0-50-0"), "{screen}");
-    assert!(screen.contains("not reported by this bridge"), "{screen}");
+    // No limit set: the reply's fields, no bar.
+    assert!(screen.contains("source=bridge starts=0 arc_s=0"), "{screen}");
     // The simulator's history: the unit's fault, its time from the clock the monitor set.
     let fault = screen
         .lines()
