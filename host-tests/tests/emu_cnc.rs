@@ -494,3 +494,45 @@ fn stored(board: &mut Board) -> (u32, u32) {
     };
     (read("arc_ok_debounce_ms"), read("hold_debounce_ms"))
 }
+
+/// The consumable record is kept in the board's settings flash: a cut the bridge counted
+/// (legacy Powermax: the bridge's own count) is there after a power cut.
+#[test]
+fn the_consumable_count_is_kept_on_the_board_across_a_power_cut() {
+    let mut board = common::emu::ready(boot(BoardOptions {
+        wiring: host_tests::emu::Wiring::Manual,
+        ..BoardOptions::new(Model::Pm65)
+    }));
+    let first = command(&mut board, "CONSUMABLES");
+    assert!(
+        first.starts_with("OK source=bridge starts=0 arc_s=0 "),
+        "{first}"
+    );
+    set(&board, Input::TorchOn, true);
+    expect_output(&board, Output::Start, true, EDGE);
+    set(&board, Input::Motion, true);
+    expect_output(&board, Output::ArcOk, true, EDGE);
+    set(&board, Input::Motion, false);
+    expect_output(&board, Output::ArcOk, false, EDGE);
+    set(&board, Input::TorchOn, false);
+    expect_output(&board, Output::Start, false, EDGE);
+    board
+        .wait_status(EDGE, |s| s.contains(" start=OFF motion=OFF "))
+        .unwrap_or_else(|e| panic!("{e}"));
+    // The first count is stored at its arc-off. A CONFIG SAVE waits for a store under way,
+    // and a second one for a store taken between the two: after both it is in flash.
+    for _ in 0..2 {
+        assert_eq!(command(&mut board, "CONFIG SAVE"), "OK config=saved");
+    }
+    let counted = command(&mut board, "CONSUMABLES");
+    assert!(
+        counted.starts_with("OK source=bridge starts=1 "),
+        "{counted}"
+    );
+
+    board.cut_power(LINK_EVENT).unwrap();
+    board = common::emu::ready(board);
+    let kept = command(&mut board, "CONSUMABLES");
+    assert!(kept.starts_with("OK source=bridge starts=1 "), "{kept}");
+    board.assert_safe();
+}

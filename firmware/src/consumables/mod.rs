@@ -401,11 +401,17 @@ mod tests {
                 transfer_time_counts: 2447,
             },
         };
-        assert!(!c.cartridge_seen(at(5000), cartridge.uid.0), "the first one");
+        assert!(
+            !c.cartridge_seen(at(5000), cartridge.uid.0),
+            "the first one"
+        );
         assert_eq!(c.set().wear_faults, 0, "a new set");
         assert_eq!(c.set().uid, Some(cartridge.uid.0));
         assert!(!c.cartridge_seen(at(6000), cartridge.uid.0));
-        assert!(c.cartridge_seen(at(7000), *b"E00401D0036FB25E"), "another one");
+        assert!(
+            c.cartridge_seen(at(7000), *b"E00401D0036FB25E"),
+            "another one"
+        );
         assert!(!c.cartridge_seen(at(8000), *b"E00401D0036FB25E"));
         assert_eq!(
             c.usage(at(6000), Some(&cartridge)),
