@@ -7,7 +7,8 @@
 //!   is an arc transfer (MOTION on) or a start that ran into the transfer time-out; the arc
 //!   seconds run from MOTION on to MOTION off. `CONSUMABLES NEW` starts a new set.
 //! - Signs of wear are counted on every family: a 0-32-x fault (cartridge at end of life,
-//!   SYNC manual fault table) and an HPR rampdown error.
+//!   SYNC manual fault table) and an HPR rampdown error, as its RAMPDOWN_ERROR output signals
+//!   it ("Consumable life is affected", HPR manual 002_72b43a5685974c77.txt line 56).
 //! - The 90 % and 100 % warnings are given once per set; which were given is part of the
 //!   record, so a reset of the bridge does not repeat them.
 //!
