@@ -8,6 +8,7 @@ mod common;
 
 use common::{bridge_world, field, ready_hpr};
 use host_tests::harness::{BridgeEndpoint, World};
+use plasma_firmware::io::Input;
 use plasma_protocol::time::Duration;
 use plasma_sim::Model;
 use plasma_sim::powermax::Powermax;
@@ -130,6 +131,21 @@ fn the_bridge_counts_the_cuts_of_every_family_without_a_cartridge() {
         cut(&mut w, secs(1));
         assert_eq!(warnings(&w).len(), 2, "not again after a reset: {model:?}");
 
+        if model != Model::Pm65 {
+            // The HPR's RAMPDOWN_ERROR output: a sign of wear (HPR manual
+            // 002_72b43a5685974c77.txt line 56).
+            w.set_input(Input::RampdownError, true);
+            w.run_for(Duration::from_millis(100));
+            w.set_input(Input::RampdownError, false);
+            w.run_for(Duration::from_millis(100));
+            let reply = w.cnc_line("CONSUMABLES");
+            assert_eq!(
+                field(&reply, "rampdown_errors"),
+                Some("1"),
+                "{model:?}: {reply}"
+            );
+        }
+
         let reply = w.cnc_line("CONSUMABLES NEW");
         assert!(
             reply.starts_with("OK source=bridge starts=0 arc_s=0 start_limit=10 "),
@@ -188,6 +204,13 @@ fn a_sync_cartridge_counts_itself_and_another_one_starts_a_new_record() {
         secs(70),
     )
     .unwrap_or_else(|t| panic!("no warning: {t}: {:?}", warnings(&w)));
+
+    // A 0-32-x fault (cartridge at end of life) is a sign of wear.
+    w.inject_fault(320);
+    w.run_for(secs(1));
+    w.clear_fault();
+    w.run_for(secs(1));
+    assert_eq!(field(&w.cnc_line("CONSUMABLES"), "wear_faults"), Some("1"));
 
     let refused = w.cnc_line("CONSUMABLES NEW");
     assert!(
