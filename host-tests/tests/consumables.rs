@@ -212,6 +212,19 @@ fn a_sync_cartridge_counts_itself_and_another_one_starts_a_new_record() {
     w.run_for(secs(1));
     assert_eq!(field(&w.cnc_line("CONSUMABLES"), "wear_faults"), Some("1"));
 
+    // The cable pulled: the cartridge's last counts, still.
+    w.pull_cable(true);
+    w.run_until(|w| !w.bridge().status().link_up, secs(10))
+        .expect("the link goes down");
+    let reply = w.cnc_line("CONSUMABLES");
+    assert!(
+        reply.starts_with("OK source=cartridge starts=19 "),
+        "{reply}"
+    );
+    assert_eq!(field(&reply, "uid"), Some(uid.as_str()), "{reply}");
+    w.pull_cable(false);
+    common::settle(&mut w);
+
     let refused = w.cnc_line("CONSUMABLES NEW");
     assert!(
         refused.starts_with("ERR UNSUPPORTED CONSUMABLES NEW "),

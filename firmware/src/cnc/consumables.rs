@@ -138,11 +138,16 @@ impl Session {
     pub(super) fn follow_consumables(&mut self, ctx: &mut Context<'_>) {
         let status = ctx.link.status();
         if status.family == Some(Family::PowermaxSync)
-            && let Some(uid) = status.cartridge.map(|c| c.uid.0)
-            && uid != UNREADABLE_UID
-            && ctx.consumables.cartridge_seen(ctx.now, uid)
+            && let Some(cartridge) = status.cartridge
+            && cartridge.uid.0 != UNREADABLE_UID
         {
-            super::history::note(ctx, Event::ConsumableChanged);
+            let counters = cartridge.counters;
+            let replaced = ctx.consumables.cartridge_seen(ctx.now, cartridge.uid.0);
+            ctx.consumables
+                .cartridge_counts(u32::from(counters.starts), counters.transfer_seconds());
+            if replaced {
+                super::history::note(ctx, Event::ConsumableChanged);
+            }
         }
         let usage = usage(ctx);
         let limits = ctx.settings.consumable_limits;

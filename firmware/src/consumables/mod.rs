@@ -212,27 +212,41 @@ impl Consumables {
         replaced
     }
 
-    /// The counts of the set in use: the cartridge's when one was read, else the bridge's.
+    /// The counters of the record's cartridge as the unit last gave them: the record keeps
+    /// them, so that they are shown (and survive a reset) while the link is down.
+    pub fn cartridge_counts(&mut self, starts: u32, arc_seconds: u32) {
+        let arc_ms = u64::from(arc_seconds) * 1000;
+        if self.set.uid.is_some() && (self.set.starts, self.set.arc_ms) != (starts, arc_ms) {
+            self.set.starts = starts;
+            self.set.arc_ms = arc_ms;
+            self.changed();
+        }
+    }
+
+    /// The counts of the set in use: the cartridge's when one is read; for a cartridge's
+    /// record without one (the link is down) its last counts, with the starts and arc time
+    /// the bridge saw since; else the bridge's.
     pub fn usage(&self, now: Instant, cartridge: Option<&Cartridge>) -> Usage {
-        match cartridge {
-            Some(c) => Usage {
+        if let Some(c) = cartridge {
+            return Usage {
                 source: Source::Cartridge,
                 starts: u32::from(c.counters.starts),
                 arc_seconds: c.counters.transfer_seconds(),
+            };
+        }
+        let burning = self
+            .arc_since
+            .map_or(0, |since| now.saturating_since(since).as_millis());
+        let ms = self.set.arc_ms.saturating_add(burning);
+        // `div_rem_u16`: a 64-bit division would link the runtime's.
+        let (seconds, _) = plasma_protocol::time::div_rem_u16(ms, 1000);
+        Usage {
+            source: match self.set.uid {
+                Some(_) => Source::Cartridge,
+                None => Source::Bridge,
             },
-            None => {
-                let burning = self
-                    .arc_since
-                    .map_or(0, |since| now.saturating_since(since).as_millis());
-                let ms = self.set.arc_ms.saturating_add(burning);
-                // `div_rem_u16`: a 64-bit division would link the runtime's.
-                let (seconds, _) = plasma_protocol::time::div_rem_u16(ms, 1000);
-                Usage {
-                    source: Source::Bridge,
-                    starts: self.set.starts,
-                    arc_seconds: u32::try_from(seconds).unwrap_or(u32::MAX),
-                }
-            }
+            starts: self.set.starts,
+            arc_seconds: u32::try_from(seconds).unwrap_or(u32::MAX),
         }
     }
 
@@ -413,15 +427,18 @@ mod tests {
             c.cartridge_seen(at(7000), *b"E00401D0036FB25E"),
             "another one"
         );
+        assert_eq!(c.usage(at(7000), None).starts, 0);
         assert!(!c.cartridge_seen(at(8000), *b"E00401D0036FB25E"));
-        assert_eq!(
-            c.usage(at(6000), Some(&cartridge)),
-            Usage {
-                source: Source::Cartridge,
-                starts: 214,
-                arc_seconds: 4894
-            }
-        );
+        let read = Usage {
+            source: Source::Cartridge,
+            starts: 214,
+            arc_seconds: 4894,
+        };
+        assert_eq!(c.usage(at(6000), Some(&cartridge)), read);
+        // Without the cartridge (the link down): its last counts, kept in the record.
+        c.cartridge_counts(read.starts, read.arc_seconds);
+        assert_eq!(c.usage(at(6000), None), read);
+        assert_eq!((c.set().starts, c.set().arc_ms), (214, 4_894_000));
     }
 
     #[test]
