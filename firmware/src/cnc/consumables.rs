@@ -240,7 +240,7 @@ mod tests {
         assert!(reply.contains(" used=0% "), "{reply}");
         let tokens = rig.send_bytes(b"HISTORY 1\r\n", 1);
         assert!(
-            tokens[0].ends_with(" family=HPR event=CONSUMABLES_CHANGED"),
+            tokens[0].contains(" family=HPR ") && tokens[0].ends_with(" event=CONSUMABLES_CHANGED"),
             "{tokens:?}"
         );
     }

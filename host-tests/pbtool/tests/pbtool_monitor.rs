@@ -319,7 +319,10 @@ fn snapshot_prints_one_frame() {
     );
     assert!(screen.contains("FAULT 0-50-0"), "{screen}");
     // No limit set: the reply's fields, no bar.
-    assert!(screen.contains("source=bridge starts=0 arc_s=0"), "{screen}");
+    assert!(
+        screen.contains("source=bridge starts=0 arc_s=0"),
+        "{screen}"
+    );
     // The simulator's history: the unit's fault, its time from the clock the monitor set.
     let fault = screen
         .lines()
