@@ -318,11 +318,9 @@ fn snapshot_prints_one_frame() {
         "{screen}"
     );
     assert!(screen.contains("FAULT 0-50-0"), "{screen}");
-    // No limit set: the reply's fields, no bar.
-    assert!(
-        screen.contains("source=bridge starts=0 arc_s=0"),
-        "{screen}"
-    );
+    // The bridge answers CONSUMABLES; no limit set: the counts, no bar.
+    assert!(screen.contains("starts 0  arc 0 s  bridge"), "{screen}");
+    assert!(screen.contains("no limit set (used=OFF)"), "{screen}");
     // The simulator's history: the unit's fault, its time from the clock the monitor set.
     let fault = screen
         .lines()
