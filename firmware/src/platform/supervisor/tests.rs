@@ -856,7 +856,7 @@ fn history_waits_for_the_drafts_its_keeper_had_no_room_for() {
     let mut sup = supervisor(
         &world,
         64,
-        FakeSaver::<Settings, SaveError>::new(&world, |_| Ok(())),
+        FakeSaver::<crate::bridge::SaveRequest, SaveError>::new(&world, |_| Ok(())),
     )
     .with_history(keeper);
     block_on(async {
