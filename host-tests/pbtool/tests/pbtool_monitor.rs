@@ -329,6 +329,49 @@ fn snapshot_prints_one_frame() {
     assert!(!fault.contains("boot "), "a wall-clock time: {fault}");
 }
 
+/// Every simulated family on one screen: the unit and its link, the consumables as the bridge
+/// reports them (the cartridge's on a SYNC, the bridge's own count elsewhere) and the history
+/// panel with the unit's fault.
+#[test]
+fn every_simulated_family_on_the_dashboard() {
+    for (model, family, fault, source) in [
+        ("sync65", "SYNC", "0-50-0", "cartridge"),
+        ("pm85", "LEGACY", "0-50-0", "bridge"),
+        ("hpr260", "HPR", "044", "bridge"),
+        ("maxpro200", "MAXPRO200", "044", "bridge"),
+    ] {
+        let output = Command::new(pbtool_exe())
+            .args([
+                "monitor",
+                "--sim",
+                model,
+                "--fault",
+                fault,
+                "--snapshot",
+                "--size",
+                "100x30",
+            ])
+            .output()
+            .expect("pbtool runs");
+        assert!(output.status.success(), "{model}: {output:?}");
+        let screen = String::from_utf8(output.stdout).expect("UTF-8");
+        for wanted in [
+            format!("family {family}"),
+            "unit link UP".to_string(),
+            format!("arc 0 s  {source}"),
+            "History (bridge, newest first)".to_string(),
+        ] {
+            assert!(screen.contains(&wanted), "{model}: no {wanted:?}\n{screen}");
+        }
+        assert!(
+            screen
+                .lines()
+                .any(|l| l.contains(&format!(" FAULT code={fault}"))),
+            "{model}: no history entry for the fault\n{screen}"
+        );
+    }
+}
+
 #[test]
 fn a_child_that_exits_is_restarted() {
     // `pbtool decode` without frames exits at once: the monitor restarts it every second.
