@@ -1212,6 +1212,26 @@ fn after_the_units_own_power_cycle_it_stays_local_until_the_cnc_asks_again() {
             .unwrap_or_else(|t| panic!("{model:?}: {t}"));
         w.run_for(Duration::from_secs(10));
         assert!(!w.bridge().status().remote, "{model:?}: taken back");
+        // The history keeps it, after the link lost while the unit was off.
+        let history_mark = w.cnc_output().len();
+        assert!(
+            w.cnc_line("HISTORY 3").starts_with("OK history=3"),
+            "{model:?}"
+        );
+        let entries: Vec<&str> = w.cnc_output()[history_mark..]
+            .iter()
+            .filter_map(|r| r.item.line())
+            .filter(|l| l.starts_with("HISTORY "))
+            .collect();
+        let position = |event: &str| entries.iter().position(|l| l.contains(event));
+        let (cycled, lost) = (
+            position(" event=UNIT_POWER_CYCLED"),
+            position(" event=LINK_LOST"),
+        );
+        assert!(
+            cycled.is_some() && lost.is_some() && cycled < lost,
+            "{model:?}: {entries:?}"
+        );
         assert_eq!(w.bridge().settings().process, None, "{model:?}: not kept");
         let events = events_since(&w, mark);
         assert!(

@@ -187,6 +187,7 @@ pub(super) fn note_link_event(ctx: &mut Context<'_>, event: &LinkEvent) {
             steps: steps_of(code),
         },
         LinkEvent::FaultCleared { code } => Event::FaultCleared { fault: code },
+        LinkEvent::UnitPowerCycled { .. } => Event::UnitPowerCycled,
         _ => return,
     };
     note(ctx, event);
