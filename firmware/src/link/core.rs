@@ -19,6 +19,9 @@ pub(crate) struct Core {
     pub(crate) diagnostics: Diagnostics,
     /// What is re-applied, for every family (see [`kept`](crate::link::kept)).
     pub(crate) kept: Kept,
+    /// The unit shares its line with others (set by the line's arbiter): an HPR's polls are
+    /// mostly the short fault read (see `hpr::SHARED_LINE_FULL_POLL_EVERY`).
+    pub(crate) shared_line: bool,
     events: EventQueue,
 }
 
@@ -30,6 +33,7 @@ impl Core {
             status: UnitStatus::default(),
             diagnostics: Diagnostics::default(),
             kept: Kept::default(),
+            shared_line: false,
             events: EventQueue::new(),
         }
     }

@@ -49,6 +49,9 @@ pub(crate) enum HprExpect {
 pub(crate) enum HprPurpose {
     /// GET_PS_INFO.
     Poll,
+    /// 003 CURRENT_ERROR: the short fault read a poll on a shared line is, between full
+    /// GET_PS_INFO polls.
+    FaultPoll,
     /// 028 READ_PLASMA_AMPS after an HPR poll that shows the arc on (the MaxPro200 has no
     /// 028).
     PollAmps,
@@ -100,6 +103,14 @@ fn slow_items(system: &SystemId) -> u8 {
     }
 }
 
+/// On a line shared with other units, one poll in this many is the full 079 GET_PS_INFO
+/// (52 ms of wire: 7 characters out, about 90 back); the others are the short fault read 003
+/// CURRENT_ERROR (18 characters: `>00393<`, `>00301165B<`, manual line 142), so with four
+/// units each unit's fault is read every round of four short turns and their hand-overs
+/// (the bus benchmark's table in docs/developers.md). State and pressures come with every
+/// fourth poll.
+pub(crate) const SHARED_LINE_FULL_POLL_EVERY: u8 = 8;
+
 /// Wait before re-applying kept settings again after a re-apply failed.
 pub(crate) const REAPPLY_BACKOFF: Duration = Duration::from_secs(5);
 
@@ -134,6 +145,9 @@ pub(crate) struct HprDriver {
     polled_last: bool,
     /// The poll's 028 READ_PLASMA_AMPS is still to send (HPR with the arc on only).
     amps_due: bool,
+    /// Polls that may still be the short fault read before the next full one (on a shared
+    /// line only: see [`SHARED_LINE_FULL_POLL_EVERY`]).
+    fault_reads_left: u8,
     now: Instant,
 }
 
@@ -194,6 +208,7 @@ impl HprDriver {
             returned: !core.kept.hpr.is_empty(),
             polled_last: false,
             amps_due: false,
+            fault_reads_left: 0,
             now,
         }
     }
@@ -337,7 +352,18 @@ impl HprDriver {
     ) -> Option<(HprPurpose, HprExpect, Vec<u8, RAW_HPR_CAPACITY>)> {
         self.next_poll_at = now + core.config.poll_interval;
         self.polled_last = true;
+        if self.fault_read_will_do(core) {
+            self.fault_reads_left = self.fault_reads_left.saturating_sub(1);
+            return typed(HprPurpose::FaultPoll, Request::CurrentError);
+        }
         typed(HprPurpose::Poll, Request::GetPsInfo)
+    }
+
+    /// Whether this poll may be the short fault read: on a shared line, between full polls
+    /// (a new driver's first poll is full), while not cutting. While cutting (states 4-10)
+    /// every poll is the full one: the state drives the pilot-arc pause and 028.
+    fn fault_read_will_do(&self, core: &Core) -> bool {
+        core.shared_line && self.fault_reads_left > 0 && !is_cutting(core.status.hpr.state)
     }
 
     fn slow_request(

@@ -8,7 +8,7 @@ use plasma_protocol::time::Instant;
 use super::kept::sets;
 use super::{
     ActiveJob, HprDriver, HprJob, HprPurpose, PILOT_ARC_PAUSE, REAPPLY_BACKOFF, SLOW_ERROR_LOG,
-    SLOW_GASES, SLOW_TIMERS, is_arc_on, is_pilot_arc, is_power_up,
+    SHARED_LINE_FULL_POLL_EVERY, SLOW_GASES, SLOW_TIMERS, is_arc_on, is_pilot_arc, is_power_up,
 };
 use crate::link::core::Core;
 use crate::link::event::{CommandFailure, CommandOutput, LinkEvent, ProcessFailure};
@@ -106,6 +106,9 @@ impl HprDriver {
                 core.status.hpr.maxpro_info = Some(*info);
                 self.polled(now, info.state, info.error, info.current_setpoint, core);
             }
+            (HprPurpose::FaultPoll, Some(Reply::CurrentError(error))) => {
+                self.update_error(*error, core);
+            }
             (HprPurpose::PollAmps, Some(Reply::PlasmaAmps(amps))) => {
                 core.status.hpr.actual_amps = Some(*amps);
             }
@@ -154,6 +157,7 @@ impl HprDriver {
         core: &mut Core,
     ) {
         core.status.hpr.nominal_amps = Some(setpoint);
+        self.fault_reads_left = SHARED_LINE_FULL_POLL_EVERY - 1;
         self.update_state(now, state, core);
         self.update_error(error, core);
         if core::mem::take(&mut self.returned) {
@@ -326,7 +330,10 @@ impl HprDriver {
     ) {
         self.now = now;
         match purpose {
-            HprPurpose::Poll | HprPurpose::PollAmps | HprPurpose::State => {}
+            HprPurpose::Poll
+            | HprPurpose::FaultPoll
+            | HprPurpose::PollAmps
+            | HprPurpose::State => {}
             HprPurpose::SlowErrorLog => self.slow_done(now, SLOW_ERROR_LOG, Some(error), core),
             HprPurpose::SlowTimers => self.slow_done(now, SLOW_TIMERS, Some(error), core),
             HprPurpose::SlowGases => self.slow_done(now, SLOW_GASES, Some(error), core),

@@ -107,10 +107,15 @@ impl SharedLine {
     /// cannot share a line.
     pub fn new(base: LinkConfig, units: &[LineUnit], now: Instant) -> Result<Self, LineError> {
         let configs = config::link_configs(base, units)?;
+        let shared = configs.len() > 1;
         let mut links = Vec::new();
         for config in configs {
+            let mut link = PsLink::new(config, now);
+            if shared {
+                link.share_line();
+            }
             // As many as `configs` holds, at most MAX_UNITS.
-            let _ = links.push(PsLink::new(config, now));
+            let _ = links.push(link);
         }
         Ok(SharedLine {
             links,

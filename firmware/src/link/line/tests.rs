@@ -328,3 +328,50 @@ fn units_that_cannot_share_a_line_are_refused() {
     assert_eq!(new(&[LineUnit::MaxPro200]), Ok(()));
     assert_eq!(new(&[pm(1), pm(2), pm(3), pm(4)]), Ok(()));
 }
+
+/// Each unit's polls since `from` (GET_PS_INFO or CURRENT_ERROR), by the id awake.
+fn polls_by_unit(bench: &LineBench, units: usize, from: Instant) -> Vec<Vec<u16>> {
+    let mut awake = None;
+    let mut polls = std::vec![Vec::new(); units];
+    for (at, frame) in &bench.sent {
+        let id = core::str::from_utf8(&frame[1..4])
+            .ok()
+            .and_then(|s| s.parse::<u16>().ok());
+        match id {
+            Some(86) => awake = None,
+            Some(85) => awake = Some(usize::from(frame[4] - b'0')),
+            Some(id @ (3 | 79)) if *at >= from => polls[awake.unwrap()].push(id),
+            _ => {}
+        }
+    }
+    polls
+}
+
+#[test]
+fn on_a_shared_line_a_polls_turn_is_the_short_fault_read_and_every_nth_the_full_status() {
+    let mut bench = LineBench::hprs(4);
+    bench.run(ms(8000));
+    assert!(bench.all_up());
+    let every = usize::from(crate::link::hpr::SHARED_LINE_FULL_POLL_EVERY);
+    for (unit, polls) in polls_by_unit(&bench, 4, ms(3000)).iter().enumerate() {
+        let full: Vec<usize> = (0..polls.len()).filter(|&i| polls[i] == 79).collect();
+        assert!(full.len() >= 2, "unit {unit}: {polls:?}");
+        for pair in full.windows(2) {
+            // Between two full polls, N - 1 short ones (003 CURRENT_ERROR).
+            assert_eq!(pair[1] - pair[0], every, "unit {unit}: {polls:?}");
+        }
+    }
+    // A fault still reaches its unit, by the short read.
+    bench.fault(2, 44);
+    bench.run(ms(8300));
+    assert!(bench.line.unit(2).unwrap().status().active_fault.is_some());
+}
+
+#[test]
+fn a_unit_alone_on_its_line_polls_the_full_status_only() {
+    let mut bench = LineBench::hprs(1);
+    bench.run(ms(4000));
+    assert!(bench.all_up());
+    let polls = &polls_by_unit(&bench, 1, ms(1000))[0];
+    assert!(polls.len() > 20 && polls.iter().all(|&id| id == 79), "{polls:?}");
+}

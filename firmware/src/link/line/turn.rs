@@ -39,4 +39,10 @@ impl PsLink {
     pub(super) fn learn_line_echo(&mut self) {
         self.line_echoes = true;
     }
+
+    /// The link shares its line with other units: its polls favour the short fault read
+    /// (the HPR driver's `SHARED_LINE_FULL_POLL_EVERY`), so each unit's turn is short.
+    pub(super) fn share_line(&mut self) {
+        self.core.shared_line = true;
+    }
 }

@@ -26,7 +26,8 @@ pub struct SharedLineFigures {
     /// Per unit (the silent one's empty): from its fault appearing to the bridge's status
     /// showing it.
     pub faults: Vec<Latencies>,
-    /// Per unit: status cycles (GET_PS_INFO polls) per second over the window, idle.
+    /// Per unit: status cycles (fault reads: GET_PS_INFO or, on a shared line, the short
+    /// CURRENT_ERROR between them) per second over the window, idle.
     pub cycles_per_s: Vec<f64>,
     /// Hand-overs of the line (WAKEs sent by the bridge) per second over the window.
     pub switches_per_s: f64,
@@ -54,7 +55,7 @@ fn line(units: usize, silent: Option<usize>, seed: u64) -> World<SharedLine> {
     world
 }
 
-/// GET_PS_INFO polls per unit in `[from, to)`, each counted for the unit the line's SLEEP /
+/// Fault reads (GET_PS_INFO or CURRENT_ERROR) per unit from `from`, each counted for the unit the line's SLEEP /
 /// WAKE traffic had awake when it went out.
 fn polls_per_unit(world: &World<SharedLine>, units: usize, from: Instant) -> Vec<usize> {
     let mut counts = vec![0; units];
@@ -68,7 +69,7 @@ fn polls_per_unit(world: &World<SharedLine>, units: usize, from: Instant) -> Vec
                     .get(4)
                     .map(|&digit| usize::from(digit.wrapping_sub(b'0')));
             }
-            Some(id::GET_PS_INFO) if frame.start >= from => {
+            Some(id::GET_PS_INFO | id::CURRENT_ERROR) if frame.start >= from => {
                 if let Some(count) = awake.and_then(|u| counts.get_mut(u)) {
                     *count += 1;
                 }
