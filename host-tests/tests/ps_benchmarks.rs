@@ -184,7 +184,7 @@ fn on_a_line_of_four_hprs_a_silent_unit_costs_the_others_at_most_one_time_out_pe
             silent.faults[unit].max() <= Duration::from_secs(1),
             "{silent:?}"
         );
-        // One round is the time between two status cycles of a unit.
+        // One round is the time between two fault reads of a unit.
         let round = 1.0 / full.cycles_per_s[unit];
         let round_with_silent = 1.0 / silent.cycles_per_s[unit];
         assert!(

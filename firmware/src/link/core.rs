@@ -22,6 +22,9 @@ pub(crate) struct Core {
     /// The unit shares its line with others (set by the line's arbiter): an HPR's polls are
     /// mostly the short fault read (see `hpr::SHARED_LINE_FULL_POLL_EVERY`).
     pub(crate) shared_line: bool,
+    /// On a shared line, the arbiter allows a full poll in this turn (no other unit's went
+    /// out in the last round); always true for a unit alone.
+    pub(crate) full_poll_allowed: bool,
     events: EventQueue,
 }
 
@@ -34,6 +37,7 @@ impl Core {
             diagnostics: Diagnostics::default(),
             kept: Kept::default(),
             shared_line: false,
+            full_poll_allowed: true,
             events: EventQueue::new(),
         }
     }

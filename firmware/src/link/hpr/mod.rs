@@ -104,11 +104,11 @@ fn slow_items(system: &SystemId) -> u8 {
 }
 
 /// On a line shared with other units, one poll in this many is the full 079 GET_PS_INFO
-/// (52 ms of wire: 7 characters out, about 90 back); the others are the short fault read 003
-/// CURRENT_ERROR (18 characters: `>00393<`, `>00301165B<`, manual line 142), so with four
-/// units each unit's fault is read every round of four short turns and their hand-overs
-/// (the bus benchmark's table in docs/developers.md). State and pressures come with every
-/// fourth poll.
+/// (manual line 168; 52 ms of wire: 7 characters out, about 90 back); the others are the
+/// short fault read 003 CURRENT_ERROR (line 142; 18 characters, `>00393<` and `>00301165B<`).
+/// Eight, not four: the four-unit fault latency in the bus benchmark (docs/developers.md).
+/// The arbiter lets one full poll out per round of turns, so several units' full polls
+/// never add up in one round.
 pub(crate) const SHARED_LINE_FULL_POLL_EVERY: u8 = 8;
 
 /// Wait before re-applying kept settings again after a re-apply failed.
@@ -359,11 +359,17 @@ impl HprDriver {
         typed(HprPurpose::Poll, Request::GetPsInfo)
     }
 
-    /// Whether this poll may be the short fault read: on a shared line, between full polls
-    /// (a new driver's first poll is full), while not cutting. While cutting (states 4-10)
-    /// every poll is the full one: the state drives the pilot-arc pause and 028.
+    /// Whether this poll may be the short fault read: on a shared line, while the state is
+    /// known (a new driver's first poll is full) and not cutting, between full polls or while
+    /// the line's arbiter holds a full one back (another unit's went out this round). While
+    /// cutting (states 4-10) every poll is the full one: the state drives the pilot-arc pause
+    /// and 028.
     fn fault_read_will_do(&self, core: &Core) -> bool {
-        core.shared_line && self.fault_reads_left > 0 && !is_cutting(core.status.hpr.state)
+        let state = core.status.hpr.state;
+        core.shared_line
+            && state.is_some()
+            && !is_cutting(state)
+            && (self.fault_reads_left > 0 || !core.full_poll_allowed)
     }
 
     fn slow_request(

@@ -7,8 +7,9 @@ use plasma_protocol::time::Instant;
 
 use super::kept::sets;
 use super::{
-    ActiveJob, HprDriver, HprJob, HprPurpose, PILOT_ARC_PAUSE, REAPPLY_BACKOFF, SLOW_ERROR_LOG,
-    SHARED_LINE_FULL_POLL_EVERY, SLOW_GASES, SLOW_TIMERS, is_arc_on, is_pilot_arc, is_power_up,
+    ActiveJob, HprDriver, HprJob, HprPurpose, PILOT_ARC_PAUSE, REAPPLY_BACKOFF,
+    SHARED_LINE_FULL_POLL_EVERY, SLOW_ERROR_LOG, SLOW_GASES, SLOW_TIMERS, is_arc_on, is_pilot_arc,
+    is_power_up,
 };
 use crate::link::core::Core;
 use crate::link::event::{CommandFailure, CommandOutput, LinkEvent, ProcessFailure};
@@ -330,10 +331,8 @@ impl HprDriver {
     ) {
         self.now = now;
         match purpose {
-            HprPurpose::Poll
-            | HprPurpose::FaultPoll
-            | HprPurpose::PollAmps
-            | HprPurpose::State => {}
+            HprPurpose::Poll | HprPurpose::FaultPoll | HprPurpose::PollAmps | HprPurpose::State => {
+            }
             HprPurpose::SlowErrorLog => self.slow_done(now, SLOW_ERROR_LOG, Some(error), core),
             HprPurpose::SlowTimers => self.slow_done(now, SLOW_TIMERS, Some(error), core),
             HprPurpose::SlowGases => self.slow_done(now, SLOW_GASES, Some(error), core),

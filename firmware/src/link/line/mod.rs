@@ -18,6 +18,9 @@
 //!   meanwhile simply goes out at its turn (a retry later than its schedule still rides
 //!   through an HF-ignition blackout). A unit that does not answer costs one reply time-out
 //!   per turn: the others each wait one time-out per round at most.
+//! - Turns are kept short: with more than one unit, each link is told it shares the line
+//!   (an HPR's poll is then mostly the short fault read 003, the full 079 one poll in
+//!   `SHARED_LINE_FULL_POLL_EVERY`), and at most one full poll goes out per round.
 //!
 //! # Switching an HPR line
 //! HPR units share the line by SLEEP / WAKE ([`switch`]): before a unit that is not the one
@@ -98,6 +101,9 @@ pub struct SharedLine {
     out: Option<Out>,
     control: [u8; CONTROL_CAPACITY],
     control_len: usize,
+    /// Unit turns since the last full status poll went out (HPR 079): the next is allowed
+    /// once every other unit had a turn, so at most one goes out per round.
+    turns_since_full_poll: usize,
     stats: LineStats,
 }
 
@@ -130,6 +136,7 @@ impl SharedLine {
             out: None,
             control: [0; CONTROL_CAPACITY],
             control_len: 0,
+            turns_since_full_poll: usize::MAX,
             stats: LineStats::default(),
         })
     }
@@ -301,9 +308,18 @@ impl SharedLine {
                 continue;
             };
             let due = link.poll_at().is_some_and(|at| at <= now);
-            if !due || link.poll_transmit(now).is_none() {
+            if !due {
                 continue;
             }
+            link.allow_full_poll(self.turns_since_full_poll >= count - 1);
+            if link.poll_transmit(now).is_none() {
+                continue;
+            }
+            self.turns_since_full_poll = if link.full_poll_on_wire() {
+                0
+            } else {
+                self.turns_since_full_poll.saturating_add(1)
+            };
             self.owner = index;
             return self.begin_turn(now);
         }

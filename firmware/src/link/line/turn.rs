@@ -4,6 +4,8 @@
 use plasma_protocol::time::Instant;
 
 use crate::link::PsLink;
+use crate::link::hpr::HprPurpose;
+use crate::link::schedule::Tag;
 
 impl PsLink {
     /// True while an attempt of this link is on the wire (its reply, or the quiet after a
@@ -44,5 +46,17 @@ impl PsLink {
     /// (the HPR driver's `SHARED_LINE_FULL_POLL_EVERY`), so each unit's turn is short.
     pub(super) fn share_line(&mut self) {
         self.core.shared_line = true;
+    }
+
+    /// Whether a full status poll may go out in this turn (see [`PsLink::share_line`]).
+    pub(super) fn allow_full_poll(&mut self, allowed: bool) {
+        self.core.full_poll_allowed = allowed;
+    }
+
+    /// True when the attempt on the wire is a full status poll (an HPR's 079 GET_PS_INFO).
+    pub(super) fn full_poll_on_wire(&self) -> bool {
+        self.txn.as_ref().is_some_and(|txn| {
+            txn.is_on_wire() && matches!(txn.tag(), Tag::Hpr(HprPurpose::Poll, _))
+        })
     }
 }

@@ -1,5 +1,5 @@
 //! Several HPR260s on one line ([`World::on_one_line`]): each unit's fault-detection latency
-//! and status cycles per second, with every unit answering or one silent (its drop cut). The
+//! and fault reads per second, with every unit answering or one silent (its drop cut). The
 //! figures show what sharing costs: each unit waits for one attempt of every other unit (and
 //! the SLEEP / WAKE that hands the line over), a silent unit one reply time-out per round.
 
@@ -26,8 +26,8 @@ pub struct SharedLineFigures {
     /// Per unit (the silent one's empty): from its fault appearing to the bridge's status
     /// showing it.
     pub faults: Vec<Latencies>,
-    /// Per unit: status cycles (fault reads: GET_PS_INFO or, on a shared line, the short
-    /// CURRENT_ERROR between them) per second over the window, idle.
+    /// Per unit: fault reads (GET_PS_INFO or, on a shared line, mostly the short
+    /// CURRENT_ERROR) per second over the window, idle.
     pub cycles_per_s: Vec<f64>,
     /// Hand-overs of the line (WAKEs sent by the bridge) per second over the window.
     pub switches_per_s: f64,
@@ -81,7 +81,7 @@ fn polls_per_unit(world: &World<SharedLine>, units: usize, from: Instant) -> Vec
 }
 
 /// Measure a line of `units` HPR260s (`silent` cut off): `trials` faults per answering unit,
-/// at random phases, and the status cycles over `window` of idle polling.
+/// at random phases, and the fault reads over `window` of idle polling.
 pub fn shared_line(
     units: usize,
     silent: Option<usize>,
@@ -146,7 +146,7 @@ pub fn report(out: &mut String) {
     let window = Duration::from_secs(20);
     let _ = writeln!(
         out,
-        "\n(d) Several HPR260s on one line (ids 0-3, SLEEP/WAKE), default schedule: per unit, fault-detection latency over {} injections\n    at random phases (p50/p99/max ms) and status cycles per second ({} s idle); the bridge's WAKEs (line hand-overs) per second",
+        "\n(d) Several HPR260s on one line (ids 0-3, SLEEP/WAKE), default schedule: per unit, fault-detection latency over {} injections\n    at random phases (p50/p99/max ms) and fault reads (079 or 003) per second ({} s idle); the bridge's WAKEs (line hand-overs) per second",
         SHARED_LINE_TRIALS,
         window.as_micros() / 1_000_000
     );
