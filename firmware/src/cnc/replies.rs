@@ -65,11 +65,32 @@ pub(super) fn id(ctx: &Context<'_>) -> ReplyLine {
             w.field("product", model.product_code())?;
         }
         // The torch and its lead choose the cut chart: a SYNC unit's 0x3000, a legacy unit's
-        // lead coils (which say nothing of the torch).
-        if status.family.is_some_and(Family::is_modbus) {
-            let torch = status.identification.and_then(|i| i.torch);
-            w.field("torch", OrDash(torch.map(|t| torch_word(t.kind))))?;
-            w.field("lead_ft", OrDash(status.torch_lead().map(|l| l.max_feet())))?;
+        // lead coils (which say nothing of the torch), a MaxPro200's 145 READ TORCH ID
+        // (HPR manual line 290; `-` for "No jumper detected" and the reserved ids).
+        match status.family {
+            Some(family) if family.is_modbus() => {
+                let torch = status.identification.and_then(|i| i.torch);
+                w.field("torch", OrDash(torch.map(|t| torch_word(t.kind))))?;
+                w.field("lead_ft", OrDash(status.torch_lead().map(|l| l.max_feet())))?;
+            }
+            Some(Family::MaxPro200) => {
+                let torch = status.hpr.torch.and_then(|t| t.torch());
+                w.field("torch", OrDash(torch.map(|(kind, _)| torch_word(kind))))?;
+                w.field("lead_ft", OrDash(torch.map(|(_, feet)| feet)))?;
+            }
+            _ => {}
+        }
+        // An HPR's and a MaxPro200's firmware (001 VERSION, line 140): what a service call
+        // asks for first.
+        if status.family.is_some_and(|f| !f.is_modbus()) {
+            let firmware = status.hpr.firmware;
+            let power_supply = firmware.as_ref().map(|f| Text(f.power_supply.as_str()));
+            w.field("firmware", OrDash(power_supply))?;
+            let gas_console = firmware.as_ref().and_then(|f| f.gas_console.as_ref());
+            w.field(
+                "gas_firmware",
+                OrDash(gas_console.map(|r| Text(r.as_str()))),
+            )?;
         }
         Ok(())
     })
@@ -186,8 +207,9 @@ fn hpr_status(
         w.field("plasma", GasName(m.plasma_gas))?;
         w.field("shield", GasName(m.shield_gas))?;
     }
-    // A manual gas console's switch positions (slow data, 122).
-    if let Some(gases) = hpr.gases {
+    // A manual gas console's switch positions (slow data, 122); an automatic one's inlet gases
+    // (slow data, 098).
+    if let Some(gases) = hpr.gases.or(hpr.inlet_gases) {
         w.field("plasma", GasName(gases.plasma))?;
         w.field("shield", GasName(gases.shield))?;
     }

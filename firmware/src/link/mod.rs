@@ -128,7 +128,9 @@ pub use command::{HprValue, LinkCommand, RAW_CAPACITY, Refusal};
 pub use config::{ConfigError, LinkConfig, ProtocolChoice};
 pub use diagnostics::Diagnostics;
 pub use event::{CommandFailure, CommandOutput, LinkDownReason, LinkEvent, ProcessFailure, Ticket};
-pub use status::{ActiveFault, Family, HprStatus, Limits, Model, PowermaxProcess, UnitStatus};
+pub use status::{
+    ActiveFault, Family, Firmware, HprStatus, Limits, Model, PowermaxProcess, Revision, UnitStatus,
+};
 pub use transaction::TransactionError;
 
 use self::core::Core;

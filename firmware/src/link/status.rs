@@ -1,7 +1,7 @@
 //! The bridge's picture of the power supply, kept up to date by the link.
 
 use plasma_protocol::hpr::{
-    ErrorCode, GasPair, MaxProPsInfo, PsInfo, StateCode, SystemId, TimerCounter,
+    ErrorCode, GasPair, MaxProPsInfo, PsInfo, StateCode, SystemId, TimerCounter, TorchId, Version,
 };
 use plasma_protocol::powermax::sync::{
     Cartridge, FaultLog, Identification, PermittedModes, PsCounters,
@@ -133,6 +133,67 @@ pub struct HprStatus {
     pub gases: Option<GasPair>,
     /// True after the unit accepted 004 REMOTE_MODE.
     pub remote_accepted: bool,
+    /// Firmware revisions (001 VERSION, read once after detection).
+    pub firmware: Option<Firmware>,
+    /// A MaxPro200's torch (145 READ TORCH ID, read once after detection).
+    pub torch: Option<TorchId>,
+    /// The inlet gases an automatic gas console uses (098 GET_INLET_GASES, slow data).
+    pub inlet_gases: Option<GasPair>,
+}
+
+/// Longest firmware revision kept: the manual's are three characters (`A.0`, line 140).
+pub const REVISION_CAPACITY: usize = 12;
+
+/// One firmware revision as the unit wrote it, kept without borrowing the reply.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Revision {
+    bytes: [u8; REVISION_CAPACITY],
+    len: u8,
+}
+
+impl Revision {
+    /// `text`, or `None` when it is longer than [`REVISION_CAPACITY`].
+    pub fn new(text: &str) -> Option<Revision> {
+        let mut bytes = [0u8; REVISION_CAPACITY];
+        bytes
+            .get_mut(..text.len())?
+            .copy_from_slice(text.as_bytes());
+        Some(Revision {
+            bytes,
+            len: u8::try_from(text.len()).ok()?,
+        })
+    }
+
+    /// The revision's text.
+    pub fn as_str(&self) -> &str {
+        let bytes = self.bytes.get(..usize::from(self.len)).unwrap_or_default();
+        core::str::from_utf8(bytes).unwrap_or_default()
+    }
+}
+
+/// The 001 VERSION reply kept: power supply firmware, then gas console firmware (line 140).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Firmware {
+    /// Power supply firmware.
+    pub power_supply: Revision,
+    /// Gas console firmware, when the reply has one.
+    pub gas_console: Option<Revision>,
+}
+
+impl Firmware {
+    /// The reply kept; `None` when a revision is longer than [`REVISION_CAPACITY`].
+    pub fn new(version: &Version<'_>) -> Option<Firmware> {
+        let gas_console = match version.gas_console {
+            Some(text) => Some(Revision::new(text)?),
+            None => None,
+        };
+        Some(Firmware {
+            power_supply: Revision::new(version.power_supply)?,
+            gas_console,
+        })
+    }
 }
 
 /// Snapshot of what the bridge knows about the unit.

@@ -2,6 +2,7 @@
 //! tenths of a volt, all as integers.
 
 use super::gas::GasCode;
+use crate::powermax::TorchKind;
 use crate::{Error, Result};
 
 /// Check an inclusive range (used on both emit and parse so that the two agree).
@@ -261,6 +262,24 @@ impl TorchId {
     pub fn description(self) -> Option<&'static str> {
         TORCH_IDS.get(usize::from(self.0)).map(|&(_, d)| d)
     }
+
+    /// The torch the id names: hand or mechanized, and its lead in feet (the table's "25 Ft
+    /// mechanized torch"); `None` for 0 "No jumper detected", the reserved ids and ids past
+    /// the table.
+    pub const fn torch(self) -> Option<(TorchKind, u16)> {
+        use TorchKind::{Hand, Machine};
+        Some(match self.0 {
+            1 => (Machine, 100),
+            2 => (Machine, 25),
+            3 => (Machine, 75),
+            4 => (Hand, 100),
+            6 => (Machine, 50),
+            8 => (Hand, 25),
+            9 => (Hand, 50),
+            12 => (Hand, 75),
+            _ => return None,
+        })
+    }
 }
 
 #[cfg(test)]
@@ -288,6 +307,25 @@ mod tests {
         );
         assert_eq!(TorchId(2).description(), Some("25 Ft mechanized torch"));
         assert_eq!(TorchId(13).description(), None);
+        // `torch` says what the table's text says, row by row.
+        for &(id, text) in TORCH_IDS {
+            let torch = TorchId(id).torch();
+            let feet = text.split(' ').next().and_then(|n| n.parse::<u16>().ok());
+            assert_eq!(torch.map(|(_, f)| f), feet, "{text}");
+            if let Some((kind, _)) = torch {
+                assert_eq!(
+                    kind == TorchKind::Hand,
+                    text.ends_with("hand torch"),
+                    "{text}"
+                );
+                assert_eq!(
+                    kind == TorchKind::Machine,
+                    text.ends_with("mechanized torch")
+                );
+            }
+        }
+        assert_eq!(TorchId(2).torch(), Some((TorchKind::Machine, 25)));
+        assert_eq!(TorchId(13).torch(), None);
         let f = GasFlows::from_array([1, 2, 3, 4, 5, 6]);
         assert_eq!(f.to_array(), [1, 2, 3, 4, 5, 6]);
         assert_eq!(in_range(5, 5, 400), Ok(5));

@@ -202,7 +202,8 @@ fn settings_that_do_not_read_back_are_an_error_with_the_read_back_values() {
 /// ID names the torch and its lead, so a CNC loads the cut chart for them: a SYNC unit's from
 /// 0x3000 (SYNC manual, 000_dd931256418ae627.txt, lines 618-620: 0x04 machine torch 15-25 ft,
 /// 0x06 75 ft), a legacy unit's lead from its coils (Powermax65/85 protocol,
-/// 001_0bf4bbd6620a48c8.txt, lines 258-271: 01 is 35-50 ft), which say nothing of the torch.
+/// 001_0bf4bbd6620a48c8.txt, lines 258-271: 01 is 35-50 ft), which say nothing of the torch,
+/// a MaxPro200's from 145; an HPR has no torch id.
 #[test]
 fn id_names_the_torch_and_its_lead() {
     let mut sync = Rig::new(Settings::default(), Some("sync85"));
@@ -224,6 +225,15 @@ fn id_names_the_torch_and_its_lead() {
     let mut hpr = Rig::hpr("hpr130");
     let id = hpr.cmd("ID");
     assert!(!id.contains("torch=") && !id.contains("lead_ft="), "{id}");
+    // A MaxPro200's from 145 READ TORCH ID (HPR manual, 002_72b43a5685974c77.txt, line 290:
+    // the simulator answers the sample, `>14500025C<`, id 2 "25 Ft mechanized torch"), with
+    // its firmware from 001 VERSION (line 140).
+    let mut maxpro = Rig::hpr("maxpro200");
+    let id = maxpro.cmd("ID");
+    assert!(
+        id.ends_with(" family=MAXPRO200 torch=MACHINE lead_ft=25 firmware=A.0 gas_firmware=A.2"),
+        "{id}"
+    );
 }
 
 #[test]
@@ -404,7 +414,8 @@ fn every_command_on_an_hpr() {
     let mut rig = Rig::hpr("hpr130");
     assert_eq!(
         rig.cmd("ID"),
-        "OK bridge=plasma-bridge version=0.1.0 reset=unknown link=UP model=HPR130 family=HPR"
+        "OK bridge=plasma-bridge version=0.1.0 reset=unknown link=UP model=HPR130 family=HPR \
+         firmware=A.0 gas_firmware=A.2"
     );
     assert_eq!(rig.cmd("FAULT"), "OK fault=none");
     assert_eq!(rig.cmd("FAULTLOG"), "OK log=none");
@@ -413,7 +424,7 @@ fn every_command_on_an_hpr() {
         "OK link=UP model=HPR130 family=HPR remote=OFF mode=- amps=130 psi=- out_amps=0 \
          out_psi=55 fault=none start=OFF motion=OFF arc_ok=OFF ready=ON state=3 \
          state_name=IDLE2 console=AUTO plasma_cutflow_psi=55 plasma_preflow_psi=45 \
-         shield_cutflow_psi=35 shield_preflow_psi=25"
+         shield_cutflow_psi=35 shield_preflow_psi=25 plasma=O2 shield=AIR"
     );
     assert_eq!(
         rig.cmd("LIMITS"),

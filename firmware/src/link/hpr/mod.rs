@@ -65,6 +65,12 @@ pub(crate) enum HprPurpose {
     SlowTimers,
     /// 122 READ_GAS_SWITCH (slow data, manual gas console).
     SlowGases,
+    /// 098 GET_INLET_GASES (slow data, automatic gas console).
+    SlowInletGases,
+    /// 001 VERSION (once after detection).
+    SlowVersion,
+    /// 145 READ TORCH ID (once after detection, MaxPro200).
+    SlowTorch,
     /// The active command.
     Active,
 }
@@ -90,16 +96,25 @@ const SLOW_TIMERS: u8 = 2;
 /// A manual gas console's switch positions: 122 READ_GAS_SWITCH ("Manual Gas System" only,
 /// line 252).
 const SLOW_GASES: u8 = 4;
+/// The inlet gases an automatic console uses: 098 GET_INLET_GASES (line 187). A manual
+/// console's are its switches (122); a MaxPro200's 079 names them at every poll.
+const SLOW_INLET_GASES: u8 = 8;
+/// Read once after detection: 001 VERSION (every system, line 140).
+const SLOW_VERSION: u8 = 16;
+/// Read once after detection: 145 READ TORCH ID ("MaxPro200" only, line 290).
+const SLOW_TORCH: u8 = 32;
 
-/// The slow data of `system`: an HPR's error log and timers, and a manual console's gas
-/// switches; a MaxPro200 has none.
+/// The slow data of `system`, read at detection and at every refresh: an HPR's error log and
+/// timers, and its console's gases (122 on a manual console, 098 on an automatic one); a
+/// MaxPro200 has none.
 fn slow_items(system: &SystemId) -> u8 {
+    use hpr::command::id;
     if system.is_maxpro200() {
         0
-    } else if hpr::accepts(hpr::command::id::READ_GAS_SWITCH, system) {
+    } else if hpr::accepts(id::READ_GAS_SWITCH, system) {
         SLOW_ERROR_LOG | SLOW_TIMERS | SLOW_GASES
     } else {
-        SLOW_ERROR_LOG | SLOW_TIMERS
+        SLOW_ERROR_LOG | SLOW_TIMERS | SLOW_INLET_GASES
     }
 }
 
@@ -110,6 +125,20 @@ fn slow_items(system: &SystemId) -> u8 {
 /// The arbiter lets one full poll out per round of turns, so several units' full polls
 /// never add up in one round.
 pub(crate) const SHARED_LINE_FULL_POLL_EVERY: u8 = 8;
+
+/// What does not change while the unit is on the line, read once after detection where the
+/// manual's "System" column names the system: firmware (001) and torch (145).
+fn once_items(system: &SystemId) -> u8 {
+    use hpr::command::id;
+    let mut items = 0;
+    if hpr::accepts(id::VERSION, system) {
+        items |= SLOW_VERSION;
+    }
+    if hpr::accepts(id::READ_TORCH_ID, system) {
+        items |= SLOW_TORCH;
+    }
+    items
+}
 
 /// Wait before re-applying kept settings again after a re-apply failed.
 pub(crate) const REAPPLY_BACKOFF: Duration = Duration::from_secs(5);
@@ -199,7 +228,11 @@ impl HprDriver {
             system,
             next_poll_at: now,
             pause_until: None,
-            slow: SlowData::new(slow_items(&system), now, core.config.slow_data_interval),
+            slow: SlowData::new(
+                slow_items(&system) | once_items(&system),
+                now,
+                core.config.slow_data_interval,
+            ),
             queue: Deque::new(),
             active: None,
             reapply: Deque::new(),
@@ -382,6 +415,15 @@ impl HprDriver {
         }
         self.slow.take_due_retries(now);
         let pending = self.slow.pending();
+        if pending & SLOW_VERSION != 0 {
+            return typed(HprPurpose::SlowVersion, Request::Version);
+        }
+        if pending & SLOW_TORCH != 0 {
+            return typed(HprPurpose::SlowTorch, Request::ReadTorchId);
+        }
+        if pending & SLOW_INLET_GASES != 0 {
+            return typed(HprPurpose::SlowInletGases, Request::GetInletGases);
+        }
         if pending & SLOW_GASES != 0 {
             return typed(HprPurpose::SlowGases, Request::ReadGasSwitch);
         }

@@ -8,12 +8,12 @@ use plasma_protocol::time::Instant;
 use super::kept::sets;
 use super::{
     ActiveJob, HprDriver, HprJob, HprPurpose, PILOT_ARC_PAUSE, REAPPLY_BACKOFF,
-    SHARED_LINE_FULL_POLL_EVERY, SLOW_ERROR_LOG, SLOW_GASES, SLOW_TIMERS, is_arc_on, is_pilot_arc,
-    is_power_up,
+    SHARED_LINE_FULL_POLL_EVERY, SLOW_ERROR_LOG, SLOW_GASES, SLOW_INLET_GASES, SLOW_TIMERS,
+    SLOW_TORCH, SLOW_VERSION, is_arc_on, is_pilot_arc, is_power_up,
 };
 use crate::link::core::Core;
 use crate::link::event::{CommandFailure, CommandOutput, LinkEvent, ProcessFailure};
-use crate::link::status::ActiveFault;
+use crate::link::status::{ActiveFault, Firmware};
 use crate::link::transaction::TransactionError;
 
 /// State 2, GAS PURGE (MaxPro200) / PURGE (HPR): after power-up, before ready.
@@ -131,6 +131,24 @@ impl HprDriver {
                     core.status.hpr.gases = Some(*gases);
                 }
                 self.slow_done(now, SLOW_GASES, None, core);
+            }
+            (HprPurpose::SlowInletGases, reply) => {
+                if let Some(Reply::InletGases(gases)) = reply {
+                    core.status.hpr.inlet_gases = Some(*gases);
+                }
+                self.slow_done(now, SLOW_INLET_GASES, None, core);
+            }
+            (HprPurpose::SlowVersion, reply) => {
+                if let Some(Reply::Version(version)) = reply {
+                    core.status.hpr.firmware = Firmware::new(version);
+                }
+                self.slow_done(now, SLOW_VERSION, None, core);
+            }
+            (HprPurpose::SlowTorch, reply) => {
+                if let Some(Reply::TorchId(torch)) = reply {
+                    core.status.hpr.torch = Some(*torch);
+                }
+                self.slow_done(now, SLOW_TORCH, None, core);
             }
             (HprPurpose::SlowTimers, reply) => {
                 if let Some(Reply::TimerCounter(t)) = reply {
@@ -336,6 +354,9 @@ impl HprDriver {
             HprPurpose::SlowErrorLog => self.slow_done(now, SLOW_ERROR_LOG, Some(error), core),
             HprPurpose::SlowTimers => self.slow_done(now, SLOW_TIMERS, Some(error), core),
             HprPurpose::SlowGases => self.slow_done(now, SLOW_GASES, Some(error), core),
+            HprPurpose::SlowInletGases => self.slow_done(now, SLOW_INLET_GASES, Some(error), core),
+            HprPurpose::SlowVersion => self.slow_done(now, SLOW_VERSION, Some(error), core),
+            HprPurpose::SlowTorch => self.slow_done(now, SLOW_TORCH, Some(error), core),
             HprPurpose::RemoteMode | HprPurpose::Active => {
                 if let Some(job) = self.active.take() {
                     self.job_failed(

@@ -33,6 +33,23 @@ fn ps_info(state: u16, error: u16) -> Vec<u8> {
     )
 }
 
+/// The unit's answer to a slow-data read, 028 or 122 (`frame` is the request): the HPR
+/// manual's (002_72b43a5685974c77.txt) sample replies where it prints one that passes its
+/// checksum (098 line 187, 145 line 290), else a reply of the format it describes (001 line
+/// 140: its sample `>001A.0 A.25<` fails its checksum).
+fn slow_reply(frame: &[u8]) -> Vec<u8> {
+    match &frame[1..4] {
+        b"001" => hf(1, "A.0 A.2"),
+        b"098" => b">0980001 000648<".to_vec(),
+        b"145" => b">14500025C<".to_vec(),
+        b"134" => hf(134, "000 000 000 000"),
+        b"125" => hf(125, &"0000000 ".repeat(7)),
+        b"028" => hf(28, "0000"),
+        b"122" => hf(122, "0001 0006"),
+        other => panic!("unexpected {other:?}"),
+    }
+}
+
 #[test]
 fn hpr_retries_span_more_than_a_one_second_blackout() {
     let mut bench = hpr_bench("HYPERFORMANCE260AUTO");
@@ -81,9 +98,7 @@ fn an_hpr_poll_reads_the_pressures_the_set_point_and_the_output_current() {
         let frame = bench.next_tx(bench.now + Duration::from_secs(1)).unwrap();
         match &frame[1..4] {
             b"079" => break,
-            b"134" => bench.rx(2, &hf(134, "000 000 000 000")),
-            b"125" => bench.rx(2, &hf(125, &"0000000 ".repeat(7))),
-            other => panic!("unexpected {other:?}"),
+            _ => bench.rx(2, &slow_reply(&frame)),
         }
     }
     bench.rx(2, &ps_info(8, 0));
@@ -241,10 +256,7 @@ fn hpr_at_100_a() -> Bench {
         let frame = bench.next_tx(bench.now + Duration::from_secs(1)).unwrap();
         let reply = match &frame[1..4] {
             b"079" => ps_info_at(3, 130),
-            b"134" => hf(134, "000 000 000 000"),
-            b"125" => hf(125, &"0000000 ".repeat(7)),
-            b"028" => hf(28, "0000"),
-            other => panic!("unexpected {other:?}"),
+            _ => slow_reply(&frame),
         };
         bench.rx(2, &reply);
     }
@@ -475,11 +487,7 @@ fn hpr_cutflow_and_preflow_gas_tests_go_out_as_the_manual_writes_them() {
         let frame = bench.next_tx(bench.now + Duration::from_secs(1)).unwrap();
         match &frame[1..4] {
             b"079" => break,
-            b"134" => bench.rx(2, &hf(134, "000 000 000 000")),
-            b"125" => bench.rx(2, &hf(125, &"0000000 ".repeat(7))),
-            b"028" => bench.rx(2, &hf(28, "0000")),
-            b"122" => bench.rx(2, &hf(122, "0001 0006")),
-            other => panic!("unexpected {other:?}"),
+            _ => bench.rx(2, &slow_reply(&frame)),
         }
     }
     bench.rx(2, &ps_info(8, 0));
@@ -511,7 +519,14 @@ fn a_maxpro200_gas_test_is_143_test_mode_1_in_state_3_only() {
             ..
         })
     ));
-    bench.next_tx(bench.now + Duration::from_secs(1)).unwrap();
+    // The next poll, after the firmware and torch read once after detection.
+    loop {
+        let frame = bench.next_tx(bench.now + Duration::from_secs(1)).unwrap();
+        if &frame[1..4] == b"079" {
+            break;
+        }
+        bench.rx(2, &slow_reply(&frame));
+    }
     bench.rx(2, &info(3));
     // The manual's sample: ">1431C9< //request test mode 1 >1431C9<" (line 283).
     let on = LinkCommand::MaxProTestGas { on: true };
@@ -612,4 +627,63 @@ fn a_maxpro200_process_goes_out_as_the_manuals_137_sample_and_is_kept() {
         bench.link.kept().hpr_requests(),
         [plasma_protocol::hpr::Request::SetProcess { amps: 200, gases }]
     );
+}
+
+/// What does not change while the unit is on the line is read once after detection, where
+/// the manual's "System" column names the system: 001 VERSION on every system (HPR manual
+/// (002_72b43a5685974c77.txt) line 140), 145 READ TORCH ID on a MaxPro200 only (line 290,
+/// its sample `>1459A<` answered `>14500025C<`, id 2); an automatic console's inlet gases
+/// (098, line 187, sample `>098A1<` answered `>0980001 000648<`) are slow data.
+#[test]
+fn firmware_and_torch_are_read_once_where_the_system_takes_them() {
+    use plasma_protocol::hpr::{GasCode, GasPair, TorchId};
+    let sent = |bench: &mut Bench, rounds: usize| {
+        let mut sent = Vec::new();
+        for _ in 0..rounds {
+            let frame = bench.next_tx(bench.now + Duration::from_secs(1)).unwrap();
+            let reply = match &frame[1..4] {
+                b"079" if bench.link.status().family == Some(Family::MaxPro200) => hf(
+                    79,
+                    "st0003 er0000 pg0001 ps0056 sg0001 ss0058 cs0200 dm0001 lm0000",
+                ),
+                b"079" => ps_info(3, 0),
+                _ => slow_reply(&frame),
+            };
+            sent.push(frame);
+            bench.rx(2, &reply);
+        }
+        sent
+    };
+    let mut maxpro = hpr_bench("MaxPro200");
+    let frames = sent(&mut maxpro, 4);
+    assert!(frames.contains(&b">00191<".to_vec()), "{frames:?}");
+    assert!(frames.contains(&b">1459A<".to_vec()), "{frames:?}");
+    let status = maxpro.link.status().hpr;
+    assert_eq!(status.torch, Some(TorchId(2)));
+    let firmware = status.firmware.unwrap();
+    assert_eq!(firmware.power_supply.as_str(), "A.0");
+    assert_eq!(firmware.gas_console.map(|r| r.as_str().len()), Some(3));
+    // Never again while the unit stays on the line.
+    let later = sent(&mut maxpro, 20);
+    assert!(
+        later.iter().all(|f| f.as_slice() == b">079A0<"),
+        "{later:?}"
+    );
+
+    let mut auto = hpr_bench("HYPERFORMANCE130AUTO");
+    let frames = sent(&mut auto, 12);
+    assert_eq!(
+        frames.iter().filter(|f| f.as_slice() == b">00191<").count(),
+        1
+    );
+    assert!(!frames.iter().any(|f| f.as_slice() == b">1459A<"));
+    assert!(frames.contains(&b">098A1<".to_vec()), "{frames:?}");
+    let status = auto.link.status().hpr;
+    assert!(status.firmware.is_some());
+    assert_eq!(status.torch, None);
+    let o2_n2 = GasPair {
+        plasma: GasCode(1),
+        shield: GasCode(6),
+    };
+    assert_eq!(status.inlet_gases, Some(o2_n2));
 }

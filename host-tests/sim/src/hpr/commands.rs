@@ -231,6 +231,7 @@ impl Hpr {
             138 if !hpr => reply(Self::flag(
                 self.phase == Phase::Ready && !self.error_blocks_start() && !self.test_gas,
             )),
+            145 if !hpr => reply(format!("{:04}", self.config.torch_id)),
             // 143 SET TEST MODE: 1 Test Gas only in state 3, 0 stops it (line 283). The reply
             // echoes the mode taken, as the manual's sample (`>1431C9<` to `>1431C9<`).
             // 141 GET MFG DATA1: the measured pressures while gas flows (the 143 test gas or a

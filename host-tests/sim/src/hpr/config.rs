@@ -68,8 +68,10 @@ pub struct HprConfig {
     pub port: PortConfig,
     /// Sequence timing.
     pub timings: HprTimings,
-    /// Firmware versions reported by 001.
+    /// Firmware versions reported by 001: power supply, then gas console, space delimited.
     pub version: String,
+    /// Torch id reported by 145 (MaxPro200), one of the manual's table (line 290).
+    pub torch_id: u16,
     /// Settings commands are refused until 004 REMOTE_MODE.
     pub require_remote_mode: bool,
     /// PRNG seed (response time).
@@ -85,7 +87,11 @@ impl HprConfig {
             console: GasConsole::Auto,
             port: PortConfig::HPR,
             timings: HprTimings::default(),
-            version: "A.0 A.25".into(),
+            // "ps rev A, gas rev A" (line 140); the sample frame `>001A.0 A.25<` fails its
+            // checksum, and `A.0 A.2` is the reading whose text matches the note.
+            version: "A.0 A.2".into(),
+            // The manual's sample, `>14500025C<`: id 2, 25 Ft mechanized torch.
+            torch_id: 2,
             require_remote_mode: true,
             seed: 1,
         }

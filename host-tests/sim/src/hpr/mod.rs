@@ -44,8 +44,9 @@
 //!
 //! # Not modelled
 //! The factory-test and diagnostic commands (074, 100-124 except those listed, 126-130, 132,
-//! 133, 135, 139-142, 144-147) answer 501. A manual gas console answers 501 to what its
-//! "System" column leaves out (058, 078, 095, 096, 099) and 122 gives its knobs' positions.
+//! 133, 135, 139-142, 144, 146, 147) answer 501 (145 READ TORCH ID gives the configured
+//! torch). A manual gas console answers 501 to what its "System" column leaves out (058,
+//! 078, 095, 096, 099) and 122 gives its knobs' positions.
 //!
 //! By job: `config` what makes a unit, `sequence` the arc sequence and errors, `commands` the
 //! serial command table; this file the unit's state and its [`SimulatedUnit`] face.
