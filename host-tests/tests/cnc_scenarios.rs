@@ -360,7 +360,8 @@ fn maxpro200_commands_ok_and_err() {
         &[
             (
                 "ID",
-                "OK bridge=plasma-bridge version=0.1.0 reset=unknown link=UP model=MaxPro200 family=MAXPRO200",
+                "OK bridge=plasma-bridge version=0.1.0 reset=unknown link=UP model=MaxPro200 family=MAXPRO200 \
+                 torch=MACHINE lead_ft=25 firmware=A.0 gas_firmware=A.2",
             ),
             (
                 "STATUS",

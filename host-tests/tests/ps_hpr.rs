@@ -5,8 +5,9 @@ use host_tests::harness::{World, WorldOptions};
 use plasma_firmware::io::Interlock;
 use plasma_firmware::link::{CommandOutput, LinkCommand, LinkEvent, RAW_CAPACITY, Refusal};
 use plasma_protocol::hpr::{self, Class, GasCode, GasPair, StateCode};
+use plasma_protocol::powermax::TorchKind;
 use plasma_protocol::time::Duration;
-use plasma_sim::hpr::Hpr;
+use plasma_sim::hpr::{Hpr, HprConfig};
 use plasma_sim::{Model, SimulatedUnit};
 
 fn ms(n: u64) -> Duration {
@@ -401,4 +402,56 @@ fn a_maxpro200_process_is_reapplied_after_a_power_cycle_when_configured() {
     assert_eq!(world.sim::<Hpr>().gases(), (1, 5));
     let received = world.sim::<Hpr>().commands_received();
     assert_eq!(received.iter().filter(|&&id| id == 137).count(), 2);
+}
+
+/// What a technician asks first, read once after the unit is found where the manual's
+/// "System" column names the system: the firmware of every system (001 VERSION, HPR manual
+/// (002_72b43a5685974c77.txt) line 140) and a MaxPro200's torch (145 READ TORCH ID, line 290,
+/// "MaxPro200" only); an automatic console's inlet gases (098 GET_INLET_GASES, line 187) come
+/// with the slow data.
+#[test]
+fn firmware_torch_and_inlet_gases_are_read_where_the_system_takes_them() {
+    let mut config = HprConfig::for_model(Model::MaxPro200);
+    config.torch_id = 8; // "8 = 25 Ft hand torch"
+    config.version = "B.1 C.3".into();
+    let mut world = World::with_unit(Box::new(Hpr::new(config)), WorldOptions::default());
+    world.wait_link_up(secs(2)).expect("link up");
+    world
+        .run_until(
+            |w| {
+                let hpr = &w.link().status().hpr;
+                hpr.torch.is_some() && hpr.firmware.is_some()
+            },
+            secs(5),
+        )
+        .expect("torch and firmware read");
+    let hpr = world.link().status().hpr;
+    assert_eq!(
+        hpr.torch.and_then(|t| t.torch()),
+        Some((TorchKind::Hand, 25))
+    );
+    let firmware = hpr.firmware.unwrap();
+    assert_eq!(firmware.power_supply.as_str(), "B.1");
+    assert_eq!(
+        firmware.gas_console.map(|r| r.as_str().to_owned()),
+        Some("C.3".into())
+    );
+    world.run_for(secs(5));
+    let received = world.sim::<Hpr>().commands_received();
+    let count = |id: u16| received.iter().filter(|&&r| r == id).count();
+    assert_eq!((count(1), count(145)), (1, 1));
+
+    let mut world = ready(Model::Hpr260);
+    world
+        .run_until(
+            |w| {
+                let hpr = &w.link().status().hpr;
+                hpr.inlet_gases.is_some() && hpr.firmware.is_some()
+            },
+            secs(5),
+        )
+        .expect("inlet gases and firmware read");
+    let received = world.sim::<Hpr>().commands_received();
+    assert!(!received.contains(&145), "145 is the MaxPro200's only");
+    assert_eq!(received.iter().filter(|&&r| r == 1).count(), 1);
 }
