@@ -427,14 +427,19 @@ fn garbage_on_the_line_never_panics_and_the_link_recovers_when_it_stops() {
 }
 
 /// True for a request the link may send without being asked to: reads (the legacy torch-lead
-/// coils among them), detection, line control, polls (no write of any kind).
+/// coils among them), detection, line control, polls, the HPR's slow data and what it reads
+/// once after detection (001 VERSION, 145 READ TORCH ID); no write of any kind.
 fn request_is_harmless(f: &host_tests::harness::TraceFrame) -> bool {
     if f.is_modbus() {
         return matches!(f.modbus_function(), Some(0x01 | 0x03 | 0x04 | 0x2B));
     }
     match f.hpr_id() {
         Some(id) => {
-            hpr::is_allowed(id) && matches!(id, 0 | 2 | 28 | 79 | 85 | 86 | 122 | 125 | 134)
+            hpr::is_allowed(id)
+                && matches!(
+                    id,
+                    0 | 1 | 2 | 28 | 79 | 85 | 86 | 98 | 122 | 125 | 134 | 145
+                )
         }
         None => false,
     }
