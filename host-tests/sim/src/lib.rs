@@ -245,10 +245,48 @@ pub(crate) mod tests {
     use clock::earliest;
     use plasma_protocol::serial::Parity;
 
+    /// What the loop below needs of the unit end of a line: one unit, or a line of them.
+    pub(crate) trait UnitEnd {
+        fn receive(&mut self, now: Instant, byte: u8);
+        fn receive_error(&mut self, now: Instant);
+        fn advance(&mut self, now: Instant);
+        fn poll_transmit(&mut self, now: Instant) -> Option<Vec<u8>>;
+        fn next_wakeup(&self) -> Option<Instant>;
+        fn take_noise_bursts(&mut self) -> Vec<(Instant, Duration)>;
+    }
+
+    /// One impl per type, each forwarding to the methods of the same names.
+    macro_rules! unit_end_by_names {
+        ($($unit:ty),+) => {$(
+            impl UnitEnd for $unit {
+                fn receive(&mut self, now: Instant, byte: u8) {
+                    <$unit>::receive(self, now, byte)
+                }
+                fn receive_error(&mut self, now: Instant) {
+                    <$unit>::receive_error(self, now)
+                }
+                fn advance(&mut self, now: Instant) {
+                    <$unit>::advance(self, now)
+                }
+                fn poll_transmit(&mut self, now: Instant) -> Option<Vec<u8>> {
+                    <$unit>::poll_transmit(self, now)
+                }
+                fn next_wakeup(&self) -> Option<Instant> {
+                    <$unit>::next_wakeup(self)
+                }
+                fn take_noise_bursts(&mut self) -> Vec<(Instant, Duration)> {
+                    <$unit>::take_noise_bursts(self)
+                }
+            }
+        )+};
+    }
+
+    unit_end_by_names!(dyn SimulatedUnit, crate::multidrop::MultiDrop);
+
     /// A minimal discrete-event loop (the shape of the scenario harness): the master sends
     /// `request` at `t0`; returns what the master hears until `until`.
     pub(crate) fn over_the_line(
-        unit: &mut dyn SimulatedUnit,
+        unit: &mut (impl UnitEnd + ?Sized),
         line: &mut Line,
         t0: Instant,
         request: &[u8],

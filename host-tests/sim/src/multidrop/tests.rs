@@ -2,44 +2,13 @@
 
 use super::*;
 use crate::hpr::{Hpr, HprConfig};
-use crate::line::{End, Line, RxByte, Wiring};
+use crate::line::{Line, RxByte, Wiring};
 use crate::powermax::{Powermax, PowermaxConfig};
+use crate::tests::over_the_line;
 use crate::{hpr_wire, modbus_wire};
 
 fn ms(t: u64) -> Instant {
     Instant::from_millis(t)
-}
-
-/// The scenario harness's loop with a line of units at the unit end: the master sends
-/// `request` at `t0`; returns what the master hears until `until`.
-fn over_the_line(
-    drop: &mut MultiDrop,
-    line: &mut Line,
-    t0: Instant,
-    request: &[u8],
-    until: Instant,
-) -> Vec<RxByte> {
-    line.transmit(End::Master, t0, request);
-    let mut heard = Vec::new();
-    let mut now = t0;
-    while let Some(t) = earliest(line.next_delivery(), drop.next_wakeup()) {
-        if t > until {
-            break;
-        }
-        now = now.max(t);
-        for b in line.receive(End::Unit, now) {
-            match b.error {
-                None => drop.receive(b.at, b.byte),
-                Some(_) => drop.receive_error(b.at),
-            }
-        }
-        drop.advance(now);
-        if let Some(bytes) = drop.poll_transmit(now) {
-            line.transmit(End::Unit, now, &bytes);
-        }
-        heard.extend(line.receive(End::Master, now));
-    }
-    heard
 }
 
 fn text(heard: &[RxByte]) -> String {
@@ -230,8 +199,7 @@ fn a_lone_unit_sounds_exactly_as_without_the_multi_drop() {
     let mut bench = Bench::of(&[Model::Hpr260], &SimOptions::default());
     let mut alone = Model::Hpr260.build(&SimOptions::default());
     let mut line = Line::new(alone.port(), alone.port(), Wiring::FourWire, 9);
-    let reference =
-        crate::tests::over_the_line(&mut *alone, &mut line, ms(100), b">00090<", ms(200));
+    let reference = over_the_line(&mut *alone, &mut line, ms(100), b">00090<", ms(200));
     let heard = over_the_line(
         &mut bench.drop,
         &mut bench.line,
