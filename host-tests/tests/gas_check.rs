@@ -117,18 +117,34 @@ fn refused_while_the_torch_is_on_and_no_test_starts() {
     }
 }
 
+/// A world whose `GASTEST CHECK` has the gas flowing, and the reply count before it.
+fn check_under_way(model: Model) -> (World<BridgeEndpoint>, usize) {
+    let mut w = world(model);
+    let mark = w.cnc_reply_count();
+    w.cnc_send(b"GASTEST CHECK\r\n");
+    w.run_until(gas_flowing, Duration::from_secs(2))
+        .unwrap_or_else(|t| panic!("{model:?}: the gas test never ran: {t}"));
+    (w, mark)
+}
+
+/// The reply after the first `mark` replies, waited for up to `timeout`.
+fn reply_after(
+    w: &mut World<BridgeEndpoint>,
+    mark: usize,
+    timeout: Duration,
+    model: Model,
+) -> String {
+    w.wait_cnc_replies(mark + 1, timeout)
+        .unwrap_or_else(|t| panic!("{model:?}: no reply: {t}"));
+    w.cnc_replies().nth(mark).expect("waited").to_string()
+}
+
 #[test]
 fn torch_on_during_the_check_ends_the_test_and_the_cut_goes_on_safely() {
     for model in FAMILIES {
-        let mut w = world(model);
-        let mark = w.cnc_reply_count();
-        w.cnc_send(b"GASTEST CHECK\r\n");
-        w.run_until(gas_flowing, Duration::from_secs(2))
-            .unwrap_or_else(|t| panic!("{model:?}: the gas test never ran: {t}"));
+        let (mut w, mark) = check_under_way(model);
         w.set_torch(true);
-        w.wait_cnc_replies(mark + 1, Duration::from_secs(2))
-            .unwrap_or_else(|t| panic!("{model:?}: no reply: {t}"));
-        let reply = w.cnc_replies().nth(mark).expect("waited").to_string();
+        let reply = reply_after(&mut w, mark, Duration::from_secs(2), model);
         assert_eq!(
             reply,
             err(ErrorCode::State, texts::GAS_CHECK_STOPPED_TORCH),
@@ -145,15 +161,9 @@ fn torch_on_during_the_check_ends_the_test_and_the_cut_goes_on_safely() {
 #[test]
 fn a_link_lost_mid_check_ends_it_and_the_test_is_stopped_once_the_link_is_back() {
     for model in FAMILIES {
-        let mut w = world(model);
-        let mark = w.cnc_reply_count();
-        w.cnc_send(b"GASTEST CHECK\r\n");
-        w.run_until(gas_flowing, Duration::from_secs(2))
-            .unwrap_or_else(|t| panic!("{model:?}: the gas test never ran: {t}"));
+        let (mut w, mark) = check_under_way(model);
         w.pull_cable(true);
-        w.wait_cnc_replies(mark + 1, Duration::from_secs(10))
-            .unwrap_or_else(|t| panic!("{model:?}: no reply: {t}"));
-        let reply = w.cnc_replies().nth(mark).expect("waited").to_string();
+        let reply = reply_after(&mut w, mark, Duration::from_secs(10), model);
         // The loss itself, or the reading it left unanswered.
         assert!(reply.starts_with("ERR LINK "), "{model:?}: {reply}");
         w.pull_cable(false);
