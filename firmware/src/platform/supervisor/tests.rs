@@ -740,6 +740,23 @@ struct RamHistory {
     room: usize,
 }
 
+impl RamHistory {
+    /// An empty history over 8 pages that takes `room` drafts before it is full.
+    fn new(room: usize) -> RamHistory {
+        use crate::storage::ram_flash::{PAGE_SIZE, RamFlash};
+        let mut store =
+            crate::storage::history::HistoryStore::new(RamFlash::new(), 0..(8 * PAGE_SIZE) as u32)
+                .unwrap();
+        block_on(store.scan()).unwrap();
+        RamHistory {
+            store,
+            answer: None,
+            recorded: 0,
+            room,
+        }
+    }
+}
+
 impl HistoryKeeper for RamHistory {
     fn has_room(&self) -> bool {
         self.room > 0
@@ -769,7 +786,6 @@ fn history_reaches_its_keeper_and_the_answer_the_cnc() {
     use crate::bridge::Bridge;
     use crate::platform::safe_state::ResetCause;
     use crate::settings::{SaveError, Settings};
-    use crate::storage::ram_flash::{PAGE_SIZE, RamFlash};
 
     let run = |with_keeper: bool| {
         let world: Shared = Rc::default();
@@ -782,18 +798,7 @@ fn history_reaches_its_keeper_and_the_answer_the_cnc() {
         let mut bridge = Bridge::new(Settings::default(), Instant::ZERO);
         bridge.record_reset(Instant::ZERO, ResetCause::Pin);
         cnc_rx(&world, 50, b"HISTORY\r\n");
-        let mut store = crate::storage::history::HistoryStore::new(
-            RamFlash::<{ 8 * PAGE_SIZE }>::new(),
-            0..(8 * PAGE_SIZE) as u32,
-        )
-        .unwrap();
-        block_on(store.scan()).unwrap();
-        let keeper = RamHistory {
-            store,
-            answer: None,
-            recorded: 0,
-            room: usize::MAX,
-        };
+        let keeper = RamHistory::new(usize::MAX);
         let recorded = if with_keeper {
             let mut sup = sup.with_history(keeper);
             block_on(async {
@@ -832,7 +837,6 @@ fn history_waits_for_the_drafts_its_keeper_had_no_room_for() {
     use crate::bridge::Bridge;
     use crate::platform::safe_state::ResetCause;
     use crate::settings::{SaveError, Settings};
-    use crate::storage::ram_flash::{PAGE_SIZE, RamFlash};
 
     let world: Shared = Rc::default();
     let clock = FakeClock(world.clone());
@@ -841,18 +845,7 @@ fn history_waits_for_the_drafts_its_keeper_had_no_room_for() {
         bridge.record_reset(Instant::ZERO, cause);
     }
     cnc_rx(&world, 10, b"HISTORY\r\n");
-    let mut store = crate::storage::history::HistoryStore::new(
-        RamFlash::<{ 8 * PAGE_SIZE }>::new(),
-        0..(8 * PAGE_SIZE) as u32,
-    )
-    .unwrap();
-    block_on(store.scan()).unwrap();
-    let keeper = RamHistory {
-        store,
-        answer: None,
-        recorded: 0,
-        room: 1,
-    };
+    let keeper = RamHistory::new(1);
     let mut sup = supervisor(
         &world,
         64,
