@@ -43,7 +43,7 @@ use crate::cnc::{Context, Session, SessionStats};
 pub use crate::cnc::{FRAME_IDLE_TIMEOUT, MAX_REPLY_LEN, OUTPUT_CAPACITY, SimCommand};
 use crate::consumables::{ConsumableSet, Consumables};
 use crate::io::{Inputs, IoConfig, IoEvent, Outputs, SupplyState};
-use crate::link::{Diagnostics, PowermaxProcess, PsLink, UnitStatus};
+use crate::link::{Diagnostics, MAX_UNITS, PowermaxProcess, PsLink, UnitStatus, Units};
 use crate::platform::safe_state::ResetCause;
 use crate::settings::{Process, SaveError, Settings};
 use crate::storage::history::{Draft, Event, HistoryAnswer, HistoryRequest, Unit};
@@ -54,10 +54,11 @@ use plasma_protocol::time::Instant;
 /// The bridge: link, CNC session and settings. See the module docs.
 #[derive(Debug)]
 pub struct Bridge {
-    link: PsLink,
+    units: Units,
     session: Session,
     settings: Settings,
-    io: Option<(Inputs, Outputs)>,
+    /// Each unit's discrete-I/O snapshot.
+    io: [Option<(Inputs, Outputs)>; MAX_UNITS],
     boot_report: Option<&'static str>,
     history: HistoryLog,
     consumables: Consumables,
@@ -76,15 +77,19 @@ pub enum SaveRequest {
     Consumables(ConsumableSet),
 }
 
-/// A [`Context`] of `$bridge` at `$now` (a macro, so that the session can be borrowed at the
-/// same time as the other fields).
+/// A [`Context`] of `$bridge` at `$now` about `$unit` (the first unit by default; a macro, so
+/// that the session can be borrowed at the same time as the other fields).
 macro_rules! ctx {
     ($bridge:ident, $now:expr) => {
+        ctx!($bridge, $now, 0)
+    };
+    ($bridge:ident, $now:expr, $unit:expr) => {
         Context {
             now: $now,
-            link: &mut $bridge.link,
+            units: &mut $bridge.units,
+            unit: $unit,
             settings: &mut $bridge.settings,
-            io: $bridge.io,
+            ios: &$bridge.io,
             boot_report: $bridge.boot_report,
             history: &mut $bridge.history,
             consumables: &mut $bridge.consumables,
@@ -94,18 +99,15 @@ macro_rules! ctx {
 
 impl Bridge {
     /// A bridge that runs with `settings` (loaded from flash, or the defaults) from `now`.
-    /// The process persisted in the settings goes to the link, which applies it again once a
-    /// Powermax answers (the link decides what is re-applied and when: [`crate::link::kept`]).
+    /// The process persisted in the settings goes to the first unit's link, which applies it
+    /// again once a Powermax answers (the link decides what is re-applied and when:
+    /// [`crate::link::kept`]).
     pub fn new(settings: Settings, now: Instant) -> Self {
-        let mut link = PsLink::new(settings.link, now);
-        if let Some(process) = settings.process {
-            link.restore(unit_process(&process));
-        }
         Bridge {
-            link,
+            units: units_for(&settings, now),
             session: Session::new(&settings),
             settings,
-            io: None,
+            io: [None; MAX_UNITS],
             boot_report: None,
             history: HistoryLog::default(),
             consumables: Consumables::default(),
@@ -132,7 +134,7 @@ impl Bridge {
 
     /// Bytes received from the power supply (any chunking).
     pub fn handle_ps_rx(&mut self, now: Instant, bytes: &[u8]) {
-        self.link.handle_rx(now, bytes);
+        self.units.handle_rx(now, bytes);
         self.service(now);
     }
 
@@ -140,14 +142,14 @@ impl Bridge {
     /// error, in its place among the received bytes (see
     /// [`PsLink::handle_rx_error`](crate::link::PsLink::handle_rx_error)).
     pub fn handle_ps_rx_error(&mut self, now: Instant) {
-        self.link.handle_rx_error(now);
+        self.units.handle_rx_error(now);
         self.service(now);
     }
 
     /// The frame from [`Bridge::poll_ps_transmit`] has left the wire (its last stop bit) at
     /// `at`: its reply time-out runs from there.
     pub fn ps_transmitted(&mut self, at: Instant) {
-        self.link.handle_transmitted(at);
+        self.units.handle_transmitted(at);
     }
 
     /// The next frame to transmit to the power supply, if any (write it completely, then
@@ -156,12 +158,12 @@ impl Bridge {
     /// be moved in the same call).
     pub fn poll_ps_transmit(&mut self, now: Instant) -> Option<&[u8]> {
         self.service(now);
-        self.link.poll_transmit(now)
+        self.units.poll_transmit(now)
     }
 
     /// The UART settings the power-supply port must use now.
     pub fn ps_port_config(&self) -> PortConfig {
-        self.link.port_config()
+        self.units.port_config()
     }
 
     // --- CNC side -----------------------------------------------------------------------
@@ -200,10 +202,10 @@ impl Bridge {
     /// When [`Bridge::poll`] / [`Bridge::poll_ps_transmit`] need to be called next: at once
     /// while the link holds events the session has not taken.
     pub fn poll_at(&self) -> Option<Instant> {
-        if self.link.has_events() {
+        if self.units.has_events() {
             return Some(self.now);
         }
-        match (self.link.poll_at(), self.session.poll_at()) {
+        match (self.units.poll_at(), self.session.poll_at()) {
             (Some(a), Some(b)) => Some(a.min(b)),
             (a, b) => a.or(b),
         }
@@ -211,8 +213,9 @@ impl Bridge {
 
     fn service(&mut self, now: Instant) {
         self.now = now;
-        while let Some(event) = self.link.poll_event() {
-            self.session.on_link_event(&mut ctx!(self, now), &event);
+        while let Some((unit, event)) = self.units.poll_event() {
+            self.session
+                .on_link_event(&mut ctx!(self, now, unit), &event);
         }
         self.session.poll(&mut ctx!(self, now));
         self.session.pump(&mut ctx!(self, now));
@@ -220,9 +223,23 @@ impl Bridge {
 
     // --- discrete I/O exchange ----------------------------------------------------------
 
-    /// What the interlocks need to know about the supply.
+    /// What the interlocks need to know about the supply (the first unit's).
     pub fn supply_state(&self) -> SupplyState {
-        SupplyState::from(self.link.status())
+        self.supply_state_of(0)
+    }
+
+    /// How many units the bridge drives (`CONFIG units`; 1 by default).
+    pub fn unit_count(&self) -> usize {
+        self.units.count()
+    }
+
+    /// What unit `unit`'s interlocks need to know about its supply (0 = the first unit);
+    /// a unit the bridge does not drive is a supply with no link.
+    pub fn supply_state_of(&self, unit: usize) -> SupplyState {
+        if unit >= self.units.count() {
+            return SupplyState::default();
+        }
+        SupplyState::from(self.units.link(unit).status())
     }
 
     /// The interlocks' configuration (changes after `CONFIG <io key> <value>`).
@@ -237,16 +254,33 @@ impl Bridge {
             .then_some(self.settings.io)
     }
 
-    /// The interlocks' inputs and outputs now (for STATUS).
+    /// The first unit's interlock inputs and outputs now (for STATUS).
     pub fn set_io_snapshot(&mut self, inputs: Inputs, outputs: Outputs) {
-        self.io = Some((inputs, outputs));
-        let now = self.now;
-        self.session.io_changed(&mut ctx!(self, now));
+        self.set_io_snapshot_of(0, inputs, outputs);
     }
 
-    /// Something the interlocks report (`!ARC ON`, `!START REFUSED ...` with events on).
+    /// Unit `unit`'s interlock inputs and outputs now (ignored for a unit out of range).
+    pub fn set_io_snapshot_of(&mut self, unit: usize, inputs: Inputs, outputs: Outputs) {
+        let Some(slot) = self.io.get_mut(unit) else {
+            return;
+        };
+        *slot = Some((inputs, outputs));
+        let now = self.now;
+        self.session.io_changed(&mut ctx!(self, now, unit));
+    }
+
+    /// Something the first unit's interlocks report (`!ARC ON`, `!START REFUSED ...` with
+    /// events on).
     pub fn on_io_event(&mut self, now: Instant, event: IoEvent) {
-        self.session.on_io_event(&mut ctx!(self, now), event);
+        self.on_io_event_of(0, now, event);
+    }
+
+    /// Something unit `unit`'s interlocks report (its events carry `unit=N` beyond the
+    /// first; ignored for a unit the bridge does not drive).
+    pub fn on_io_event_of(&mut self, unit: usize, now: Instant, event: IoEvent) {
+        if unit < self.units.count() {
+            self.session.on_io_event(&mut ctx!(self, now, unit), event);
+        }
     }
 
     // --- persistence --------------------------------------------------------------------
@@ -308,7 +342,7 @@ impl Bridge {
         Some(match command {
             HistoryCommand::Newest(n) => HistoryRequest::Newest(n),
             HistoryCommand::Clear => {
-                let unit = crate::cnc::history::unit_on(&self.link);
+                let unit = crate::cnc::history::unit_on(self.units.link(0));
                 HistoryRequest::Clear(self.history.stamp(self.now, unit))
             }
         })
@@ -327,14 +361,19 @@ impl Bridge {
         &self.settings
     }
 
-    /// What the bridge knows about the unit.
+    /// What the bridge knows about the (first) unit.
     pub fn status(&self) -> &UnitStatus {
-        self.link.status()
+        self.units.link(0).status()
     }
 
-    /// Link counters.
+    /// What the bridge knows about unit `unit` (the first unit's for one out of range).
+    pub fn status_of(&self, unit: usize) -> &UnitStatus {
+        self.units.link(unit).status()
+    }
+
+    /// The (first) unit's link counters.
     pub fn diagnostics(&self) -> &Diagnostics {
-        self.link.diagnostics()
+        self.units.link(0).diagnostics()
     }
 
     /// CNC-side counters.
@@ -342,10 +381,27 @@ impl Bridge {
         self.session.stats()
     }
 
-    /// The link (read only), e.g. for its configuration.
+    /// The (first) unit's link (read only), e.g. for its configuration.
     pub fn link(&self) -> &PsLink {
-        &self.link
+        self.units.link(0)
     }
+
+    /// The units (read only).
+    pub fn units(&self) -> &Units {
+        &self.units
+    }
+}
+
+/// The units `settings` name, the persisted process restored to the first. Settings that
+/// could not name them were refused when loaded or typed; should they reach here, the bridge
+/// drives one unit rather than none.
+pub(crate) fn units_for(settings: &Settings, now: Instant) -> Units {
+    let mut units = Units::new(settings.link, settings.units.as_slice(), now)
+        .unwrap_or_else(|_| Units::One(PsLink::new(settings.link, now)));
+    if let Some(process) = settings.process {
+        units.link_mut(0).restore(unit_process(&process));
+    }
+    units
 }
 
 /// The one translation of the link's view into what the interlocks need: the board's

@@ -19,7 +19,7 @@ use crate::storage::history::ChangedBy;
 impl Session {
     /// Carry out one command: its reply, or `None` when it waits for the link or a save.
     pub(super) fn run(&mut self, ctx: &mut Context<'_>, command: Command<'_>) -> Option<ReplyLine> {
-        let status = ctx.link.status();
+        let status = ctx.link().status();
         let family = status.family.filter(|_| status.link_up);
         match route(&command, family) {
             Route::Send(request, awaiting) => self.submit(ctx, request, awaiting),
@@ -36,7 +36,7 @@ impl Session {
             // locally.
             Route::Local => Some(match command {
                 Command::Cartridge => cartridge(status),
-                _ => counters(ctx.link),
+                _ => counters(ctx.link()),
             }),
             Route::Unsupported(text) => Some(match family {
                 Some(family) => err_line(ErrorCode::Unsupported, UnsupportedText(*text, family)),
@@ -55,7 +55,7 @@ impl Session {
         command: Command<'_>,
         family: Option<Family>,
     ) -> Option<ReplyLine> {
-        let status = ctx.link.status();
+        let status = ctx.link().status();
         Some(match command {
             Command::Help => help(self.sim_enabled),
             Command::Id => id(ctx),
@@ -82,13 +82,13 @@ impl Session {
         command: LinkCommand<'_>,
         awaiting: Awaiting,
     ) -> Option<ReplyLine> {
-        match ctx.link.submit(ctx.now, command) {
+        match ctx.submit(command) {
             Ok(ticket) => {
                 self.pending = Some(Pending::Link { ticket, awaiting });
                 None
             }
             Err(refusal) => {
-                let family = ctx.link.status().family;
+                let family = ctx.link().status().family;
                 Some(line(|l| write_refusal(l, &refusal, family, ctx.now)))
             }
         }
@@ -216,9 +216,14 @@ impl Session {
         if let Err(e) = ctx.settings.set(key, value) {
             return err_line(e.code(), e);
         }
-        let relink = before.link.needs_redetect(&ctx.settings.link);
-        if before.link != ctx.settings.link {
-            ctx.link.reconfigure(ctx.now, ctx.settings.link);
+        let new_units = before.units != ctx.settings.units;
+        let relink = new_units || before.link.needs_redetect(&ctx.settings.link);
+        if new_units {
+            // Other units on the line: every link starts afresh, the kept process goes to
+            // the first unit as at power-up.
+            *ctx.units = crate::bridge::units_for(ctx.settings, ctx.now);
+        } else if before.link != ctx.settings.link {
+            ctx.units.reconfigure(ctx.now, ctx.settings.link);
         }
         if before.io != ctx.settings.io {
             self.io_config_changed = true;
@@ -265,7 +270,11 @@ fn events(ctx: &mut Context<'_>, on: bool) -> ReplyLine {
 /// failing that the unit's (as the link keeps or reads it).
 fn base_process(ctx: &Context<'_>, family: Option<Family>) -> Option<Process> {
     ctx.settings.process.or_else(|| {
-        let known = ctx.link.kept().powermax().or(ctx.link.status().settings)?;
+        let known = ctx
+            .link()
+            .kept()
+            .powermax()
+            .or(ctx.link().status().settings)?;
         Some(Process {
             mode: cnc_mode(known.mode?, family),
             amps: known.current,

@@ -19,7 +19,7 @@ const UNREADABLE_UID: [u8; 16] = [0; 16];
 
 /// The counts of the set in use now: a SYNC's cartridge, else the bridge's.
 pub(super) fn usage(ctx: &Context<'_>) -> Usage {
-    let status = ctx.link.status();
+    let status = ctx.link().status();
     let cartridge = status
         .cartridge
         .as_ref()
@@ -119,7 +119,7 @@ impl Session {
             w.field("used", Percent(usage.used_percent(limits)))?;
             w.field("wear_faults", set.wear_faults)?;
             let hpr = matches!(
-                ctx.link.status().family,
+                ctx.link().status().family,
                 Some(Family::Hpr | Family::MaxPro200)
             );
             if hpr || set.rampdown_errors > 0 {
@@ -136,7 +136,7 @@ impl Session {
     /// entry; the first one the bridge sees only a record); a warning due goes out as
     /// `!WARN CONSUMABLE`.
     pub(super) fn follow_consumables(&mut self, ctx: &mut Context<'_>) {
-        let status = ctx.link.status();
+        let status = ctx.link().status();
         if status.family == Some(Family::PowermaxSync)
             && let Some(cartridge) = status.cartridge
             && cartridge.uid.0 != UNREADABLE_UID

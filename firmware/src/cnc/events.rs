@@ -41,7 +41,7 @@ impl Session {
         if let LinkEvent::UnitPowerCycled { reapply: false } = event {
             ctx.settings.process = None;
         }
-        let status = ctx.link.status();
+        let status = ctx.link().status();
         self.event(ctx, |l| write_link_event(l, event, status));
     }
 

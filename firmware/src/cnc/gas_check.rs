@@ -94,7 +94,7 @@ enum Outcome {
 
 /// TORCH_ON, START or MOTION on, as the last I/O snapshot shows them.
 fn torch_on(ctx: &Context<'_>) -> bool {
-    ctx.io
+    ctx.io()
         .is_some_and(|(inputs, outputs)| inputs.torch_on || inputs.motion || outputs.start)
 }
 
@@ -106,7 +106,7 @@ impl Session {
         ctx: &mut Context<'_>,
         steps: GasCheckSteps,
     ) -> Option<ReplyLine> {
-        let status = ctx.link.status();
+        let status = ctx.link().status();
         if torch_on(ctx) {
             return Some(err_line(ErrorCode::State, texts::GAS_CHECK_TORCH_ON));
         }
@@ -130,7 +130,7 @@ impl Session {
             _ => None,
         };
         let family = status.family;
-        let ticket = match ctx.link.submit(ctx.now, steps.start) {
+        let ticket = match ctx.submit(steps.start) {
             Ok(ticket) => ticket,
             Err(refusal) => {
                 return Some(line(|l| write_refusal(l, &refusal, family, ctx.now)));
@@ -244,11 +244,8 @@ impl Session {
         // A stop owed is sent once the link is up; its answer is nobody's (the check that
         // owed it has replied). Another family on the line now has no such test running.
         if let Some(stop) = self.gas_stop_owed
-            && ctx.link.status().link_up
-            && matches!(
-                ctx.link.submit(ctx.now, stop),
-                Ok(_) | Err(Refusal::NotSupported { .. })
-            )
+            && ctx.link().status().link_up
+            && matches!(ctx.submit(stop), Ok(_) | Err(Refusal::NotSupported { .. }))
         {
             self.gas_stop_owed = None;
         }
@@ -266,7 +263,7 @@ impl Session {
         if ctx.now < until {
             return;
         }
-        match ctx.link.submit(ctx.now, check.steps.read) {
+        match ctx.submit(check.steps.read) {
             Ok(ticket) => {
                 check.ticket = Some(ticket);
                 check.phase = Phase::Reading;
@@ -294,7 +291,7 @@ impl Session {
     /// follows its answer.
     fn gas_check_end(&mut self, ctx: &mut Context<'_>, mut check: GasCheck) {
         check.phase = Phase::Ending;
-        match ctx.link.submit(ctx.now, check.steps.stop) {
+        match ctx.submit(check.steps.stop) {
             Ok(ticket) => {
                 check.ticket = Some(ticket);
                 self.pending = Some(Pending::GasCheck(check));
@@ -313,7 +310,7 @@ impl Session {
     /// result.
     fn gas_check_reply(&mut self, ctx: &mut Context<'_>, check: GasCheck) {
         self.pending = None;
-        let family = ctx.link.status().family;
+        let family = ctx.link().status().family;
         let reply = match (check.outcome, check.last) {
             (Outcome::Measured, Some(reading)) => {
                 let verdict = Verdict::of(reading, check.powermax_range, check.settled);

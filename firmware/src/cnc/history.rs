@@ -209,7 +209,7 @@ pub(super) fn process_change_starts(ctx: &mut Context<'_>) {
         .settings
         .process
         .map(|p| p.amps)
-        .or_else(|| ctx.link.status().settings.map(|s| s.current));
+        .or_else(|| ctx.link().status().settings.map(|s| s.current));
 }
 
 /// The process the unit confirmed becomes the one the settings keep; a change is noted.
@@ -225,7 +225,7 @@ pub(super) fn keep_process(ctx: &mut Context<'_>, process: Process, by: ChangedB
 
 /// Queues `event`, now, about the unit on the line.
 pub(super) fn note(ctx: &mut Context<'_>, event: Event) {
-    let unit = unit_on(ctx.link);
+    let unit = unit_on(ctx.link());
     ctx.history.note(ctx.now, unit, event);
 }
 

@@ -295,7 +295,7 @@ impl Session {
 /// The reply to a line that did not parse. A current outside every unit's bounds quotes the
 /// range of the unit on the line when the link knows it (what LIMITS shows), not the bounds.
 fn parse_error(ctx: &Context<'_>, error: &ParseError) -> ReplyLine {
-    let status = ctx.link.status();
+    let status = ctx.link().status();
     let family = status.family.filter(|_| status.link_up);
     match (error, AmpsRange::of(status, family)) {
         (ParseError::OutOfRange { what, .. }, Some(range)) if *what == AMPS_ARGUMENT => err_line(

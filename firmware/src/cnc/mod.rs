@@ -55,7 +55,7 @@ use plasma_protocol::cnc::reply::{ReplyWriter, write_error};
 use plasma_protocol::cnc::{ErrorCode, LineAssembler, MAX_LINE_LEN};
 
 use crate::io::{Inputs, Outputs};
-use crate::link::{PsLink, Ticket};
+use crate::link::{LinkCommand, MAX_UNITS, PsLink, Refusal, Ticket, Units};
 use crate::settings::{SaveError, Settings};
 use plasma_protocol::time::{Duration, Instant};
 
@@ -99,18 +99,37 @@ pub enum SimCommand {
 pub struct Context<'a> {
     /// The time of the call.
     pub now: Instant,
-    /// The power-supply link.
-    pub link: &'a mut PsLink,
+    /// The units' links.
+    pub units: &'a mut Units,
+    /// The unit the input or event is about (0 = the first; `@N` names unit N - 1).
+    pub unit: usize,
     /// The settings (CONFIG changes them; a confirmed process is kept in them).
     pub settings: &'a mut Settings,
-    /// The last discrete-I/O snapshot, if the driver has given one.
-    pub io: Option<(Inputs, Outputs)>,
+    /// Each unit's last discrete-I/O snapshot, if the driver has given one.
+    pub ios: &'a [Option<(Inputs, Outputs)>; MAX_UNITS],
     /// Why the board last reset, if the board said.
     pub boot_report: Option<&'static str>,
     /// The history's queue and the wall clock.
     pub history: &'a mut history::HistoryLog,
     /// The consumable set in use.
     pub consumables: &'a mut crate::consumables::Consumables,
+}
+
+impl Context<'_> {
+    /// The link of the unit this call is about.
+    pub fn link(&self) -> &PsLink {
+        self.units.link(self.unit)
+    }
+
+    /// Submit `command` to the link of the unit this call is about.
+    pub fn submit(&mut self, command: LinkCommand<'_>) -> Result<Ticket, Refusal> {
+        self.units.link_mut(self.unit).submit(self.now, command)
+    }
+
+    /// That unit's last discrete-I/O snapshot.
+    pub fn io(&self) -> Option<(Inputs, Outputs)> {
+        self.ios.get(self.unit).copied().flatten()
+    }
 }
 
 /// Counters of the CNC side.

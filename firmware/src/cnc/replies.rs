@@ -53,7 +53,7 @@ pub(super) fn link_word(status: &UnitStatus) -> &'static str {
 }
 
 pub(super) fn id(ctx: &Context<'_>) -> ReplyLine {
-    let status = ctx.link.status();
+    let status = ctx.link().status();
     ok_line(|w| {
         w.field("bridge", "plasma-bridge")?;
         w.field("version", env!("CARGO_PKG_VERSION"))?;
@@ -99,12 +99,12 @@ pub(super) fn id(ctx: &Context<'_>) -> ReplyLine {
 /// `STATUS`; `refused`: the 0-11-x fault of a setting the unit refused through the Powermax
 /// registers, shown while the unit itself has no fault (as 0x2098 shows it).
 pub(super) fn status_line(ctx: &Context<'_>, refused: Option<FaultCode>) -> ReplyLine {
-    let status = ctx.link.status();
+    let status = ctx.link().status();
     let active_fault = status.active_fault.or(refused.map(ActiveFault::Powermax));
     let family = status.family;
     let hpr = matches!(family, Some(Family::Hpr | Family::MaxPro200));
-    let (inputs, outputs) = ctx.io.unwrap_or((Inputs::NONE, Outputs::OFF));
-    let ready = match ctx.io {
+    let (inputs, outputs) = ctx.io().unwrap_or((Inputs::NONE, Outputs::OFF));
+    let ready = match ctx.io() {
         Some((_, outputs)) => outputs.ready,
         None => status.ready,
     };
@@ -135,7 +135,7 @@ pub(super) fn status_line(ctx: &Context<'_>, refused: Option<FaultCode>) -> Repl
             // 0x3012 "gas pressure setting"): the request is AUTO, as SET answered, and the
             // choice is shown beside it.
             let unit_psi = settings.map(|s| s.pressure);
-            if status.remote && kept_auto_pressure(ctx.link) {
+            if status.remote && kept_auto_pressure(ctx.link()) {
                 w.field("psi", "AUTO")?;
                 w.field("auto_psi", OrDash(unit_psi.and_then(Pressure::psi)))?;
             } else {
@@ -415,7 +415,7 @@ pub(super) fn complete(
     awaiting: Awaiting,
     result: &Result<CommandOutput, CommandFailure>,
 ) -> ReplyLine {
-    let family = ctx.link.status().family;
+    let family = ctx.link().status().family;
     let output = match result {
         Err(failure) => return line(|l| write_failure(l, failure, family)),
         Ok(output) => *output,
@@ -474,7 +474,7 @@ fn process_done(process: Process, output: CommandOutput, family: Option<Family>)
 /// `RESTART` done: how long the unit stays quiet.
 fn restart_done(ctx: &Context<'_>) -> ReplyLine {
     let quiet = ctx
-        .link
+        .link()
         .status()
         .restart_blackout_until
         .map(|until| until.saturating_since(ctx.now).as_millis_u32());
@@ -490,7 +490,7 @@ fn raw_done(ctx: &Context<'_>, output: CommandOutput) -> ReplyLine {
         CommandOutput::Raw { len } => len,
         _ => 0,
     };
-    let reply = ctx.link.raw_reply();
+    let reply = ctx.link().raw_reply();
     let reply = reply.get(..len).unwrap_or(reply).trim_ascii_end();
     let text = core::str::from_utf8(reply).unwrap_or("?");
     // `reply=` is the last field and runs to the end of the line: an HPR reply may hold
@@ -500,7 +500,7 @@ fn raw_done(ctx: &Context<'_>, output: CommandOutput) -> ReplyLine {
 
 /// `FAULTLOG` read: the HPR error log or the SYNC cartridge's fault log.
 fn fault_log_done(ctx: &Context<'_>, output: CommandOutput) -> ReplyLine {
-    let status = ctx.link.status();
+    let status = ctx.link().status();
     match (output, status.fault_log, status.hpr.error_log) {
         (CommandOutput::ErrorLog(log), _, _) | (_, None, Some(log)) => ok_line(|w| {
             let codes = log.iter().filter(|e| e.0 != 0).map(|e| HprId(e.0));
@@ -516,8 +516,8 @@ fn fault_log_done(ctx: &Context<'_>, output: CommandOutput) -> ReplyLine {
 
 /// `COUNTERS` read: the unit's counters, then the link's.
 fn counters_done(ctx: &Context<'_>) -> ReplyLine {
-    let status = ctx.link.status().clone();
-    counters_with(ctx.link, |w| {
+    let status = ctx.link().status().clone();
+    counters_with(ctx.link(), |w| {
         if let Some(c) = status.ps_counters {
             w.field("starts", c.starts)?;
             w.field("pilot_arc_s", c.pilot_arc_seconds)?;

@@ -114,6 +114,7 @@ mod schedule;
 pub(crate) mod slow;
 pub(crate) mod status;
 pub(crate) mod transaction;
+mod units;
 
 #[cfg(test)]
 mod test_support;
@@ -136,12 +137,13 @@ pub use transaction::TransactionError;
 use self::core::Core;
 use detect::{DetectStep, Detector, KnownGood};
 pub use kept::Kept;
-pub use line::{LineError, LineStats, LineUnit, MAX_UNITS, SharedLine};
+pub use line::{LineError, LineStats, LineUnit, MAX_UNITS, NamedUnits, SharedLine, UnitsError};
 use phase::Phase;
 pub use powermax::FAULT_CHECK_INTERVAL;
 use schedule::Tag;
 pub use transaction::TX_CAPACITY;
 use transaction::Transaction;
+pub use units::Units;
 
 use plasma_protocol::serial::PortConfig;
 use plasma_protocol::time::Instant;

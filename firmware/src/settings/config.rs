@@ -13,7 +13,7 @@ use super::{
     wiring,
 };
 use crate::consumables::Limits;
-use crate::link::{LinkConfig, ProtocolChoice};
+use crate::link::{LinkConfig, NamedUnits, ProtocolChoice, UnitsError};
 
 const CNC_BAUD_WORDS: &str = "1200|2400|4800|9600|19200|38400|57600|115200";
 /// Every format value the Phoenix manual lists (a test ties it to [`Format::ALL`]).
@@ -87,14 +87,19 @@ pub enum SetError<'a> {
         /// The value as typed (digits only).
         value: &'a str,
     },
+    /// Units that are not a list `CONFIG units` takes, or cannot share a line.
+    Units(UnitsError),
 }
 
 impl SetError<'_> {
     /// The reply code.
     pub const fn code(&self) -> ErrorCode {
         match self {
-            SetError::NotANumber { .. } | SetError::BadWord { .. } => ErrorCode::Syntax,
+            SetError::NotANumber { .. }
+            | SetError::BadWord { .. }
+            | SetError::Units(UnitsError::Syntax) => ErrorCode::Syntax,
             SetError::OutOfRange { .. } | SetError::NotPhoenixFormat { .. } => ErrorCode::Range,
+            SetError::Units(UnitsError::Line(_)) => ErrorCode::Refused,
         }
     }
 }
@@ -116,6 +121,7 @@ impl fmt::Display for SetError<'_> {
                 f,
                 "phoenix_format {value} is not a Phoenix format ({PHOENIX_FORMAT_WORDS})"
             ),
+            SetError::Units(error) => error.fmt(f),
         }
     }
 }
@@ -128,6 +134,8 @@ pub enum ConfigValue {
     Word(&'static str),
     /// A number.
     Number(u32),
+    /// The units on the line (`AUTO` or a list).
+    Units(NamedUnits),
 }
 
 impl fmt::Display for ConfigValue {
@@ -135,6 +143,7 @@ impl fmt::Display for ConfigValue {
         match self {
             ConfigValue::Word(w) => f.write_str(w),
             ConfigValue::Number(n) => write!(f, "{n}"),
+            ConfigValue::Units(units) => units.fmt(f),
         }
     }
 }
@@ -280,6 +289,7 @@ impl Settings {
             }
             ConfigKey::ConsumableStartLimit => limit(self.consumable_limits.starts),
             ConfigKey::ConsumableArcLimitS => limit(self.consumable_limits.arc_seconds),
+            ConfigKey::Units => ConfigValue::Units(self.units),
             // The wiring keys (`wiring::KEYS`); every other key has its arm above.
             other => wiring::get(io, other).unwrap_or(ConfigValue::Number(0)),
         }
@@ -302,6 +312,7 @@ impl Settings {
             ConfigKey::ConsumableStartLimit | ConfigKey::ConsumableArcLimitS => {
                 Accepted::Words(LIMIT_WORDS)
             }
+            ConfigKey::Units => Accepted::Words(NamedUnits::WORDS),
             other => wiring::accepted(other).unwrap_or_else(|| {
                 let (min, max) = range_of(other);
                 Accepted::Range(min, max)
@@ -370,6 +381,9 @@ impl Settings {
             }
             ConfigKey::ConsumableArcLimitS => {
                 self.consumable_limits.arc_seconds = parse_limit(key, text)?;
+            }
+            ConfigKey::Units => {
+                self.units = NamedUnits::parse(self.link, text).map_err(SetError::Units)?;
             }
             // The wiring keys (`wiring::KEYS`); every other key has its arm above.
             other => return wiring::set(io, other, text).unwrap_or(Ok(())),

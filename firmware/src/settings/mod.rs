@@ -137,6 +137,8 @@ pub struct Settings {
     pub cnc: CncPort,
     /// The limits of a consumable set (OFF by default: no manual gives a figure).
     pub consumable_limits: crate::consumables::Limits,
+    /// The units on the power-supply line (`CONFIG units`; one, auto-detected, by default).
+    pub units: crate::link::NamedUnits,
 }
 
 impl Default for Settings {
@@ -149,6 +151,7 @@ impl Default for Settings {
             process: None,
             cnc: CncPort::DEFAULT,
             consumable_limits: crate::consumables::Limits::default(),
+            units: crate::link::NamedUnits::AUTO,
         }
     }
 }
@@ -235,6 +238,7 @@ impl Settings {
             && within(self.io.arc_ok_debounce, ARC_OK_DEBOUNCE_MS)
             && within(self.io.transfer_timeout, TRANSFER_TIMEOUT_MS)
             && self.cnc.is_valid()
+            && crate::link::NamedUnits::new(self.link, self.units.as_slice()).is_ok()
             && process_ok
     }
 }

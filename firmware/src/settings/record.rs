@@ -1,5 +1,6 @@
-//! The settings record the store keeps: a fixed layout, version 4 (version 3 is its first 46
-//! bytes, version 2 its first 45, version 1 its first 29, and all still load). Decoding is strict: a wrong length, an unknown code, a value out of
+//! The settings record the store keeps: a fixed layout, version 5 (version 4 is its first 54
+//! bytes, version 3 its first 46, version 2 its first 45, version 1 its first 29, and all
+//! still load). Decoding is strict: a wrong length, an unknown code, a value out of
 //! range or a reserved bit set gives `None`, and the store falls back to the defaults.
 
 use plasma_protocol::cnc::phoenix::Format;
@@ -10,7 +11,7 @@ use plasma_protocol::time::Duration;
 use super::{CncPort, Process, Settings, ms, stop_bits_number, wiring};
 use crate::consumables::Limits;
 use crate::io::{InputConfig, IoConfig, MIN_START_GAP, OutputConfig};
-use crate::link::{LinkConfig, ProtocolChoice};
+use crate::link::{LineUnit, LinkConfig, MAX_UNITS, NamedUnits, ProtocolChoice};
 use crate::storage;
 
 /// Length of the version-1 record (no wiring, no CNC port block).
@@ -20,13 +21,17 @@ pub const RECORD_V2_LEN: usize = RECORD_V1_LEN + wiring::RECORD_LEN + CNC_BLOCK_
 /// Length of the version-3 record: version 2, then the wiring of the inputs added since.
 pub const RECORD_V3_LEN: usize = RECORD_V2_LEN + wiring::TAIL_LEN;
 /// Length of the version-4 record: version 3, then the consumable limits.
-pub const RECORD_LEN: usize = RECORD_V3_LEN + LIMITS_BLOCK_LEN;
+pub const RECORD_V4_LEN: usize = RECORD_V3_LEN + LIMITS_BLOCK_LEN;
+/// Length of the version-5 record: version 4, then the units on the line.
+pub const RECORD_LEN: usize = RECORD_V4_LEN + UNITS_BLOCK_LEN;
+/// Bytes of the units block: their number (0 = AUTO), then kind and address of each.
+const UNITS_BLOCK_LEN: usize = 1 + 2 * MAX_UNITS;
 /// Bytes of the consumable limits: starts, arc seconds (LE u32 each, 0 = OFF).
 const LIMITS_BLOCK_LEN: usize = 8;
 /// Bytes of the CNC port block in the record: address, baud (LE u32), parity, stop bits.
 const CNC_BLOCK_LEN: usize = 7;
 
-// --- record layout, version 4 (version 3 is its first 46 bytes, 2 its first 45, 1 its 29) ---
+// --- record layout, version 5 (4 is its first 54 bytes, 3 its 46, 2 its 45, 1 its 29) ---
 // 0 protocol | 1 node address | 2 parity | 3 stop bits | 4-5 response time-out ms (LE)
 // 6 retries | 7-8 poll ms | 9-12 slow-data ms | 13 HPR id | 14 failures before down
 // 15-16 start gap ms | 17-18 ARC_OK debounce ms | 19-20 transfer time-out ms | 21 flags
@@ -36,6 +41,8 @@ const CNC_BLOCK_LEN: usize = 7;
 // 38 CNC address | 39-42 CNC baud (LE) | 43 CNC parity | 44 CNC stop bits
 // 45 SYSTEM_ERROR debounce ms (version 3)
 // 46-49 consumable start limit (LE, 0 = OFF) | 50-53 consumable arc limit s (LE, 0 = OFF) (v4)
+// 54 units on the line (0 = AUTO) | 55-62 each unit's kind (1 HPR, 2 MaxPro200, 3 Powermax)
+//   and id or node, two bytes per unit, unused pairs 0 (v5)
 
 const FLAG_ARC_OK_REQUIRES_START: u8 = 1 << 0;
 const FLAG_DROP_START_ON_TRANSFER_TIMEOUT: u8 = 1 << 1;
@@ -105,7 +112,7 @@ impl CncPort {
 }
 
 impl storage::Persistent for Settings {
-    const VERSION: u8 = 4;
+    const VERSION: u8 = 5;
 
     fn encode(&self, out: &mut [u8]) -> usize {
         let mut r = [0u8; RECORD_LEN];
@@ -148,11 +155,13 @@ impl storage::Persistent for Settings {
         let (wiring_bytes, wiring_tail) = wiring::encode(io);
         let (wiring_slot, rest) = r[RECORD_V1_LEN..].split_at_mut(wiring::RECORD_LEN);
         let (cnc, rest) = rest.split_at_mut(CNC_BLOCK_LEN);
-        let (tail, limits) = rest.split_at_mut(wiring::TAIL_LEN);
+        let (tail, rest) = rest.split_at_mut(wiring::TAIL_LEN);
+        let (limits, units) = rest.split_at_mut(LIMITS_BLOCK_LEN);
         wiring_slot.copy_from_slice(&wiring_bytes);
         cnc.copy_from_slice(&self.cnc.encode());
         tail.copy_from_slice(&wiring_tail);
         limits.copy_from_slice(&encode_limits(self.consumable_limits));
+        units.copy_from_slice(&encode_units(&self.units));
         match out.get_mut(..RECORD_LEN) {
             Some(slot) => {
                 slot.copy_from_slice(&r);
@@ -164,24 +173,73 @@ impl storage::Persistent for Settings {
     }
 
     fn decode(payload: &[u8]) -> Option<Self> {
-        let (v3, limits) = payload.split_at_checked(RECORD_V3_LEN)?;
-        Some(Settings {
-            consumable_limits: decode_limits(limits.try_into().ok()?)?,
-            ..decode_v3(v3)?
-        })
+        let (v4, units) = payload.split_at_checked(RECORD_V4_LEN)?;
+        let v4 = decode_v4(v4)?;
+        let settings = Settings {
+            units: decode_units(v4.link, units.try_into().ok()?)?,
+            ..v4
+        };
+        settings.is_valid().then_some(settings)
     }
 
     /// Version 1 had neither the wiring nor the CNC port block: both keep their defaults.
     /// Version 2 had no SYSTEM_ERROR input: it keeps the reference board's wiring.
     /// Version 3 had no consumable limits: they are OFF.
+    /// Version 4 had one unit only: `units` is AUTO.
     fn migrate(version: u8, payload: &[u8]) -> Option<Self> {
         match version {
             1 => decode_v1(payload),
             2 => decode_v2(payload, wiring::decode_v2),
             3 => decode_v3(payload),
+            4 => decode_v4(payload),
             _ => None,
         }
     }
+}
+
+/// The version-4 record (also the first part of version 5).
+fn decode_v4(payload: &[u8]) -> Option<Settings> {
+    let (v3, limits) = payload.split_at_checked(RECORD_V3_LEN)?;
+    Some(Settings {
+        consumable_limits: decode_limits(limits.try_into().ok()?)?,
+        ..decode_v3(v3)?
+    })
+}
+
+fn encode_units(units: &NamedUnits) -> [u8; UNITS_BLOCK_LEN] {
+    let mut block = [0u8; UNITS_BLOCK_LEN];
+    let (count, pairs) = block.split_at_mut(1);
+    count.copy_from_slice(&[units.as_slice().len() as u8]);
+    for (pair, unit) in pairs.chunks_exact_mut(2).zip(units.as_slice()) {
+        pair.copy_from_slice(&match *unit {
+            LineUnit::Hpr { id } => [1, id],
+            LineUnit::MaxPro200 => [2, 0],
+            LineUnit::Powermax { node } => [3, node],
+        });
+    }
+    block
+}
+
+/// Strict: an unknown kind, a used pair past the count, or units that cannot share a line
+/// give `None`.
+fn decode_units(link: LinkConfig, block: &[u8; UNITS_BLOCK_LEN]) -> Option<NamedUnits> {
+    let (&count, pairs) = block.split_first()?;
+    let count = usize::from(count);
+    let mut units = [LineUnit::MaxPro200; MAX_UNITS];
+    for (index, pair) in pairs.chunks_exact(2).enumerate() {
+        let &[kind, address] = pair else {
+            return None;
+        };
+        let unit = match (index < count, kind) {
+            (false, 0) if address == 0 => continue,
+            (true, 1) => LineUnit::Hpr { id: address },
+            (true, 2) if address == 0 => LineUnit::MaxPro200,
+            (true, 3) => LineUnit::Powermax { node: address },
+            _ => return None,
+        };
+        *units.get_mut(index)? = unit;
+    }
+    NamedUnits::new(link, units.get(..count)?).ok()
 }
 
 fn encode_limits(limits: Limits) -> [u8; LIMITS_BLOCK_LEN] {
@@ -289,6 +347,7 @@ fn decode_v1(payload: &[u8]) -> Option<Settings> {
         process,
         cnc: CncPort::DEFAULT,
         consumable_limits: Limits::default(),
+        units: NamedUnits::AUTO,
     };
     settings.is_valid().then_some(settings)
 }
@@ -443,13 +502,35 @@ mod tests {
         s.set(ConfigKey::ConsumableStartLimit, "800").unwrap();
         let mut out = [0u8; storage::MAX_PAYLOAD];
         let len = s.encode(&mut out);
-        assert_eq!((len, RECORD_V3_LEN), (54, 46));
+        assert_eq!((len, RECORD_V4_LEN, RECORD_V3_LEN), (63, 54, 46));
         assert_eq!(out[46..50], 800u32.to_le_bytes());
         let v3 = &out[..RECORD_V3_LEN];
-        assert_eq!(Settings::decode(v3), None, "not a version-4 record");
+        assert_eq!(Settings::decode(v3), None, "not a version-5 record");
         let migrated = Settings::migrate(3, v3).unwrap();
         assert_eq!(migrated.link.hpr_id, 2);
         assert_eq!(migrated.consumable_limits, Limits::default());
+    }
+
+    #[test]
+    fn a_version_4_record_loads_with_one_unit_and_the_units_round_trip() {
+        let mut s = Settings::default();
+        s.set(ConfigKey::ConsumableStartLimit, "800").unwrap();
+        s.set(ConfigKey::Units, "HPR:0,HPR:2,HPR:3").unwrap();
+        let mut out = [0u8; storage::MAX_PAYLOAD];
+        let len = s.encode(&mut out);
+        assert_eq!(out[54..len], [3, 1, 0, 1, 2, 1, 3, 0, 0]);
+        assert_eq!(Settings::decode(&out[..len]), Some(s));
+        let v4 = &out[..RECORD_V4_LEN];
+        assert_eq!(Settings::decode(v4), None, "not a version-5 record");
+        let migrated = Settings::migrate(4, v4).unwrap();
+        assert_eq!(migrated.consumable_limits.starts, Some(800));
+        assert_eq!(migrated.units, NamedUnits::AUTO);
+        // Units that cannot share a line, an unknown kind, a pair past the count: refused.
+        for (at, byte) in [(55, 3), (55, 9), (61, 1)] {
+            let mut bad = out;
+            bad[at] = byte;
+            assert_eq!(Settings::decode(&bad[..len]), None, "byte {at} = {byte}");
+        }
     }
 
     #[test]

@@ -213,11 +213,13 @@ pub enum ConfigKey {
     // Consumable life: the limits of one set (OFF or a number).
     ConsumableStartLimit,
     ConsumableArcLimitS,
+    // The units on the power-supply line.
+    Units,
 }
 
 impl ConfigKey {
     /// Every key, in the order `CONFIG` lists them.
-    pub const ALL: [ConfigKey; 41] = [
+    pub const ALL: [ConfigKey; 42] = [
         ConfigKey::Protocol,
         ConfigKey::Address,
         ConfigKey::Parity,
@@ -259,6 +261,7 @@ impl ConfigKey {
         ConfigKey::CncStopBits,
         ConfigKey::ConsumableStartLimit,
         ConfigKey::ConsumableArcLimitS,
+        ConfigKey::Units,
     ];
 
     /// The key as written in commands and replies (lower case, `snake_case`).
@@ -305,6 +308,7 @@ impl ConfigKey {
             ConfigKey::CncStopBits => "cnc_stop_bits",
             ConfigKey::ConsumableStartLimit => "consumable_start_limit",
             ConfigKey::ConsumableArcLimitS => "consumable_arc_limit_s",
+            ConfigKey::Units => "units",
         }
     }
 

@@ -206,7 +206,7 @@ impl PowermaxPort {
         if !broadcast && address != ctx.settings.cnc.address {
             return Step::Pending;
         }
-        let status = ctx.link.status();
+        let status = ctx.link().status();
         // Link lost or not up yet: silence, as a unit with its cable cut.
         let Some(family) = status.family.filter(|_| status.link_up) else {
             return Step::Pending;
@@ -304,8 +304,8 @@ impl PowermaxPort {
             Request::ReadCoils { start, quantity } => {
                 refused = self.complete_group(ctx);
                 let coils = Coils {
-                    status: ctx.link.status(),
-                    io: ctx.io,
+                    status: ctx.link().status(),
+                    io: ctx.io(),
                 };
                 match coils.read_many(start, quantity, &mut bits) {
                     Ok(len) => Response::ReadCoils {
@@ -317,13 +317,13 @@ impl PowermaxPort {
             Request::WriteSingleCoil { address: coil, on } => {
                 refused = self.complete_group(ctx);
                 let coils = Coils {
-                    status: ctx.link.status(),
-                    io: ctx.io,
+                    status: ctx.link().status(),
+                    io: ctx.io(),
                 };
                 if !coils.is_gas_test(coil) {
                     exception(function, ExceptionCode::IllegalDataAddress)
                 } else {
-                    match ctx.link.submit(ctx.now, LinkCommand::GasTest { on }) {
+                    match ctx.submit(LinkCommand::GasTest { on }) {
                         Ok(_) => Response::WriteSingleCoil { address: coil, on },
                         Err(refusal) => exception(function, refusal_exception(&refusal)),
                     }
@@ -350,7 +350,7 @@ impl PowermaxPort {
             return Err(ExceptionCode::IllegalDataValue);
         }
         let view = View {
-            status: ctx.link.status(),
+            status: ctx.link().status(),
             forced: self.forced(ctx),
             refused: self.refused,
         };
@@ -393,8 +393,8 @@ impl PowermaxPort {
     /// The force registers: as written, else the process the link keeps or the unit's.
     fn forced(&self, ctx: &Context<'_>) -> Forced {
         self.combiner.forced().unwrap_or_else(|| {
-            let kept = ctx.link.kept().powermax();
-            kept.or(ctx.link.status().settings)
+            let kept = ctx.link().kept().powermax();
+            kept.or(ctx.link().status().settings)
                 .map(|s| Forced {
                     mode: s.mode.map_or(0, OperatingMode::to_legacy),
                     current: s.current.raw(),
@@ -407,7 +407,7 @@ impl PowermaxPort {
     /// The group of writes is complete: one settings change (or none), never a partial one.
     fn complete_group(&mut self, ctx: &mut Context<'_>) -> Option<FaultCode> {
         let forced = self.combiner.close()?;
-        let status = ctx.link.status();
+        let status = ctx.link().status();
         let family = status.family.filter(|_| status.link_up)?;
         let (command, process) = match change(forced, family) {
             Change::Local if family.is_modbus() => (LinkCommand::ExitRemote, Keep::Forget),
@@ -429,7 +429,7 @@ impl PowermaxPort {
                     amps: current,
                     pressure,
                 };
-                if ctx.link.kept().powermax().is_some_and(|k| {
+                if ctx.link().kept().powermax().is_some_and(|k| {
                     k.mode == Some(mode) && k.current == current && k.pressure == pressure
                 }) && status.remote
                 {
@@ -446,7 +446,7 @@ impl PowermaxPort {
             }
             Change::HprAmps(amps) => (LinkCommand::HprSetNominalAmps { amps }, Keep::Unchanged),
         };
-        match ctx.link.submit(ctx.now, command) {
+        match ctx.submit(command) {
             Ok(ticket) => {
                 self.refused = None;
                 self.applying = Some((ticket, process));
@@ -520,7 +520,7 @@ fn identification(
     object_id: u8,
     out: &mut [u8],
 ) -> Result<usize, ExceptionCode> {
-    let status = ctx.link.status();
+    let status = ctx.link().status();
     let model = match (status.model, status.family) {
         (Some(Model::Powermax(model)), Some(family))
             if (model.addressing() == AddressingSystem::Sync)
@@ -567,7 +567,7 @@ fn quick_restart(ctx: &mut Context<'_>, start: u16, values: &[u16]) -> Result<()
     if start != sync::QUICK_RESTART_COMMAND || values != words {
         return Err(ExceptionCode::IllegalDataValue);
     }
-    match ctx.link.submit(ctx.now, LinkCommand::QuickRestart) {
+    match ctx.submit(LinkCommand::QuickRestart) {
         Ok(_) | Err(Refusal::QuickRestartNeeds050 { .. }) => Ok(()),
         Err(refusal) => Err(refusal_exception(&refusal)),
     }

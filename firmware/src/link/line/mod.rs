@@ -50,6 +50,7 @@
 //! ```
 
 mod config;
+mod links;
 mod switch;
 mod turn;
 
@@ -61,7 +62,8 @@ use plasma_protocol::serial::PortConfig;
 use plasma_protocol::time::Instant;
 
 use crate::link::{LinkConfig, LinkEvent, PsLink};
-pub use config::{LineError, LineUnit, MAX_UNITS};
+pub use config::{LineError, LineUnit, MAX_UNITS, NamedUnits, UnitsError};
+use links::Links;
 use switch::{Awake, CONTROL_CAPACITY, Switch, SwitchOut, emit_control};
 
 /// Counters of the arbiter's own traffic.
@@ -88,7 +90,7 @@ enum Out {
 /// Up to [`MAX_UNITS`] units on one line. See the [module docs](self).
 #[derive(Debug)]
 pub struct SharedLine {
-    links: Vec<PsLink, MAX_UNITS>,
+    links: Links,
     units: Vec<LineUnit, MAX_UNITS>,
     /// The unit whose attempt is on the wire, or that had the line last.
     owner: usize,
@@ -114,15 +116,15 @@ impl SharedLine {
     pub fn new(base: LinkConfig, units: &[LineUnit], now: Instant) -> Result<Self, LineError> {
         let configs = config::link_configs(base, units)?;
         let shared = configs.len() > 1;
-        let mut links = Vec::new();
-        for config in configs {
+        let mut links = configs.into_iter().map(|config| {
             let mut link = PsLink::new(config, now);
             if shared {
                 link.share_line();
             }
-            // As many as `configs` holds, at most MAX_UNITS.
-            let _ = links.push(link);
-        }
+            link
+        });
+        let first = links.next().ok_or(LineError::NoUnits)?;
+        let links = Links::new(first, links);
         Ok(SharedLine {
             links,
             units: Vec::from_slice(units)
@@ -148,7 +150,28 @@ impl SharedLine {
 
     /// Always false: a line has at least one unit.
     pub fn is_empty(&self) -> bool {
-        self.links.is_empty()
+        false
+    }
+
+    /// The first unit's link (a line always has one).
+    pub fn first(&self) -> &PsLink {
+        self.links.first()
+    }
+
+    /// Unit `index`'s link, or the first unit's for an index out of range.
+    pub fn unit_or_first_mut(&mut self, index: usize) -> &mut PsLink {
+        self.links.get_or_first_mut(index)
+    }
+
+    /// Every unit takes `base` for its link settings, each with its own protocol and
+    /// address (see [`PsLink::reconfigure`]).
+    pub fn reconfigure(&mut self, now: Instant, base: LinkConfig) {
+        for (unit, link) in self.units.iter().zip(self.links.iter_mut()) {
+            link.reconfigure(now, unit.link_config(base));
+        }
+        self.switch = None;
+        self.awake = Awake::Unknown;
+        self.out = None;
     }
 
     /// Unit `index`'s link (0 = the first unit).
@@ -365,7 +388,7 @@ impl SharedLine {
     /// they all share the one line.
     fn learn_line_echo(&mut self) {
         self.line_echoes = true;
-        for link in &mut self.links {
+        for link in self.links.iter_mut() {
             link.learn_line_echo();
         }
     }
