@@ -167,9 +167,10 @@ impl Session {
     }
 
     fn torch(&mut self, on: bool) -> ReplyLine {
+        let unit = self.answering;
         if !self.sim_enabled {
             err_line(ErrorCode::Unsupported, texts::TORCH_SIMULATOR_ONLY)
-        } else if self.sim.push_back(SimCommand::Torch(on)).is_err() {
+        } else if self.sim.push_back(SimCommand::Torch { unit, on }).is_err() {
             err_line(ErrorCode::Busy, texts::SIMULATOR_QUEUE_FULL)
         } else {
             ok_line(|w| w.field("torch", on_off(on)))
@@ -179,6 +180,9 @@ impl Session {
     /// `POWER ON|OFF`: the REMOTE_POWER output, with or without a unit on the line (one that
     /// is off has no link). HPR manual: Remote Power "is used to turn the power on or off".
     fn power(&mut self, ctx: &mut Context<'_>, on: bool) -> ReplyLine {
+        if ctx.unit != 0 {
+            return err_line(ErrorCode::Unsupported, texts::POWER_EVERY_UNIT);
+        }
         if ctx.settings.io.remote_power != on {
             ctx.settings.io.remote_power = on;
             self.io_config_changed = true;
@@ -250,6 +254,11 @@ impl Session {
         result: &Result<CommandOutput, CommandFailure>,
         by: ChangedBy,
     ) {
+        // The settings persist the first unit's process; another unit's is kept by its
+        // link alone (re-applied after a link loss, not after a bridge restart).
+        if ctx.unit != 0 {
+            return;
+        }
         match (awaiting, result) {
             (Awaiting::Settings(process), Ok(CommandOutput::Process(_))) => {
                 super::history::keep_process(ctx, process, by);

@@ -7,7 +7,9 @@ use core::fmt::Write as _;
 use plasma_protocol::cnc::ConsumablesCommand;
 use plasma_protocol::cnc::reply::ReplyWriter;
 
-use super::{Context, ReplyLine, Session, ok_line};
+use plasma_protocol::cnc::ErrorCode;
+
+use super::{Context, ReplyLine, Session, err_line, ok_line, texts};
 use crate::consumables::{Source, Usage};
 use crate::io::IoEvent;
 use crate::link::{ActiveFault, Family, LinkEvent};
@@ -27,13 +29,20 @@ pub(super) fn usage(ctx: &Context<'_>) -> Usage {
     ctx.consumables.usage(ctx.now, cartridge)
 }
 
-/// The share of life used, percent, for STATUS (`None`: both limits OFF).
+/// The share of life used, percent, for STATUS (`None`: both limits OFF, or a unit beyond
+/// the first, whose consumables the bridge does not follow).
 pub(super) fn used_percent(ctx: &Context<'_>) -> Option<u32> {
+    if ctx.unit != 0 {
+        return None;
+    }
     usage(ctx).used_percent(ctx.settings.consumable_limits)
 }
 
-/// What of an I/O event the record counts.
+/// What of an I/O event the record counts (the first unit's).
 pub(super) fn note_io_event(ctx: &mut Context<'_>, event: IoEvent) {
+    if ctx.unit != 0 {
+        return;
+    }
     let c = &mut *ctx.consumables;
     match event {
         IoEvent::ArcOn => c.arc_on(ctx.now),
@@ -46,6 +55,9 @@ pub(super) fn note_io_event(ctx: &mut Context<'_>, event: IoEvent) {
 
 /// What of a link event the record counts: a 0-32-x fault.
 pub(super) fn note_link_event(ctx: &mut Context<'_>, event: &LinkEvent) {
+    if ctx.unit != 0 {
+        return;
+    }
     if let LinkEvent::FaultRaised {
         code: ActiveFault::Powermax(code),
         ..
@@ -103,6 +115,9 @@ impl Session {
     /// `CONSUMABLES`: the set in use; `CONSUMABLES NEW`: a new set (the table refuses it on a
     /// SYNC, whose cartridge names its set).
     pub(super) fn consumables(ctx: &mut Context<'_>, command: ConsumablesCommand) -> ReplyLine {
+        if ctx.unit != 0 {
+            return err_line(ErrorCode::Unsupported, texts::CONSUMABLES_FIRST_UNIT);
+        }
         if command == ConsumablesCommand::New {
             ctx.consumables.new_set(ctx.now, None);
             super::history::note(ctx, Event::ConsumableChanged);

@@ -28,6 +28,7 @@ impl Session {
                 awaiting,
             }) = self.pending
                 && t == *ticket
+                && ctx.unit == self.answering
             {
                 self.pending = None;
                 Session::keep_outcome(ctx, awaiting, result, self.origin);
@@ -37,8 +38,11 @@ impl Session {
             }
             return;
         }
-        // The kept process is forgotten: so is its persisted copy (`CONFIG SAVE` stores none).
-        if let LinkEvent::UnitPowerCycled { reapply: false } = event {
+        // The kept process is forgotten: so is its persisted copy (`CONFIG SAVE` stores none;
+        // only the first unit's process is persisted).
+        if let LinkEvent::UnitPowerCycled { reapply: false } = event
+            && ctx.unit == 0
+        {
             ctx.settings.process = None;
         }
         let status = ctx.link().status();

@@ -159,6 +159,10 @@ impl Session {
 
     /// A link event while a check runs: the answer to its request, or the link lost.
     pub(super) fn gas_check_link_event(&mut self, ctx: &mut Context<'_>, event: &LinkEvent) {
+        // The check is the command being answered: its unit's events only.
+        if ctx.unit != self.answering {
+            return;
+        }
         let Some(check) = self.gas_check() else {
             return;
         };
@@ -171,7 +175,7 @@ impl Session {
             // Settling has no request in flight to fail: the loss ends the check here.
             LinkEvent::LinkDown { .. } if matches!(check.phase, Phase::Settling { .. }) => {
                 check.outcome = Outcome::LinkLost;
-                self.gas_stop_owed = Some(check.steps.stop);
+                self.gas_stop_owed = Some((self.answering, check.steps.stop));
                 self.gas_check_reply(ctx, check);
             }
             _ => {}
@@ -188,7 +192,7 @@ impl Session {
             (Phase::Ending, Ok(_)) => self.gas_check_reply(ctx, check),
             (Phase::Ending, Err(failure)) => {
                 // The test may still run: the stop is sent again once the link answers.
-                self.gas_stop_owed = Some(check.steps.stop);
+                self.gas_stop_owed = Some((self.answering, check.steps.stop));
                 check.outcome = match failure {
                     CommandFailure::LinkDown => Outcome::LinkLost,
                     _ if check.outcome == Outcome::Measured => Outcome::Failed(failure),
@@ -241,14 +245,24 @@ impl Session {
 
     /// Time passes: a settled flow is read, a stop owed is sent, the torch on stops the check.
     pub(super) fn gas_check_poll(&mut self, ctx: &mut Context<'_>) {
-        // A stop owed is sent once the link is up; its answer is nobody's (the check that
-        // owed it has replied). Another family on the line now has no such test running.
-        if let Some(stop) = self.gas_stop_owed
-            && ctx.link().status().link_up
-            && matches!(ctx.submit(stop), Ok(_) | Err(Refusal::NotSupported { .. }))
-        {
-            self.gas_stop_owed = None;
+        let caller = ctx.unit;
+        self.gas_check_poll_units(ctx);
+        ctx.unit = caller;
+    }
+
+    fn gas_check_poll_units(&mut self, ctx: &mut Context<'_>) {
+        // A stop owed is sent once its unit's link is up; its answer is nobody's (the check
+        // that owed it has replied). Another family on the line now has no such test running.
+        if let Some((unit, stop)) = self.gas_stop_owed {
+            ctx.unit = unit;
+            if ctx.link().status().link_up
+                && matches!(ctx.submit(stop), Ok(_) | Err(Refusal::NotSupported { .. }))
+            {
+                self.gas_stop_owed = None;
+            }
         }
+        // The check is the command being answered: its unit's link and torch.
+        ctx.unit = self.answering;
         let Some(check) = self.gas_check() else {
             return;
         };
@@ -297,7 +311,7 @@ impl Session {
                 self.pending = Some(Pending::GasCheck(check));
             }
             Err(refusal) => {
-                self.gas_stop_owed = Some(check.steps.stop);
+                self.gas_stop_owed = Some((self.answering, check.steps.stop));
                 if check.outcome == Outcome::Pending || check.outcome == Outcome::Measured {
                     check.outcome = Outcome::Refused(refusal);
                 }

@@ -5,7 +5,7 @@
 use plasma_protocol::cnc::phoenix::{self, Deframer, Format};
 use plasma_protocol::cnc::reply::write_parse_error;
 use plasma_protocol::cnc::{
-    AMPS_ARGUMENT, Command, ErrorCode, LineError, MAX_LINE_LEN, ParseError,
+    AMPS_ARGUMENT, Command, ErrorCode, LineError, MAX_LINE_LEN, ParseError, split_unit,
 };
 
 use super::replies::AmpsRange;
@@ -265,7 +265,7 @@ impl Session {
             return self.execute(ctx, item);
         }
         if self.queue.push_back(item).is_err() {
-            self.send(err_line(ErrorCode::Busy, texts::QUEUE_FULL));
+            self.send_untagged(err_line(ErrorCode::Busy, texts::QUEUE_FULL));
         }
     }
 
@@ -276,16 +276,34 @@ impl Session {
         } else {
             ChangedBy::Text
         };
+        self.answering = 0;
+        ctx.unit = 0;
         let reply = match item.error {
             Some(InputError::Parse(error)) => parse_error(ctx, &error),
             Some(InputError::Frame(error)) => frame_error(error),
             Some(InputError::Interrupted) => err_line(ErrorCode::Syntax, texts::LINE_INTERRUPTED),
-            None => match Command::parse(&item.text) {
+            None => match split_unit(&item.text) {
                 Err(error) => parse_error(ctx, &error),
-                Ok(command) => match self.run(ctx, command) {
-                    Some(reply) => reply,
-                    None => return,
-                },
+                Ok((unit, text)) => {
+                    let unit = usize::from(unit) - 1;
+                    let count = ctx.units.count();
+                    if unit >= count {
+                        self.send_untagged(err_line(
+                            ErrorCode::Range,
+                            texts::NoSuchUnit { unit, count },
+                        ));
+                        return;
+                    }
+                    self.answering = unit;
+                    ctx.unit = unit;
+                    match Command::parse(text) {
+                        Err(error) => parse_error(ctx, &error),
+                        Ok(command) => match self.run(ctx, command) {
+                            Some(reply) => reply,
+                            None => return,
+                        },
+                    }
+                }
             },
         };
         self.send(reply);

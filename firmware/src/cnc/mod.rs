@@ -91,8 +91,13 @@ type LineText = String<MAX_LINE_LEN>;
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum SimCommand {
-    /// Drive the CNC's TORCH_ON input on (`true`) or off.
-    Torch(bool),
+    /// Drive the CNC's TORCH_ON input of unit `unit` (0 = the first) on or off.
+    Torch {
+        /// The unit whose input (`@N TORCH ...` names unit N - 1).
+        unit: usize,
+        /// On (`true`) or off.
+        on: bool,
+    },
 }
 
 /// What the session may use while it handles one input or event.
@@ -117,6 +122,7 @@ pub struct Context<'a> {
 
 impl Context<'_> {
     /// The link of the unit this call is about.
+    #[inline(never)]
     pub fn link(&self) -> &PsLink {
         self.units.link(self.unit)
     }
@@ -271,8 +277,12 @@ pub struct Session {
     powermax: powermax_port::PowermaxPort,
     /// Who sent the command being carried out (for the history's process changes).
     origin: crate::storage::history::ChangedBy,
-    /// A gas check's stop that could not be sent (link lost): sent when the link is back.
-    gas_stop_owed: Option<crate::link::LinkCommand<'static>>,
+    /// A gas check's stop that could not be sent (link lost), and the unit it is for: sent
+    /// when that unit's link is back.
+    gas_stop_owed: Option<(usize, crate::link::LinkCommand<'static>)>,
+    /// The unit of the command being answered (`@N` names unit N - 1; 0 without it): its
+    /// reply, and the link events that complete it, are that unit's.
+    answering: usize,
 }
 
 impl Session {
@@ -301,6 +311,7 @@ impl Session {
             powermax: powermax_port::PowermaxPort::default(),
             origin: crate::storage::history::ChangedBy::Text,
             gas_stop_owed: None,
+            answering: 0,
         }
     }
 
@@ -415,7 +426,14 @@ impl Session {
         }
     }
 
-    fn send(&mut self, line: ReplyLine) {
+    /// The reply to the command being answered, `unit=N` added for a unit beyond the first.
+    fn send(&mut self, mut line: ReplyLine) {
+        tag_unit(&mut line, self.answering);
+        self.send_untagged(line);
+    }
+
+    /// A reply that is no unit's (a line refused before it was read).
+    fn send_untagged(&mut self, line: ReplyLine) {
         self.stats.replies = self.stats.replies.saturating_add(1);
         if line.starts_with("ERR") {
             self.stats.errors = self.stats.errors.saturating_add(1);
@@ -433,23 +451,38 @@ impl Session {
         }
     }
 
-    /// Write an event line if events are on.
+    /// Write an event line if events are on (`unit=N` added for a unit beyond the first).
     fn event(&mut self, ctx: &Context<'_>, build: impl FnOnce(&mut ReplyLine) -> fmt::Result) {
         if !ctx.settings.events {
             return;
         }
         let mut l = ReplyLine::new();
         if build(&mut l).is_ok() {
-            self.push_event(&l);
+            self.push_event(l, ctx.unit);
         }
     }
 
     /// The part of [`Session::event`] every event shares: one copy in the image instead of
     /// one inlined into each kind of event.
     #[inline(never)]
-    fn push_event(&mut self, line: &ReplyLine) {
+    fn push_event(&mut self, mut line: ReplyLine, unit: usize) {
+        tag_unit(&mut line, unit);
         self.stats.events = self.stats.events.saturating_add(1);
         self.push(line.as_bytes());
+    }
+}
+
+/// ` unit=N` at the end of a line (before its CR LF) about unit `unit` (0-based), beyond the
+/// first: what a CNC written for one unit reads stays as it was.
+#[inline(never)]
+fn tag_unit(line: &mut ReplyLine, unit: usize) {
+    if unit == 0 {
+        return;
+    }
+    let body = line.trim_ascii_end().len();
+    line.truncate(body);
+    if write!(line, " unit={}\r\n", unit + 1).is_err() {
+        too_long(line);
     }
 }
 

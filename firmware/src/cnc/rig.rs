@@ -130,6 +130,43 @@ impl Rig {
         rig
     }
 
+    /// A bridge with `CONFIG units` set to `units` and the simulated `models` (pbtool's
+    /// names) on one multi-drop line, built as `pbtool` builds them: HPR ids and Powermax
+    /// nodes in order (nodes from 1). Runs until every unit's link is up.
+    pub(crate) fn on_line(mut settings: Settings, units: &str, models: &[&str]) -> Self {
+        settings
+            .set(plasma_protocol::cnc::ConfigKey::Units, units)
+            .expect("units that can share a line");
+        let models: Vec<plasma_sim::Model> = models
+            .iter()
+            .map(|m| plasma_sim::Model::from_name(m).expect("a plasma-sim model name"))
+            .collect();
+        let options = plasma_sim::SimOptions {
+            modbus_address: 1,
+            ..Default::default()
+        };
+        let units = plasma_sim::multidrop::units_for_one_line(&models, &options)
+            .expect("simulated units for one line");
+        let line = plasma_sim::multidrop::MultiDrop::new(units).expect("one serial setting");
+        let mut rig = Rig::new(settings, None);
+        rig.unit = Some(SimPs::with_unit(std::boxed::Box::new(line)));
+        let up = rig.now + Duration::from_secs(10);
+        while rig.now < up && !(0..rig.bridge.unit_count()).all(|u| rig.bridge.status_of(u).link_up)
+        {
+            rig.run(100);
+        }
+        rig
+    }
+
+    /// The simulated line of a rig built by [`Rig::on_line`].
+    pub(crate) fn line(&mut self) -> &mut plasma_sim::multidrop::MultiDrop {
+        self.ps()
+            .unit()
+            .as_any_mut()
+            .downcast_mut()
+            .expect("a rig built on_line")
+    }
+
     pub(crate) fn collect(&mut self) {
         while let Some(bytes) = self.bridge.poll_cnc_output() {
             for &b in bytes {

@@ -85,6 +85,34 @@ pub const GAS_CHECK_NO_READING: &str = "GASTEST CHECK: the unit gave no pressure
 /// `HISTORY` when the history's flash could not be read or erased (or the board keeps none).
 pub const HISTORY_UNAVAILABLE: &str = "history not available";
 
+/// `POWER` with `@N`: one setting drives every unit's REMOTE_POWER output.
+pub const POWER_EVERY_UNIT: &str =
+    "POWER switches every unit's REMOTE_POWER output: send it without @N";
+
+/// `CONSUMABLES` for a unit beyond the first.
+pub const CONSUMABLES_FIRST_UNIT: &str =
+    "consumable life is kept for unit 1 only (the unit without @N)";
+
+/// `@N` for a unit the bridge does not drive (0-based `unit`, `count` units configured).
+pub struct NoSuchUnit {
+    /// The unit named, 0-based.
+    pub unit: usize,
+    /// How many units `CONFIG units` names.
+    pub count: usize,
+}
+
+impl fmt::Display for NoSuchUnit {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "unit {}: the bridge drives {} unit{} (CONFIG units)",
+            self.unit + 1,
+            self.count,
+            if self.count == 1 { "" } else { "s" }
+        )
+    }
+}
+
 /// A line that found the queue of [`QUEUE_CAPACITY`](super::QUEUE_CAPACITY) full (a test ties the number).
 pub const QUEUE_FULL: &str = "4 commands are already waiting, line dropped";
 

@@ -22,6 +22,9 @@ use plasma_protocol::time::Instant;
 use crate::link::{LineError, LineUnit, LinkConfig, LinkEvent, PsLink, SharedLine};
 
 /// One unit, or several on one line. See the [module docs](self).
+// The bridge lives in one static slot on the board, sized for four units whichever variant
+// is in use: boxing the line would need a heap the board does not have.
+#[allow(clippy::large_enum_variant)]
 #[derive(Debug)]
 pub enum Units {
     /// One unit, auto-detected (`CONFIG units auto`, the default).
@@ -50,6 +53,8 @@ impl Units {
 
     /// Unit `index`'s link (0 = the first unit); the first unit's for an index beyond
     /// [`Units::count`] (callers check the index against the count first).
+    // Out of line: the CNC session reaches its unit's link this way in dozens of places.
+    #[inline(never)]
     pub fn link(&self, index: usize) -> &PsLink {
         match self {
             Units::One(link) => link,
@@ -61,6 +66,7 @@ impl Units {
     }
 
     /// Unit `index`'s link, for its commands; as [`Units::link`] for an index out of range.
+    #[inline(never)]
     pub fn link_mut(&mut self, index: usize) -> &mut PsLink {
         match self {
             Units::One(link) => link,

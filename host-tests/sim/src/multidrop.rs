@@ -31,6 +31,7 @@
 //! With a single unit nothing can collide and its transmissions are handed over whole, exactly
 //! as the unit alone would send them.
 
+use std::any::Any;
 use std::collections::VecDeque;
 use std::fmt;
 
@@ -223,6 +224,21 @@ impl MultiDrop {
         })
     }
 
+    /// Unit 0 (a line is built with at least one unit).
+    fn first(&self) -> &dyn SimulatedUnit {
+        &**self
+            .units
+            .first()
+            .expect("MultiDrop::new refuses a line without units")
+    }
+
+    fn first_mut(&mut self) -> &mut dyn SimulatedUnit {
+        &mut **self
+            .units
+            .first_mut()
+            .expect("MultiDrop::new refuses a line without units")
+    }
+
     /// The serial settings every unit on the line has.
     pub fn port(&self) -> PortConfig {
         self.port
@@ -413,6 +429,69 @@ impl MultiDrop {
             at: instant_from_ns(start),
             bytes,
         });
+    }
+}
+
+/// The line as one unit, for a port loop that drives one: the traffic is every unit's; the
+/// discrete I/O, power and faults of the trait are unit 0's (reach the others with
+/// [`MultiDrop::unit_mut`]). Downcasts (`as_any`) to the [`MultiDrop`].
+impl SimulatedUnit for MultiDrop {
+    fn model(&self) -> Model {
+        self.first().model()
+    }
+    fn port(&self) -> PortConfig {
+        MultiDrop::port(self)
+    }
+    fn receive(&mut self, now: Instant, byte: u8) {
+        MultiDrop::receive(self, now, byte);
+    }
+    fn receive_error(&mut self, now: Instant) {
+        MultiDrop::receive_error(self, now);
+    }
+    fn poll_transmit(&mut self, now: Instant) -> Option<Vec<u8>> {
+        MultiDrop::poll_transmit(self, now)
+    }
+    fn next_wakeup(&self) -> Option<Instant> {
+        MultiDrop::next_wakeup(self)
+    }
+    fn advance(&mut self, now: Instant) {
+        MultiDrop::advance(self, now);
+    }
+    fn set_start(&mut self, now: Instant, on: bool) {
+        self.first_mut().set_start(now, on);
+    }
+    fn motion(&self) -> bool {
+        self.first().motion()
+    }
+    fn power_off(&mut self, now: Instant) {
+        self.first_mut().power_off(now);
+    }
+    fn power_on(&mut self, now: Instant) {
+        self.first_mut().power_on(now);
+    }
+    fn is_powered(&self) -> bool {
+        self.first().is_powered()
+    }
+    fn inject_fault(&mut self, now: Instant, code: u16) {
+        self.first_mut().inject_fault(now, code);
+    }
+    fn clear_fault(&mut self, now: Instant) {
+        self.first_mut().clear_fault(now);
+    }
+    fn active_fault(&self) -> u16 {
+        self.first().active_fault()
+    }
+    fn in_remote_mode(&self) -> bool {
+        self.first().in_remote_mode()
+    }
+    fn take_noise_bursts(&mut self) -> Vec<(Instant, Duration)> {
+        MultiDrop::take_noise_bursts(self)
+    }
+    fn as_any(&self) -> &dyn Any {
+        self
+    }
+    fn as_any_mut(&mut self) -> &mut dyn Any {
+        self
     }
 }
 

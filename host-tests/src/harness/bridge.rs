@@ -73,7 +73,8 @@ impl WorldEndpoint for Bridge {
 
     fn poll_torch_request(&mut self) -> Option<bool> {
         match self.poll_sim_command()? {
-            SimCommand::Torch(on) => Some(on),
+            SimCommand::Torch { unit: 0, on } => Some(on),
+            SimCommand::Torch { .. } => None,
         }
     }
 }
@@ -321,7 +322,8 @@ impl BridgeEndpoint {
             }
             while let Some(command) = self.bridge.poll_sim_command() {
                 match command {
-                    SimCommand::Torch(on) => self.torch.push_back(on),
+                    SimCommand::Torch { unit: 0, on } => self.torch.push_back(on),
+                    SimCommand::Torch { .. } => {}
                 }
             }
             if self.serve_history(now) {

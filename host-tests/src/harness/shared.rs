@@ -9,14 +9,12 @@
 //!
 //! [`Line`]: plasma_sim::line::Line
 
-use std::any::Any;
 use std::fmt;
 
 use plasma_firmware::link::{Diagnostics, LineUnit, LinkEvent, SharedLine, UnitStatus};
-use plasma_protocol::serial::PortConfig;
 use plasma_protocol::time::{Duration, Instant};
 use plasma_sim::multidrop::{self, MultiDrop, units_for_one_line};
-use plasma_sim::{Family, Model, SimulatedUnit};
+use plasma_sim::{Family, Model};
 
 use super::endpoint::WorldEndpoint;
 use super::options::WorldOptions;
@@ -41,80 +39,6 @@ impl fmt::Display for SharedLineError {
 }
 
 impl std::error::Error for SharedLineError {}
-
-/// The units of a [`MultiDrop`] as the world's one unit: the line's traffic is theirs, the
-/// discrete I/O and power are unit 0's. Downcasts ([`World::sim`]) to the [`MultiDrop`].
-struct UnitsOnLine(MultiDrop);
-
-impl UnitsOnLine {
-    fn first(&self) -> &dyn SimulatedUnit {
-        self.0.unit(0).expect("a line has a unit")
-    }
-
-    fn first_mut(&mut self) -> &mut dyn SimulatedUnit {
-        self.0.unit_mut(0).expect("a line has a unit")
-    }
-}
-
-impl SimulatedUnit for UnitsOnLine {
-    fn model(&self) -> Model {
-        self.first().model()
-    }
-    fn port(&self) -> PortConfig {
-        self.0.port()
-    }
-    fn receive(&mut self, now: Instant, byte: u8) {
-        self.0.receive(now, byte);
-    }
-    fn receive_error(&mut self, now: Instant) {
-        self.0.receive_error(now);
-    }
-    fn poll_transmit(&mut self, now: Instant) -> Option<Vec<u8>> {
-        self.0.poll_transmit(now)
-    }
-    fn next_wakeup(&self) -> Option<Instant> {
-        self.0.next_wakeup()
-    }
-    fn advance(&mut self, now: Instant) {
-        self.0.advance(now);
-    }
-    fn set_start(&mut self, now: Instant, on: bool) {
-        self.first_mut().set_start(now, on);
-    }
-    fn motion(&self) -> bool {
-        self.first().motion()
-    }
-    fn power_off(&mut self, now: Instant) {
-        self.first_mut().power_off(now);
-    }
-    fn power_on(&mut self, now: Instant) {
-        self.first_mut().power_on(now);
-    }
-    fn is_powered(&self) -> bool {
-        self.first().is_powered()
-    }
-    fn inject_fault(&mut self, now: Instant, code: u16) {
-        self.first_mut().inject_fault(now, code);
-    }
-    fn clear_fault(&mut self, now: Instant) {
-        self.first_mut().clear_fault(now);
-    }
-    fn active_fault(&self) -> u16 {
-        self.first().active_fault()
-    }
-    fn in_remote_mode(&self) -> bool {
-        self.first().in_remote_mode()
-    }
-    fn take_noise_bursts(&mut self) -> Vec<(Instant, Duration)> {
-        self.0.take_noise_bursts()
-    }
-    fn as_any(&self) -> &dyn Any {
-        &self.0
-    }
-    fn as_any_mut(&mut self) -> &mut dyn Any {
-        &mut self.0
-    }
-}
 
 /// The world observes the first unit: its status, diagnostics and the I/O; every unit's
 /// events go to the world's record (without the unit: [`World::unit_status`] tells them apart).
@@ -194,11 +118,7 @@ impl<E: WorldEndpoint> World<E> {
         let units = MultiDrop::new(units).map_err(SharedLineError::Units)?;
         let line = SharedLine::new(options.link, &addresses(models, &options), Instant::ZERO)
             .map_err(SharedLineError::Bridge)?;
-        Ok(World::with_endpoint(
-            wrap(line),
-            Box::new(UnitsOnLine(units)),
-            options,
-        ))
+        Ok(World::with_endpoint(wrap(line), Box::new(units), options))
     }
 
     /// The simulated units on the line (a world built by [`World::on_one_line_with`]).

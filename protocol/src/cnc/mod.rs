@@ -61,6 +61,7 @@ mod error;
 pub mod line;
 pub mod phoenix;
 pub mod reply;
+pub mod unit;
 
 pub use crate::units::{Amps, Pressure, Psi};
 pub use command::{
@@ -70,3 +71,4 @@ pub use command::{
 };
 pub use error::{ErrorCode, ParseError};
 pub use line::{LineAssembler, LineError, MAX_LINE_LEN};
+pub use unit::{MAX_UNIT, UNIT_ARGUMENT, split_unit};

@@ -647,10 +647,13 @@ fn torch_is_handed_to_the_simulator_driver() {
     rig.bridge.enable_sim_commands();
     assert_eq!(rig.cmd("TORCH ON"), "OK torch=ON");
     assert_eq!(rig.cmd("torch off"), "OK torch=OFF");
-    assert_eq!(rig.bridge.poll_sim_command(), Some(SimCommand::Torch(true)));
     assert_eq!(
         rig.bridge.poll_sim_command(),
-        Some(SimCommand::Torch(false))
+        Some(SimCommand::Torch { unit: 0, on: true })
+    );
+    assert_eq!(
+        rig.bridge.poll_sim_command(),
+        Some(SimCommand::Torch { unit: 0, on: false })
     );
     assert_eq!(rig.bridge.poll_sim_command(), None);
     assert!(

@@ -360,3 +360,100 @@ fn phoenix_framing_is_recognised_without_setting_phoenix_format() {
         "nothing left over"
     );
 }
+
+// ---------------------------------------------------------------------------------------
+// `@N`: several units on one line
+
+fn two_hprs() -> Rig {
+    let settings = Settings {
+        events: true,
+        ..Settings::default()
+    };
+    let mut rig = Rig::on_line(settings, "HPR:0,HPR:1", &["hpr260", "hpr130"]);
+    assert!(rig.bridge.status_of(0).link_up && rig.bridge.status_of(1).link_up);
+    rig.received.clear();
+    rig
+}
+
+#[test]
+fn a_line_without_at_n_is_for_the_first_unit_and_at_n_names_another() {
+    let mut rig = two_hprs();
+    let first = rig.cmd("ID");
+    assert!(first.contains(" model=HPR260 "), "{first}");
+    assert!(!first.contains("unit="), "{first}");
+    let second = rig.cmd("@2 ID");
+    assert!(second.contains(" model=HPR130 "), "{second}");
+    assert!(second.ends_with(" unit=2"), "{second}");
+    assert_eq!(rig.cmd("@1 ID"), first, "@1 is the line without a prefix");
+    // Refused lines of unit 2 say so too.
+    assert!(rig.cmd("@2 FROB").ends_with(" unit=2"));
+}
+
+#[test]
+fn a_unit_the_bridge_does_not_drive_is_refused_precisely() {
+    let mut rig = two_hprs();
+    assert_eq!(
+        rig.cmd("@3 ID"),
+        std::format!("ERR RANGE {}", texts::NoSuchUnit { unit: 2, count: 2 })
+    );
+    assert_eq!(
+        rig.cmd("@3 ID"),
+        "ERR RANGE unit 3: the bridge drives 2 units (CONFIG units)"
+    );
+    assert_eq!(rig.cmd("@5 ID"), "ERR RANGE unit out of range 1..4");
+    assert_eq!(rig.cmd("@x ID"), "ERR SYNTAX unit: not a number");
+    // One unit (the default): only @1.
+    let mut one = Rig::sync65(Settings::default());
+    assert_eq!(
+        one.cmd("@2 STATUS"),
+        "ERR RANGE unit 2: the bridge drives 1 unit (CONFIG units)"
+    );
+    assert_eq!(one.cmd("@1 FAULT"), "OK fault=none");
+}
+
+#[test]
+fn each_units_fault_is_its_own_and_its_events_carry_the_unit() {
+    let mut rig = two_hprs();
+    let now = rig.now;
+    rig.line().unit_mut(1).unwrap().inject_fault(now, 44);
+    rig.run(1500);
+    let events: Vec<&String> = rig
+        .received
+        .iter()
+        .filter(|t| t.starts_with("!FAULT"))
+        .collect();
+    assert_eq!(events.len(), 1, "{:?}", rig.received);
+    assert!(events[0].ends_with(" unit=2"), "{}", events[0]);
+    assert_eq!(rig.cmd("FAULT"), "OK fault=none");
+    let fault = rig.cmd("@2 FAULT");
+    assert!(fault.starts_with("OK fault=044 "), "{fault}");
+    assert!(fault.ends_with(" unit=2"), "{fault}");
+}
+
+#[test]
+fn a_setting_goes_to_the_unit_named_and_stays_there() {
+    let mut rig = two_hprs();
+    let reply = rig.cmd("@2 SET AMPS 80");
+    assert!(reply.starts_with("OK "), "{reply}");
+    assert!(reply.ends_with(" unit=2"), "{reply}");
+    let second = rig.cmd("@2 STATUS");
+    let first = rig.cmd("STATUS");
+    assert!(second.contains(" amps=80"), "{second}");
+    assert!(!first.contains(" amps=80"), "{first}");
+    // The first unit's process is the one the settings persist.
+    assert_eq!(rig.bridge.settings().process, None);
+}
+
+#[test]
+fn what_is_the_whole_bridges_or_the_first_units_refuses_at_n() {
+    let mut rig = two_hprs();
+    assert_eq!(
+        rig.cmd("@2 POWER ON"),
+        std::format!("ERR UNSUPPORTED {} unit=2", texts::POWER_EVERY_UNIT)
+    );
+    assert_eq!(
+        rig.cmd("@2 CONSUMABLES"),
+        std::format!("ERR UNSUPPORTED {} unit=2", texts::CONSUMABLES_FIRST_UNIT)
+    );
+    assert!(rig.cmd("CONSUMABLES").starts_with("OK source=bridge "));
+}

@@ -159,6 +159,10 @@ impl PowermaxPort {
 
     /// A link event: the outcome of the change it applies, the link lost.
     pub fn on_link_event(&mut self, ctx: &mut Context<'_>, event: &LinkEvent) {
+        // The port answers for the first unit: another unit's events are not its business.
+        if ctx.unit != 0 {
+            return;
+        }
         match event {
             LinkEvent::CommandDone { ticket, result } => {
                 let Some((mine, process)) = self.applying else {

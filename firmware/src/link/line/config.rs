@@ -8,7 +8,7 @@ use crate::link::{ConfigError, LinkConfig, ProtocolChoice};
 
 /// The most units one line carries: HPR ids are 0-3 (HPR manual, 002_72b43a5685974c77.txt,
 /// lines 93-105). Powermax nodes could be more; the bridge drives four at most.
-pub const MAX_UNITS: usize = 4;
+pub const MAX_UNITS: usize = plasma_protocol::cnc::MAX_UNIT as usize;
 
 /// One unit on the line and how it is addressed.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
