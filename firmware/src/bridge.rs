@@ -265,6 +265,7 @@ impl Bridge {
             return;
         };
         *slot = Some((inputs, outputs));
+        self.units.set_start(unit, outputs.start);
         let now = self.now;
         self.session.io_changed(&mut ctx!(self, now, unit));
     }

@@ -25,6 +25,9 @@ pub(crate) struct Core {
     /// On a shared line, the arbiter allows a full poll in this turn (no other unit's went
     /// out in the last round); always true for a unit alone.
     pub(crate) full_poll_allowed: bool,
+    /// On a shared line, the unit's START is on (the bridge drives it): its state is polled
+    /// in full every turn, so its pilot arc is seen and the line falls quiet for it.
+    pub(crate) start_on: bool,
     events: EventQueue,
 }
 
@@ -38,6 +41,7 @@ impl Core {
             kept: Kept::default(),
             shared_line: false,
             full_poll_allowed: true,
+            start_on: false,
             events: EventQueue::new(),
         }
     }

@@ -101,6 +101,15 @@ impl Units {
         }
     }
 
+    /// Unit `unit`'s START output is on or off: on a shared line its state is then polled
+    /// at every turn and its HF ignition keeps the whole line quiet
+    /// ([`SharedLine::set_start`]); one unit alone keeps its own pilot-arc pause as always.
+    pub fn set_start(&mut self, unit: usize, on: bool) {
+        if let Units::Line(line) = self {
+            line.set_start(unit, on);
+        }
+    }
+
     /// Bytes received from the line.
     pub fn handle_rx(&mut self, now: Instant, bytes: &[u8]) {
         match self {

@@ -273,6 +273,11 @@ impl HprDriver {
             .is_some_and(|s| is_pilot_arc(self.maxpro(), s))
     }
 
+    /// The end of the pilot-arc pause under way, if any: the HF ignition's quiet.
+    pub(crate) fn quiet_until(&self, now: Instant) -> Option<Instant> {
+        self.pause_until.filter(|&until| now < until)
+    }
+
     /// Earliest time the driver wants to send something.
     pub(crate) fn wake_at(&self, core: &Core) -> Option<Instant> {
         if let Some(until) = self.pause_until.filter(|&u| self.now < u) {
@@ -393,13 +398,14 @@ impl HprDriver {
     }
 
     /// Whether this poll may be the short fault read: on a shared line, while the state is
-    /// known (a new driver's first poll is full) and not cutting, between full polls or while
-    /// the line's arbiter holds a full one back (another unit's went out this round). While
-    /// cutting (states 4-10) every poll is the full one: the state drives the pilot-arc pause
-    /// and 028.
+    /// known (a new driver's first poll is full), START is off and the unit is not cutting,
+    /// between full polls or while the line's arbiter holds a full one back (another unit's
+    /// went out this round). From START on and while cutting (states 4-10) every poll is the
+    /// full one: the state drives the pilot-arc pause, which the whole line keeps, and 028.
     fn fault_read_will_do(&self, core: &Core) -> bool {
         let state = core.status.hpr.state;
         core.shared_line
+            && !core.start_on
             && state.is_some()
             && !is_cutting(state)
             && (self.fault_reads_left > 0 || !core.full_poll_allowed)

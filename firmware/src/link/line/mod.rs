@@ -22,6 +22,15 @@
 //!   (an HPR's poll is then mostly the short fault read 003, the full 079 one poll in
 //!   `SHARED_LINE_FULL_POLL_EVERY`), and at most one full poll goes out per round.
 //!
+//! # HF ignition
+//! An HPR in pilot arc fires its HF ignition, and the manual has serial traffic stop for it
+//! (up to 1 s, HPR manual section VIII). On a shared line that noise is on every drop, so
+//! while any unit's link keeps its pilot-arc pause nothing at all goes out. A unit's state
+//! is polled in full at every turn from its START on ([`SharedLine::set_start`], which the
+//! bridge calls from the unit's discrete outputs), so its pilot arc is read at its next turn
+//! rather than at the next full poll; a pilot arc shorter than a round of turns can still
+//! pass unseen, as one shorter than the poll interval does on a line of its own.
+//!
 //! # Switching an HPR line
 //! HPR units share the line by SLEEP / WAKE ([`switch`]): before a unit that is not the one
 //! awake sends a request, SLEEP (unless no unit is awake) and WAKE with its id go out, and
@@ -106,6 +115,8 @@ pub struct SharedLine {
     /// Unit turns since the last full status poll went out (HPR 079): the next is allowed
     /// once every other unit had a turn, so at most one goes out per round.
     turns_since_full_poll: usize,
+    /// The HF-ignition quiet the line keeps, as of the last [`SharedLine::poll_transmit`].
+    quiet_until: Option<Instant>,
     stats: LineStats,
 }
 
@@ -139,6 +150,7 @@ impl SharedLine {
             control: [0; CONTROL_CAPACITY],
             control_len: 0,
             turns_since_full_poll: usize::MAX,
+            quiet_until: None,
             stats: LineStats::default(),
         })
     }
@@ -271,6 +283,9 @@ impl SharedLine {
     /// When [`SharedLine::poll_transmit`] must be called at the latest: the switch's quiet
     /// or echo time-out, the attempt on the wire's deadline, or the earliest unit's.
     pub fn poll_at(&self) -> Option<Instant> {
+        if let Some(quiet) = self.quiet_until {
+            return Some(quiet);
+        }
         if let Some(switch) = &self.switch {
             return Some(switch.poll_at());
         }
@@ -278,6 +293,24 @@ impl SharedLine {
             return owner.poll_at();
         }
         self.links.iter().filter_map(PsLink::poll_at).min()
+    }
+
+    /// Unit `unit`'s START output is on or off (the bridge follows its discrete I/O): from
+    /// START on, that unit's state is polled in full at every turn, so that its pilot arc is
+    /// seen at once and the whole line keeps the HF-ignition quiet (see the module docs).
+    pub fn set_start(&mut self, unit: usize, on: bool) {
+        if let Some(link) = self.links.get_mut(unit) {
+            link.follow_start(on);
+        }
+    }
+
+    /// The end of the HF-ignition quiet under way on the line, if any: the latest of the
+    /// units' pilot-arc pauses.
+    fn ignition_quiet_until(&self, now: Instant) -> Option<Instant> {
+        self.links
+            .iter()
+            .filter_map(|link| link.ignition_quiet_until(now))
+            .max()
     }
 
     /// Decide what goes out now, if anything.
@@ -289,6 +322,11 @@ impl SharedLine {
             if Some(index) != held {
                 link.handle_time(now);
             }
+        }
+        // One unit's HF ignition is noise on every drop: nothing goes out until it is over.
+        self.quiet_until = self.ignition_quiet_until(now);
+        if self.quiet_until.is_some() {
+            return None;
         }
         if let Some(switch) = &mut self.switch {
             match switch.poll(now) {

@@ -391,3 +391,78 @@ fn a_unit_alone_on_its_line_polls_the_full_status_only() {
         "{polls:?}"
     );
 }
+
+/// HPR manual (002_72b43a5685974c77.txt, section VIII): while the state is pilot arc "stop
+/// serial communications" for the HF-ignition burst, up to 1 s. On a shared line every
+/// unit's traffic crosses that noise, so the whole line keeps the quiet; and from START on the
+/// unit's state is read at every turn, so the pilot arc is seen when it begins.
+#[test]
+fn from_start_on_a_units_state_is_read_every_turn_and_its_ignition_quiets_the_whole_line() {
+    let mut bench = LineBench::hprs(3);
+    bench.run(ms(8000));
+    assert!(bench.all_up());
+    // Through the gas purge to state 3, ready for start.
+    let ready = |b: &LineBench| b.line.unit(1).unwrap().status().hpr.state.map(|s| s.0) == Some(3);
+    while !ready(&bench) && bench.now < ms(20_000) {
+        let next = bench.now + Duration::from_millis(100);
+        bench.run(next);
+        bench.now = bench.now.max(next);
+    }
+    assert!(ready(&bench));
+    while bench.line.poll_event().is_some() {}
+    // A pilot arc that waits 300 ms for the plate (the simulator's default transfers after
+    // 50 ms, shorter than a round of three units' turns).
+    let hpr: &mut plasma_sim::hpr::Hpr = bench
+        .units
+        .unit_mut(1)
+        .unwrap()
+        .as_any_mut()
+        .downcast_mut()
+        .unwrap();
+    hpr.config_mut().timings.transfer_delay = Some(Duration::from_millis(300));
+    let start = bench.now;
+    bench.line.set_start(1, true);
+    bench.units.unit_mut(1).unwrap().set_start(start, true);
+    let mut pilot_arc_seen = None;
+    let end = start + Duration::from_secs(8);
+    while bench.now < end && pilot_arc_seen.is_none() {
+        let step = bench.now + Duration::from_millis(5);
+        bench.run(step);
+        bench.now = bench.now.max(step);
+        while let Some((unit, event)) = bench.line.poll_event() {
+            if let (1, LinkEvent::StateChanged { to, .. }) = (unit, event)
+                && to.0 == 5
+            {
+                pilot_arc_seen = Some(bench.now);
+            }
+        }
+    }
+    let seen = pilot_arc_seen.expect("unit 2's pilot arc seen");
+    // Unit 2's polls after START are all the full status, never the short fault read.
+    let polls = &polls_by_unit(&bench, 3, start + Duration::from_millis(150))[1];
+    assert!(
+        !polls.is_empty() && polls.iter().all(|&id| id == 79),
+        "{polls:?}"
+    );
+    bench.run(seen + Duration::from_millis(1500));
+    // Nothing at all went out on the line for a second after the pilot arc was read (the
+    // reply came within the 5 ms step that ended at `seen`).
+    let read_after = seen - Duration::from_millis(5);
+    let quiet: Vec<&(Instant, Vec<u8>)> = bench
+        .sent
+        .iter()
+        .filter(|(at, _)| *at > seen && *at < read_after + Duration::from_millis(1000))
+        .collect();
+    assert!(
+        quiet.is_empty(),
+        "sent during the ignition quiet: {quiet:?}"
+    );
+    assert!(
+        bench
+            .sent
+            .iter()
+            .any(|(at, _)| *at >= seen + Duration::from_millis(1000)),
+        "the line talks again after the quiet"
+    );
+    assert_eq!(bench.units.collisions(), 0);
+}

@@ -5,6 +5,7 @@ use plasma_protocol::time::Instant;
 
 use crate::link::PsLink;
 use crate::link::hpr::HprPurpose;
+use crate::link::phase::Phase;
 use crate::link::schedule::Tag;
 
 impl PsLink {
@@ -51,6 +52,21 @@ impl PsLink {
     /// Whether a full status poll may go out in this turn (see [`PsLink::share_line`]).
     pub(super) fn allow_full_poll(&mut self, allowed: bool) {
         self.core.full_poll_allowed = allowed;
+    }
+
+    /// The unit's START output is on (`true`) or off: from START on, its state is polled in
+    /// full every turn (see [`Core::start_on`](crate::link::core::Core)).
+    pub(super) fn follow_start(&mut self, on: bool) {
+        self.core.start_on = on;
+    }
+
+    /// The end of this unit's HF-ignition quiet (an HPR in pilot arc), if one is under way:
+    /// the whole line keeps it, as every unit's traffic crosses the noise.
+    pub(super) fn ignition_quiet_until(&self, now: Instant) -> Option<Instant> {
+        match &self.phase {
+            Phase::Hpr(driver) => driver.quiet_until(now),
+            _ => None,
+        }
     }
 
     /// True when the attempt on the wire is a full status poll (an HPR's 079 GET_PS_INFO).
