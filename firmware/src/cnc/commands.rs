@@ -56,12 +56,14 @@ impl Session {
         family: Option<Family>,
     ) -> Option<ReplyLine> {
         let status = ctx.link().status();
+        // The Powermax-speaking port sets the first unit (a refusal there is that unit's).
+        let refused = self.powermax.refused().filter(|_| ctx.unit == 0);
         Some(match command {
             Command::Help => help(self.sim_enabled),
             Command::Id => id(ctx),
-            Command::Status => status_line(ctx, self.powermax.refused()),
+            Command::Status => status_line(ctx, refused),
             Command::Limits => limits(status, family),
-            Command::Fault => fault(status, family, self.powermax.refused()),
+            Command::Fault => fault(status, family, refused),
             Command::Events(on) => events(ctx, on),
             Command::Config(config) => return self.config(ctx, config),
             Command::Torch(on) => self.torch(on),
@@ -70,6 +72,7 @@ impl Session {
             Command::History(history) => return self.history(history),
             Command::Clock(set) => Session::clock(ctx, set),
             Command::Consumables(command) => Session::consumables(ctx, command),
+            Command::Units => self.units(ctx),
             // The table routes every other command to the unit.
             _ => no_link(),
         })

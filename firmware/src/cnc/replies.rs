@@ -13,7 +13,7 @@ use super::describe::{
 };
 use super::table::Awaiting;
 use super::texts::{self, write_failure};
-use super::{Context, List, ReplyLine, err_line, line, no_link, ok_line};
+use super::{Context, List, ReplyLine, Session, err_line, line, no_link, ok_line};
 use crate::io::{Inputs, Outputs};
 use crate::link::{
     ActiveFault, CommandFailure, CommandOutput, Family, HprStatus, Limits, Model, PsLink,
@@ -27,7 +27,7 @@ use plasma_protocol::powermax::FaultCode;
 /// `help_is_the_parsers_word_lists` ties the two.
 const HELP_COMMANDS: &str = "HELP,ID,STATUS,LIMITS,FAULT,FAULTLOG,COUNTERS,CARTRIDGE,SET,REMOTE,\
                              GASTEST,POWER,RESTART,GASES,CORNER,RESET,CLEARWARN,EVENTS,CONFIG,HISTORY,\
-                             CLOCK,CONSUMABLES,RAW";
+                             CLOCK,CONSUMABLES,UNITS,RAW";
 /// The parser's [`SET_WORDS`](plasma_protocol::cnc::command::SET_WORDS) as HELP writes them.
 const HELP_SET: &str = "MODE,AMPS,PSI,PROCESS,HPR_PROCESS";
 /// The parser's [`GASTEST_WORDS`](plasma_protocol::cnc::command::GASTEST_WORDS).
@@ -50,6 +50,36 @@ pub(super) fn help(sim: bool) -> ReplyLine {
 
 pub(super) fn link_word(status: &UnitStatus) -> &'static str {
     if status.link_up { "UP" } else { "DOWN" }
+}
+
+impl Session {
+    /// `UNITS`: a `UNIT` line per unit on the line (its number, address, link, family,
+    /// model, fault), then `OK units=<count>`.
+    pub(super) fn units(&mut self, ctx: &Context<'_>) -> ReplyLine {
+        let named = ctx.settings.units.as_slice();
+        for (index, link) in ctx.units.links().enumerate() {
+            let status = link.status();
+            let l = line(|l| {
+                let mut w = ReplyWriter::data(l, "UNIT")?;
+                w.field("n", index + 1)?;
+                match named.get(index) {
+                    Some(unit) => w.field("address", unit)?,
+                    None => w.field("address", "AUTO")?,
+                }
+                w.field("link", link_word(status))?;
+                w.field("family", OrDash(status.family.map(family_word)))?;
+                w.field("model", ModelName(status))?;
+                match (status.link_up, status.active_fault) {
+                    (false, _) => w.field("fault", "-")?,
+                    (true, None) => w.field("fault", "none")?,
+                    (true, Some(fault)) => w.field("fault", FaultId(fault))?,
+                }
+                w.finish().map(|_| ())
+            });
+            self.push(l.as_bytes());
+        }
+        ok_line(|w| w.field("units", ctx.units.count()))
+    }
 }
 
 pub(super) fn id(ctx: &Context<'_>) -> ReplyLine {

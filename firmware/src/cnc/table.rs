@@ -92,6 +92,7 @@ pub(super) fn route<'a>(command: &Command<'a>, family: Option<Family>) -> Route<
             | Command::History(_)
             | Command::Clock(_)
             | Command::Consumables(ConsumablesCommand::Show)
+            | Command::Units
             | Command::Power(_)
             | Command::Raw(_),
             _,

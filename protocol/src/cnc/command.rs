@@ -431,6 +431,8 @@ pub enum Command<'a> {
     Clock(Option<WallClock>),
     /// `CONSUMABLES`: the consumable set's life; `CONSUMABLES NEW`: a new set is fitted.
     Consumables(ConsumablesCommand),
+    /// `UNITS`: every unit on the power-supply line and its state.
+    Units,
 }
 
 /// The forms of `CONSUMABLES`.
@@ -723,7 +725,7 @@ fn clock(args: &mut Args<'_>) -> Result<Option<WallClock>, ParseError> {
 
 /// The first word of every command a CNC program may send, in the order HELP lists them
 /// (`TORCH`, which only the simulator runs, is listed apart by HELP).
-pub const COMMAND_WORDS: [&str; 23] = [
+pub const COMMAND_WORDS: [&str; 24] = [
     "HELP",
     "ID",
     "STATUS",
@@ -746,6 +748,7 @@ pub const COMMAND_WORDS: [&str; 23] = [
     "HISTORY",
     "CLOCK",
     "CONSUMABLES",
+    "UNITS",
     "RAW",
 ];
 
@@ -852,6 +855,8 @@ impl<'a> Command<'a> {
             Command::Clock(clock(&mut args)?)
         } else if is(word, "CONSUMABLES") {
             Command::Consumables(consumables(&mut args)?)
+        } else if is(word, "UNITS") {
+            Command::Units
         } else if is(word, "RAW") {
             let frame = args.remainder();
             if frame.is_empty() {

@@ -457,3 +457,33 @@ fn what_is_the_whole_bridges_or_the_first_units_refuses_at_n() {
     );
     assert!(rig.cmd("CONSUMABLES").starts_with("OK source=bridge "));
 }
+
+#[test]
+fn units_lists_every_unit_with_its_state() {
+    let mut rig = two_hprs();
+    let now = rig.now;
+    rig.line().unit_mut(1).unwrap().inject_fault(now, 44);
+    rig.line().set_connected(0, false);
+    rig.run(6000);
+    assert!(!rig.bridge.status_of(0).link_up);
+    rig.received.clear();
+    let tokens = rig.send_bytes(b"UNITS\r\n", 1);
+    assert_eq!(
+        tokens,
+        [
+            "UNIT n=1 address=HPR:0 link=DOWN family=- model=- fault=-",
+            "UNIT n=2 address=HPR:1 link=UP family=HPR model=HPR130 fault=044",
+            "OK units=2",
+        ]
+    );
+    // One unit, auto-detected.
+    let mut one = Rig::sync65(Settings::default());
+    let tokens = one.send_bytes(b"UNITS\r\n", 1);
+    assert_eq!(
+        tokens,
+        [
+            "UNIT n=1 address=AUTO link=UP family=SYNC model=Powermax65 fault=none",
+            "OK units=1",
+        ]
+    );
+}

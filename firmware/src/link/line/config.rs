@@ -249,13 +249,20 @@ impl fmt::Display for NamedUnits {
             if index > 0 {
                 f.write_str(",")?;
             }
-            match unit {
-                LineUnit::Hpr { id } => write!(f, "HPR:{id}")?,
-                LineUnit::MaxPro200 => f.write_str("MAXPRO200")?,
-                LineUnit::Powermax { node } => write!(f, "POWERMAX:{node}")?,
-            }
+            unit.fmt(f)?;
         }
         Ok(())
+    }
+}
+
+/// As `CONFIG units` writes it: `HPR:<id>`, `MAXPRO200`, `POWERMAX:<node>`.
+impl fmt::Display for LineUnit {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            LineUnit::Hpr { id } => write!(f, "HPR:{id}"),
+            LineUnit::MaxPro200 => f.write_str("MAXPRO200"),
+            LineUnit::Powermax { node } => write!(f, "POWERMAX:{node}"),
+        }
     }
 }
 
