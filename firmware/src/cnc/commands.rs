@@ -56,8 +56,8 @@ impl Session {
         family: Option<Family>,
     ) -> Option<ReplyLine> {
         let status = ctx.link().status();
-        // The Powermax-speaking port sets the first unit (a refusal there is that unit's).
-        let refused = self.powermax.refused().filter(|_| ctx.unit == 0);
+        // A setting refused through the Powermax-speaking port, on this unit's node.
+        let refused = self.powermax.refused(ctx.unit);
         Some(match command {
             Command::Help => help(self.sim_enabled),
             Command::Id => id(ctx),

@@ -378,9 +378,11 @@ impl Session {
     /// abandoned; a group of Modbus writes with nothing after it completes.
     pub fn poll(&mut self, ctx: &mut Context<'_>) {
         self.gas_check_poll(ctx);
+        let caller = ctx.unit;
         if let Some(fault) = self.powermax.poll(ctx) {
             self.settings_refused_event(ctx, fault);
         }
+        ctx.unit = caller;
         self.follow_consumables(ctx);
         if ctx.now < self.last_rx + FRAME_IDLE_TIMEOUT {
             return;

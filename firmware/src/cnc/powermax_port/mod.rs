@@ -1,8 +1,10 @@
 //! The CNC port answering as a Powermax: Modbus ASCII requests (`:` ... CR LF) on the same
 //! port as the text protocol, answered at once from what the bridge holds. Sans-IO.
 //!
-//! - Node: `cnc_address` (CONFIG, default 1). Requests for another node are ignored; a
-//!   broadcast (node 0) is carried out and never answered.
+//! - Node: `cnc_address` (CONFIG, default 1) for the first unit; with several units on the
+//!   power-supply line (`CONFIG units`), unit N answers at `cnc_address + N - 1`, each with
+//!   its own group of writes and refused setting. Requests for another node are ignored; a
+//!   broadcast (node 0) is carried out for every unit and never answered.
 //! - Functions 03 and 04 read the [register map](map); 06 and 0x10 write the force registers
 //!   (0x2093/0x2094/0x2096, and 0x3080-0x3082 behind a SYNC unit); 0x10 to 0x308E/0x308F
 //!   (SYNC) is the quick restart that stops 0-50-0, handed to the link; 01 reads and 05
@@ -44,6 +46,7 @@ use plasma_protocol::time::Instant;
 
 use super::Context;
 use super::describe::cnc_mode;
+use crate::link::MAX_UNITS;
 use crate::link::{
     CommandOutput, Family, LinkCommand, LinkEvent, Model, ProcessFailure, Refusal, Ticket,
 };
@@ -62,21 +65,26 @@ const PRESSURE_REFUSED: FaultCode = FaultCode(112);
 #[derive(Debug)]
 pub struct PowermaxPort {
     decoder: plasma_protocol::modbus_ascii::Decoder,
+    /// One node per unit on the power-supply line: unit N answers at `cnc_address + N - 1`.
+    nodes: [Node; MAX_UNITS],
+    reply: [u8; MAX_FRAME_CHARS],
+    reply_len: usize,
+}
+
+/// What the port keeps for one unit's node.
+#[derive(Debug, Default)]
+struct Node {
     combiner: Combiner,
     refused: Option<FaultCode>,
     /// The settings change in progress on the link, and what the settings keep once it is done.
     applying: Option<(Ticket, Keep)>,
-    reply: [u8; MAX_FRAME_CHARS],
-    reply_len: usize,
 }
 
 impl Default for PowermaxPort {
     fn default() -> Self {
         PowermaxPort {
             decoder: plasma_protocol::modbus_ascii::Decoder::new(),
-            combiner: Combiner::default(),
-            refused: None,
-            applying: None,
+            nodes: Default::default(),
             reply: [0; MAX_FRAME_CHARS],
             reply_len: 0,
         }
@@ -122,9 +130,23 @@ impl PowermaxPort {
         self.reply.get(..self.reply_len).unwrap_or_default()
     }
 
-    /// The fault a refused setting reads as, until a change is accepted.
-    pub fn refused(&self) -> Option<FaultCode> {
-        self.refused
+    /// The fault a refused setting of unit `unit` reads as, until a change is accepted.
+    pub fn refused(&self, unit: usize) -> Option<FaultCode> {
+        self.node_ref(unit).refused
+    }
+
+    /// Unit `unit`'s node (the last one for an index out of range: units are checked
+    /// against the count before they get here).
+    #[allow(clippy::indexing_slicing)] // clamped to the array on the line above
+    fn node(&mut self, unit: usize) -> &mut Node {
+        let index = unit.min(MAX_UNITS - 1);
+        &mut self.nodes[index]
+    }
+
+    #[allow(clippy::indexing_slicing)] // clamped to the array on the line above
+    fn node_ref(&self, unit: usize) -> &Node {
+        let index = unit.min(MAX_UNITS - 1);
+        &self.nodes[index]
     }
 
     /// One byte from the CNC (the first of a frame is `:`).
@@ -146,58 +168,69 @@ impl PowermaxPort {
 
     /// When [`PowermaxPort::poll`] has a group to complete.
     pub fn poll_at(&self) -> Option<Instant> {
-        self.combiner.due_at()
+        self.nodes.iter().filter_map(|n| n.combiner.due_at()).min()
     }
 
-    /// Let time pass: a group of writes with nothing after it completes after [`SETTLE`](group::SETTLE).
+    /// Let time pass: a group of writes with nothing after it completes after
+    /// [`SETTLE`](group::SETTLE). The fault of a change refused before it was sent, with the
+    /// unit it is for (`ctx.unit` is left at that unit).
     pub fn poll(&mut self, ctx: &mut Context<'_>) -> Option<FaultCode> {
-        if self.combiner.due_at().is_some_and(|at| ctx.now >= at) {
-            return self.complete_group(ctx);
+        for unit in 0..ctx.units.count() {
+            if self
+                .node(unit)
+                .combiner
+                .due_at()
+                .is_some_and(|at| ctx.now >= at)
+            {
+                ctx.unit = unit;
+                if let Some(fault) = self.complete_group(ctx) {
+                    return Some(fault);
+                }
+            }
         }
         None
     }
 
     /// A link event: the outcome of the change it applies, the link lost.
     pub fn on_link_event(&mut self, ctx: &mut Context<'_>, event: &LinkEvent) {
-        // The port answers for the first unit: another unit's events are not its business.
-        if ctx.unit != 0 {
-            return;
-        }
+        let node = self.node(ctx.unit);
         match event {
             LinkEvent::CommandDone { ticket, result } => {
-                let Some((mine, process)) = self.applying else {
+                let Some((mine, process)) = node.applying else {
                     return;
                 };
                 if mine != *ticket {
                     return;
                 }
-                self.applying = None;
+                node.applying = None;
+                // The settings persist the first unit's process only.
+                let first = ctx.unit == 0;
                 match (result, process) {
-                    (Ok(CommandOutput::Process(_)), Keep::Process(p)) => {
+                    (Ok(CommandOutput::Process(_)), Keep::Process(p)) if first => {
                         super::history::keep_process(ctx, p, ChangedBy::ModbusCnc);
                     }
-                    (Ok(_), Keep::Forget) => ctx.settings.process = None,
+                    (Ok(_), Keep::Forget) if first => ctx.settings.process = None,
                     (Ok(_), _) => {}
                     (
                         Err(crate::link::CommandFailure::Process(ProcessFailure::RejectedByUnit {
                             fault,
                         })),
                         _,
-                    ) => self.refused = Some(*fault),
+                    ) => node.refused = Some(*fault),
                     (Err(crate::link::CommandFailure::NotAccepted), _) => {
-                        self.refused = Some(CURRENT_REFUSED);
+                        node.refused = Some(CURRENT_REFUSED);
                     }
                     (Err(_), _) => {}
                 }
             }
             LinkEvent::LinkDown { .. } => {
-                self.combiner.abandon();
-                self.applying = None;
+                node.combiner.abandon();
+                node.applying = None;
             }
             // Settings applied by a text command (or re-applied): the force registers read
             // them from now on, not what the Modbus master wrote before.
-            LinkEvent::ProcessApplied { .. } if self.applying.is_none() => {
-                self.combiner.forget_written();
+            LinkEvent::ProcessApplied { .. } if node.applying.is_none() => {
+                node.combiner.forget_written();
             }
             _ => {}
         }
@@ -205,11 +238,40 @@ impl PowermaxPort {
 
     // --- requests -----------------------------------------------------------------------
 
+    /// A request for `address`: unit N's node is `cnc_address + N - 1`; a broadcast (node 0)
+    /// is every unit's (and answered by none). `ctx.unit` is left at the unit it was for (a
+    /// broadcast: the first whose change was refused).
     fn request(&mut self, ctx: &mut Context<'_>, address: u8, pdu: &[u8]) -> Step {
-        let broadcast = address == 0;
-        if !broadcast && address != ctx.settings.cnc.address {
-            return Step::Pending;
+        if address == 0 {
+            let mut refused = None;
+            for unit in 0..ctx.units.count() {
+                ctx.unit = unit;
+                if let Step::Refused(fault) = self.serve(ctx, address, pdu) {
+                    refused = refused.or(Some((unit, fault)));
+                }
+            }
+            return match refused {
+                Some((unit, fault)) => {
+                    ctx.unit = unit;
+                    Step::Refused(fault)
+                }
+                None => Step::Pending,
+            };
         }
+        let unit = address
+            .checked_sub(ctx.settings.cnc.address)
+            .map(usize::from)
+            .filter(|&unit| unit < ctx.units.count());
+        let Some(unit) = unit else {
+            return Step::Pending;
+        };
+        ctx.unit = unit;
+        self.serve(ctx, address, pdu)
+    }
+
+    /// A request for `ctx.unit`'s node `address` (0: a broadcast).
+    fn serve(&mut self, ctx: &mut Context<'_>, address: u8, pdu: &[u8]) -> Step {
+        let broadcast = address == 0;
         let status = ctx.link().status();
         // Link lost or not up yet: silence, as a unit with its cable cut.
         let Some(family) = status.family.filter(|_| status.link_up) else {
@@ -356,7 +418,7 @@ impl PowermaxPort {
         let view = View {
             status: ctx.link().status(),
             forced: self.forced(ctx),
-            refused: self.refused,
+            refused: self.node_ref(ctx.unit).refused,
         };
         for (i, slot) in words.iter_mut().take(n).enumerate() {
             let address = start
@@ -388,7 +450,8 @@ impl PowermaxPort {
         }
         let base = self.forced(ctx);
         for (i, &value) in values.iter().enumerate() {
-            self.combiner
+            self.node(ctx.unit)
+                .combiner
                 .write(ctx.now, base, start.wrapping_add(i as u16), value);
         }
         Ok(())
@@ -396,31 +459,34 @@ impl PowermaxPort {
 
     /// The force registers: as written, else the process the link keeps or the unit's.
     fn forced(&self, ctx: &Context<'_>) -> Forced {
-        self.combiner.forced().unwrap_or_else(|| {
-            let kept = ctx.link().kept().powermax();
-            kept.or(ctx.link().status().settings)
-                .map(|s| Forced {
-                    mode: s.mode.map_or(0, OperatingMode::to_legacy),
-                    current: s.current.raw(),
-                    pressure: s.pressure.raw(),
-                })
-                .unwrap_or_default()
-        })
+        self.node_ref(ctx.unit)
+            .combiner
+            .forced()
+            .unwrap_or_else(|| {
+                let kept = ctx.link().kept().powermax();
+                kept.or(ctx.link().status().settings)
+                    .map(|s| Forced {
+                        mode: s.mode.map_or(0, OperatingMode::to_legacy),
+                        current: s.current.raw(),
+                        pressure: s.pressure.raw(),
+                    })
+                    .unwrap_or_default()
+            })
     }
 
     /// The group of writes is complete: one settings change (or none), never a partial one.
     fn complete_group(&mut self, ctx: &mut Context<'_>) -> Option<FaultCode> {
-        let forced = self.combiner.close()?;
+        let forced = self.node(ctx.unit).combiner.close()?;
         let status = ctx.link().status();
         let family = status.family.filter(|_| status.link_up)?;
         let (command, process) = match change(forced, family) {
             Change::Local if family.is_modbus() => (LinkCommand::ExitRemote, Keep::Forget),
             Change::Local => {
-                self.refused = None;
+                self.node(ctx.unit).refused = None;
                 return None;
             }
             Change::Refused(fault) => {
-                self.refused = Some(fault);
+                self.node(ctx.unit).refused = Some(fault);
                 return Some(fault);
             }
             Change::Powermax {
@@ -437,7 +503,7 @@ impl PowermaxPort {
                     k.mode == Some(mode) && k.current == current && k.pressure == pressure
                 }) && status.remote
                 {
-                    self.refused = None;
+                    self.node(ctx.unit).refused = None;
                     return None;
                 }
                 super::history::process_change_starts(ctx);
@@ -452,13 +518,14 @@ impl PowermaxPort {
         };
         match ctx.submit(command) {
             Ok(ticket) => {
-                self.refused = None;
-                self.applying = Some((ticket, process));
+                self.node(ctx.unit).refused = None;
+                self.node(ctx.unit).applying = Some((ticket, process));
                 None
             }
             Err(refusal) => {
                 let fault = refusal_fault(&refusal);
-                self.refused = fault.or(self.refused);
+                let node = self.node(ctx.unit);
+                node.refused = fault.or(node.refused);
                 fault
             }
         }

@@ -686,3 +686,48 @@ fn a_sync_units_identification_and_cartridge_read_through_the_bridge() {
         "0x304E is past the map"
     );
 }
+
+/// A Modbus frame for `node`.
+fn at_node(node: u8, pdu: &[u8]) -> Vec<u8> {
+    let mut out = [0u8; 600];
+    let n = plasma_protocol::modbus_ascii::encode(node, pdu, &mut out).unwrap();
+    out[..n].to_vec()
+}
+
+#[test]
+fn each_unit_on_the_line_answers_at_its_own_node_from_cnc_address_on() {
+    // A SYNC 65 (node 1 on the supply line) and a SYNC 45 (node 2); the CNC port's nodes 5
+    // and 6.
+    let mut rig = Rig::on_line(
+        Settings::default(),
+        "POWERMAX:1,POWERMAX:2",
+        &["sync65", "sync45"],
+    );
+    assert_eq!(rig.cmd("CONFIG cnc_address 5"), "OK cnc_address=5");
+    // Both units' limits read (slow data, in turns on the shared line).
+    rig.run(3000);
+    assert!((0..2).all(|u| rig.bridge.status_of(u).limits.is_some()));
+    // 0x209A, the maximum current: 65 A and 45 A, x 64.
+    let max = |rig: &mut Rig, node: u8| {
+        let reply = ask(rig, &at_node(node, &[0x04, 0x20, 0x9A, 0x00, 0x01]))?;
+        Some(u16::from_str_radix(&reply[7..11], 16).unwrap() / 64)
+    };
+    assert_eq!(max(&mut rig, 5), Some(65));
+    assert_eq!(max(&mut rig, 6), Some(45));
+    assert_eq!(max(&mut rig, 7), None, "no third unit: no answer");
+    assert_eq!(max(&mut rig, 4), None);
+    // A write to node 6 sets unit 2 only, and its reply is node 6's.
+    for (register, value) in [(0x2093u16, 1u16), (0x2094, 30 * 64), (0x2096, 0)] {
+        let [hi, lo] = register.to_be_bytes();
+        let [vh, vl] = value.to_be_bytes();
+        let frame = at_node(6, &[0x06, hi, lo, vh, vl]);
+        assert_eq!(ask(&mut rig, &frame), Some(line(frame)));
+    }
+    rig.run(1500);
+    let second = rig.cmd("@2 STATUS");
+    assert!(second.contains(" amps=30"), "{second}");
+    let first = rig.cmd("STATUS");
+    assert!(!first.contains(" amps=30"), "{first}");
+    // The settings persist the first unit's process only.
+    assert_eq!(rig.bridge.settings().process, None);
+}
