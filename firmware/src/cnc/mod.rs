@@ -474,18 +474,36 @@ impl Session {
     }
 }
 
-/// ` unit=N` at the end of a line (before its CR LF) about unit `unit` (0-based), beyond the
-/// first: what a CNC written for one unit reads stays as it was.
+/// `unit=N` in a line about unit `unit` (0-based) beyond the first, where a reader of the
+/// line for one unit does not trip on it: after an `ERR` line's code (its text runs to the end
+/// of the line), before a free-text `text=` or `reply=` field (which runs to the end), else
+/// last. Lines about the first unit stay as they were.
 #[inline(never)]
 fn tag_unit(line: &mut ReplyLine, unit: usize) {
     if unit == 0 {
         return;
     }
-    let body = line.trim_ascii_end().len();
-    line.truncate(body);
-    if write!(line, " unit={}\r\n", unit + 1).is_err() {
-        too_long(line);
+    let body = line.trim_ascii_end();
+    let bytes = body.as_bytes();
+    // Byte searches, not `str::find`: its substring searcher costs 2 KB of flash.
+    let at = if bytes.starts_with(b"ERR ") {
+        // After `ERR <CODE>`.
+        let spaces = bytes.iter().enumerate().filter(|&(_, &b)| b == b' ');
+        spaces.map(|(i, _)| i).nth(1)
+    } else {
+        [&b" text="[..], b" reply="].iter().find_map(|field| {
+            bytes
+                .windows(field.len())
+                .position(|window| window == *field)
+        })
     }
+    .unwrap_or(body.len());
+    let mut tagged = ReplyLine::new();
+    let (head, tail) = body.split_at_checked(at).unwrap_or((body, ""));
+    if write!(tagged, "{head} unit={}{tail}\r\n", unit + 1).is_err() {
+        too_long(&mut tagged);
+    }
+    *line = tagged;
 }
 
 fn no_link() -> ReplyLine {

@@ -378,15 +378,25 @@ fn two_hprs() -> Rig {
 #[test]
 fn a_line_without_at_n_is_for_the_first_unit_and_at_n_names_another() {
     let mut rig = two_hprs();
+    // As docs/cnc-protocol.md section 10 shows them (unit 2's firmware not read yet).
     let first = rig.cmd("ID");
-    assert!(first.contains(" model=HPR260 "), "{first}");
-    assert!(!first.contains("unit="), "{first}");
+    assert_eq!(
+        first,
+        "OK bridge=plasma-bridge version=0.1.0 reset=unknown link=UP model=HPR260 family=HPR \
+         firmware=A.0 gas_firmware=A.2"
+    );
     let second = rig.cmd("@2 ID");
-    assert!(second.contains(" model=HPR130 "), "{second}");
-    assert!(second.ends_with(" unit=2"), "{second}");
+    assert_eq!(
+        second,
+        "OK bridge=plasma-bridge version=0.1.0 reset=unknown link=UP model=HPR130 family=HPR \
+         firmware=- gas_firmware=- unit=2"
+    );
     assert_eq!(rig.cmd("@1 ID"), first, "@1 is the line without a prefix");
-    // Refused lines of unit 2 say so too.
-    assert!(rig.cmd("@2 FROB").ends_with(" unit=2"));
+    // Refused lines of unit 2 say so too, after the code: an ERR text runs to the end.
+    assert_eq!(
+        rig.cmd("@2 FROB"),
+        "ERR SYNTAX unit=2 unknown command (HELP lists the commands)"
+    );
 }
 
 #[test]
@@ -423,11 +433,16 @@ fn each_units_fault_is_its_own_and_its_events_carry_the_unit() {
         .filter(|t| t.starts_with("!FAULT"))
         .collect();
     assert_eq!(events.len(), 1, "{:?}", rig.received);
-    assert!(events[0].ends_with(" unit=2"), "{}", events[0]);
+    // Before the free-text field, which runs to the end of the line.
+    assert_eq!(
+        events[0],
+        "!FAULT 044 action=required unit=2 text=LOW PLASMA GAS PRESSURE"
+    );
     assert_eq!(rig.cmd("FAULT"), "OK fault=none");
-    let fault = rig.cmd("@2 FAULT");
-    assert!(fault.starts_with("OK fault=044 "), "{fault}");
-    assert!(fault.ends_with(" unit=2"), "{fault}");
+    assert_eq!(
+        rig.cmd("@2 FAULT"),
+        "OK fault=044 action=required unit=2 text=LOW PLASMA GAS PRESSURE"
+    );
 }
 
 #[test]
@@ -449,11 +464,11 @@ fn what_is_the_whole_bridges_or_the_first_units_refuses_at_n() {
     let mut rig = two_hprs();
     assert_eq!(
         rig.cmd("@2 POWER ON"),
-        std::format!("ERR UNSUPPORTED {} unit=2", texts::POWER_EVERY_UNIT)
+        std::format!("ERR UNSUPPORTED unit=2 {}", texts::POWER_EVERY_UNIT)
     );
     assert_eq!(
         rig.cmd("@2 CONSUMABLES"),
-        std::format!("ERR UNSUPPORTED {} unit=2", texts::CONSUMABLES_FIRST_UNIT)
+        std::format!("ERR UNSUPPORTED unit=2 {}", texts::CONSUMABLES_FIRST_UNIT)
     );
     assert!(rig.cmd("CONSUMABLES").starts_with("OK source=bridge "));
 }
@@ -485,5 +500,40 @@ fn units_lists_every_unit_with_its_state() {
             "UNIT n=1 address=AUTO link=UP family=SYNC model=Powermax65 fault=none",
             "OK units=1",
         ]
+    );
+}
+
+/// The examples of docs/cnc-protocol.md section 10, line for line.
+#[test]
+fn the_several_units_examples_of_the_protocol_page() {
+    let mut one = Rig::sync65(Settings::default());
+    assert_eq!(
+        one.cmd("CONFIG units HPR:0,POWERMAX:1"),
+        "ERR REFUSED units: unit 2 cannot share the line: a Powermax speaks Modbus ASCII, an HPR \
+         or MaxPro200 its own protocol"
+    );
+    assert_eq!(
+        one.cmd("CONFIG units MAXPRO200,HPR:1"),
+        "ERR REFUSED units: a MaxPro200 cannot share a line: it has no SLEEP/WAKE, so it \
+         answers every request"
+    );
+    assert_eq!(
+        one.cmd("CONFIG units HPR:0,HPR:1"),
+        "OK units=HPR:0,HPR:1 link=redetecting"
+    );
+    assert_eq!(one.bridge.unit_count(), 2);
+    let mut rig = two_hprs();
+    assert_eq!(rig.cmd("@2 SET AMPS 80"), "OK amps=80 unit=2");
+    let now = rig.now;
+    rig.line().unit_mut(1).unwrap().inject_fault(now, 44);
+    rig.run(1500);
+    let fault: Vec<&String> = rig
+        .received
+        .iter()
+        .filter(|t| t.starts_with("!FAULT"))
+        .collect();
+    assert_eq!(
+        fault,
+        ["!FAULT 044 action=required unit=2 text=LOW PLASMA GAS PRESSURE"]
     );
 }
