@@ -55,6 +55,8 @@ use plasma_protocol::time::Instant;
 #[derive(Debug)]
 pub struct Bridge {
     units: Units,
+    /// The named units are still to be built (at the first call that drives the line).
+    units_pending: bool,
     session: Session,
     settings: Settings,
     /// Each unit's discrete-I/O snapshot.
@@ -102,9 +104,17 @@ impl Bridge {
     /// The process persisted in the settings goes to the first unit's link, which applies it
     /// again once a Powermax answers (the link decides what is re-applied and when:
     /// [`crate::link::kept`]).
+    /// Named units (`CONFIG units`) start at the first call that drives the line: the
+    /// bridge is built with the first unit's link alone, so that the board builds it (23 KB)
+    /// straight in its static slot, and the others are filled in place.
     pub fn new(settings: Settings, now: Instant) -> Self {
         Bridge {
-            units: units_for(&settings, now),
+            units: Units::alone(
+                settings.link,
+                settings.process.as_ref().map(unit_process),
+                now,
+            ),
+            units_pending: !settings.units.as_slice().is_empty(),
             session: Session::new(&settings),
             settings,
             io: [None; MAX_UNITS],
@@ -134,6 +144,7 @@ impl Bridge {
 
     /// Bytes received from the power supply (any chunking).
     pub fn handle_ps_rx(&mut self, now: Instant, bytes: &[u8]) {
+        self.start_units(now);
         self.units.handle_rx(now, bytes);
         self.service(now);
     }
@@ -142,6 +153,7 @@ impl Bridge {
     /// error, in its place among the received bytes (see
     /// [`PsLink::handle_rx_error`](crate::link::PsLink::handle_rx_error)).
     pub fn handle_ps_rx_error(&mut self, now: Instant) {
+        self.start_units(now);
         self.units.handle_rx_error(now);
         self.service(now);
     }
@@ -211,7 +223,15 @@ impl Bridge {
         }
     }
 
+    /// The named units, built in place once (see [`Bridge::new`]).
+    fn start_units(&mut self, now: Instant) {
+        if core::mem::take(&mut self.units_pending) {
+            restart_units(&mut self.units, &self.settings, now);
+        }
+    }
+
     fn service(&mut self, now: Instant) {
+        self.start_units(now);
         self.now = now;
         while let Some((unit, event)) = self.units.poll_event() {
             self.session
@@ -393,16 +413,15 @@ impl Bridge {
     }
 }
 
-/// The units `settings` name, the persisted process restored to the first. Settings that
-/// could not name them were refused when loaded or typed; should they reach here, the bridge
-/// drives one unit rather than none.
-pub(crate) fn units_for(settings: &Settings, now: Instant) -> Units {
-    let mut units = Units::new(settings.link, settings.units.as_slice(), now)
-        .unwrap_or_else(|_| Units::One(PsLink::new(settings.link, now)));
-    if let Some(process) = settings.process {
-        units.link_mut(0).restore(unit_process(&process));
+/// The units `settings` name start afresh in `units`, in place, the persisted process
+/// restored to the first (`CONFIG units`). Settings that cannot name them were refused when
+/// typed; should they get here, the bridge drives one unit rather than none.
+pub(crate) fn restart_units(units: &mut Units, settings: &Settings, now: Instant) {
+    let process = settings.process.as_ref().map(unit_process);
+    let named = settings.units.as_slice();
+    if units.rebuild(settings.link, named, process, now).is_err() {
+        let _ = units.rebuild(settings.link, &[], process, now);
     }
-    units
 }
 
 /// The one translation of the link's view into what the interlocks need: the board's

@@ -1,54 +1,72 @@
 //! The units the bridge drives: one alone on its line (found by auto-detection, whatever its
 //! family), or up to four named ones sharing a line ([`SharedLine`]).
 //!
-//! One unit alone is a bare [`PsLink`], exactly as it always was: a line of one would send
-//! an HPR SLEEP / WAKE it does not need and force a family the link can find by itself.
+//! One unit alone is driven as a bare [`PsLink`], exactly as it always was: a line of one
+//! would send an HPR SLEEP / WAKE it does not need and force a family the link can find by
+//! itself.
 //!
 //! ```
 //! use plasma_firmware::link::{LineUnit, LinkConfig, Units};
 //! use plasma_protocol::time::Instant;
 //!
-//! let one = Units::new(LinkConfig::default(), &[], Instant::ZERO).unwrap();
-//! assert_eq!(one.count(), 1);
+//! let mut units = Units::alone(LinkConfig::default(), None, Instant::ZERO);
+//! assert_eq!(units.count(), 1);
 //! let two = [LineUnit::Hpr { id: 0 }, LineUnit::Hpr { id: 1 }];
-//! let line = Units::new(LinkConfig::default(), &two, Instant::ZERO).unwrap();
-//! assert_eq!(line.count(), 2);
-//! assert_eq!(line.link(1).config().hpr_id, 1);
+//! units.rebuild(LinkConfig::default(), &two, None, Instant::ZERO).unwrap();
+//! assert_eq!(units.count(), 2);
+//! assert_eq!(units.link(1).config().hpr_id, 1);
 //! ```
 
 use plasma_protocol::serial::PortConfig;
 use plasma_protocol::time::Instant;
 
-use crate::link::{LineError, LineUnit, LinkConfig, LinkEvent, PsLink, SharedLine};
+use crate::link::{
+    LineError, LineUnit, LinkConfig, LinkEvent, PowermaxProcess, PsLink, SharedLine,
+};
 
 /// One unit, or several on one line. See the [module docs](self).
-// The bridge lives in one static slot on the board, sized for four units whichever variant
-// is in use: boxing the line would need a heap the board does not have.
-#[allow(clippy::large_enum_variant)]
+///
+/// It always holds the line's storage for [`MAX_UNITS`](crate::link::MAX_UNITS) links (the
+/// bridge lives in one static slot on the board, sized for four units whatever is in use),
+/// and changes its units in place ([`Units::rebuild`]): one link is built at a time, never a
+/// whole line on the stack.
 #[derive(Debug)]
-pub enum Units {
-    /// One unit, auto-detected (`CONFIG units auto`, the default).
-    One(PsLink),
-    /// Named units sharing the line.
-    Line(SharedLine),
+pub struct Units {
+    line: SharedLine,
+    /// One unit, auto-detected: its link is driven directly, as a link alone always was.
+    alone: bool,
 }
 
 impl Units {
-    /// The units `named` (none: one unit, auto-detected) with `base` for their link
-    /// settings, detecting from `now`. Refused when they cannot share a line.
-    pub fn new(base: LinkConfig, named: &[LineUnit], now: Instant) -> Result<Units, LineError> {
-        if named.is_empty() {
-            return Ok(Units::One(PsLink::new(base, now)));
+    /// One unit, auto-detected, with `base` for its link settings, detecting from `now` and
+    /// restoring `process` (the persisted one). Named units follow in place
+    /// ([`Units::rebuild`]): so the board's bridge is built in its static slot, never as a
+    /// 15 KB value on its stack.
+    pub fn alone(base: LinkConfig, process: Option<PowermaxProcess>, now: Instant) -> Units {
+        Units {
+            line: SharedLine::alone(base, process, now),
+            alone: true,
         }
-        SharedLine::new(base, named, now).map(Units::Line)
+    }
+
+    /// In place: the units `named` (none: one unit, auto-detected) start afresh at `now`,
+    /// the first restoring `process`. Refused, and nothing changes, when they cannot share a
+    /// line.
+    pub fn rebuild(
+        &mut self,
+        base: LinkConfig,
+        named: &[LineUnit],
+        process: Option<PowermaxProcess>,
+        now: Instant,
+    ) -> Result<(), LineError> {
+        self.line.rebuild(base, named, process, now)?;
+        self.alone = named.is_empty();
+        Ok(())
     }
 
     /// How many units (1-4).
     pub fn count(&self) -> usize {
-        match self {
-            Units::One(_) => 1,
-            Units::Line(line) => line.len(),
-        }
+        self.line.len()
     }
 
     /// Unit `index`'s link (0 = the first unit); the first unit's for an index beyond
@@ -56,22 +74,16 @@ impl Units {
     // Out of line: the CNC session reaches its unit's link this way in dozens of places.
     #[inline(never)]
     pub fn link(&self, index: usize) -> &PsLink {
-        match self {
-            Units::One(link) => link,
-            Units::Line(line) => match line.unit(index) {
-                Some(link) => link,
-                None => line.first(),
-            },
+        match self.line.unit(index) {
+            Some(link) => link,
+            None => self.line.first(),
         }
     }
 
     /// Unit `index`'s link, for its commands; as [`Units::link`] for an index out of range.
     #[inline(never)]
     pub fn link_mut(&mut self, index: usize) -> &mut PsLink {
-        match self {
-            Units::One(link) => link,
-            Units::Line(line) => line.unit_or_first_mut(index),
-        }
+        self.line.unit_or_first_mut(index)
     }
 
     /// Every unit's link, in order.
@@ -81,10 +93,7 @@ impl Units {
 
     /// The next event of any unit, with the unit's index.
     pub fn poll_event(&mut self) -> Option<(usize, LinkEvent)> {
-        match self {
-            Units::One(link) => link.poll_event().map(|event| (0, event)),
-            Units::Line(line) => line.poll_event(),
-        }
+        self.line.poll_event()
     }
 
     /// Some unit holds events nobody has taken yet.
@@ -95,9 +104,10 @@ impl Units {
     /// Every unit takes `base` for its link settings (each keeps its own protocol and
     /// address on a shared line).
     pub fn reconfigure(&mut self, now: Instant, base: LinkConfig) {
-        match self {
-            Units::One(link) => link.reconfigure(now, base),
-            Units::Line(line) => line.reconfigure(now, base),
+        if self.alone {
+            self.line.first_mut().reconfigure(now, base);
+        } else {
+            self.line.reconfigure(now, base);
         }
     }
 
@@ -105,56 +115,56 @@ impl Units {
     /// at every turn and its HF ignition keeps the whole line quiet
     /// ([`SharedLine::set_start`]); one unit alone keeps its own pilot-arc pause as always.
     pub fn set_start(&mut self, unit: usize, on: bool) {
-        if let Units::Line(line) = self {
-            line.set_start(unit, on);
+        if !self.alone {
+            self.line.set_start(unit, on);
         }
     }
 
     /// Bytes received from the line.
     pub fn handle_rx(&mut self, now: Instant, bytes: &[u8]) {
-        match self {
-            Units::One(link) => link.handle_rx(now, bytes),
-            Units::Line(line) => line.handle_rx(now, bytes),
+        match self.alone {
+            true => self.line.first_mut().handle_rx(now, bytes),
+            false => self.line.handle_rx(now, bytes),
         }
     }
 
     /// A character received with a parity or framing error.
     pub fn handle_rx_error(&mut self, now: Instant) {
-        match self {
-            Units::One(link) => link.handle_rx_error(now),
-            Units::Line(line) => line.handle_rx_error(now),
+        match self.alone {
+            true => self.line.first_mut().handle_rx_error(now),
+            false => self.line.handle_rx_error(now),
         }
     }
 
     /// The next whole frame to transmit.
     pub fn poll_transmit(&mut self, now: Instant) -> Option<&[u8]> {
-        match self {
-            Units::One(link) => link.poll_transmit(now),
-            Units::Line(line) => line.poll_transmit(now),
+        match self.alone {
+            true => self.line.first_mut().poll_transmit(now),
+            false => self.line.poll_transmit(now),
         }
     }
 
     /// The frame handed out last left the wire at `at`.
     pub fn handle_transmitted(&mut self, at: Instant) {
-        match self {
-            Units::One(link) => link.handle_transmitted(at),
-            Units::Line(line) => line.handle_transmitted(at),
+        match self.alone {
+            true => self.line.first_mut().handle_transmitted(at),
+            false => self.line.handle_transmitted(at),
         }
     }
 
     /// The line settings the port must use now.
     pub fn port_config(&self) -> PortConfig {
-        match self {
-            Units::One(link) => link.port_config(),
-            Units::Line(line) => line.port_config(),
+        match self.alone {
+            true => self.line.first().port_config(),
+            false => self.line.port_config(),
         }
     }
 
     /// When [`Units::poll_transmit`] must be called at the latest.
     pub fn poll_at(&self) -> Option<Instant> {
-        match self {
-            Units::One(link) => link.poll_at(),
-            Units::Line(line) => line.poll_at(),
+        match self.alone {
+            true => self.line.first().poll_at(),
+            false => self.line.poll_at(),
         }
     }
 }

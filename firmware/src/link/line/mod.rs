@@ -70,9 +70,9 @@ use heapless::Vec;
 use plasma_protocol::serial::PortConfig;
 use plasma_protocol::time::Instant;
 
-use crate::link::{LinkConfig, LinkEvent, PsLink};
+use crate::link::{LinkConfig, LinkEvent, PowermaxProcess, PsLink};
 pub use config::{LineError, LineUnit, MAX_UNITS, NamedUnits, UnitsError};
-use links::Links;
+use links::{Links, Making};
 use switch::{Awake, CONTROL_CAPACITY, Switch, SwitchOut, emit_control};
 
 /// Counters of the arbiter's own traffic.
@@ -125,24 +125,21 @@ impl SharedLine {
     /// and its own protocol and address; they start detecting at `now`. Refused when the units
     /// cannot share a line.
     pub fn new(base: LinkConfig, units: &[LineUnit], now: Instant) -> Result<Self, LineError> {
-        let configs = config::link_configs(base, units)?;
-        let shared = configs.len() > 1;
-        let mut links = configs.into_iter().map(|config| {
-            let mut link = PsLink::new(config, now);
-            if shared {
-                link.share_line();
-            }
-            link
-        });
-        let first = links.next().ok_or(LineError::NoUnits)?;
-        let links = Links::new(first, links);
-        Ok(SharedLine {
-            links,
-            units: Vec::from_slice(units)
-                .map_err(|_| LineError::TooManyUnits { count: units.len() })?,
-            // The first turn goes to unit 0.
-            owner: units.len().saturating_sub(1),
-            switching: units.iter().all(|u| matches!(u, LineUnit::Hpr { .. })),
+        config::link_configs(base, units)?;
+        let mut line = SharedLine::alone(base, None, now);
+        line.rebuild(base, units, None, now)?;
+        Ok(line)
+    }
+
+    /// One unit alone, `base` as it is (auto-detected), restoring `process`: a line's storage
+    /// with its first link only, built as one expression so that the board's bridge is built
+    /// in its static slot ([`SharedLine::rebuild`] fills the others in place).
+    pub(crate) fn alone(base: LinkConfig, process: Option<PowermaxProcess>, now: Instant) -> Self {
+        SharedLine {
+            links: Links::alone(Making::first_alone(base, process, now)),
+            units: Vec::new(),
+            owner: 0,
+            switching: false,
             awake: Awake::Unknown,
             line_echoes: false,
             switch: None,
@@ -152,7 +149,53 @@ impl SharedLine {
             turns_since_full_poll: usize::MAX,
             quiet_until: None,
             stats: LineStats::default(),
-        })
+        }
+    }
+
+    /// In place, `units` (none: one unit alone with `base` as it is) start afresh at `now`,
+    /// the first restoring `process`: one link is built at a time, never the whole line, so
+    /// that a bridge on a small stack can change its units. Refused (nothing changes) when
+    /// they cannot share a line.
+    pub(crate) fn rebuild(
+        &mut self,
+        base: LinkConfig,
+        units: &[LineUnit],
+        process: Option<PowermaxProcess>,
+        now: Instant,
+    ) -> Result<(), LineError> {
+        let configs = match units.is_empty() {
+            true => None,
+            false => Some(config::link_configs(base, units)?),
+        };
+        let configs = configs.as_deref().unwrap_or(core::slice::from_ref(&base));
+        self.links.refill(Making {
+            base,
+            configs,
+            process,
+            now,
+        });
+        self.units.clear();
+        for unit in units {
+            // At most MAX_UNITS: checked with the configurations.
+            let _ = self.units.push(*unit);
+        }
+        self.owner = units.len().saturating_sub(1);
+        self.switching =
+            !units.is_empty() && units.iter().all(|u| matches!(u, LineUnit::Hpr { .. }));
+        self.awake = Awake::Unknown;
+        self.line_echoes = false;
+        self.switch = None;
+        self.out = None;
+        self.control_len = 0;
+        self.turns_since_full_poll = usize::MAX;
+        self.quiet_until = None;
+        self.stats = LineStats::default();
+        Ok(())
+    }
+
+    /// The first unit's link, to be driven as a link alone.
+    pub(crate) fn first_mut(&mut self) -> &mut PsLink {
+        self.links.get_or_first_mut(0)
     }
 
     /// How many units share the line.
