@@ -322,11 +322,7 @@ fn expect_cnc_framing(board: &Board, wanted: PortConfig) {
 #[test]
 fn the_cnc_framing_follows_config_at_once_and_the_port_answers_modbus_after() {
     let mut board = ready_board(Model::Sync65);
-    let mut framing = PortConfig {
-        baud: 115_200,
-        parity: Parity::None,
-        stop_bits: StopBits::One,
-    };
+    let mut framing = PortConfig::new(115_200, Parity::None, StopBits::One);
     expect_cnc_framing(&board, framing);
     let mark = board.log().len();
     // Each reply comes at the old framing; the UART switches after it (pmx485's 19200 8E1).
@@ -360,16 +356,8 @@ fn the_cnc_framing_follows_config_at_once_and_the_port_answers_modbus_after() {
 #[test]
 fn holding_b1_at_reset_restores_the_cnc_ports_default_framing_and_nothing_else() {
     let mut board = ready_board(Model::Sync65);
-    let default = PortConfig {
-        baud: 115_200,
-        parity: Parity::None,
-        stop_bits: StopBits::One,
-    };
-    let saved = PortConfig {
-        baud: 19_200,
-        parity: Parity::Even,
-        stop_bits: StopBits::One,
-    };
+    let default = PortConfig::new(115_200, Parity::None, StopBits::One);
+    let saved = PortConfig::new(19_200, Parity::Even, StopBits::One);
     for (line, reply) in [
         (
             "CONFIG timeout_ms 250",

@@ -175,11 +175,11 @@ impl LinkConfig {
 
     /// The UART settings for Modbus with this configuration (19200 baud).
     pub const fn modbus_port(&self) -> PortConfig {
-        PortConfig {
-            baud: PortConfig::MODBUS_DEFAULT.baud,
-            parity: self.modbus_parity,
-            stop_bits: self.modbus_stop_bits,
-        }
+        PortConfig::new(
+            PortConfig::MODBUS_DEFAULT.baud,
+            self.modbus_parity,
+            self.modbus_stop_bits,
+        )
     }
 }
 

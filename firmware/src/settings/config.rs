@@ -5,13 +5,10 @@ use core::fmt;
 
 use plasma_protocol::cnc::phoenix::Format;
 use plasma_protocol::cnc::{ConfigKey, ErrorCode};
-use plasma_protocol::serial::{Parity, StopBits};
+use plasma_protocol::serial::{DataBits, Parity, StopBits};
 use plasma_protocol::time::Duration;
 
-use super::{
-    ARC_OK_DEBOUNCE_MS, CNC_BAUDS, CncPort, Settings, TRANSFER_TIMEOUT_MS, ms, stop_bits_number,
-    wiring,
-};
+use super::{ARC_OK_DEBOUNCE_MS, CNC_BAUDS, CncPort, Settings, TRANSFER_TIMEOUT_MS, ms, wiring};
 use crate::consumables::Limits;
 use crate::link::{LinkConfig, NamedUnits, ProtocolChoice, UnitsError};
 
@@ -40,6 +37,20 @@ fn parse_stop_bits(key: ConfigKey, text: &str) -> Result<StopBits, SetError<'_>>
         _ => Err(SetError::BadWord {
             key,
             expected: "1|2",
+        }),
+    }
+}
+
+/// 7 or 8. The L4 USART runs both with every parity and stop-bit setting (RM0351, USART_CR1
+/// M1/M0: a 7-, 8- or 9-bit word, the parity bit included; `plasma_tasks::uart` picks it),
+/// so no framing is refused.
+fn parse_data_bits(key: ConfigKey, text: &str) -> Result<DataBits, SetError<'_>> {
+    match text {
+        "7" => Ok(DataBits::Seven),
+        "8" => Ok(DataBits::Eight),
+        _ => Err(SetError::BadWord {
+            key,
+            expected: "7|8",
         }),
     }
 }
@@ -285,7 +296,10 @@ impl Settings {
             ConfigKey::CncBaud => ConfigValue::Number(self.cnc.framing.baud),
             ConfigKey::CncParity => ConfigValue::Word(parity_name(self.cnc.framing.parity)),
             ConfigKey::CncStopBits => {
-                ConfigValue::Number(u32::from(stop_bits_number(self.cnc.framing.stop_bits)))
+                ConfigValue::Number(u32::from(self.cnc.framing.stop_bits.number()))
+            }
+            ConfigKey::CncDataBits => {
+                ConfigValue::Number(u32::from(self.cnc.framing.data_bits.number()))
             }
             ConfigKey::ConsumableStartLimit => limit(self.consumable_limits.starts),
             ConfigKey::ConsumableArcLimitS => limit(self.consumable_limits.arc_seconds),
@@ -302,6 +316,7 @@ impl Settings {
             ConfigKey::Parity | ConfigKey::CncParity => Accepted::Words("NONE|EVEN|ODD"),
             ConfigKey::StopBits | ConfigKey::CncStopBits => Accepted::Words("1|2"),
             ConfigKey::CncBaud => Accepted::Words(CNC_BAUD_WORDS),
+            ConfigKey::CncDataBits => Accepted::Words("7|8"),
             ConfigKey::InterlockFault
             | ConfigKey::InterlockLink
             | ConfigKey::InterlockReady
@@ -376,6 +391,7 @@ impl Settings {
             ConfigKey::CncBaud => self.cnc.framing.baud = parse_cnc_baud(key, text)?,
             ConfigKey::CncParity => self.cnc.framing.parity = parse_parity(key, text)?,
             ConfigKey::CncStopBits => self.cnc.framing.stop_bits = parse_stop_bits(key, text)?,
+            ConfigKey::CncDataBits => self.cnc.framing.data_bits = parse_data_bits(key, text)?,
             ConfigKey::ConsumableStartLimit => {
                 self.consumable_limits.starts = parse_limit(key, text)?;
             }
@@ -502,6 +518,39 @@ mod tests {
             assert_eq!(s.get(ConfigKey::CncBaud).to_string(), baud);
         }
         assert!(Settings::default().set(ConfigKey::CncBaud, "600").is_err());
+    }
+
+    /// Phoenix manual (003_610fea73110d789e.txt) lines 7037-7043, a messaging port's settings:
+    /// "Parity: Select None, Odd or Even." and "Data Bits: Select 7 or 8 Data Bits." Every
+    /// combination, with 1 or 2 stop bits, is a CNC port framing.
+    #[test]
+    fn the_cnc_framing_covers_a_phoenix_ports_parity_and_data_bits() {
+        for data_bits in ["7", "8"] {
+            for parity in ["NONE", "ODD", "EVEN"] {
+                for stop_bits in ["1", "2"] {
+                    let mut s = Settings::default();
+                    s.set(ConfigKey::CncBaud, "4800").unwrap();
+                    s.set(ConfigKey::CncDataBits, data_bits).unwrap();
+                    s.set(ConfigKey::CncParity, parity).unwrap();
+                    s.set(ConfigKey::CncStopBits, stop_bits).unwrap();
+                    assert!(s.is_valid());
+                    assert_eq!(s.get(ConfigKey::CncDataBits).to_string(), data_bits);
+                    let framing = [data_bits, &parity[..1], stop_bits].concat();
+                    assert_eq!(
+                        s.cnc_port_config().to_string(),
+                        ["4800 ", &framing].concat()
+                    );
+                }
+            }
+        }
+        let mut s = Settings::default();
+        let err = s.set(ConfigKey::CncDataBits, "9").unwrap_err();
+        assert_eq!(err.to_string(), "cnc_data_bits: expected 7|8");
+        assert_eq!(s, Settings::default(), "nothing changed");
+        assert_eq!(
+            Settings::accepted(ConfigKey::CncDataBits).to_string(),
+            "7|8"
+        );
     }
 
     /// Phoenix manual (003_610fea73110d789e.txt) line 7075: "0,1,16,17,32,33,48,49,64,

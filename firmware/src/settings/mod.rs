@@ -73,7 +73,7 @@ pub struct CncPort {
     /// Modbus node address the bridge answers at, [`CncPort::MIN_ADDRESS`] to
     /// [`CncPort::MAX_ADDRESS`].
     pub address: u8,
-    /// UART framing (8 data bits always).
+    /// UART framing.
     pub framing: PortConfig,
 }
 
@@ -82,11 +82,7 @@ impl CncPort {
     /// (the node LinuxCNC's pmx485 always addresses).
     pub const DEFAULT: CncPort = CncPort {
         address: 1,
-        framing: PortConfig {
-            baud: 115_200,
-            parity: Parity::None,
-            stop_bits: StopBits::One,
-        },
+        framing: PortConfig::new(115_200, Parity::None, StopBits::One),
     };
 
     /// Lowest node address accepted (0 is the broadcast address).
@@ -97,13 +93,6 @@ impl CncPort {
     fn is_valid(&self) -> bool {
         (Self::MIN_ADDRESS..=Self::MAX_ADDRESS).contains(&self.address)
             && CNC_BAUDS.contains(&self.framing.baud)
-    }
-}
-
-fn stop_bits_number(stop_bits: StopBits) -> u8 {
-    match stop_bits {
-        StopBits::One => 1,
-        StopBits::Two => 2,
     }
 }
 
@@ -197,7 +186,8 @@ fn ms(duration: Duration) -> u32 {
 }
 
 impl Settings {
-    /// The CNC port's UART framing (`cnc_baud`, `cnc_parity`, `cnc_stop_bits`).
+    /// The CNC port's UART framing (`cnc_baud`, `cnc_parity`, `cnc_stop_bits`,
+    /// `cnc_data_bits`).
     pub fn cnc_port_config(&self) -> PortConfig {
         self.cnc.framing
     }
@@ -264,6 +254,7 @@ mod tests {
             (ConfigKey::CncBaud, "19200"),
             (ConfigKey::CncParity, "EVEN"),
             (ConfigKey::CncStopBits, "2"),
+            (ConfigKey::CncDataBits, "7"),
             (ConfigKey::CncAddress, "7"),
             (ConfigKey::TimeoutMs, "250"),
             (ConfigKey::InterlockReady, "OFF"),

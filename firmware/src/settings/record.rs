@@ -1,14 +1,14 @@
-//! The settings record the store keeps: a fixed layout, version 5 (version 4 is its first 54
-//! bytes, version 3 its first 46, version 2 its first 45, version 1 its first 29, and all
-//! still load). Decoding is strict: a wrong length, an unknown code, a value out of
+//! The settings record the store keeps: a fixed layout, version 6 (version 5 is its first 63
+//! bytes, version 4 its first 54, version 3 its first 46, version 2 its first 45, version 1
+//! its first 29, and all still load). Decoding is strict: a wrong length, an unknown code, a value out of
 //! range or a reserved bit set gives `None`, and the store falls back to the defaults.
 
 use plasma_protocol::cnc::phoenix::Format;
 use plasma_protocol::cnc::{Amps, Mode, Pressure};
-use plasma_protocol::serial::{Parity, PortConfig, StopBits};
+use plasma_protocol::serial::{DataBits, Parity, PortConfig, StopBits};
 use plasma_protocol::time::Duration;
 
-use super::{CncPort, Process, Settings, ms, stop_bits_number, wiring};
+use super::{CncPort, Process, Settings, ms, wiring};
 use crate::consumables::Limits;
 use crate::io::{InputConfig, IoConfig, MIN_START_GAP, OutputConfig};
 use crate::link::{LineUnit, LinkConfig, MAX_UNITS, NamedUnits, ProtocolChoice};
@@ -23,7 +23,9 @@ pub const RECORD_V3_LEN: usize = RECORD_V2_LEN + wiring::TAIL_LEN;
 /// Length of the version-4 record: version 3, then the consumable limits.
 pub const RECORD_V4_LEN: usize = RECORD_V3_LEN + LIMITS_BLOCK_LEN;
 /// Length of the version-5 record: version 4, then the units on the line.
-pub const RECORD_LEN: usize = RECORD_V4_LEN + UNITS_BLOCK_LEN;
+pub const RECORD_V5_LEN: usize = RECORD_V4_LEN + UNITS_BLOCK_LEN;
+/// Length of the version-6 record: version 5, then the CNC port's data bits.
+pub const RECORD_LEN: usize = RECORD_V5_LEN + 1;
 /// Bytes of the units block: their number (0 = AUTO), then kind and address of each.
 const UNITS_BLOCK_LEN: usize = 1 + 2 * MAX_UNITS;
 /// Bytes of the consumable limits: starts, arc seconds (LE u32 each, 0 = OFF).
@@ -31,7 +33,7 @@ const LIMITS_BLOCK_LEN: usize = 8;
 /// Bytes of the CNC port block in the record: address, baud (LE u32), parity, stop bits.
 const CNC_BLOCK_LEN: usize = 7;
 
-// --- record layout, version 5 (4 is its first 54 bytes, 3 its 46, 2 its 45, 1 its 29) ---
+// --- record layout, version 6 (5 is its first 63 bytes, 4 its 54, 3 its 46, 2 its 45, 1 its 29)
 // 0 protocol | 1 node address | 2 parity | 3 stop bits | 4-5 response time-out ms (LE)
 // 6 retries | 7-8 poll ms | 9-12 slow-data ms | 13 HPR id | 14 failures before down
 // 15-16 start gap ms | 17-18 ARC_OK debounce ms | 19-20 transfer time-out ms | 21 flags
@@ -43,6 +45,7 @@ const CNC_BLOCK_LEN: usize = 7;
 // 46-49 consumable start limit (LE, 0 = OFF) | 50-53 consumable arc limit s (LE, 0 = OFF) (v4)
 // 54 units on the line (0 = AUTO) | 55-62 each unit's kind (1 HPR, 2 MaxPro200, 3 Powermax)
 //   and id or node, two bytes per unit, unused pairs 0 (v5)
+// 63 CNC data bits (7 or 8) (v6)
 
 const FLAG_ARC_OK_REQUIRES_START: u8 = 1 << 0;
 const FLAG_DROP_START_ON_TRANSFER_TIMEOUT: u8 = 1 << 1;
@@ -73,6 +76,12 @@ fn u16_ms(d: Duration) -> [u8; 2] {
         .to_le_bytes()
 }
 
+fn data_bits_from(number: u8) -> Option<DataBits> {
+    [DataBits::Seven, DataBits::Eight]
+        .into_iter()
+        .find(|bits| bits.number() == number)
+}
+
 fn stop_bits_from(number: u8) -> Option<StopBits> {
     match number {
         1 => Some(StopBits::One),
@@ -91,7 +100,7 @@ impl CncPort {
             b[2],
             b[3],
             index_of(&PARITIES, &self.framing.parity),
-            stop_bits_number(self.framing.stop_bits),
+            self.framing.stop_bits.number(),
         ]
     }
 
@@ -101,18 +110,19 @@ impl CncPort {
         };
         let port = CncPort {
             address,
-            framing: PortConfig {
-                baud: u32::from_le_bytes([b0, b1, b2, b3]),
-                parity: *PARITIES.get(usize::from(parity))?,
-                stop_bits: stop_bits_from(stop)?,
-            },
+            // Data bits are in a later block (version 6); before, always 8.
+            framing: PortConfig::new(
+                u32::from_le_bytes([b0, b1, b2, b3]),
+                *PARITIES.get(usize::from(parity))?,
+                stop_bits_from(stop)?,
+            ),
         };
         port.is_valid().then_some(port)
     }
 }
 
 impl storage::Persistent for Settings {
-    const VERSION: u8 = 5;
+    const VERSION: u8 = 6;
 
     fn encode(&self, out: &mut [u8]) -> usize {
         let mut r = [0u8; RECORD_LEN];
@@ -121,7 +131,7 @@ impl storage::Persistent for Settings {
         r[0] = index_of(&PROTOCOLS, &link.protocol);
         r[1] = link.node_address;
         r[2] = index_of(&PARITIES, &link.modbus_parity);
-        r[3] = stop_bits_number(link.modbus_stop_bits);
+        r[3] = link.modbus_stop_bits.number();
         r[4..6].copy_from_slice(&u16_ms(link.response_timeout));
         r[6] = link.retries;
         r[7..9].copy_from_slice(&u16_ms(link.poll_interval));
@@ -156,12 +166,14 @@ impl storage::Persistent for Settings {
         let (wiring_slot, rest) = r[RECORD_V1_LEN..].split_at_mut(wiring::RECORD_LEN);
         let (cnc, rest) = rest.split_at_mut(CNC_BLOCK_LEN);
         let (tail, rest) = rest.split_at_mut(wiring::TAIL_LEN);
-        let (limits, units) = rest.split_at_mut(LIMITS_BLOCK_LEN);
+        let (limits, rest) = rest.split_at_mut(LIMITS_BLOCK_LEN);
+        let (units, data_bits) = rest.split_at_mut(UNITS_BLOCK_LEN);
         wiring_slot.copy_from_slice(&wiring_bytes);
         cnc.copy_from_slice(&self.cnc.encode());
         tail.copy_from_slice(&wiring_tail);
         limits.copy_from_slice(&encode_limits(self.consumable_limits));
         units.copy_from_slice(&encode_units(&self.units));
+        data_bits.copy_from_slice(&[self.cnc.framing.data_bits.number()]);
         match out.get_mut(..RECORD_LEN) {
             Some(slot) => {
                 slot.copy_from_slice(&r);
@@ -173,12 +185,11 @@ impl storage::Persistent for Settings {
     }
 
     fn decode(payload: &[u8]) -> Option<Self> {
-        let (v4, units) = payload.split_at_checked(RECORD_V4_LEN)?;
-        let v4 = decode_v4(v4)?;
-        let settings = Settings {
-            units: decode_units(v4.link, units.try_into().ok()?)?,
-            ..v4
+        let (v5, &[data_bits]) = payload.split_at_checked(RECORD_V5_LEN)? else {
+            return None;
         };
+        let mut settings = decode_v5(v5)?;
+        settings.cnc.framing.data_bits = data_bits_from(data_bits)?;
         settings.is_valid().then_some(settings)
     }
 
@@ -186,15 +197,28 @@ impl storage::Persistent for Settings {
     /// Version 2 had no SYSTEM_ERROR input: it keeps the reference board's wiring.
     /// Version 3 had no consumable limits: they are OFF.
     /// Version 4 had one unit only: `units` is AUTO.
+    /// Version 5 had 8 data bits on the CNC port, always.
     fn migrate(version: u8, payload: &[u8]) -> Option<Self> {
         match version {
             1 => decode_v1(payload),
             2 => decode_v2(payload, wiring::decode_v2),
             3 => decode_v3(payload),
             4 => decode_v4(payload),
+            5 => decode_v5(payload),
             _ => None,
         }
     }
+}
+
+/// The version-5 record (also the first part of version 6).
+fn decode_v5(payload: &[u8]) -> Option<Settings> {
+    let (v4, units) = payload.split_at_checked(RECORD_V4_LEN)?;
+    let v4 = decode_v4(v4)?;
+    let settings = Settings {
+        units: decode_units(v4.link, units.try_into().ok()?)?,
+        ..v4
+    };
+    settings.is_valid().then_some(settings)
 }
 
 /// The version-4 record (also the first part of version 5).
@@ -400,6 +424,7 @@ mod tests {
             (ConfigKey::CncBaud, "19200"),
             (ConfigKey::CncParity, "even"),
             (ConfigKey::CncStopBits, "2"),
+            (ConfigKey::CncDataBits, "7"),
             (ConfigKey::ConsumableStartLimit, "600"),
             (ConfigKey::ConsumableArcLimitS, "1000000"),
         ] {
@@ -502,10 +527,13 @@ mod tests {
         s.set(ConfigKey::ConsumableStartLimit, "800").unwrap();
         let mut out = [0u8; storage::MAX_PAYLOAD];
         let len = s.encode(&mut out);
-        assert_eq!((len, RECORD_V4_LEN, RECORD_V3_LEN), (63, 54, 46));
+        assert_eq!(
+            (len, RECORD_V5_LEN, RECORD_V4_LEN, RECORD_V3_LEN),
+            (64, 63, 54, 46)
+        );
         assert_eq!(out[46..50], 800u32.to_le_bytes());
         let v3 = &out[..RECORD_V3_LEN];
-        assert_eq!(Settings::decode(v3), None, "not a version-5 record");
+        assert_eq!(Settings::decode(v3), None, "not a version-6 record");
         let migrated = Settings::migrate(3, v3).unwrap();
         assert_eq!(migrated.link.hpr_id, 2);
         assert_eq!(migrated.consumable_limits, Limits::default());
@@ -518,10 +546,10 @@ mod tests {
         s.set(ConfigKey::Units, "HPR:0,HPR:2,HPR:3").unwrap();
         let mut out = [0u8; storage::MAX_PAYLOAD];
         let len = s.encode(&mut out);
-        assert_eq!(out[54..len], [3, 1, 0, 1, 2, 1, 3, 0, 0]);
+        assert_eq!(out[54..RECORD_V5_LEN], [3, 1, 0, 1, 2, 1, 3, 0, 0]);
         assert_eq!(Settings::decode(&out[..len]), Some(s));
         let v4 = &out[..RECORD_V4_LEN];
-        assert_eq!(Settings::decode(v4), None, "not a version-5 record");
+        assert_eq!(Settings::decode(v4), None, "not a version-6 record");
         let migrated = Settings::migrate(4, v4).unwrap();
         assert_eq!(migrated.consumable_limits.starts, Some(800));
         assert_eq!(migrated.units, NamedUnits::AUTO);
@@ -534,8 +562,30 @@ mod tests {
     }
 
     #[test]
+    fn a_version_5_record_loads_with_8_data_bits_on_the_cnc_port() {
+        let mut s = Settings::default();
+        s.set(ConfigKey::Units, "HPR:0,HPR:2").unwrap();
+        s.set(ConfigKey::CncParity, "EVEN").unwrap();
+        s.set(ConfigKey::CncDataBits, "7").unwrap();
+        let mut out = [0u8; storage::MAX_PAYLOAD];
+        let len = s.encode(&mut out);
+        assert_eq!((len, out[RECORD_V5_LEN]), (RECORD_V5_LEN + 1, 7));
+        assert_eq!(Settings::decode(&out[..len]), Some(s));
+        let v5 = &out[..RECORD_V5_LEN];
+        assert_eq!(Settings::decode(v5), None, "not a version-6 record");
+        let migrated = Settings::migrate(5, v5).unwrap();
+        assert_eq!(migrated.units, s.units);
+        assert_eq!(
+            migrated.cnc.framing,
+            s.cnc.framing.with_data_bits(DataBits::Eight)
+        );
+        assert_eq!(migrated.get(ConfigKey::CncDataBits), ConfigValue::Number(8));
+        assert_eq!(Settings::migrate(6, v5), None);
+    }
+
+    #[test]
     fn decode_is_strict() {
-        let mut out = [0u8; 64];
+        let mut out = [0u8; 72];
         let len = Settings::default().encode(&mut out);
         let good = out;
         assert!(Settings::decode(&good[..len]).is_some());
@@ -567,6 +617,8 @@ mod tests {
         assert_eq!(corrupt(43, 3), None, "unknown CNC parity");
         assert_eq!(corrupt(44, 3), None, "three CNC stop bits");
         assert_eq!(corrupt(49, 1), None, "a start limit above 1000000");
+        assert_eq!(corrupt(63, 9), None, "nine CNC data bits");
+        assert!(corrupt(63, 7).is_some(), "seven CNC data bits");
         let with_process = Settings {
             process: Some(Process {
                 mode: Mode::Cut,
@@ -589,7 +641,7 @@ mod tests {
         let mut s = Settings::default();
         s.set(ConfigKey::TimeoutMs, "250").unwrap();
         s.set(ConfigKey::TorchOnActive, "HIGH").unwrap();
-        let mut out = [0u8; 64];
+        let mut out = [0u8; RECORD_LEN];
         let len = s.encode(&mut out);
         assert_eq!(len, RECORD_LEN);
         // A version-1 record is the first 29 bytes of a version-2 one.

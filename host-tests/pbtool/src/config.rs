@@ -80,11 +80,7 @@ pub fn candidates(first: PortConfig) -> Vec<PortConfig> {
     for baud in CNC_BAUDS {
         for parity in [Parity::Even, Parity::None, Parity::Odd] {
             for stop_bits in [StopBits::One, StopBits::Two] {
-                all.push(PortConfig {
-                    baud,
-                    parity,
-                    stop_bits,
-                });
+                all.push(PortConfig::new(baud, parity, stop_bits));
             }
         }
     }
@@ -145,11 +141,7 @@ pub fn framing_in(config_reply: &str) -> Option<PortConfig> {
         "2" => StopBits::Two,
         _ => return None,
     };
-    Some(PortConfig {
-        baud,
-        parity,
-        stop_bits,
-    })
+    Some(PortConfig::new(baud, parity, stop_bits))
 }
 
 /// What [`set_cnc_framing`] did.
@@ -348,11 +340,7 @@ mod tests {
         assert_eq!(framing_in("OK parity=EVEN cnc_baud=9600"), None);
         assert_eq!(
             framing_in("OK cnc_baud=9600 cnc_parity=ODD cnc_stop_bits=2"),
-            Some(PortConfig {
-                baud: 9_600,
-                parity: Parity::Odd,
-                stop_bits: StopBits::Two
-            })
+            Some(PortConfig::new(9_600, Parity::Odd, StopBits::Two))
         );
     }
 }

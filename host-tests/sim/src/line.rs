@@ -597,16 +597,8 @@ mod tests {
 
     const E1: PortConfig = PortConfig::MODBUS_DEFAULT;
     const N1: PortConfig = PortConfig::HPR;
-    const O1: PortConfig = PortConfig {
-        baud: 19_200,
-        parity: Parity::Odd,
-        stop_bits: StopBits::One,
-    };
-    const E2: PortConfig = PortConfig {
-        baud: 19_200,
-        parity: Parity::Even,
-        stop_bits: StopBits::Two,
-    };
+    const O1: PortConfig = PortConfig::new(19_200, Parity::Odd, StopBits::One);
+    const E2: PortConfig = PortConfig::new(19_200, Parity::Even, StopBits::Two);
 
     fn clean(config: PortConfig, wiring: Wiring) -> Line {
         Line::new(config, config, wiring, 7)

@@ -120,11 +120,7 @@ pub fn port_from_registers(
         }
         _ => nominal_baud,
     };
-    Some(PortConfig {
-        baud,
-        parity,
-        stop_bits,
-    })
+    Some(PortConfig::new(baud, parity, stop_bits))
 }
 
 #[cfg(test)]
@@ -142,11 +138,7 @@ mod tests {
         let odd_two = port_from_registers(UE | PCE | PS | M0, 0b10 << 12, 0, None, 19_200);
         assert_eq!(
             odd_two,
-            Some(PortConfig {
-                baud: 19_200,
-                parity: Parity::Odd,
-                stop_bits: StopBits::Two
-            })
+            Some(PortConfig::new(19_200, Parity::Odd, StopBits::Two))
         );
         // 8N1 at 80 MHz: BRR = 80e6 / 19200 = 4166, 19203 baud: the unit's 19200 within 2 %.
         let hpr = port_from_registers(UE, 0, 4166, Some(80_000_000), 19_200).unwrap();

@@ -210,6 +210,7 @@ pub enum ConfigKey {
     CncBaud,
     CncParity,
     CncStopBits,
+    CncDataBits,
     // Consumable life: the limits of one set (OFF or a number).
     ConsumableStartLimit,
     ConsumableArcLimitS,
@@ -219,7 +220,7 @@ pub enum ConfigKey {
 
 impl ConfigKey {
     /// Every key, in the order `CONFIG` lists them.
-    pub const ALL: [ConfigKey; 42] = [
+    pub const ALL: [ConfigKey; 43] = [
         ConfigKey::Protocol,
         ConfigKey::Address,
         ConfigKey::Parity,
@@ -259,6 +260,7 @@ impl ConfigKey {
         ConfigKey::CncBaud,
         ConfigKey::CncParity,
         ConfigKey::CncStopBits,
+        ConfigKey::CncDataBits,
         ConfigKey::ConsumableStartLimit,
         ConfigKey::ConsumableArcLimitS,
         ConfigKey::Units,
@@ -306,6 +308,7 @@ impl ConfigKey {
             ConfigKey::CncBaud => "cnc_baud",
             ConfigKey::CncParity => "cnc_parity",
             ConfigKey::CncStopBits => "cnc_stop_bits",
+            ConfigKey::CncDataBits => "cnc_data_bits",
             ConfigKey::ConsumableStartLimit => "consumable_start_limit",
             ConfigKey::ConsumableArcLimitS => "consumable_arc_limit_s",
             ConfigKey::Units => "units",

@@ -572,7 +572,7 @@ fn config_get_set_and_save_round_trip_through_the_settings_record() {
          motion_debounce_ms=0 not_ready_active=LOW not_ready_debounce_ms=5 \
          rampdown_error_active=LOW rampdown_error_debounce_ms=5 system_error_active=LOW system_error_debounce_ms=5 ps_hold_active=HIGH \
          fault_active=HIGH cnc_address=1 cnc_baud=115200 cnc_parity=NONE \
-         cnc_stop_bits=1 consumable_start_limit=OFF consumable_arc_limit_s=OFF \
+         cnc_stop_bits=1 cnc_data_bits=8 consumable_start_limit=OFF consumable_arc_limit_s=OFF \
          units=AUTO"
     );
     assert_eq!(rig.cmd("CONFIG timeout_ms"), "OK timeout_ms=100");

@@ -17,11 +17,7 @@ use crate::platform::runner::UnsupportedConfig;
 use plasma_protocol::serial::{Parity, PortConfig, StopBits};
 
 /// The framing the fake CNC port is opened at.
-const CNC_OPENED_AT: PortConfig = PortConfig {
-    baud: 19_200,
-    parity: Parity::None,
-    stop_bits: StopBits::One,
-};
+const CNC_OPENED_AT: PortConfig = PortConfig::new(19_200, Parity::None, StopBits::One);
 
 const PS: usize = 0;
 const CNC: usize = 1;
@@ -257,15 +253,15 @@ impl BridgeEndpoint for FakeBridge {
                 [b'F', b'R', b'A', b'M', b'I', b'N', b'G', b' ', rest @ ..] => {
                     let text = String::from_utf8_lossy(rest);
                     let (baud, parity) = text.split_once(' ').unwrap_or((&text, "N"));
-                    self.cnc_framing = PortConfig {
-                        baud: baud.parse().unwrap_or(0),
-                        parity: match parity {
+                    self.cnc_framing = PortConfig::new(
+                        baud.parse().unwrap_or(0),
+                        match parity {
                             "E" => Parity::Even,
                             "O" => Parity::Odd,
                             _ => Parity::None,
                         },
-                        stop_bits: StopBits::One,
-                    };
+                        StopBits::One,
+                    );
                     self.output.push_back(b"OK framing\r\n".to_vec());
                 }
                 _ => {
@@ -562,11 +558,7 @@ fn a_new_cnc_framing_applies_once_the_reply_has_left() {
     cnc_rx(&world, 60, b"FRAMING 9600 E\r");
     cnc_rx(&world, 80, b"HELLO\r");
     run_until(&mut sup, &mut bridge, &clock, 200);
-    let wanted = PortConfig {
-        baud: 9_600,
-        parity: Parity::Even,
-        stop_bits: StopBits::One,
-    };
+    let wanted = PortConfig::new(9_600, Parity::Even, StopBits::One);
     let w = world.borrow();
     // Nothing set before: the port was opened at the bridge's framing.
     assert_eq!(

@@ -181,11 +181,7 @@ mod tests {
     fn the_hint_spells_the_framing_as_cnc_framing_reads_it() {
         for parity in [Parity::None, Parity::Even, Parity::Odd] {
             for stop_bits in [StopBits::One, StopBits::Two] {
-                let framing = PortConfig {
-                    baud: 19_200,
-                    parity,
-                    stop_bits,
-                };
+                let framing = PortConfig::new(19_200, parity, stop_bits);
                 assert_eq!(
                     super::super::sim::cnc_framing(&framing_arg(framing)),
                     Ok(framing)

@@ -44,11 +44,7 @@ pub(super) fn framing(text: &str, baud: u32) -> Option<PortConfig> {
         b'2' => StopBits::Two,
         _ => return None,
     };
-    Some(PortConfig {
-        baud,
-        parity,
-        stop_bits,
-    })
+    Some(PortConfig::new(baud, parity, stop_bits))
 }
 
 /// Listens until a port goes away or the process is stopped.
@@ -102,11 +98,7 @@ mod tests {
         assert_eq!(framing("8N1", 19_200), Some(PortConfig::HPR));
         assert_eq!(
             framing("8O2", 9600),
-            Some(PortConfig {
-                baud: 9600,
-                parity: Parity::Odd,
-                stop_bits: StopBits::Two
-            })
+            Some(PortConfig::new(9600, Parity::Odd, StopBits::Two))
         );
         assert_eq!(framing("7E1", 19_200), None);
         assert_eq!(framing("8E", 19_200), None);

@@ -335,11 +335,7 @@ mod tests {
     #[test]
     fn a_mismatch_says_both_framings_and_what_to_do() {
         let cnc = PortConfig::MODBUS_DEFAULT;
-        let board = PortConfig {
-            baud: 9600,
-            parity: Parity::None,
-            stop_bits: StopBits::One,
-        };
+        let board = PortConfig::new(9600, Parity::None, StopBits::One);
         let text = mismatch_note(false, Some(board), cnc);
         assert!(text.contains(&describe(board)), "{text}");
         assert!(text.contains(&describe(cnc)), "{text}");

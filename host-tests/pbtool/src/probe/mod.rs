@@ -33,11 +33,7 @@ pub const DEFAULT_NODE: u8 = 1;
 /// The framings detection tries, in order (the bridge's link tries the same).
 pub const FRAMINGS: [PortConfig; 6] = {
     const fn at(parity: Parity, stop_bits: StopBits) -> PortConfig {
-        PortConfig {
-            baud: 19_200,
-            parity,
-            stop_bits,
-        }
+        PortConfig::new(19_200, parity, stop_bits)
     }
     [
         at(Parity::Even, StopBits::One),
