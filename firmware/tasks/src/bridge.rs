@@ -13,7 +13,7 @@ use crate::Board;
 use crate::clock::EmbassyClock;
 use crate::history::BoardHistory;
 use crate::io::BoardIo;
-use crate::log_text::{FaultName, TurnFailure, UnitName, framing};
+use crate::log_text::{FaultName, Framing, TurnFailure, UnitName};
 use crate::progress::report;
 use crate::settings::BoardSaver;
 
@@ -44,7 +44,7 @@ pub async fn run<B: Board>(
         if now_applied != applied {
             applied = now_applied;
             if let Some(config) = now_applied {
-                debug!("PS UART: {} baud {=str}", config.baud, framing(config));
+                debug!("PS UART: {} baud {}", config.baud, Framing(config));
             }
         }
         if let Some(now_framing) = supervisor.cnc_framing()
@@ -54,9 +54,9 @@ pub async fn run<B: Board>(
             // A refused framing was logged as the turn's error; the UART kept its old one.
             if !matches!(turn, Err(TurnError::CncUnsupported(_))) {
                 info!(
-                    "CNC UART: {} baud {=str}",
+                    "CNC UART: {} baud {}",
                     cnc_framing.baud,
-                    framing(cnc_framing)
+                    Framing(cnc_framing)
                 );
             }
         }

@@ -11,7 +11,7 @@ use plasma_firmware::link::{ActiveFault, Model};
 use plasma_firmware::platform::runner::PortError;
 use plasma_firmware::platform::supervisor::TurnError;
 use plasma_protocol::hpr::SystemId;
-use plasma_protocol::serial::{Parity, PortConfig, StopBits};
+use plasma_protocol::serial::PortConfig;
 
 /// The unit that answered: the model's name (`Powermax65/85/105 SYNC`, `HPR260XD`,
 /// `MaxPro200`, `Powermax` when it did not say which).
@@ -75,31 +75,40 @@ impl<P: Format, C: Format> Format for TurnFailure<'_, P, C> {
             TurnError::Ps(PortError::Closed) => write!(f, "power-supply port closed"),
             TurnError::Ps(PortError::Unsupported(config)) => write!(
                 f,
-                "power-supply port cannot run {=u32} baud {=str}",
+                "power-supply port cannot run {=u32} baud {}",
                 config.baud,
-                framing(*config)
+                Framing(*config)
             ),
             TurnError::CncRead(e) => write!(f, "CNC port: read failed: {}", e),
             TurnError::CncWrite(e) => write!(f, "CNC port: write failed, output lost: {}", e),
             TurnError::CncClosed => write!(f, "CNC port closed"),
             TurnError::CncUnsupported(config) => write!(
                 f,
-                "CNC port cannot run {=u32} baud {=str}",
+                "CNC port cannot run {=u32} baud {}",
                 config.baud,
-                framing(*config)
+                Framing(*config)
             ),
         }
     }
 }
 
-/// A line setting's short form (`8E1`).
-pub fn framing(config: PortConfig) -> &'static str {
-    match (config.parity, config.stop_bits) {
-        (Parity::None, StopBits::One) => "8N1",
-        (Parity::Even, StopBits::One) => "8E1",
-        (Parity::Odd, StopBits::One) => "8O1",
-        (Parity::None, StopBits::Two) => "8N2",
-        (Parity::Even, StopBits::Two) => "8E2",
-        (Parity::Odd, StopBits::Two) => "8O2",
+/// A line setting's short form (`8E1`, `7N2`), as `PortConfig::framing` writes it.
+pub struct Framing(pub PortConfig);
+
+impl Format for Framing {
+    fn format(&self, f: Formatter<'_>) {
+        let PortConfig {
+            data_bits,
+            parity,
+            stop_bits,
+            ..
+        } = self.0;
+        write!(
+            f,
+            "{=u8}{=char}{=u8}",
+            data_bits.number(),
+            parity.letter(),
+            stop_bits.number()
+        )
     }
 }

@@ -34,7 +34,7 @@ use embassy_sync::waitqueue::AtomicWaker;
 use embedded_io_async::{ErrorKind, ErrorType, Read, ReadReady, Write};
 use heapless::Deque;
 use plasma_firmware::platform::runner::{ConfigurablePort, UnsupportedConfig};
-use plasma_protocol::serial::{Parity, PortConfig, StopBits};
+use plasma_protocol::serial::{DataBits, Parity, PortConfig, StopBits};
 use stm32_metapac::usart::Usart;
 use stm32_metapac::usart::vals::{M0, M1, Ps, Stop};
 
@@ -221,14 +221,10 @@ impl Uart {
                 StopBits::Two => Stop::STOP2,
             })
         });
+        let (m1, m0) = word_length(config);
         regs.cr1().modify(|w| {
-            // 8 data bits; with parity the word is 9 bits (M0) and the 9th is the parity bit.
-            w.set_m1(M1::M0);
-            w.set_m0(if config.parity == Parity::None {
-                M0::BIT8
-            } else {
-                M0::BIT9
-            });
+            w.set_m1(m1);
+            w.set_m0(m0);
             w.set_pce(config.parity != Parity::None);
             w.set_ps(if config.parity == Parity::Odd {
                 Ps::ODD
@@ -244,6 +240,31 @@ impl Uart {
             w.set_ue(true);
         });
         Some(())
+    }
+}
+
+/// M1:M0, the word length (RM0351, USART_CR1): it counts the parity bit, which takes the
+/// word's top bit. 8 data bits: an 8-bit word (M=00) without parity, 9 bits (M=01) with; 7
+/// data bits: a 7-bit word (M=10) without parity, 8 bits (M=00) with (embassy-stm32 0.6.0's
+/// `DataBits7`/`DataBits8` map the same). Every framing the settings take has a word length.
+fn word_length(config: PortConfig) -> (M1, M0) {
+    match (config.data_bits, config.parity != Parity::None) {
+        (DataBits::Eight, false) | (DataBits::Seven, true) => (M1::M0, M0::BIT8),
+        (DataBits::Eight, true) => (M1::M0, M0::BIT9),
+        (DataBits::Seven, false) => (M1::BIT7, M0::BIT8),
+    }
+}
+
+/// The data bits of a character RDR holds: with parity its top bit is the parity bit (RM0351,
+/// "the value read in the MSB bit is the received parity bit"), so a 7E1 character reads 0x7F
+/// at most only when masked; an 8-bit read of a 9-bit word drops the parity bit by itself.
+fn data_mask(cr1: stm32_metapac::usart::regs::Cr1) -> u8 {
+    let seven_bit_word = cr1.m1() == M1::BIT7;
+    let eight_bit_word_with_parity = cr1.m1() == M1::M0 && cr1.m0() == M0::BIT8 && cr1.pce();
+    if seven_bit_word || eight_bit_word_with_parity {
+        0x7F
+    } else {
+        0xFF
     }
 }
 
@@ -274,9 +295,10 @@ pub fn on_interrupt(regs: Usart, state: &UartState) -> bool {
         state.overrun.store(true, Ordering::Release);
         state.rx_waker.wake();
     }
+    let cr1 = regs.cr1().read();
     if isr.rxne() {
         // Reading RDR clears RXNE.
-        let byte = regs.rdr().read().dr() as u8;
+        let byte = regs.rdr().read().dr() as u8 & data_mask(cr1);
         let full = critical_section::with(|cs| {
             state
                 .rx
@@ -300,7 +322,6 @@ pub fn on_interrupt(regs: Usart, state: &UartState) -> bool {
         });
         state.rx_waker.wake();
     }
-    let cr1 = regs.cr1().read();
     if cr1.txeie() && isr.txe() {
         let next = critical_section::with(|cs| state.tx.borrow(cs).borrow_mut().pop_front());
         match next {
