@@ -13,7 +13,7 @@ use common::emu::{
 };
 use host_tests::emu::{Board, BoardOptions};
 use plasma_firmware::io::{Input, Interlock, IoEvent, Output};
-use plasma_protocol::serial::{Parity, PortConfig, StopBits};
+use plasma_protocol::serial::{DataBits, Parity, PortConfig, StopBits};
 use plasma_sim::Model;
 use plasma_sim::powermax::Powermax;
 
@@ -350,6 +350,19 @@ fn the_cnc_framing_follows_config_at_once_and_the_port_answers_modbus_after() {
     );
     framing.stop_bits = StopBits::Two;
     expect_cnc_framing(&board, framing);
+    // A Phoenix messaging port's 7 data bits (Phoenix manual, 003_610fea73110d789e.txt line
+    // 7043): with parity the USART's word is 8 bits, the parity bit its top one; the port
+    // still answers (QEMU carries bytes, the firmware keeps the 7 data bits of each).
+    assert_eq!(
+        command(&mut board, "CONFIG cnc_data_bits 7"),
+        "OK cnc_data_bits=7"
+    );
+    framing.data_bits = DataBits::Seven;
+    expect_cnc_framing(&board, framing);
+    logged(&board, mark, "CNC UART at 7E2", |l| {
+        l == "CNC UART: 19200 baud 7E2"
+    });
+    assert_eq!(command(&mut board, ":01042099000141"), ":0104020500F4");
     board.assert_safe();
 }
 

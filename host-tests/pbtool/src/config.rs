@@ -1,7 +1,7 @@
 //! `pbtool config`: sets the framing of the bridge's CNC port from a PC on that port, both ends
 //! in step.
 //!
-//! A change of `cnc_baud`, `cnc_parity` or `cnc_stop_bits` applies on the board right after
+//! A change of `cnc_baud`, `cnc_data_bits`, `cnc_parity` or `cnc_stop_bits` applies on the board right after
 //! its reply, so the PC must follow each one before it sends the next: done by hand in a
 //! terminal program, one missed step leaves the two ends at different framings. Here:
 //!
@@ -10,14 +10,14 @@
 //!    also finds a framing saved and forgotten.
 //! 2. Read the board's own CNC settings (`CONFIG`): on a pty every framing "works", and the
 //!    board's word is what counts.
-//! 3. Change baud, parity, stop bits one at a time ([`steps`]), the PC following each reply.
+//! 3. Change baud, data bits, parity, stop bits one at a time ([`steps`]), the PC following each reply.
 //! 4. `ID` again at the new framing; `CONFIG SAVE` when asked to.
 
 use std::fmt;
 use std::time::{Duration, Instant};
 
 use plasma_firmware::settings::CNC_BAUDS;
-use plasma_protocol::serial::{Parity, PortConfig, StopBits};
+use plasma_protocol::serial::{DataBits, Parity, PortConfig, StopBits};
 
 use crate::serial::{CNC_PORT, Port, Rx, SerialError, describe};
 
@@ -74,13 +74,15 @@ impl From<SerialError> for ConfigError {
 }
 
 /// Every framing the board's CNC port can run, `first` first, then the default, then the
-/// others (slow to fast, parity before none).
+/// others (8 data bits before 7, slow to fast, parity before none).
 pub fn candidates(first: PortConfig) -> Vec<PortConfig> {
     let mut all = vec![first, CNC_PORT];
-    for baud in CNC_BAUDS {
-        for parity in [Parity::Even, Parity::None, Parity::Odd] {
-            for stop_bits in [StopBits::One, StopBits::Two] {
-                all.push(PortConfig::new(baud, parity, stop_bits));
+    for data_bits in [DataBits::Eight, DataBits::Seven] {
+        for baud in CNC_BAUDS {
+            for parity in [Parity::Even, Parity::None, Parity::Odd] {
+                for stop_bits in [StopBits::One, StopBits::Two] {
+                    all.push(PortConfig::new(baud, parity, stop_bits).with_data_bits(data_bits));
+                }
             }
         }
     }
@@ -94,13 +96,18 @@ pub fn candidates(first: PortConfig) -> Vec<PortConfig> {
 }
 
 /// The `CONFIG` commands that take the CNC port from `from` to `to`, one setting each (baud,
-/// then parity, then stop bits), each with the framing both ends run after its reply.
+/// then data bits, parity, stop bits), each with the framing both ends run after its reply.
 pub fn steps(from: PortConfig, to: PortConfig) -> Vec<(String, PortConfig)> {
     let mut now = from;
     let mut steps = Vec::new();
     if now.baud != to.baud {
         now.baud = to.baud;
         steps.push((format!("CONFIG cnc_baud {}", to.baud), now));
+    }
+    if now.data_bits != to.data_bits {
+        now.data_bits = to.data_bits;
+        let bits = to.data_bits.number();
+        steps.push((format!("CONFIG cnc_data_bits {bits}"), now));
     }
     if now.parity != to.parity {
         now.parity = to.parity;
@@ -122,7 +129,8 @@ pub fn steps(from: PortConfig, to: PortConfig) -> Vec<(String, PortConfig)> {
     steps
 }
 
-/// The CNC framing in a `CONFIG` reply (`... cnc_baud=19200 cnc_parity=EVEN cnc_stop_bits=1`).
+/// The CNC framing in a `CONFIG` reply (`... cnc_baud=19200 cnc_parity=EVEN cnc_stop_bits=1
+/// cnc_data_bits=8`; 8 data bits from firmware that has no `cnc_data_bits`).
 pub fn framing_in(config_reply: &str) -> Option<PortConfig> {
     let value = |key: &str| {
         config_reply
@@ -141,7 +149,12 @@ pub fn framing_in(config_reply: &str) -> Option<PortConfig> {
         "2" => StopBits::Two,
         _ => return None,
     };
-    Some(PortConfig::new(baud, parity, stop_bits))
+    let data_bits = match value("cnc_data_bits") {
+        None | Some("8") => DataBits::Eight,
+        Some("7") => DataBits::Seven,
+        Some(_) => return None,
+    };
+    Some(PortConfig::new(baud, parity, stop_bits).with_data_bits(data_bits))
 }
 
 /// What [`set_cnc_framing`] did.
@@ -300,7 +313,8 @@ mod tests {
     fn the_framing_asked_for_is_tried_first_then_the_default_then_every_other_once() {
         let all = candidates(PMX485);
         assert_eq!(all[..2], [PMX485, CNC_PORT]);
-        assert_eq!(all.len(), CNC_BAUDS.len() * 3 * 2);
+        assert_eq!(all.len(), 2 * CNC_BAUDS.len() * 3 * 2);
+        assert!(all.iter().any(|f| f.data_bits == DataBits::Seven));
         assert!(all.iter().enumerate().all(|(i, f)| !all[..i].contains(f)));
     }
 
@@ -342,5 +356,29 @@ mod tests {
             framing_in("OK cnc_baud=9600 cnc_parity=ODD cnc_stop_bits=2"),
             Some(PortConfig::new(9_600, Parity::Odd, StopBits::Two))
         );
+        assert_eq!(
+            framing_in("OK cnc_baud=4800 cnc_parity=EVEN cnc_stop_bits=1 cnc_data_bits=7"),
+            PortConfig::from_framing(4800, "7E1")
+        );
+        assert_eq!(
+            framing_in("OK cnc_baud=4800 cnc_parity=EVEN cnc_stop_bits=1 cnc_data_bits=9"),
+            None
+        );
+    }
+
+    #[test]
+    fn seven_data_bits_are_a_step_of_their_own() {
+        let phoenix = PortConfig::from_framing(4800, "7E1").unwrap();
+        let steps = steps(CNC_PORT, phoenix);
+        let commands: Vec<&str> = steps.iter().map(|(c, _)| c.as_str()).collect();
+        assert_eq!(
+            commands,
+            [
+                "CONFIG cnc_baud 4800",
+                "CONFIG cnc_data_bits 7",
+                "CONFIG cnc_parity EVEN"
+            ]
+        );
+        assert_eq!(steps[2].1, phoenix);
     }
 }

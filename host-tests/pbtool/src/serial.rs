@@ -4,7 +4,8 @@
 //! - [`Port::open`] says clearly why a port cannot be used: missing, in use, not permitted.
 //! - The framing is a [`PortConfig`] and may change while the port is open (the bridge's
 //!   detection tries 8E1, 8O1, 8N1 and two stop bits). What the port reads back is never
-//!   checked: a pty keeps no parity (the kernel drops PARENB), and that is no error.
+//!   checked: a pty keeps no parity and no character size (the kernel sets CS8 and drops
+//!   PARENB), and that is no error.
 //! - [`Port::read`] blocks up to a time-out, so a loop waiting for characters sleeps in the
 //!   kernel instead of spinning. A character the UART flagged with a parity or framing error
 //!   comes as [`Rx::Error`] (on Unix the port marks them, PARMRK); the caller counts it as
@@ -16,9 +17,10 @@ use std::fmt;
 use std::io::{self, Read, Write};
 use std::time::Duration;
 
-use plasma_protocol::serial::{Parity, PortConfig, StopBits};
+use plasma_protocol::serial::{DataBits, Parity, PortConfig, StopBits};
 
-/// The bridge's CNC port until `CONFIG cnc_baud/cnc_parity/cnc_stop_bits` change it: the
+/// The bridge's CNC port until `CONFIG cnc_baud/cnc_parity/cnc_stop_bits/cnc_data_bits`
+/// change it: the
 /// settings' default (115200 8N1, as the board's ST-LINK virtual COM port).
 pub const CNC_PORT: PortConfig = plasma_firmware::settings::CncPort::DEFAULT.framing;
 
@@ -126,7 +128,7 @@ impl Port {
     /// Opens `name` (exclusively where the OS allows) with `config`.
     pub fn open(name: &str, config: PortConfig) -> Result<Port, SerialError> {
         let builder = serialport::new(name, config.baud)
-            .data_bits(serialport::DataBits::Eight)
+            .data_bits(data_bits(config.data_bits))
             .parity(parity(config.parity))
             .stop_bits(stop_bits(config.stop_bits))
             .flow_control(serialport::FlowControl::None)
@@ -178,6 +180,9 @@ impl Port {
             _ => SerialError::Other(name.clone(), e.to_string()),
         };
         self.native.set_baud_rate(config.baud).map_err(fail)?;
+        self.native
+            .set_data_bits(data_bits(config.data_bits))
+            .map_err(fail)?;
         self.native
             .set_parity(parity(config.parity))
             .map_err(fail)?;
@@ -293,6 +298,13 @@ impl MarkDecoder {
     }
 }
 
+fn data_bits(data_bits: DataBits) -> serialport::DataBits {
+    match data_bits {
+        DataBits::Seven => serialport::DataBits::Seven,
+        DataBits::Eight => serialport::DataBits::Eight,
+    }
+}
+
 fn parity(parity: Parity) -> serialport::Parity {
     match parity {
         Parity::None => serialport::Parity::None,
@@ -344,16 +356,7 @@ fn is_not_a_terminal(_name: &str) -> bool {
 
 /// Text for a `PortConfig`: `19200 8E1`.
 pub fn describe(config: PortConfig) -> String {
-    let parity = match config.parity {
-        Parity::None => 'N',
-        Parity::Even => 'E',
-        Parity::Odd => 'O',
-    };
-    let stop = match config.stop_bits {
-        StopBits::One => 1,
-        StopBits::Two => 2,
-    };
-    format!("{} 8{parity}{stop}", config.baud)
+    config.to_string()
 }
 
 #[cfg(test)]
@@ -401,6 +404,10 @@ mod tests {
                 stop_bits: StopBits::Two,
                 ..PortConfig::MODBUS_DEFAULT
             },
+            // A Phoenix messaging port's 7 data bits: the pty takes the setting (and keeps
+            // CS8: it carries bytes, not bits).
+            PortConfig::new(4800, Parity::Even, StopBits::One).with_data_bits(DataBits::Seven),
+            PortConfig::new(1200, Parity::None, StopBits::Two).with_data_bits(DataBits::Seven),
         ] {
             port.set_config(config).expect("framing set");
         }
@@ -414,7 +421,7 @@ mod tests {
         let mut back = [0u8; 5];
         master.read_exact(&mut back).unwrap();
         assert_eq!(&back, b":01\r\n");
-        assert_eq!(describe(port.config()), "19200 8O2");
+        assert_eq!(describe(port.config()), "1200 7N2");
     }
 
     #[cfg(unix)]

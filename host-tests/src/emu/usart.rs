@@ -4,7 +4,7 @@
 //! QEMU's socket carries bytes, not bits: the framing the firmware set is read from the
 //! registers, so the harness can model a mismatch between the board and the other end.
 
-use plasma_protocol::serial::{Parity, PortConfig, StopBits};
+use plasma_protocol::serial::{DataBits, Parity, PortConfig, StopBits};
 
 use super::error::Result;
 use super::qtest::Qtest;
@@ -44,7 +44,7 @@ impl Usart {
     }
 
     /// The framing the firmware set, read now (see [`port_from_registers`]); `Ok(None)` while
-    /// the USART is off or not at 8 data bits.
+    /// the USART is off or at a word length the bridge never sets.
     pub fn framing(
         self,
         qtest: &Qtest,
@@ -61,7 +61,7 @@ impl Usart {
 }
 
 /// The port settings a USART's registers describe: `None` while the USART is disabled or set
-/// to anything but 8 data bits. A baud rate within 2 % of `nominal_baud` (the unit's; BRR
+/// to anything but 7 or 8 data bits. A baud rate within 2 % of `nominal_baud` (the unit's; BRR
 /// rounds, and a UART tolerates that much) is taken as `nominal_baud`; without the clock the
 /// baud rate is taken as `nominal_baud`.
 pub fn port_from_registers(
@@ -80,7 +80,8 @@ pub fn port_from_registers(
     if cr1 & UE == 0 {
         return None;
     }
-    // Word length counts the parity bit: 8 data bits are M=00 without parity, M=01 with.
+    // Word length counts the parity bit: 8 data bits are M=00 without parity, M=01 with; 7
+    // data bits M=10 without, M=00 with.
     let word_bits = match (cr1 & M1 != 0, cr1 & M0 != 0) {
         (false, false) => 8,
         (false, true) => 9,
@@ -92,10 +93,11 @@ pub fn port_from_registers(
         (true, false) => Parity::Even,
         (true, true) => Parity::Odd,
     };
-    let data_bits = word_bits - u32::from(parity != Parity::None);
-    if data_bits != 8 {
-        return None;
-    }
+    let data_bits = match word_bits - u32::from(parity != Parity::None) {
+        7 => DataBits::Seven,
+        8 => DataBits::Eight,
+        _ => return None,
+    };
     let stop_bits = match (cr2 >> 12) & 0b11 {
         0b00 => StopBits::One,
         0b10 => StopBits::Two,
@@ -120,7 +122,7 @@ pub fn port_from_registers(
         }
         _ => nominal_baud,
     };
-    Some(PortConfig::new(baud, parity, stop_bits))
+    Some(PortConfig::new(baud, parity, stop_bits).with_data_bits(data_bits))
 }
 
 #[cfg(test)]
@@ -146,9 +148,21 @@ mod tests {
         // Against a 9600-baud unit it is a mismatch.
         let fast = port_from_registers(UE, 0, 4166, Some(80_000_000), 9600).unwrap();
         assert_eq!(fast.baud, 19_203);
-        // Disabled, or 7 data bits with parity: no 8-bit framing to model.
+        // 7 data bits: an 8-bit word with parity, a 7-bit word (M1) without.
+        const M1: u32 = 1 << 28;
+        let seven = |framing| PortConfig::from_framing(19_200, framing);
+        assert_eq!(
+            port_from_registers(UE | PCE, 0, 0, None, 19_200),
+            seven("7E1")
+        );
+        assert_eq!(
+            port_from_registers(UE | M1, 0b10 << 12, 0, None, 19_200),
+            seven("7N2")
+        );
+        // Disabled; a 7-bit word with parity (6 data bits); M=11 (reserved).
         assert_eq!(port_from_registers(PCE | M0, 0, 0, None, 19_200), None);
-        assert_eq!(port_from_registers(UE | PCE, 0, 0, None, 19_200), None);
+        assert_eq!(port_from_registers(UE | PCE | M1, 0, 0, None, 19_200), None);
+        assert_eq!(port_from_registers(UE | M1 | M0, 0, 0, None, 19_200), None);
     }
 
     #[test]

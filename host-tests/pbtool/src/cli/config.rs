@@ -16,8 +16,8 @@ pub struct ConfigArgs {
     /// its /dev/serial/by-id/ name; COM5).
     #[arg(long, value_name = "DEV")]
     port: String,
-    /// The framing to set, BAUD:8XY: 19200:8E1 for LinuxCNC's pmx485, 115200:8N1 (the
-    /// default) for a terminal.
+    /// The framing to set, BAUD:DPS (data bits, parity, stop bits): 19200:8E1 for LinuxCNC's
+    /// pmx485, 9600:7E1 for a Phoenix CNC set so, 115200:8N1 (the default) for a terminal.
     #[arg(long, value_name = "FRAMING", value_parser = cnc_framing)]
     cnc_framing: PortConfig,
     /// Store it in the board's flash (`CONFIG SAVE`): the board then starts at it. Without

@@ -37,7 +37,7 @@ pub struct EmuArgs {
     /// CNC software talks to the firmware itself.
     #[arg(long, value_name = "DEV", conflicts_with = "measure")]
     pub cnc_port: Option<String>,
-    /// With --cnc-port: the CNC's framing, BAUD:8XY; the board is set to it at start
+    /// With --cnc-port: the CNC's framing, BAUD:DPS (data bits 7|8, parity N|E|O, stop bits 1|2); the board is set to it at start
     /// (`CONFIG cnc_baud`, `cnc_parity`, `cnc_stop_bits`). 19200:8E1 for LinuxCNC's pmx485.
     #[arg(long, value_name = "FRAMING", default_value = "115200:8N1", value_parser = cnc_framing, requires = "cnc_port")]
     pub cnc_framing: PortConfig,

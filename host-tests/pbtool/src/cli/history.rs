@@ -34,7 +34,7 @@ pub struct HistoryArgs {
     /// With `--sim` or `--emu`: the unit starts with this fault (`0-50-0`, HPR error number).
     #[arg(long, value_name = "CODE", conflicts_with = "port")]
     pub fault: Option<String>,
-    /// The CNC port's framing, BAUD:8XY.
+    /// The CNC port's framing, BAUD:DPS (data bits 7|8, parity N|E|O, stop bits 1|2).
     #[arg(long, value_name = "FRAMING", default_value = "115200:8N1", value_parser = cnc_framing)]
     pub cnc_framing: PortConfig,
     /// How many of the newest entries (1..16).

@@ -19,7 +19,7 @@ pub struct MonitorArgs {
     /// A board's CNC port.
     #[arg(long, value_name = "DEV")]
     pub port: Option<String>,
-    /// With --port: the CNC port's framing, BAUD:8XY.
+    /// With --port: the CNC port's framing, BAUD:DPS (data bits 7|8, parity N|E|O, stop bits 1|2).
     #[arg(long, value_name = "FRAMING", default_value = "115200:8N1", value_parser = cnc_framing)]
     pub framing: PortConfig,
     /// The emulated board (`pbtool emu --ps MODEL --events` as a child).

@@ -25,8 +25,8 @@ pub struct SimArgs {
     /// the emulated board when QEMU is there, as `emu --cnc-port`).
     #[arg(long, value_name = "DEV", conflicts_with = "fast")]
     pub cnc_port: Option<String>,
-    /// The CNC port's framing, BAUD:8XY (the bridge's `cnc_baud`, `cnc_parity`,
-    /// `cnc_stop_bits`): 115200:8N1 by default, 19200:8E1 for LinuxCNC's pmx485.
+    /// The CNC port's framing, BAUD:DPS, e.g. 9600:7E1 (the bridge's `cnc_baud`,
+    /// `cnc_data_bits`, `cnc_parity`, `cnc_stop_bits`): 115200:8N1 by default, 19200:8E1 for LinuxCNC's pmx485.
     #[arg(long, value_name = "FRAMING", default_value = "115200:8N1", value_parser = cnc_framing)]
     pub cnc_framing: PortConfig,
     /// Keep the bridge's flash (stored settings and history) in FILE: read at start (a power
@@ -138,13 +138,16 @@ fn on_cnc_port(console: &mut Console, name: &str, model: plasma_sim::Model) -> E
     serial_failure("sim", &e)
 }
 
-/// `--cnc-framing`: `BAUD:8XY` with a baud `cnc_baud` accepts.
+/// `--cnc-framing`: `BAUD:DPS` (data bits 7 or 8, parity, stop bits) with a baud `cnc_baud`
+/// accepts.
 pub(super) fn cnc_framing(text: &str) -> Result<PortConfig, String> {
-    let bad = || format!("{text}: expected BAUD:8XY, e.g. 19200:8E1 (baud one of {CNC_BAUDS:?})");
+    let bad = || {
+        format!("{text}: expected BAUD:DPS, e.g. 19200:8E1 or 9600:7E1 (baud one of {CNC_BAUDS:?})")
+    };
     let (baud, framing) = text.split_once(':').ok_or_else(bad)?;
     let baud: u32 = baud.parse().map_err(|_| bad())?;
     if !CNC_BAUDS.contains(&baud) {
         return Err(bad());
     }
-    super::sniff::framing(framing, baud).ok_or_else(bad)
+    PortConfig::from_framing(baud, framing).ok_or_else(bad)
 }

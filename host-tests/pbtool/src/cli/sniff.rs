@@ -7,7 +7,7 @@ use clap::Args;
 use pbtool::realtime::{Clock, spawn_reader};
 use pbtool::serial::{Port, describe};
 use pbtool::sniff::{Sniffer, Stop};
-use plasma_protocol::serial::{Parity, PortConfig, StopBits};
+use plasma_protocol::serial::{DataBits, PortConfig};
 
 use super::{USAGE, serial_failure};
 
@@ -27,24 +27,9 @@ pub struct SniffArgs {
     json: bool,
 }
 
-/// Parses `8E1` and the like.
+/// Parses `8E1` and the like: a power-supply line runs 8 data bits.
 pub(super) fn framing(text: &str, baud: u32) -> Option<PortConfig> {
-    let bytes = text.to_ascii_uppercase().into_bytes();
-    let [b'8', parity, stop] = bytes.as_slice() else {
-        return None;
-    };
-    let parity = match parity {
-        b'N' => Parity::None,
-        b'E' => Parity::Even,
-        b'O' => Parity::Odd,
-        _ => return None,
-    };
-    let stop_bits = match stop {
-        b'1' => StopBits::One,
-        b'2' => StopBits::Two,
-        _ => return None,
-    };
-    Some(PortConfig::new(baud, parity, stop_bits))
+    PortConfig::from_framing(baud, text).filter(|port| port.data_bits == DataBits::Eight)
 }
 
 /// Listens until a port goes away or the process is stopped.
@@ -91,6 +76,7 @@ pub fn sniff(args: &SniffArgs) -> ExitCode {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use plasma_protocol::serial::{Parity, StopBits};
 
     #[test]
     fn framings_are_read() {

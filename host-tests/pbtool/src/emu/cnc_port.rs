@@ -223,6 +223,7 @@ fn set_cnc_framing(board: &mut Board, framing: PortConfig) -> Result<(), RelayEr
     wanted.cnc.framing = framing;
     for key in [
         ConfigKey::CncBaud,
+        ConfigKey::CncDataBits,
         ConfigKey::CncParity,
         ConfigKey::CncStopBits,
     ] {
