@@ -158,6 +158,90 @@ pub const fn output(output: Output) -> Wiring {
     }
 }
 
+/// How many units' discrete sets the board carries: unit 0's is [`input`] and [`output`];
+/// the Nucleo's free pins allow one more (docs/board.md, "Several units").
+pub const UNIT_SETS: usize = 2;
+
+/// Whether `input` is the board's, read by every unit's I/O, rather than each unit's own: the
+/// CNC's HOLD, PIERCE_COMPLETE and CORNER_CURRENT follow the machine's motion, which the torches
+/// of one gantry share (HOLD is how a CNC makes several torches ignite together). Each unit
+/// still has its own PS_HOLD, PS_PIERCE_COMPLETE and PS_CORNER_CURRENT outputs: each supply
+/// has its own isolated inputs.
+pub const fn is_board_wide(input: Input) -> bool {
+    matches!(
+        input,
+        Input::Hold | Input::PierceComplete | Input::CornerCurrent
+    )
+}
+
+/// One unit's discrete set: the index of a set the board carries (below [`UNIT_SETS`]), so
+/// every pin it names exists. Unit 0 (the first unit, `@1` on the CNC port) is the set of
+/// [`input`] and [`output`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct UnitSet(u8);
+
+impl UnitSet {
+    /// Every set, unit 0 first.
+    pub const ALL: [UnitSet; UNIT_SETS] = [UnitSet(0), UnitSet(1)];
+
+    /// Unit `unit`'s set (0 = the first unit), if the board carries one.
+    pub const fn new(unit: usize) -> Option<UnitSet> {
+        if unit < UNIT_SETS {
+            Some(UnitSet(unit as u8))
+        } else {
+            None
+        }
+    }
+
+    /// The unit's index (0 = the first unit).
+    pub const fn index(self) -> usize {
+        self.0 as usize
+    }
+
+    /// Where this unit's `input` is (a board-wide input's pin is unit 0's).
+    pub const fn input(self, input: Input) -> Wiring {
+        match (self.0, input) {
+            (0, _) => self::input(input),
+            (_, Input::TorchOn) => Wiring::new(Port::C, 2, IN),
+            (_, Input::Motion) => Wiring::new(Port::C, 3, IN),
+            (_, Input::NotReady) => Wiring::new(Port::B, 14, IN),
+            (_, Input::RampdownError) => Wiring::new(Port::B, 15, IN),
+            (_, Input::SystemError) => Wiring::new(Port::C, 4, IN),
+            (_, Input::Hold | Input::PierceComplete | Input::CornerCurrent) => self::input(input),
+        }
+    }
+
+    /// Where this unit's `output` is.
+    pub const fn output(self, output: Output) -> Wiring {
+        match (self.0, output) {
+            (0, _) => self::output(output),
+            (_, Output::Start) => Wiring::new(Port::B, 1, OUT),
+            (_, Output::Hold) => Wiring::new(Port::C, 6, OUT),
+            (_, Output::PierceComplete) => Wiring::new(Port::C, 10, OUT),
+            (_, Output::CornerCurrent) => Wiring::new(Port::B, 2, OUT),
+            (_, Output::ArcOk) => Wiring::new(Port::B, 5, OUT),
+            (_, Output::Ready) => Wiring::new(Port::B, 7, OUT),
+            (_, Output::Fault) => Wiring::new(Port::B, 11, OUT),
+            (_, Output::RemotePower) => Wiring::new(Port::B, 12, OUT),
+        }
+    }
+
+    /// Whether this unit's `input` has an EXTI line of its own, whose edges wake the I/O task
+    /// (which reads every level at each wake, and at least every 50 ms). A board-wide input
+    /// has its line in unit 0's set. Unit 1's SYSTEM_ERROR has none: the sixteen lines are
+    /// taken (one port per line: unit 0's eight inputs, unit 1's four, the four test hooks),
+    /// and it is the input whose timing matters least (it only holds FAULT on; the
+    /// supply's error code comes over the serial link).
+    pub const fn wakes_on_edge(self, input: Input) -> bool {
+        match (self.0, input) {
+            (0, _) => true,
+            (_, Input::SystemError) => false,
+            (_, input) => !is_board_wide(input),
+        }
+    }
+}
+
 /// The green heartbeat LED (LD2 on the Nucleo, LD1 on the B-L475E-IOT01A: PA5 on both).
 pub const HEARTBEAT_LED: Wiring = Wiring::new(Port::A, 5, Polarity::ActiveHigh);
 
@@ -251,20 +335,23 @@ pub const INPUTS: [Wiring; 8] = {
     all
 };
 
-/// The pin level of every output in safe state ([`SAFE_OUTPUTS`]), in [`Output::ALL`] order
-/// (START first).
+/// How many output pins the board drives: every unit's eight.
+pub const OUTPUT_PINS: usize = Output::ALL.len() * UNIT_SETS;
+
+/// The pin level of every unit's every output in safe state ([`SAFE_OUTPUTS`]): every unit's
+/// START first (the one that matters most, driven before any other), then each other output
+/// in [`Output::ALL`] order, unit 0's before unit 1's.
 #[allow(
     clippy::indexing_slicing,
     reason = "evaluated at compile time: an index out of range fails the build"
 )]
-pub const SAFE_STATE: [(Pin, bool); 8] = {
-    let mut all = [(OUTPUTS[0].pin, false); 8];
+pub const SAFE_STATE: [(Pin, bool); OUTPUT_PINS] = {
+    let mut all = [(OUTPUTS[0].pin, false); OUTPUT_PINS];
     let mut i = 0;
     while i < all.len() {
-        all[i] = (
-            OUTPUTS[i].pin,
-            OUTPUTS[i].level(SAFE_OUTPUTS.is_on(Output::ALL[i])),
-        );
+        let (output, set) = (Output::ALL[i / UNIT_SETS], UnitSet::ALL[i % UNIT_SETS]);
+        let wiring = set.output(output);
+        all[i] = (wiring.pin, wiring.level(SAFE_OUTPUTS.is_on(output)));
         i += 1;
     }
     all
@@ -278,11 +365,150 @@ pub const SAFE_STATE: [(Pin, bool); 8] = {
 pub const OUTPUT_PORTS: u32 = {
     let mut ports = 0;
     let mut i = 0;
-    while i < OUTPUTS.len() {
-        ports |= 1 << OUTPUTS[i].pin.port.index();
+    while i < SAFE_STATE.len() {
+        ports |= 1 << SAFE_STATE[i].0.port.index();
         i += 1;
     }
     ports
+};
+
+/// Every input pin with an EXTI line of its own ([`UnitSet::wakes_on_edge`]): every unit's,
+/// unit 0's first, in [`Input::ALL`] order. The boards arm these lines and no others.
+#[allow(
+    clippy::indexing_slicing,
+    reason = "evaluated at compile time: an index out of range fails the build"
+)]
+pub const EDGE_INPUTS: [Pin; EDGE_INPUT_COUNT] = {
+    let mut all = [INPUTS[0].pin; EDGE_INPUT_COUNT];
+    let (mut i, mut n) = (0, 0);
+    while i < Input::ALL.len() * UNIT_SETS {
+        let (set, input) = (
+            UnitSet::ALL[i / Input::ALL.len()],
+            Input::ALL[i % Input::ALL.len()],
+        );
+        if set.wakes_on_edge(input) {
+            all[n] = set.input(input).pin;
+            n += 1;
+        }
+        i += 1;
+    }
+    all
+};
+
+/// How many inputs have an EXTI line of their own.
+#[allow(
+    clippy::indexing_slicing,
+    reason = "evaluated at compile time: an index out of range fails the build"
+)]
+pub const EDGE_INPUT_COUNT: usize = {
+    let (mut i, mut n) = (0, 0);
+    while i < Input::ALL.len() * UNIT_SETS {
+        let (set, input) = (
+            UnitSet::ALL[i / Input::ALL.len()],
+            Input::ALL[i % Input::ALL.len()],
+        );
+        if set.wakes_on_edge(input) {
+            n += 1;
+        }
+        i += 1;
+    }
+    n
+};
+
+/// How many pins the table places: every unit's outputs, every input pin (a board-wide input
+/// once), the LED, the test hooks and both UARTs' pins.
+const PLACED_PINS: usize = OUTPUT_PINS + 8 + 5 * (UNIT_SETS - 1) + 1 + TEST_HOOKS.len() + 5;
+
+/// Every pin the table places, each once if the table is right.
+#[allow(
+    clippy::indexing_slicing,
+    reason = "evaluated at compile time: an index out of range fails the build"
+)]
+const PLACED: [Pin; PLACED_PINS] = {
+    let mut all = [HEARTBEAT_LED.pin; PLACED_PINS];
+    let mut n = 1;
+    let mut i = 0;
+    while i < SAFE_STATE.len() {
+        all[n] = SAFE_STATE[i].0;
+        (i, n) = (i + 1, n + 1);
+    }
+    let mut i = 0;
+    while i < Input::ALL.len() * UNIT_SETS {
+        let (set, input) = (
+            UnitSet::ALL[i / Input::ALL.len()],
+            Input::ALL[i % Input::ALL.len()],
+        );
+        if set.index() == 0 || !is_board_wide(input) {
+            all[n] = set.input(input).pin;
+            n += 1;
+        }
+        i += 1;
+    }
+    let mut i = 0;
+    while i < TEST_HOOKS.len() {
+        all[n] = TEST_HOOKS[i];
+        (i, n) = (i + 1, n + 1);
+    }
+    let uart = [PS_UART.tx, PS_UART.rx, CNC_UART.tx, CNC_UART.rx];
+    let mut i = 0;
+    while i < uart.len() {
+        all[n] = uart[i];
+        (i, n) = (i + 1, n + 1);
+    }
+    if let Some(de) = PS_UART.de {
+        all[n] = de;
+        n += 1;
+    }
+    assert!(n == PLACED_PINS, "PLACED_PINS miscounts the table");
+    all
+};
+
+/// Whether two of `pins` are the same pin (or, with `lines_only`, on the same EXTI line).
+#[allow(
+    clippy::indexing_slicing,
+    reason = "evaluated at compile time: an index out of range fails the build"
+)]
+const fn any_shared(pins: &[Pin], lines_only: bool) -> bool {
+    let mut i = 0;
+    while i < pins.len() {
+        let mut j = i + 1;
+        while j < pins.len() {
+            let same_line = pins[i].number == pins[j].number;
+            if same_line && (lines_only || pins[i].port as u8 == pins[j].port as u8) {
+                return true;
+            }
+            j += 1;
+        }
+        i += 1;
+    }
+    false
+}
+
+// The table at build time: no pin serves two signals (a board-wide input is one signal read
+// by every unit), every pin number exists, and no two edge-waking inputs nor test hooks share
+// an EXTI line (SYSCFG routes one port per line).
+#[allow(
+    clippy::indexing_slicing,
+    reason = "evaluated at compile time: an index out of range fails the build"
+)]
+const _: () = {
+    assert!(!any_shared(&PLACED, false), "two signals share a pin");
+    let mut i = 0;
+    while i < PLACED.len() {
+        assert!(PLACED[i].number < 16, "a pin number past 15");
+        i += 1;
+    }
+    let mut lines = [TEST_HOOKS[0]; EDGE_INPUT_COUNT + TEST_HOOKS.len()];
+    let mut i = 0;
+    while i < lines.len() {
+        lines[i] = if i < EDGE_INPUT_COUNT {
+            EDGE_INPUTS[i]
+        } else {
+            TEST_HOOKS[i - EDGE_INPUT_COUNT]
+        };
+        i += 1;
+    }
+    assert!(!any_shared(&lines, true), "two edges share an EXTI line");
 };
 
 #[cfg(test)]
@@ -290,9 +516,20 @@ mod tests {
     use super::*;
     use crate::io::InputConfig;
 
+    /// Every pin the table places, a board-wide input once.
     fn every_pin() -> Vec<Pin> {
-        let mut pins: Vec<Pin> = Input::ALL.into_iter().map(|i| input(i).pin).collect();
-        pins.extend(Output::ALL.into_iter().map(|o| output(o).pin));
+        let mut pins: Vec<Pin> = UnitSet::ALL
+            .into_iter()
+            .flat_map(|set| {
+                Input::ALL
+                    .into_iter()
+                    .filter(move |&i| set.index() == 0 || !is_board_wide(i))
+                    .map(move |i| set.input(i).pin)
+            })
+            .collect();
+        for set in UnitSet::ALL {
+            pins.extend(Output::ALL.into_iter().map(|o| set.output(o).pin));
+        }
         pins.push(HEARTBEAT_LED.pin);
         pins.extend(TEST_HOOKS);
         pins.extend(PS_UART.pins().chain(CNC_UART.pins()));
@@ -307,34 +544,74 @@ mod tests {
         pins.dedup();
         assert_eq!(pins.len(), count);
         assert!(every_pin().iter().all(|p| p.number < 16));
+        let mut placed = PLACED.to_vec();
+        placed.sort();
+        assert_eq!(placed, pins, "the build-time check sees every pin");
     }
 
     #[test]
     fn no_two_inputs_share_an_exti_line() {
         // PA5 and PB5 share EXTI5: SYSCFG routes one port per line. The test hooks' pins are
         // edge-triggered inputs too.
-        let mut lines: Vec<u8> = Input::ALL
+        let mut lines: Vec<u8> = EDGE_INPUTS
             .into_iter()
-            .map(|i| input(i).pin.number)
-            .chain(TEST_HOOKS.map(|p| p.number))
+            .chain(TEST_HOOKS)
+            .map(|p| p.number)
             .collect();
         lines.sort();
         lines.dedup();
-        assert_eq!(lines.len(), Input::ALL.len() + TEST_HOOKS.len());
+        assert_eq!(lines.len(), EDGE_INPUT_COUNT + TEST_HOOKS.len());
+        // Every unit's TORCH_ON and MOTION wake the I/O task on an edge; only unit 1's
+        // SYSTEM_ERROR and the board-wide inputs' second readings have no line of their own.
+        for set in UnitSet::ALL {
+            for i in [Input::TorchOn, Input::Motion, Input::NotReady] {
+                assert!(EDGE_INPUTS.contains(&set.input(i).pin), "{set:?} {i}");
+            }
+        }
+        assert_eq!(EDGE_INPUT_COUNT, 8 + 4);
     }
 
     #[test]
-    fn the_safe_state_drives_every_output_off() {
-        for (o, (pin, level)) in Output::ALL.into_iter().zip(SAFE_STATE) {
-            assert_eq!(pin, output(o).pin, "{o}");
-            assert!(!output(o).is_on(level), "{o} on in safe state");
-            assert!(
-                OUTPUT_PORTS & 1 << pin.port.index() != 0,
-                "{o}'s port not clocked"
-            );
+    fn unit_0s_set_is_the_one_unit_table_and_unit_1_has_its_own_signals() {
+        let [first, second] = UnitSet::ALL;
+        for i in Input::ALL {
+            assert_eq!(first.input(i), input(i), "{i}");
+            assert_eq!(second.input(i) == input(i), is_board_wide(i), "{i}");
         }
-        // START first: the one that matters most, driven before any other.
-        assert_eq!(SAFE_STATE[0], (output(Output::Start).pin, false));
+        for o in Output::ALL {
+            assert_eq!(first.output(o), output(o), "{o}");
+            assert_ne!(second.output(o).pin, output(o).pin, "{o}");
+            assert_eq!(second.output(o).active, output(o).active, "{o}");
+        }
+        assert_eq!(UnitSet::new(1), Some(second));
+        assert_eq!(UnitSet::new(UNIT_SETS), None);
+        assert_eq!(second.index(), 1);
+        assert_eq!(second.output(Output::Start).pin.to_string(), "PB1");
+        assert_eq!(second.input(Input::TorchOn).pin.to_string(), "PC2");
+    }
+
+    #[test]
+    fn the_safe_state_drives_every_units_every_output_off() {
+        let mut driven = Vec::new();
+        for set in UnitSet::ALL {
+            for o in Output::ALL {
+                let wiring = set.output(o);
+                let (_, level) = SAFE_STATE
+                    .into_iter()
+                    .find(|&(pin, _)| pin == wiring.pin)
+                    .unwrap_or_else(|| panic!("{set:?} {o} not in the safe state"));
+                assert!(!wiring.is_on(level), "{set:?} {o} on in safe state");
+                assert!(
+                    OUTPUT_PORTS & 1 << wiring.pin.port.index() != 0,
+                    "{o}'s port not clocked"
+                );
+                driven.push(wiring.pin);
+            }
+        }
+        assert_eq!(driven.len(), SAFE_STATE.len());
+        // Every unit's START first: the one that matters most, driven before any other.
+        let starts = UnitSet::ALL.map(|set| (set.output(Output::Start).pin, false));
+        assert_eq!(SAFE_STATE[..UNIT_SETS], starts);
     }
 
     #[test]
