@@ -4,7 +4,8 @@
 //! The board runs one [`Supervisor::turn`] after another in a task; host tests run it with
 //! fake ports and a virtual clock. One turn:
 //!
-//! 1. takes the I/O task's latest levels and events and passes them to the bridge;
+//! 1. takes the I/O task's latest levels (each unit's set's) and events and passes them to
+//!    the bridge, each for its unit;
 //! 2. passes every byte already waiting in either port to the bridge (so a reply that came in
 //!    time is not taken for a time-out when the bridge is polled);
 //! 3. transmits the bridge's power-supply frames ([`PsPort`]; asking for them polls it),
@@ -13,7 +14,8 @@
 //!    CNC framing changed (`CONFIG cnc_baud|cnc_parity|cnc_stop_bits`), waits until that
 //!    output has left (the reply to the CONFIG goes out at the old framing) and switches the
 //!    CNC port;
-//! 4. hands the supply state and the I/O settings to the I/O task when they changed, a save
+//! 4. hands the number of units, each unit's supply state and the I/O settings to the I/O task
+//!    when they changed, a save
 //!    request to the settings saver, and the history's drafts (as many as it has room for)
 //!    and a `HISTORY` request to the [`HistoryKeeper`];
 //! 5. waits for the first of: bytes on either port, an I/O event, the end of a save, the
@@ -33,6 +35,7 @@ use embedded_io_async::Read;
 
 use crate::bridge::{Bridge, SaveRequest};
 use crate::io::{Inputs, IoConfig, IoEvent, Outputs, SupplyState};
+use crate::platform::pins::{UNIT_SETS, UnitSet};
 use crate::platform::runner::{
     Clock, ConfigurablePort, MAX_WAIT, PS_RX_CHUNK, PortError, PsEndpoint, PsPort,
     UnsupportedConfig,
@@ -57,14 +60,16 @@ pub trait BridgeEndpoint: PsEndpoint {
     fn cnc_port_config(&self) -> PortConfig;
     /// Let time pass (asking for a frame, [`PsEndpoint::poll_ps_transmit`], does too).
     fn poll(&mut self, now: Instant);
-    /// What the I/O task must know about the supply.
-    fn supply_state(&self) -> SupplyState;
+    /// How many units it drives (the I/O task keeps the sets of the others inert).
+    fn unit_count(&self) -> usize;
+    /// What unit `unit`'s I/O must know about its supply (0 = the first unit).
+    fn supply_state_of(&self, unit: usize) -> SupplyState;
     /// The I/O settings (they change with CONFIG commands).
     fn io_config(&self) -> IoConfig;
-    /// The I/O task's latest levels.
-    fn set_io_snapshot(&mut self, inputs: Inputs, outputs: Outputs);
-    /// An event from the I/O task.
-    fn on_io_event(&mut self, now: Instant, event: IoEvent);
+    /// Unit `unit`'s latest levels in the I/O task.
+    fn set_io_snapshot_of(&mut self, unit: usize, inputs: Inputs, outputs: Outputs);
+    /// An event of unit `unit`'s I/O.
+    fn on_io_event_of(&mut self, unit: usize, now: Instant, event: IoEvent);
     /// Settings to store, after a CONFIG SAVE.
     fn take_save_request(&mut self) -> Option<Self::Saved>;
     /// How the store went.
@@ -95,17 +100,20 @@ impl BridgeEndpoint for Bridge {
     fn poll(&mut self, now: Instant) {
         Bridge::poll(self, now);
     }
-    fn supply_state(&self) -> SupplyState {
-        Bridge::supply_state(self)
+    fn unit_count(&self) -> usize {
+        Bridge::unit_count(self)
+    }
+    fn supply_state_of(&self, unit: usize) -> SupplyState {
+        Bridge::supply_state_of(self, unit)
     }
     fn io_config(&self) -> IoConfig {
         Bridge::io_config(self)
     }
-    fn set_io_snapshot(&mut self, inputs: Inputs, outputs: Outputs) {
-        Bridge::set_io_snapshot(self, inputs, outputs);
+    fn set_io_snapshot_of(&mut self, unit: usize, inputs: Inputs, outputs: Outputs) {
+        Bridge::set_io_snapshot_of(self, unit, inputs, outputs);
     }
-    fn on_io_event(&mut self, now: Instant, event: IoEvent) {
-        Bridge::on_io_event(self, now, event);
+    fn on_io_event_of(&mut self, unit: usize, now: Instant, event: IoEvent) {
+        Bridge::on_io_event_of(self, unit, now, event);
     }
     fn take_save_request(&mut self) -> Option<SaveRequest> {
         Bridge::take_save_request(self)
@@ -127,16 +135,20 @@ impl BridgeEndpoint for Bridge {
     }
 }
 
-/// The supervisor's side of the exchange with the I/O task.
+/// The supervisor's side of the exchange with the I/O task, which runs one unit's I/O per set
+/// of the pin table ([`UnitSet`]).
 pub trait IoExchange {
-    /// The latest levels, if new ones were published since the last call.
-    fn take_snapshot(&mut self) -> Option<(Inputs, Outputs)>;
-    /// The next event, if one is waiting.
-    fn try_event(&mut self) -> Option<(Instant, IoEvent)>;
+    /// Unit `unit`'s latest levels, if new ones were published since the last call.
+    fn take_snapshot(&mut self, unit: UnitSet) -> Option<(Inputs, Outputs)>;
+    /// The next event and its unit, if one is waiting.
+    fn try_event(&mut self) -> Option<(UnitSet, Instant, IoEvent)>;
     /// Completes when an event is waiting (without taking it).
     fn event_ready(&mut self) -> impl Future<Output = ()>;
-    /// Hand a new supply state to the I/O task.
-    fn send_supply(&mut self, supply: SupplyState);
+    /// Hand how many units the bridge drives to the I/O task: the sets from that index on are
+    /// inert (START off, no events), whatever the settings allow.
+    fn send_unit_count(&mut self, count: usize);
+    /// Hand unit `unit`'s new supply state to the I/O task.
+    fn send_supply(&mut self, unit: UnitSet, supply: SupplyState);
     /// Hand new I/O settings to the I/O task.
     fn send_io_config(&mut self, config: IoConfig);
 }
@@ -217,7 +229,9 @@ pub struct Supervisor<P, C, I, V, H = NoHistory> {
     io: I,
     saver: V,
     history: H,
-    sent_supply: Option<SupplyState>,
+    sent_unit_count: Option<usize>,
+    /// Each set's supply state last sent.
+    sent_supply: [Option<SupplyState>; UNIT_SETS],
     sent_io_config: Option<IoConfig>,
     saving: bool,
     reading_history: bool,
@@ -249,7 +263,8 @@ where
             io,
             saver,
             history: NoHistory,
-            sent_supply: None,
+            sent_unit_count: None,
+            sent_supply: [None; UNIT_SETS],
             sent_io_config: None,
             saving: false,
             reading_history: false,
@@ -265,6 +280,7 @@ where
             cnc_framing,
             io,
             saver,
+            sent_unit_count,
             sent_supply,
             sent_io_config,
             saving,
@@ -278,6 +294,7 @@ where
             io,
             saver,
             history,
+            sent_unit_count,
             sent_supply,
             sent_io_config,
             saving,
@@ -389,11 +406,13 @@ where
     }
 
     fn exchange_in<B: BridgeEndpoint>(&mut self, bridge: &mut B) {
-        if let Some((inputs, outputs)) = self.io.take_snapshot() {
-            bridge.set_io_snapshot(inputs, outputs);
+        for unit in UnitSet::ALL {
+            if let Some((inputs, outputs)) = self.io.take_snapshot(unit) {
+                bridge.set_io_snapshot_of(unit.index(), inputs, outputs);
+            }
         }
-        while let Some((at, event)) = self.io.try_event() {
-            bridge.on_io_event(at, event);
+        while let Some((unit, at, event)) = self.io.try_event() {
+            bridge.on_io_event_of(unit.index(), at, event);
         }
     }
 
@@ -419,10 +438,17 @@ where
     }
 
     fn exchange_out<B: BridgeEndpoint>(&mut self, bridge: &B) {
-        let supply = bridge.supply_state();
-        if self.sent_supply != Some(supply) {
-            self.io.send_supply(supply);
-            self.sent_supply = Some(supply);
+        let count = bridge.unit_count();
+        if self.sent_unit_count != Some(count) {
+            self.io.send_unit_count(count);
+            self.sent_unit_count = Some(count);
+        }
+        for (unit, sent) in UnitSet::ALL.into_iter().zip(&mut self.sent_supply) {
+            let supply = bridge.supply_state_of(unit.index());
+            if *sent != Some(supply) {
+                self.io.send_supply(unit, supply);
+                *sent = Some(supply);
+            }
         }
         let config = bridge.io_config();
         if self.sent_io_config != Some(config) {

@@ -182,11 +182,12 @@ struct FakeBridge {
     current: Vec<u8>,
     ps_frame_due: bool,
     ps_rx: Vec<u8>,
-    supply: SupplyState,
+    /// Each unit's supply state; as many units as states.
+    supplies: Vec<SupplyState>,
     io_config: IoConfig,
-    snapshots: Vec<(Inputs, Outputs)>,
-    /// (event time, event, time the bridge got it)
-    events: Vec<(Instant, IoEvent, u64)>,
+    snapshots: Vec<(usize, Inputs, Outputs)>,
+    /// (unit, event time, event, time the bridge got it)
+    events: Vec<(usize, Instant, IoEvent, u64)>,
     save_request: Option<u32>,
     next_settings: u32,
     cnc_framing: PortConfig,
@@ -201,7 +202,7 @@ impl FakeBridge {
             current: Vec::new(),
             ps_frame_due: false,
             ps_rx: Vec::new(),
-            supply: SupplyState::default(),
+            supplies: vec![SupplyState::default()],
             io_config: IoConfig::default(),
             snapshots: Vec::new(),
             events: Vec::new(),
@@ -280,18 +281,21 @@ impl BridgeEndpoint for FakeBridge {
         self.cnc_framing
     }
     fn poll(&mut self, _: Instant) {}
-    fn supply_state(&self) -> SupplyState {
-        self.supply
+    fn unit_count(&self) -> usize {
+        self.supplies.len()
+    }
+    fn supply_state_of(&self, unit: usize) -> SupplyState {
+        self.supplies.get(unit).copied().unwrap_or_default()
     }
     fn io_config(&self) -> IoConfig {
         self.io_config
     }
-    fn set_io_snapshot(&mut self, inputs: Inputs, outputs: Outputs) {
-        self.snapshots.push((inputs, outputs));
+    fn set_io_snapshot_of(&mut self, unit: usize, inputs: Inputs, outputs: Outputs) {
+        self.snapshots.push((unit, inputs, outputs));
     }
-    fn on_io_event(&mut self, now: Instant, event: IoEvent) {
+    fn on_io_event_of(&mut self, unit: usize, now: Instant, event: IoEvent) {
         let seen_at = self.world.borrow().now_us;
-        self.events.push((now, event, seen_at));
+        self.events.push((unit, now, event, seen_at));
     }
     fn take_save_request(&mut self) -> Option<u32> {
         self.save_request.take()
@@ -317,23 +321,24 @@ impl BridgeEndpoint for FakeBridge {
 #[derive(Default)]
 struct FakeIo {
     world: Shared,
-    snapshot: Option<(Inputs, Outputs)>,
-    /// (ready at, event time, event)
-    events: VecDeque<(u64, Instant, IoEvent)>,
-    supplies: Vec<SupplyState>,
+    snapshots: [Option<(Inputs, Outputs)>; UNIT_SETS],
+    /// (ready at, unit, event time, event)
+    events: VecDeque<(u64, UnitSet, Instant, IoEvent)>,
+    unit_counts: Vec<usize>,
+    supplies: Vec<(UnitSet, SupplyState)>,
     configs: Vec<IoConfig>,
 }
 
 impl IoExchange for FakeIo {
-    fn take_snapshot(&mut self) -> Option<(Inputs, Outputs)> {
-        self.snapshot.take()
+    fn take_snapshot(&mut self, unit: UnitSet) -> Option<(Inputs, Outputs)> {
+        self.snapshots[unit.index()].take()
     }
-    fn try_event(&mut self) -> Option<(Instant, IoEvent)> {
+    fn try_event(&mut self) -> Option<(UnitSet, Instant, IoEvent)> {
         let now = self.world.borrow().now_us;
         match self.events.front() {
-            Some(&(ready, at, event)) if ready <= now => {
+            Some(&(ready, unit, at, event)) if ready <= now => {
                 self.events.pop_front();
-                Some((at, event))
+                Some((unit, at, event))
             }
             _ => None,
         }
@@ -346,8 +351,11 @@ impl IoExchange for FakeIo {
             _ => Poll::Pending,
         })
     }
-    fn send_supply(&mut self, supply: SupplyState) {
-        self.supplies.push(supply);
+    fn send_unit_count(&mut self, count: usize) {
+        self.unit_counts.push(count);
+    }
+    fn send_supply(&mut self, unit: UnitSet, supply: SupplyState) {
+        self.supplies.push((unit, supply));
     }
     fn send_io_config(&mut self, config: IoConfig) {
         self.configs.push(config);
@@ -613,36 +621,86 @@ fn a_framing_the_cnc_port_refuses_is_reported_once_and_the_port_runs_on() {
 #[test]
 fn supply_state_and_io_settings_go_to_the_io_task_only_when_they_change() {
     let (world, clock, mut sup, mut bridge) = setup(256);
+    let [first, second] = UnitSet::ALL;
     run_until(&mut sup, &mut bridge, &clock, 300);
-    assert_eq!(sup.io().supplies.len(), 1, "sent once, not every turn");
-    bridge.supply = SupplyState::HEALTHY;
+    // Every set's supply once, not every turn; the second set's unit is not driven: no link.
+    assert_eq!(
+        sup.io().supplies,
+        [
+            (first, SupplyState::default()),
+            (second, SupplyState::default())
+        ]
+    );
+    assert_eq!(sup.io().unit_counts, [1]);
+    bridge.supplies[0] = SupplyState::HEALTHY;
     bridge.io_config.link_required = false;
     cnc_rx(&world, 310, b"x\r");
     run_until(&mut sup, &mut bridge, &clock, 1_000);
-    assert_eq!(
-        sup.io().supplies,
-        [SupplyState::default(), SupplyState::HEALTHY]
-    );
+    assert_eq!(sup.io().supplies[2..], [(first, SupplyState::HEALTHY)]);
     assert_eq!(sup.io().configs.len(), 2);
     assert!(!sup.io().configs[1].link_required);
+    assert_eq!(sup.io().unit_counts, [1], "sent once, not every turn");
+}
+
+#[test]
+fn each_units_supply_goes_to_its_own_set_and_each_sets_io_to_its_own_unit() {
+    let (world, clock, mut sup, mut bridge) = setup(256);
+    let [first, second] = UnitSet::ALL;
+    let faulted = SupplyState {
+        fault_active: true,
+        ..SupplyState::HEALTHY
+    };
+    bridge.supplies = vec![faulted, SupplyState::HEALTHY];
+    let torch_on = Inputs {
+        torch_on: true,
+        ..Inputs::NONE
+    };
+    let start = Outputs {
+        start: true,
+        ..Outputs::OFF
+    };
+    sup.io().snapshots = [None, Some((torch_on, start))];
+    sup.io().events.extend([
+        (20_000, second, Instant::from_micros(19_990), IoEvent::ArcOn),
+        (20_000, first, Instant::from_micros(19_995), IoEvent::ArcOff),
+    ]);
+    world.borrow_mut().wakeups.push(20_000);
+    run_until(&mut sup, &mut bridge, &clock, 200);
+    assert_eq!(sup.io().unit_counts, [2]);
+    assert_eq!(
+        sup.io().supplies,
+        [(first, faulted), (second, SupplyState::HEALTHY)]
+    );
+    assert_eq!(bridge.snapshots, [(1, torch_on, start)]);
+    let got: Vec<(usize, IoEvent)> = bridge.events.iter().map(|e| (e.0, e.2)).collect();
+    assert_eq!(got, [(1, IoEvent::ArcOn), (0, IoEvent::ArcOff)]);
+    // The second unit's link drops: only its set hears it; the count follows CONFIG units.
+    bridge.supplies = vec![faulted];
+    cnc_rx(&world, 210, b"x\r");
+    run_until(&mut sup, &mut bridge, &clock, 400);
+    assert_eq!(sup.io().unit_counts, [2, 1]);
+    assert_eq!(sup.io().supplies[2..], [(second, SupplyState::default())]);
 }
 
 #[test]
 fn io_events_wake_the_loop_and_reach_the_bridge_in_order() {
     let (world, clock, mut sup, mut bridge) = setup(256);
-    sup.io().snapshot = Some((Inputs::NONE, Outputs::OFF));
+    let first = UnitSet::ALL[0];
+    sup.io().snapshots[0] = Some((Inputs::NONE, Outputs::OFF));
     sup.io().events.extend([
-        (20_000, Instant::from_micros(19_990), IoEvent::ArcOn),
+        (20_000, first, Instant::from_micros(19_990), IoEvent::ArcOn),
         (
             20_000,
+            first,
             Instant::from_micros(19_995),
             IoEvent::TransferTimeout,
         ),
     ]);
     world.borrow_mut().wakeups.push(20_000);
     run_until(&mut sup, &mut bridge, &clock, 200);
-    assert_eq!(bridge.snapshots, [(Inputs::NONE, Outputs::OFF)]);
-    let got: Vec<(Instant, IoEvent)> = bridge.events.iter().map(|e| (e.0, e.1)).collect();
+    assert_eq!(bridge.snapshots, [(0, Inputs::NONE, Outputs::OFF)]);
+    assert!(bridge.events.iter().all(|e| e.0 == 0), "the first unit's");
+    let got: Vec<(Instant, IoEvent)> = bridge.events.iter().map(|e| (e.1, e.2)).collect();
     assert_eq!(
         got,
         [
@@ -652,7 +710,7 @@ fn io_events_wake_the_loop_and_reach_the_bridge_in_order() {
     );
     // Woken by the event, not by the 100 ms idle wait.
     assert!(
-        bridge.events.iter().all(|e| e.2 == 20_000),
+        bridge.events.iter().all(|e| e.3 == 20_000),
         "{:?}",
         bridge.events
     );
@@ -711,7 +769,10 @@ fn drives_the_real_bridge_end_to_end() {
     assert!(w.written(PS).starts_with(b":012B0E0401C1\r\n"));
     // The interlocks heard that the link is up.
     assert!(
-        sup.io().supplies.iter().any(|s| s.link_up),
+        sup.io()
+            .supplies
+            .iter()
+            .any(|&(unit, s)| unit.index() == 0 && s.link_up),
         "{:?}",
         sup.io().supplies
     );
