@@ -2,20 +2,23 @@
 
 use embedded_storage_async::nor_flash::NorFlash;
 use plasma_firmware::io::{Outputs, PinLevels};
+use plasma_firmware::platform::pins::UnitSet;
 use plasma_firmware::platform::runner::ConfigurablePort;
 
-/// The eight discrete inputs, owned by the I/O task. Their edges come through the EXTI
-/// lines the board arms with [`crate::edges::arm_inputs`].
+/// Every unit set's eight discrete inputs, owned by the I/O task. Their edges come through
+/// the EXTI lines the board arms with [`crate::edges::arm_inputs`].
 pub trait InputPins {
-    /// Reads every pin now (pin levels; the I/O logic applies the polarity).
-    fn levels(&self) -> PinLevels;
+    /// Reads every pin of unit `set`'s set now (pin levels; the I/O logic applies the
+    /// polarity); a board-wide input reads its one pin for every set.
+    fn levels(&self, set: UnitSet) -> PinLevels;
 }
 
-/// The seven discrete outputs, owned by the I/O task.
+/// Every unit set's eight discrete outputs, owned by the I/O task.
 pub trait OutputPins {
-    /// Sets every pin to `outputs` (logical levels; `plasma_firmware::platform::pins` says which pin
-    /// level each means). START first: it is the one whose latency matters.
-    fn drive(&mut self, outputs: Outputs);
+    /// Sets every pin of unit `set`'s set to `outputs` (logical levels;
+    /// `plasma_firmware::platform::pins` says which pin level each means). START first: it is
+    /// the one whose latency matters.
+    fn drive(&mut self, set: UnitSet, outputs: Outputs);
 }
 
 /// The heartbeat LED.

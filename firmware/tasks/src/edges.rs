@@ -4,7 +4,7 @@
 //! (`plasma_firmware::io::EdgeLatch`: why the lines stay armed). The I/O task waits on
 //! [`EDGES`] and reads the levels.
 
-use plasma_firmware::io::{EdgeLatch, Input};
+use plasma_firmware::io::EdgeLatch;
 use plasma_firmware::platform::pins;
 
 use crate::chip;
@@ -12,12 +12,13 @@ use crate::chip;
 /// Edges noted by the EXTI interrupts, taken by the I/O task.
 pub static EDGES: EdgeLatch = EdgeLatch::new();
 
-/// Routes every input's pin to its EXTI line and arms it (both edges). Call once, after the
-/// pins are inputs and before the EXTI interrupts are unmasked.
+/// Routes every input pin with a line of its own (`pins::EDGE_INPUTS`, every unit set's) to
+/// its EXTI line and arms it (both edges). Call once, after the pins are inputs and before the
+/// EXTI interrupts are unmasked.
 pub fn arm_inputs() {
     chip::enable_syscfg_clock();
-    for input in Input::ALL {
-        chip::arm_edge_line(pins::input(input).pin);
+    for pin in pins::EDGE_INPUTS {
+        chip::arm_edge_line(pin);
     }
 }
 

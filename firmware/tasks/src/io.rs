@@ -1,19 +1,30 @@
 //! The discrete I/O task, on its own interrupt executor above all serial work.
 //!
-//! It owns the input and output pins and a `plasma_firmware::io::DiscreteIo`. It wakes
-//! on any input edge (EXTI, through the always-armed latch of [`crate::edges`]: an edge while
-//! the task is busy wakes its next wait), on the I/O logic's own deadlines, and on news from
-//! the bridge; each time it reads every input *level* (so a bouncing edge cannot leave START
-//! wrong), updates the logic and drives the outputs at once; only then it logs and publishes.
+//! It owns the input and output pins and one `plasma_firmware::io::DiscreteIo` per unit set of
+//! the pin table (`plasma_firmware::platform::pins::UnitSet`), each with its own interlocks:
+//! one unit's TORCH_ON never reaches another's START, and one unit's fault or lost link never
+//! blocks another's. It wakes on any input edge (EXTI, through the always-armed latch of
+//! [`crate::edges`]: an edge while the task is busy wakes its next wait), on the I/O logic's
+//! own deadlines, and on news from the bridge; each time it reads every input *level* of every
+//! set (so a bouncing edge cannot leave START wrong), updates the logic and drives the outputs
+//! at once; only then it logs and publishes.
+//!
+//! A set whose unit the bridge does not drive (`CONFIG units` names fewer) is inert: no
+//! interlocks run, its outputs stay in safe state and it raises no events, whatever the
+//! settings allow (`link_required off` cannot start a unit nobody configured). Until the
+//! bridge first says how many units it drives, only the first set runs.
 //!
 //! The exchange with the bridge (thread mode) is by small copies under a critical section:
-//! [`SUPPLY`] and [`CONFIG`] come in, [`SNAPSHOT`] and [`EVENTS`] go out.
+//! the unit count, each unit's supply state and the I/O settings come in ([`News`]), each
+//! unit's levels ([`SNAPSHOTS`]) and every unit's events, tagged ([`EVENTS`]), go out.
 
+use core::cell::Cell;
 use core::future::Future;
 use core::sync::atomic::{AtomicU32, Ordering};
 
 use defmt::{debug, info, warn};
-use embassy_futures::select::{Either4, select4};
+use embassy_futures::select::{Either3, select3};
+use embassy_sync::blocking_mutex::Mutex;
 use embassy_sync::blocking_mutex::raw::CriticalSectionRawMutex;
 use embassy_sync::channel::Channel;
 use embassy_sync::signal::Signal;
@@ -21,6 +32,7 @@ use embassy_time::Timer;
 use plasma_firmware::io::{
     self, DiscreteIo, Inputs, IoConfig, IoEvent, Outputs, SupplyState, Transition,
 };
+use plasma_firmware::platform::pins::{UNIT_SETS, UnitSet};
 use plasma_firmware::platform::supervisor::IoExchange;
 use plasma_firmware::platform::watchdog::TaskId;
 use plasma_protocol::time::{Duration, Instant, div_rem_u16};
@@ -32,14 +44,41 @@ use crate::log_text::EventText;
 use crate::progress::report;
 use crate::safe_state::drive_outputs;
 
-/// The link's view of the supply, latest wins (bridge → I/O).
-pub static SUPPLY: Signal<CriticalSectionRawMutex, SupplyState> = Signal::new();
-/// New I/O settings, the CNC's wiring included, after a CONFIG command (bridge → I/O).
-pub static CONFIG: Signal<CriticalSectionRawMutex, IoConfig> = Signal::new();
-/// Input and output levels after every change, latest wins (I/O → bridge).
-pub static SNAPSHOT: Signal<CriticalSectionRawMutex, (Inputs, Outputs)> = Signal::new();
-/// I/O events for the CNC session, in order (I/O → bridge).
-pub static EVENTS: Channel<CriticalSectionRawMutex, (Instant, IoEvent), 16> = Channel::new();
+/// What the bridge told the I/O task since the task last looked, each the latest (bridge → I/O).
+#[derive(Debug, Clone, Copy, Default)]
+struct News {
+    /// How many units the bridge drives.
+    unit_count: Option<usize>,
+    /// Each set's unit's view of its supply.
+    supplies: [Option<SupplyState>; UNIT_SETS],
+    /// New I/O settings, the CNC's wiring included, after a CONFIG command.
+    config: Option<IoConfig>,
+}
+
+static NEWS: Mutex<CriticalSectionRawMutex, Cell<News>> = Mutex::new(Cell::new(News {
+    unit_count: None,
+    supplies: [None; UNIT_SETS],
+    config: None,
+}));
+/// Wakes the I/O task when [`NEWS`] has something.
+static NEWS_READY: Signal<CriticalSectionRawMutex, ()> = Signal::new();
+
+/// Adds to the news for the I/O task and wakes it.
+fn tell(update: impl FnOnce(&mut News)) {
+    NEWS.lock(|news| {
+        let mut latest = news.get();
+        update(&mut latest);
+        news.set(latest);
+    });
+    NEWS_READY.signal(());
+}
+
+/// Each set's input and output levels after every change, latest wins (I/O → bridge).
+pub static SNAPSHOTS: [Signal<CriticalSectionRawMutex, (Inputs, Outputs)>; UNIT_SETS] =
+    [const { Signal::new() }; UNIT_SETS];
+/// I/O events for the CNC session, each with its unit, in order (I/O → bridge).
+pub static EVENTS: Channel<CriticalSectionRawMutex, (UnitSet, Instant, IoEvent), 16> =
+    Channel::new();
 
 /// Longest sleep of the I/O task: it reports progress and re-reads the pins at least this
 /// often, whatever happens.
@@ -53,8 +92,11 @@ pub async fn run(
     io_config: IoConfig,
     progress: TaskId,
 ) {
-    let mut io = DiscreteIo::new(io_config, now(), pins.levels());
-    drive_outputs(&mut outputs, io.table_outputs());
+    let mut config = io_config;
+    let mut supplies = [SupplyState::default(); UNIT_SETS];
+    let mut units = UnitSet::ALL
+        .map(|set| (set.index() == 0).then(|| DiscreteIo::new(config, now(), pins.levels(set))));
+    drive_all(&mut outputs, &units);
     debug!(
         "I/O: start gap {} ms, transfer time-out {} ms, ARC_OK debounce {} us, link required: {}",
         io_config.effective_start_gap().as_millis(),
@@ -62,75 +104,138 @@ pub async fn run(
         io_config.arc_ok_debounce.as_micros(),
         io_config.link_required
     );
-    publish(&mut io, now());
+    publish(&mut units, now());
     loop {
         let latest = now() + MAX_WAIT;
-        let deadline = io.poll_at().map_or(latest, |at| at.min(latest));
-        let woke = select4(
+        let deadline = units
+            .iter()
+            .flatten()
+            .filter_map(DiscreteIo::poll_at)
+            .fold(latest, Instant::min);
+        let woke = select3(
             EDGES.wait(),
             Timer::at(embassy_instant(deadline)),
-            SUPPLY.wait(),
-            CONFIG.wait(),
+            NEWS_READY.wait(),
         )
         .await;
         let now = now();
-        match woke {
-            Either4::First(()) | Either4::Second(()) => {}
-            Either4::Third(supply) => io.on_supply(now, supply),
-            Either4::Fourth(io_config) => {
-                if io.reconfigure(now, io_config, pins.levels()) {
-                    info!(
-                        "I/O: new settings: start gap {} ms, transfer time-out {} ms, link required {=bool}",
-                        io_config.effective_start_gap().as_millis(),
-                        io_config.transfer_timeout.as_millis(),
-                        io_config.link_required
-                    );
+        if let Either3::Third(()) = woke {
+            let news = NEWS.lock(|news| news.replace(News::default()));
+            if let Some(new_config) = news.config {
+                config = new_config;
+            }
+            for ((set, unit), (supply, news_supply)) in UnitSet::ALL
+                .into_iter()
+                .zip(&mut units)
+                .zip(supplies.iter_mut().zip(news.supplies))
+            {
+                if let Some(news_supply) = news_supply {
+                    *supply = news_supply;
+                }
+                let driven = news
+                    .unit_count
+                    .map_or(unit.is_some(), |count| set.index() < count);
+                match unit {
+                    Some(io) if driven => {
+                        if let Some(supply) = news_supply {
+                            io.on_supply(now, supply);
+                        }
+                        if news.config.is_some() && io.reconfigure(now, config, pins.levels(set)) {
+                            info!(
+                                "I/O: new settings: start gap {} ms, transfer time-out {} ms, link required {=bool}",
+                                config.effective_start_gap().as_millis(),
+                                config.transfer_timeout.as_millis(),
+                                config.link_required
+                            );
+                        }
+                    }
+                    Some(_) => {
+                        *unit = None;
+                        info!("I/O: unit {} not driven: its outputs off", set.index() + 1);
+                    }
+                    None if driven => {
+                        // As at power-up: a TORCH_ON already active waits for its release.
+                        let mut io = DiscreteIo::new(config, now, pins.levels(set));
+                        io.on_supply(now, *supply);
+                        *unit = Some(io);
+                        info!("I/O: unit {} driven", set.index() + 1);
+                    }
+                    None => {}
                 }
             }
         }
         // Levels, not edges: whatever woke the task, the pins decide.
-        io.on_pins(now, pins.levels());
-        io.poll(now);
-        drive_outputs(&mut outputs, io.table_outputs());
-        publish(&mut io, now);
+        for (set, io) in UnitSet::ALL.into_iter().zip(units.iter_mut()) {
+            if let Some(io) = io {
+                io.on_pins(now, pins.levels(set));
+                io.poll(now);
+            }
+        }
+        drive_all(&mut outputs, &units);
+        publish(&mut units, now);
         report(progress);
     }
 }
 
-/// After the pins are set: hand transitions, events and levels to thread mode. Nothing is
-/// logged here: a defmt frame masks every interrupt while it is written, and this task
-/// should be ready for the next edge as soon as possible.
-fn publish(io: &mut DiscreteIo, now: Instant) {
-    while let Some(transition) = io.poll_transition() {
-        if TRANSITIONS.try_send(transition).is_err() {
-            LOST_TRANSITIONS.fetch_add(1, Ordering::Relaxed);
-        }
+/// Drives every set's outputs, the first unit's first; an inert set's all off (safe state).
+fn drive_all(outputs: &mut impl OutputPins, units: &[Option<DiscreteIo>; UNIT_SETS]) {
+    for (set, io) in UnitSet::ALL.into_iter().zip(units) {
+        let levels = io.as_ref().map_or(Outputs::OFF, DiscreteIo::table_outputs);
+        drive_outputs(outputs, set, levels);
     }
-    while let Some(event) = io.poll_event() {
-        if EVENTS.try_send((now, event)).is_err() {
-            LOST_EVENTS.fetch_add(1, Ordering::Relaxed);
+}
+
+/// After the pins are set: hand every driven unit's transitions, events and levels to thread
+/// mode. Nothing is logged here: a defmt frame masks every interrupt while it is written, and
+/// this task should be ready for the next edge as soon as possible.
+fn publish(units: &mut [Option<DiscreteIo>; UNIT_SETS], now: Instant) {
+    for ((set, io), snapshot) in UnitSet::ALL.into_iter().zip(units).zip(&SNAPSHOTS) {
+        let Some(io) = io else { continue };
+        while let Some(transition) = io.poll_transition() {
+            if TRANSITIONS.try_send((set, transition)).is_err() {
+                LOST_TRANSITIONS.fetch_add(1, Ordering::Relaxed);
+            }
         }
+        while let Some(event) = io.poll_event() {
+            if EVENTS.try_send((set, now, event)).is_err() {
+                LOST_EVENTS.fetch_add(1, Ordering::Relaxed);
+            }
+        }
+        snapshot.signal((io.inputs(), io.outputs()));
     }
-    SNAPSHOT.signal((io.inputs(), io.outputs()));
 }
 
 /// Output changes for the log (I/O → thread mode).
-static TRANSITIONS: Channel<CriticalSectionRawMutex, Transition, 32> = Channel::new();
+static TRANSITIONS: Channel<CriticalSectionRawMutex, (UnitSet, Transition), 32> = Channel::new();
 static LOST_TRANSITIONS: AtomicU32 = AtomicU32::new(0);
 static LOST_EVENTS: AtomicU32 = AtomicU32::new(0);
 
 /// Thread mode: logs every output change the I/O task made, with its reason.
 pub fn log_transitions() {
-    while let Ok(t) = TRANSITIONS.try_receive() {
+    while let Ok((set, t)) = TRANSITIONS.try_receive() {
         let (ms, us) = div_rem_u16(t.at.as_micros(), 1000);
-        info!(
-            "I/O {=u64}.{=u16:03} ms: {=istr} {=str}: {}",
-            ms,
-            us,
-            output_name(t.output),
-            if t.level { "on" } else { "off" },
-            t.reason
-        );
+        let level = if t.level { "on" } else { "off" };
+        // The first unit's lines as with one unit; another's name it as the CNC port does.
+        if set.index() == 0 {
+            info!(
+                "I/O {=u64}.{=u16:03} ms: {=istr} {=str}: {}",
+                ms,
+                us,
+                output_name(t.output),
+                level,
+                t.reason
+            );
+        } else {
+            info!(
+                "I/O @{=usize} {=u64}.{=u16:03} ms: {=istr} {=str}: {}",
+                set.index() + 1,
+                ms,
+                us,
+                output_name(t.output),
+                level,
+                t.reason
+            );
+        }
     }
     let lost = LOST_TRANSITIONS.swap(0, Ordering::Relaxed);
     if lost > 0 {
@@ -146,12 +251,23 @@ pub fn log_transitions() {
 }
 
 /// Thread mode: logs an I/O event as it is passed to the CNC session.
-pub fn log_event(at: Instant, event: IoEvent) {
+pub fn log_event(set: UnitSet, at: Instant, event: IoEvent) {
+    let unit = set.index() + 1;
     match event {
         IoEvent::ArcOn | IoEvent::ArcOff => {
-            debug!("I/O event at {} us: {}", at.as_micros(), EventText(event))
+            debug!(
+                "I/O event @{} at {} us: {}",
+                unit,
+                at.as_micros(),
+                EventText(event)
+            )
         }
-        _ => warn!("I/O event at {} us: {}", at.as_micros(), EventText(event)),
+        _ => warn!(
+            "I/O event @{} at {} us: {}",
+            unit,
+            at.as_micros(),
+            EventText(event)
+        ),
     }
 }
 
@@ -159,31 +275,43 @@ pub fn log_event(at: Instant, event: IoEvent) {
 pub struct BoardIo;
 
 impl IoExchange for BoardIo {
-    fn take_snapshot(&mut self) -> Option<(Inputs, Outputs)> {
+    fn take_snapshot(&mut self, unit: UnitSet) -> Option<(Inputs, Outputs)> {
         log_transitions();
-        SNAPSHOT.try_take()
+        SNAPSHOTS.get(unit.index())?.try_take()
     }
 
-    fn try_event(&mut self) -> Option<(Instant, IoEvent)> {
-        let (at, event) = EVENTS.try_receive().ok()?;
-        log_event(at, event);
-        Some((at, event))
+    fn try_event(&mut self) -> Option<(UnitSet, Instant, IoEvent)> {
+        let (unit, at, event) = EVENTS.try_receive().ok()?;
+        log_event(unit, at, event);
+        Some((unit, at, event))
     }
 
     fn event_ready(&mut self) -> impl Future<Output = ()> {
         EVENTS.ready_to_receive()
     }
 
-    fn send_supply(&mut self, supply: SupplyState) {
+    fn send_unit_count(&mut self, count: usize) {
+        tell(|news| news.unit_count = Some(count));
+    }
+
+    fn send_supply(&mut self, unit: UnitSet, supply: SupplyState) {
         debug!(
-            "supply: link {=bool}, ready {=bool}, fault {=bool} (requires action {=bool})",
-            supply.link_up, supply.unit_ready, supply.fault_active, supply.fault_requires_action
+            "supply @{}: link {=bool}, ready {=bool}, fault {=bool} (requires action {=bool})",
+            unit.index() + 1,
+            supply.link_up,
+            supply.unit_ready,
+            supply.fault_active,
+            supply.fault_requires_action
         );
-        SUPPLY.signal(supply);
+        tell(|news| {
+            if let Some(slot) = news.supplies.get_mut(unit.index()) {
+                *slot = Some(supply);
+            }
+        });
     }
 
     fn send_io_config(&mut self, config: IoConfig) {
-        CONFIG.signal(config);
+        tell(|news| news.config = Some(config));
     }
 }
 

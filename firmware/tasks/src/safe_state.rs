@@ -7,7 +7,7 @@
 //! refused until the reset.
 
 use plasma_firmware::io::Outputs;
-use plasma_firmware::platform::pins;
+use plasma_firmware::platform::pins::{self, UnitSet};
 use plasma_firmware::platform::safe_state::{FailSafe, FaultEntry};
 
 use crate::board::OutputPins;
@@ -55,7 +55,7 @@ pub fn trip_fail_safe() {
     });
 }
 
-/// Sets the outputs, unless the fail-safe tripped; whether they were set.
-pub fn drive_outputs(pins: &mut impl OutputPins, outputs: Outputs) -> bool {
-    critical_section::with(|_| FAIL_SAFE.drive_unless_tripped(|| pins.drive(outputs)))
+/// Sets unit `set`'s outputs, unless the fail-safe tripped; whether they were set.
+pub fn drive_outputs(pins: &mut impl OutputPins, set: UnitSet, outputs: Outputs) -> bool {
+    critical_section::with(|_| FAIL_SAFE.drive_unless_tripped(|| pins.drive(set, outputs)))
 }

@@ -4,7 +4,7 @@
 
 use cortex_m::peripheral::NVIC;
 use plasma_firmware::io::{self, Input, InputConfig, Outputs, PinLevels, Pull};
-use plasma_firmware::platform::pins::{self, Pin, Port};
+use plasma_firmware::platform::pins::{self, Pin, Port, UnitSet};
 use stm32_metapac::gpio::Gpio;
 use stm32_metapac::gpio::vals::{Idr, Moder, Pupdr};
 use stm32_metapac::{GPIOA, GPIOB, GPIOC, Interrupt, interrupt};
@@ -20,7 +20,7 @@ pub const fn gpio(port: Port) -> Gpio {
     }
 }
 
-/// The EXTI line of TORCH_ON, whose edges the latency probe stamps.
+/// The EXTI line of the first unit's TORCH_ON, whose edges the latency probe stamps.
 const TORCH_ON_LINE: usize = pins::input(Input::TorchOn).pin.number as usize;
 
 /// The interrupt of EXTI line `line`.
@@ -37,19 +37,21 @@ const fn exti_irq(line: u8) -> Interrupt {
 }
 
 /// The interrupts of the input lines; the handlers below exist for these only.
-const EXTI_IRQS: [Interrupt; 5] = [
+const EXTI_IRQS: [Interrupt; 7] = [
     Interrupt::EXTI0,
     Interrupt::EXTI1,
+    Interrupt::EXTI2,
+    Interrupt::EXTI3,
     Interrupt::EXTI4,
     Interrupt::EXTI9_5,
     Interrupt::EXTI15_10,
 ];
 
-// Every input's line must raise one of the interrupts handled here.
+// Every armed input's line (every unit set's) must raise one of the interrupts handled here.
 const _: () = {
     let mut i = 0;
-    while i < Input::ALL.len() {
-        let irq = exti_irq(pins::input(Input::ALL[i]).pin.number) as u16;
+    while i < pins::EDGE_INPUTS.len() {
+        let irq = exti_irq(pins::EDGE_INPUTS[i].number) as u16;
         let mut handled = false;
         let mut j = 0;
         while j < EXTI_IRQS.len() {
@@ -64,7 +66,7 @@ const _: () = {
     }
 };
 
-/// The eight inputs, owned by the I/O task.
+/// Every unit set's eight inputs, owned by the I/O task.
 pub struct InputPins(());
 
 impl InputPins {
@@ -73,8 +75,10 @@ impl InputPins {
     /// the EXTI interrupts at the highest priority (as on the Nucleo: they only wake the I/O
     /// task).
     pub fn new(config: &InputConfig) -> Self {
-        for input in Input::ALL {
-            let Pin { port, number } = pins::input(input).pin;
+        let every_input = UnitSet::ALL
+            .into_iter()
+            .flat_map(|set| Input::ALL.map(|input| (set.input(input).pin, input)));
+        for (Pin { port, number }, input) in every_input {
             let (pin, port) = (number as usize, gpio(port));
             let pull = match config.get(input).polarity.pull() {
                 Pull::Up => Pupdr::PULL_UP,
@@ -97,11 +101,11 @@ impl InputPins {
 }
 
 impl plasma_tasks::board::InputPins for InputPins {
-    fn levels(&self) -> PinLevels {
+    fn levels(&self, set: UnitSet) -> PinLevels {
         Input::ALL
             .iter()
             .fold(PinLevels::ALL_LOW, |levels, &input| {
-                let pin = pins::input(input).pin;
+                let pin = set.input(input).pin;
                 let high = gpio(pin.port).idr().read().idr(pin.number as usize) == Idr::HIGH;
                 levels.with(input, high)
             })
@@ -126,6 +130,16 @@ fn EXTI0() {
 
 #[interrupt]
 fn EXTI1() {
+    on_exti();
+}
+
+#[interrupt]
+fn EXTI2() {
+    on_exti();
+}
+
+#[interrupt]
+fn EXTI3() {
     on_exti();
 }
 
@@ -156,8 +170,9 @@ fn set(pin: Pin, high: bool) {
     });
 }
 
-/// The seven outputs, owned by the I/O task. `plasma_tasks::safe_state::drive_safe_state` made
-/// them outputs, all off, before anything else ran.
+/// Every unit set's eight outputs, owned by the I/O task.
+/// `plasma_tasks::safe_state::drive_safe_state` made them outputs, all off, before anything
+/// else ran.
 pub struct OutputPins {
     start: bool,
 }
@@ -170,11 +185,13 @@ impl OutputPins {
 }
 
 impl plasma_tasks::board::OutputPins for OutputPins {
-    fn drive(&mut self, outputs: Outputs) {
-        for (output, wiring) in io::Output::ALL.into_iter().zip(pins::OUTPUTS) {
+    fn drive(&mut self, unit: UnitSet, outputs: Outputs) {
+        for output in io::Output::ALL {
+            let wiring = unit.output(output);
             set(wiring.pin, wiring.level(outputs.get(output)));
         }
-        if outputs.start != self.start {
+        // The probe times the first unit's TORCH_ON to START.
+        if unit.index() == 0 && outputs.start != self.start {
             self.start = outputs.start;
             probe::start_changed(outputs.start);
         }

@@ -6,15 +6,16 @@ use embassy_stm32::gpio::{AnyPin, Level, Output, Pull, Speed};
 use embassy_stm32::interrupt;
 use embassy_stm32::interrupt::{InterruptExt, Priority};
 use plasma_firmware::io::{self, Input, InputConfig, Outputs, PinLevels};
-use plasma_firmware::platform::pins::{self, Pin, Wiring};
+use plasma_firmware::platform::pins::{self, Pin, UNIT_SETS, UnitSet, Wiring};
 use plasma_firmware::platform::safe_state::SAFE_OUTPUTS;
 
 /// The HAL's handle on a pin of the table.
 ///
 /// Sound because every pin handed out here is one the table assigns to exactly one signal
-/// (`plasma_firmware::platform::pins`' tests: no two signals, nor a signal and a UART, share a pin), each
-/// is taken once (by [`OutputPins::new`], [`InputPins::new`] or [`led`]), and main.rs takes by name
-/// only the UARTs' pins, which it checks against the same table at compile time.
+/// (`plasma_firmware::platform::pins` checks at build time that no two signals, nor a signal
+/// and a UART, share a pin), each is taken once (by [`OutputPins::new`], [`InputPins::new`]:
+/// a board-wide input once, in the first set, or [`led`]), and main.rs takes by name only the
+/// UARTs' pins, which it checks against the same table at compile time.
 pub fn table_pin(pin: Pin) -> Peri<'static, AnyPin> {
     // SAFETY: see above.
     unsafe { AnyPin::steal(pin.port_pin()) }
@@ -24,31 +25,36 @@ fn level(high: bool) -> Level {
     if high { Level::High } else { Level::Low }
 }
 
-/// The eight outputs, in [`io::Output::ALL`] order (START first).
-pub struct OutputPins([Output<'static>; 8]);
+/// Every unit set's eight outputs, each set's in [`io::Output::ALL`] order (START first).
+pub struct OutputPins([[Output<'static>; 8]; UNIT_SETS]);
 
 impl OutputPins {
     /// Takes the outputs over at their safe level, the level `drive_safe_state` gave them.
     pub fn new() -> Self {
-        OutputPins(io::Output::ALL.map(|o| {
-            let wiring = pins::output(o);
-            let safe = wiring.level(SAFE_OUTPUTS.is_on(o));
-            Output::new(table_pin(wiring.pin), level(safe), Speed::Low)
+        OutputPins(UnitSet::ALL.map(|set| {
+            io::Output::ALL.map(|o| {
+                let wiring = set.output(o);
+                let safe = wiring.level(SAFE_OUTPUTS.is_on(o));
+                Output::new(table_pin(wiring.pin), level(safe), Speed::Low)
+            })
         }))
     }
 }
 
 impl plasma_tasks::board::OutputPins for OutputPins {
-    fn drive(&mut self, outputs: Outputs) {
-        let all = self.0.iter_mut().zip(io::Output::ALL).zip(pins::OUTPUTS);
-        for ((pin, o), wiring) in all {
-            pin.set_level(level(wiring.level(outputs.get(o))));
+    fn drive(&mut self, set: UnitSet, outputs: Outputs) {
+        let Some(pins) = self.0.get_mut(set.index()) else {
+            return;
+        };
+        for (pin, o) in pins.iter_mut().zip(io::Output::ALL) {
+            pin.set_level(level(set.output(o).level(outputs.get(o))));
         }
     }
 }
 
-/// The eight inputs, in [`Input::ALL`] order, each on its own EXTI line.
-pub struct InputPins([embassy_stm32::gpio::Input<'static>; 8]);
+/// Every unit set's eight inputs, each set's in [`Input::ALL`] order; `None` for a board-wide
+/// input beyond the first set (the first set's pin serves every unit).
+pub struct InputPins([[Option<embassy_stm32::gpio::Input<'static>>; 8]; UNIT_SETS]);
 
 impl InputPins {
     /// Every input with the pull that reads inactive when open, its EXTI line armed for good
@@ -56,7 +62,12 @@ impl InputPins {
     /// an edge between a level read and the next wait), and the EXTI interrupts on at the
     /// highest priority: their handlers below only note the edge for the I/O task.
     pub fn new(config: &InputConfig) -> Self {
-        let pins = Input::ALL.map(|i| input(config, i));
+        let pins = UnitSet::ALL.map(|set| {
+            Input::ALL.map(|i| {
+                let own = set.index() == 0 || !pins::is_board_wide(i);
+                own.then(|| input(config, set, i))
+            })
+        });
         plasma_tasks::edges::arm_inputs();
         for irq in EXTI_IRQS {
             irq.set_priority(Priority::P0);
@@ -69,37 +80,33 @@ impl InputPins {
 }
 
 impl plasma_tasks::board::InputPins for InputPins {
-    fn levels(&self) -> PinLevels {
-        Input::ALL
-            .iter()
-            .zip(&self.0)
-            .fold(PinLevels::ALL_LOW, |levels, (&input, pin)| {
-                levels.with(input, pin.is_high())
-            })
+    fn levels(&self, set: UnitSet) -> PinLevels {
+        let [first, ..] = &self.0;
+        let own = self.0.get(set.index()).unwrap_or(first);
+        Input::ALL.iter().zip(own).zip(first).fold(
+            PinLevels::ALL_LOW,
+            |levels, ((&input, pin), first_sets)| {
+                let high = pin
+                    .as_ref()
+                    .or(first_sets.as_ref())
+                    .is_some_and(|p| p.is_high());
+                levels.with(input, high)
+            },
+        )
     }
 }
 
-/// The EXTI interrupts of the input lines (0, 1, 4, 5-9, 10-15); lines 2 and 3 have none.
-const EXTI_IRQS: [interrupt::Interrupt; 5] = [
+/// The EXTI interrupts of the input lines: every line has one (0 to 4 each their own, 5-9 and
+/// 10-15 shared), and the table decides which lines are armed (`pins::EDGE_INPUTS`).
+const EXTI_IRQS: [interrupt::Interrupt; 7] = [
     interrupt::EXTI0,
     interrupt::EXTI1,
+    interrupt::EXTI2,
+    interrupt::EXTI3,
     interrupt::EXTI4,
     interrupt::EXTI9_5,
     interrupt::EXTI15_10,
 ];
-
-// Every input's line must raise one of the interrupts handled here.
-const _: () = {
-    let mut i = 0;
-    while i < Input::ALL.len() {
-        let line = pins::input(Input::ALL[i]).pin.number;
-        assert!(
-            line != 2 && line != 3,
-            "an input's EXTI line has no handler in pins.rs"
-        );
-        i += 1;
-    }
-};
 
 #[interrupt]
 unsafe fn EXTI0() {
@@ -108,6 +115,16 @@ unsafe fn EXTI0() {
 
 #[interrupt]
 unsafe fn EXTI1() {
+    plasma_tasks::edges::on_interrupt();
+}
+
+#[interrupt]
+unsafe fn EXTI2() {
+    plasma_tasks::edges::on_interrupt();
+}
+
+#[interrupt]
+unsafe fn EXTI3() {
     plasma_tasks::edges::on_interrupt();
 }
 
@@ -126,13 +143,13 @@ unsafe fn EXTI15_10() {
     plasma_tasks::edges::on_interrupt();
 }
 
-/// `input`'s pin as a GPIO input with the pull that reads inactive on an open wire.
-fn input(config: &InputConfig, input: Input) -> embassy_stm32::gpio::Input<'static> {
+/// Unit `set`'s `input` pin as a GPIO input with the pull that reads inactive on an open wire.
+fn input(config: &InputConfig, set: UnitSet, input: Input) -> embassy_stm32::gpio::Input<'static> {
     let pull = match config.get(input).polarity.pull() {
         io::Pull::Up => Pull::Up,
         io::Pull::Down => Pull::Down,
     };
-    embassy_stm32::gpio::Input::new(table_pin(pins::input(input).pin), pull)
+    embassy_stm32::gpio::Input::new(table_pin(set.input(input).pin), pull)
 }
 
 /// The heartbeat LED, off.
