@@ -95,6 +95,7 @@ mod monitor;
 mod output_levels;
 mod reason;
 mod signals;
+mod units;
 
 pub use config::{IoConfig, MIN_START_GAP};
 pub use discrete::DiscreteIo;
@@ -106,3 +107,4 @@ pub use monitor::{SafetyMonitor, Violation, ViolationKind};
 pub use output_levels::{NotInvertible, OutputConfig};
 pub use reason::{Interlock, IoEvent, Reason, Transition};
 pub use signals::{Input, Inputs, Output, Outputs, SupplyState};
+pub use units::UnitsIo;

@@ -1,18 +1,16 @@
 //! The discrete I/O task, on its own interrupt executor above all serial work.
 //!
-//! It owns the input and output pins and one `plasma_firmware::io::DiscreteIo` per unit set of
-//! the pin table (`plasma_firmware::platform::pins::UnitSet`), each with its own interlocks:
-//! one unit's TORCH_ON never reaches another's START, and one unit's fault or lost link never
-//! blocks another's. It wakes on any input edge (EXTI, through the always-armed latch of
+//! It owns the input and output pins and a `plasma_firmware::io::UnitsIo`: one `DiscreteIo`
+//! per unit set of the pin table (`plasma_firmware::platform::pins::UnitSet`), each with its
+//! own interlocks: one unit's TORCH_ON never reaches another's START, and one unit's fault or
+//! lost link never blocks another's. It wakes on any input edge (EXTI, through the always-armed latch of
 //! [`crate::edges`]: an edge while the task is busy wakes its next wait), on the I/O logic's
 //! own deadlines, and on news from the bridge; each time it reads every input *level* of every
 //! set (so a bouncing edge cannot leave START wrong), updates the logic and drives the outputs
 //! at once; only then it logs and publishes.
 //!
-//! A set whose unit the bridge does not drive (`CONFIG units` names fewer) is inert: no
-//! interlocks run, its outputs stay in safe state and it raises no events, whatever the
-//! settings allow (`link_required off` cannot start a unit nobody configured). Until the
-//! bridge first says how many units it drives, only the first set runs.
+//! A set whose unit the bridge does not drive (`CONFIG units` names fewer, as the supervisor
+//! tells) is inert (`UnitsIo`: outputs off, no events, whatever the settings allow).
 //!
 //! The exchange with the bridge (thread mode) is by small copies under a critical section:
 //! the unit count, each unit's supply state and the I/O settings come in ([`News`]), each
@@ -30,7 +28,7 @@ use embassy_sync::channel::Channel;
 use embassy_sync::signal::Signal;
 use embassy_time::Timer;
 use plasma_firmware::io::{
-    self, DiscreteIo, Inputs, IoConfig, IoEvent, Outputs, SupplyState, Transition,
+    self, Inputs, IoConfig, IoEvent, Outputs, PinLevels, SupplyState, Transition, UnitsIo,
 };
 use plasma_firmware::platform::pins::{UNIT_SETS, UnitSet};
 use plasma_firmware::platform::supervisor::IoExchange;
@@ -45,7 +43,7 @@ use crate::progress::report;
 use crate::safe_state::drive_outputs;
 
 /// What the bridge told the I/O task since the task last looked, each the latest (bridge → I/O).
-#[derive(Debug, Clone, Copy, Default)]
+#[derive(Debug, Clone, Copy)]
 struct News {
     /// How many units the bridge drives.
     unit_count: Option<usize>,
@@ -55,11 +53,16 @@ struct News {
     config: Option<IoConfig>,
 }
 
-static NEWS: Mutex<CriticalSectionRawMutex, Cell<News>> = Mutex::new(Cell::new(News {
-    unit_count: None,
-    supplies: [None; UNIT_SETS],
-    config: None,
-}));
+impl News {
+    /// Nothing new.
+    const EMPTY: News = News {
+        unit_count: None,
+        supplies: [None; UNIT_SETS],
+        config: None,
+    };
+}
+
+static NEWS: Mutex<CriticalSectionRawMutex, Cell<News>> = Mutex::new(Cell::new(News::EMPTY));
 /// Wakes the I/O task when [`NEWS`] has something.
 static NEWS_READY: Signal<CriticalSectionRawMutex, ()> = Signal::new();
 
@@ -92,10 +95,8 @@ pub async fn run(
     io_config: IoConfig,
     progress: TaskId,
 ) {
-    let mut config = io_config;
-    let mut supplies = [SupplyState::default(); UNIT_SETS];
-    let mut units = UnitSet::ALL
-        .map(|set| (set.index() == 0).then(|| DiscreteIo::new(config, now(), pins.levels(set))));
+    let levels = |unit| UnitSet::new(unit).map_or(PinLevels::ALL_HIGH, |set| pins.levels(set));
+    let mut units = UnitsIo::<UNIT_SETS>::new(io_config, now(), levels);
     drive_all(&mut outputs, &units);
     debug!(
         "I/O: start gap {} ms, transfer time-out {} ms, ARC_OK debounce {} us, link required: {}",
@@ -107,11 +108,7 @@ pub async fn run(
     publish(&mut units, now());
     loop {
         let latest = now() + MAX_WAIT;
-        let deadline = units
-            .iter()
-            .flatten()
-            .filter_map(DiscreteIo::poll_at)
-            .fold(latest, Instant::min);
+        let deadline = units.poll_at().map_or(latest, |at| at.min(latest));
         let woke = select3(
             EDGES.wait(),
             Timer::at(embassy_instant(deadline)),
@@ -120,57 +117,35 @@ pub async fn run(
         .await;
         let now = now();
         if let Either3::Third(()) = woke {
-            let news = NEWS.lock(|news| news.replace(News::default()));
-            if let Some(new_config) = news.config {
-                config = new_config;
-            }
-            for ((set, unit), (supply, news_supply)) in UnitSet::ALL
-                .into_iter()
-                .zip(&mut units)
-                .zip(supplies.iter_mut().zip(news.supplies))
+            let news = NEWS.lock(|news| news.replace(News::EMPTY));
+            if let Some(config) = news.config
+                && units.reconfigure(now, config, levels)
             {
-                if let Some(news_supply) = news_supply {
-                    *supply = news_supply;
+                info!(
+                    "I/O: new settings: start gap {} ms, transfer time-out {} ms, link required {=bool}",
+                    config.effective_start_gap().as_millis(),
+                    config.transfer_timeout.as_millis(),
+                    config.link_required
+                );
+            }
+            for (unit, supply) in news.supplies.into_iter().enumerate() {
+                if let Some(supply) = supply {
+                    units.on_supply(now, unit, supply);
                 }
-                let driven = news
-                    .unit_count
-                    .map_or(unit.is_some(), |count| set.index() < count);
-                match unit {
-                    Some(io) if driven => {
-                        if let Some(supply) = news_supply {
-                            io.on_supply(now, supply);
-                        }
-                        if news.config.is_some() && io.reconfigure(now, config, pins.levels(set)) {
-                            info!(
-                                "I/O: new settings: start gap {} ms, transfer time-out {} ms, link required {=bool}",
-                                config.effective_start_gap().as_millis(),
-                                config.transfer_timeout.as_millis(),
-                                config.link_required
-                            );
-                        }
-                    }
-                    Some(_) => {
-                        *unit = None;
-                        info!("I/O: unit {} not driven: its outputs off", set.index() + 1);
-                    }
-                    None if driven => {
-                        // As at power-up: a TORCH_ON already active waits for its release.
-                        let mut io = DiscreteIo::new(config, now, pins.levels(set));
-                        io.on_supply(now, *supply);
-                        *unit = Some(io);
-                        info!("I/O: unit {} driven", set.index() + 1);
-                    }
-                    None => {}
-                }
+            }
+            if let Some(count) = news.unit_count
+                && units.set_unit_count(now, count, levels)
+            {
+                info!(
+                    "I/O: {=usize} of the board's {=usize} unit sets driven",
+                    count.min(UNIT_SETS),
+                    UNIT_SETS
+                );
             }
         }
         // Levels, not edges: whatever woke the task, the pins decide.
-        for (set, io) in UnitSet::ALL.into_iter().zip(units.iter_mut()) {
-            if let Some(io) = io {
-                io.on_pins(now, pins.levels(set));
-                io.poll(now);
-            }
-        }
+        units.on_pins(now, levels);
+        units.poll(now);
         drive_all(&mut outputs, &units);
         publish(&mut units, now);
         report(progress);
@@ -178,19 +153,20 @@ pub async fn run(
 }
 
 /// Drives every set's outputs, the first unit's first; an inert set's all off (safe state).
-fn drive_all(outputs: &mut impl OutputPins, units: &[Option<DiscreteIo>; UNIT_SETS]) {
-    for (set, io) in UnitSet::ALL.into_iter().zip(units) {
-        let levels = io.as_ref().map_or(Outputs::OFF, DiscreteIo::table_outputs);
-        drive_outputs(outputs, set, levels);
+fn drive_all(outputs: &mut impl OutputPins, units: &UnitsIo<UNIT_SETS>) {
+    for set in UnitSet::ALL {
+        drive_outputs(outputs, set, units.table_outputs(set.index()));
     }
 }
 
 /// After the pins are set: hand every driven unit's transitions, events and levels to thread
 /// mode. Nothing is logged here: a defmt frame masks every interrupt while it is written, and
 /// this task should be ready for the next edge as soon as possible.
-fn publish(units: &mut [Option<DiscreteIo>; UNIT_SETS], now: Instant) {
-    for ((set, io), snapshot) in UnitSet::ALL.into_iter().zip(units).zip(&SNAPSHOTS) {
-        let Some(io) = io else { continue };
+fn publish(units: &mut UnitsIo<UNIT_SETS>, now: Instant) {
+    for (unit, io) in units.driven() {
+        let (Some(set), Some(snapshot)) = (UnitSet::new(unit), SNAPSHOTS.get(unit)) else {
+            continue;
+        };
         while let Some(transition) = io.poll_transition() {
             if TRANSITIONS.try_send((set, transition)).is_err() {
                 LOST_TRANSITIONS.fetch_add(1, Ordering::Relaxed);
