@@ -20,7 +20,10 @@ use super::cnc::CncPort;
 use super::error::{Error, Result};
 use super::image::firmware_elf;
 use super::log::FirmwareLog;
-use super::pins::{TestHook, WATCHED_PORT, input_level, input_pin, output_active, output_pin};
+use super::pins::{
+    TestHook, UNIT_SETS, UnitSet, WATCHED_PORT, unit_input_level, unit_input_pin,
+    unit_output_active, unit_output_pin,
+};
 use super::qemu::{Qemu, QemuOptions};
 use super::qtest::Qtest;
 use super::safety::{self, Observed};
@@ -54,6 +57,9 @@ pub struct BoardOptions {
     pub model: Model,
     /// Its options.
     pub sim: SimOptions,
+    /// Further units on the same simulated line ([`SimPortOptions::more_units`]), the second
+    /// wired to the board's second unit set.
+    pub more_units: Vec<Model>,
     /// A fault the unit has from power-up (Powermax decimal code, HPR error number).
     pub fault_at_power_up: Option<u16>,
     /// Inputs already active when the board powers up.
@@ -77,6 +83,7 @@ impl BoardOptions {
         BoardOptions {
             model,
             sim: SimOptions::default(),
+            more_units: Vec::new(),
             fault_at_power_up: None,
             active_at_power_up: Vec::new(),
             wiring: Wiring::Unit,
@@ -121,6 +128,8 @@ impl Drop for Slot {
 struct Driven {
     mark: usize,
     at: Instant,
+    /// The unit set (0 = the first unit).
+    unit: usize,
     input: Input,
     active: bool,
 }
@@ -131,7 +140,8 @@ struct Driven {
 struct HeldReset {
     mark: usize,
     at: Instant,
-    start_on: bool,
+    /// Each unit set's START.
+    start_on: [bool; UNIT_SETS],
 }
 
 /// The emulated board with its simulated unit. See the [module docs](self).
@@ -146,7 +156,8 @@ pub struct Board {
     resets: Vec<HeldReset>,
     options: BoardOptions,
     elf: PathBuf,
-    start_at_power_up: bool,
+    /// Each unit set's START at power-up.
+    start_at_power_up: [bool; UNIT_SETS],
     /// The user button (B1) is held through the resets that follow.
     user_button_held: bool,
     epoch: Instant,
@@ -169,29 +180,37 @@ impl Board {
         let qtest = Arc::new(Qtest::new(sockets.qtest)?);
         let mut driven = Vec::new();
         let epoch = Instant::now();
-        for input in Input::ALL {
-            let active = options.active_at_power_up.contains(&input);
-            let mark = qtest.set_pin(input_pin(input), input_level(input, active))?;
+        for (unit, input) in every_input() {
+            // Active at power-up: the first unit's inputs the options name.
+            let active = unit == 0 && options.active_at_power_up.contains(&input);
+            let level = unit_input_level(unit, input, active);
+            let mark = qtest.set_pin(unit_input_pin(unit, input), level)?;
             driven.push(Driven {
                 mark,
                 at: epoch,
+                unit,
                 input,
                 active,
             });
         }
         qtest.intercept_outputs(WATCHED_PORT)?;
-        let start_at_power_up = output_active(
-            Output::Start,
-            qtest.output_level(output_pin(Output::Start))?,
-        );
+        let mut start_at_power_up = [false; UNIT_SETS];
+        for (unit, on) in start_at_power_up.iter_mut().enumerate() {
+            let high = qtest.output_level(unit_output_pin(unit, Output::Start))?;
+            *on = unit_output_active(unit, Output::Start, high);
+        }
 
         let (on_motion, output_edges) = match options.wiring {
             Wiring::Unit => {
                 let for_motion = Arc::clone(&qtest);
-                let motion = input_pin(Input::Motion);
-                let on_motion: Box<dyn FnMut(bool) + Send> = Box::new(move |on| {
+                let on_motion: Box<dyn FnMut(usize, bool) + Send> = Box::new(move |unit, on| {
+                    // A unit with no set of the board's has no MOTION wired.
+                    let Some(set) = UnitSet::new(unit) else {
+                        return;
+                    };
+                    let motion = set.input(Input::Motion);
                     // An error means QEMU is gone: the board is being dropped.
-                    let _ = for_motion.set_pin(motion, input_level(Input::Motion, on));
+                    let _ = for_motion.set_pin(motion.pin, motion.level(on));
                 });
                 (Some(on_motion), Some(qtest.subscribe()))
             }
@@ -209,6 +228,7 @@ impl Board {
             SimPortOptions {
                 model: options.model,
                 sim: options.sim,
+                more_units: options.more_units.clone(),
                 framing,
                 on_motion,
                 output_edges,
@@ -289,14 +309,21 @@ impl Board {
         &self.log
     }
 
-    /// Drives an input signal (`active` = the opto-coupler conducts: the pin is low).
+    /// Drives an input signal of the first unit (`active` = the opto-coupler conducts: the
+    /// pin is low).
     pub fn set_input(&self, input: Input, active: bool) -> Result<()> {
-        let mark = self
-            .qtest
-            .set_pin(input_pin(input), input_level(input, active))?;
+        self.set_unit_input(0, input, active)
+    }
+
+    /// Drives unit `unit`'s input signal (0 = the first unit; a board-wide input's one pin
+    /// for every unit).
+    pub fn set_unit_input(&self, unit: usize, input: Input, active: bool) -> Result<()> {
+        let level = unit_input_level(unit, input, active);
+        let mark = self.qtest.set_pin(unit_input_pin(unit, input), level)?;
         lock(&self.driven).push(Driven {
             mark,
             at: Instant::now(),
+            unit,
             input,
             active,
         });
@@ -352,13 +379,17 @@ impl Board {
                 on_at_reset.push(output);
             }
         }
+        let mut start_on = [false; UNIT_SETS];
+        for (unit, on) in start_on.iter_mut().enumerate() {
+            *on = self.unit_output(unit, Output::Start)?;
+        }
         self.resets.push(HeldReset {
             mark: self.qtest.edges().len(),
             at: Instant::now(),
-            start_on: on_at_reset.contains(&Output::Start),
+            start_on,
         });
         self.qemu.qmp().reset_stopped(timeout)?;
-        for pin in Input::ALL.map(input_pin) {
+        for pin in every_input().map(|(unit, input)| unit_input_pin(unit, input)) {
             if let Some(high) = self.qtest.driven_level(pin) {
                 self.qtest.set_pin(pin, high)?;
             }
@@ -372,24 +403,39 @@ impl Board {
         Ok(on_at_reset)
     }
 
-    /// An output signal now.
+    /// An output signal of the first unit now.
     pub fn output(&self, output: Output) -> Result<bool> {
-        Ok(output_active(
-            output,
-            self.qtest.output_level(output_pin(output))?,
-        ))
+        self.unit_output(0, output)
     }
 
-    /// Waits until `output` is `on`; returns how long that took.
+    /// Unit `unit`'s output signal now.
+    pub fn unit_output(&self, unit: usize, output: Output) -> Result<bool> {
+        let high = self.qtest.output_level(unit_output_pin(unit, output))?;
+        Ok(unit_output_active(unit, output, high))
+    }
+
+    /// Waits until the first unit's `output` is `on`; returns how long that took.
     pub fn wait_output(&self, output: Output, on: bool, timeout: Duration) -> Result<Duration> {
+        self.wait_unit_output(0, output, on, timeout)
+    }
+
+    /// Waits until unit `unit`'s `output` is `on`; returns how long that took.
+    pub fn wait_unit_output(
+        &self,
+        unit: usize,
+        output: Output,
+        on: bool,
+        timeout: Duration,
+    ) -> Result<Duration> {
         let began = Instant::now();
         loop {
-            if self.output(output)? == on {
+            if self.unit_output(unit, output)? == on {
                 return Ok(began.elapsed());
             }
             if began.elapsed() > timeout {
                 return Err(Error::Timeout(format!(
-                    "{} still {} after {} ms",
+                    "unit {}'s {} still {} after {} ms",
+                    unit + 1,
                     output.as_str(),
                     if on { "off" } else { "on" },
                     timeout.as_millis()
@@ -399,13 +445,24 @@ impl Board {
         }
     }
 
-    /// Waits `duration` and checks that `output` was `on` all along: its level at both ends
-    /// and, for an output on the watched port, no edge in between.
+    /// Waits `duration` and checks that the first unit's `output` was `on` all along: its
+    /// level at both ends and, for an output on the watched port, no edge in between.
     pub fn expect_held(&self, output: Output, on: bool, duration: Duration) -> Result<()> {
-        let pin = output_pin(output);
+        self.expect_unit_held(0, output, on, duration)
+    }
+
+    /// [`Board::expect_held`] for unit `unit`'s `output`.
+    pub fn expect_unit_held(
+        &self,
+        unit: usize,
+        output: Output,
+        on: bool,
+        duration: Duration,
+    ) -> Result<()> {
+        let pin = unit_output_pin(unit, output);
         let mark = self.qtest.edges().len();
         let state = |now: bool| if now { "on" } else { "off" };
-        if self.output(output)? != on {
+        if self.unit_output(unit, output)? != on {
             return Err(Error::Protocol(format!(
                 "{} is {} (expected {} for {} ms)",
                 output.as_str(),
@@ -416,7 +473,7 @@ impl Board {
         }
         let began = Instant::now();
         std::thread::sleep(duration);
-        let level = self.output(output)?;
+        let level = self.unit_output(unit, output)?;
         let edges = self.qtest.edges();
         let changed = edges
             .get(mark..)
@@ -437,14 +494,20 @@ impl Board {
         Ok(())
     }
 
-    /// Edges of `output` (on the watched port) so far, with the host time they were read.
+    /// Edges of the first unit's `output` (on the watched port) so far, with the host time
+    /// they were read.
     pub fn edges(&self, output: Output) -> Vec<(Instant, bool)> {
-        let pin = output_pin(output);
+        self.unit_edges(0, output)
+    }
+
+    /// Edges of unit `unit`'s `output` (on the watched port) so far.
+    pub fn unit_edges(&self, unit: usize, output: Output) -> Vec<(Instant, bool)> {
+        let pin = unit_output_pin(unit, output);
         self.qtest
             .edges()
             .into_iter()
             .filter(|e| e.pin == pin)
-            .map(|e| (e.at, output_active(output, e.high)))
+            .map(|e| (e.at, unit_output_active(unit, output, e.high)))
             .collect()
     }
 
@@ -475,10 +538,29 @@ impl Board {
         }
     }
 
-    /// The safety rules broken so far (see [`super::safety`]).
+    /// The safety rules broken so far by any unit (see [`super::safety`]; each unit set's
+    /// START against its own TORCH_ON), a unit beyond the first named.
     pub fn safety_violations(&self) -> Vec<String> {
-        let driven = lock(&self.driven).clone();
-        let start = output_pin(Output::Start);
+        let mut broken = self.unit_safety_violations(0);
+        for unit in 1..UNIT_SETS {
+            let of_unit = self.unit_safety_violations(unit);
+            broken.extend(
+                of_unit
+                    .into_iter()
+                    .map(|v| format!("unit {}: {v}", unit + 1)),
+            );
+        }
+        broken
+    }
+
+    /// The safety rules unit `unit`'s set broke so far.
+    fn unit_safety_violations(&self, unit: usize) -> Vec<String> {
+        let driven: Vec<Driven> = lock(&self.driven)
+            .iter()
+            .filter(|d| d.unit == unit)
+            .copied()
+            .collect();
+        let start = unit_output_pin(unit, Output::Start);
         let edges = self.qtest.edges();
         let torch_at_power_up = driven
             .iter()
@@ -500,7 +582,7 @@ impl Board {
             .chain(self.resets.iter().map(|r| {
                 let reset = Observed::Reset {
                     at: r.at,
-                    start_on: r.start_on,
+                    start_on: r.start_on.get(unit).copied().unwrap_or(false),
                 };
                 (r.mark, reset)
             }))
@@ -514,7 +596,7 @@ impl Board {
             if edge.pin == start {
                 observed.push(Observed::Start {
                     at: edge.at,
-                    on: output_active(Output::Start, edge.high),
+                    on: unit_output_active(unit, Output::Start, edge.high),
                 });
             }
         }
@@ -522,7 +604,7 @@ impl Board {
         safety::check(
             self.epoch,
             torch_at_power_up,
-            self.start_at_power_up,
+            self.start_at_power_up.get(unit).copied().unwrap_or(false),
             &observed,
         )
     }
@@ -560,25 +642,30 @@ impl Board {
         let ms = |at: Instant| at.saturating_duration_since(self.epoch).as_secs_f64() * 1000.0;
         for d in lock(&self.driven).iter().filter(|d| d.at > self.epoch) {
             text.push_str(&format!(
-                "{:>10.3} ms {} {}\n",
+                "{:>10.3} ms {}{} {}\n",
                 ms(d.at),
+                unit_prefix(d.unit),
                 d.input.as_str(),
                 if d.active { "active" } else { "inactive" }
             ));
         }
         for r in &self.resets {
             text.push_str(&format!(
-                "{:>10.3} ms the MCU reset (after {} output edges), START {}\n",
+                "{:>10.3} ms the MCU reset (after {} output edges), START {:?}\n",
                 ms(r.at),
                 r.mark,
-                if r.start_on { "on" } else { "off" }
+                r.start_on
             ));
         }
         for e in self.qtest.edges() {
-            let name = Output::ALL
+            let name = UnitSet::ALL
                 .into_iter()
-                .find(|&o| output_pin(o) == e.pin)
-                .map_or_else(|| e.pin.to_string(), |o| o.as_str().to_string());
+                .flat_map(|set| Output::ALL.map(|o| (set, o)))
+                .find(|&(set, o)| set.output(o).pin == e.pin)
+                .map_or_else(
+                    || e.pin.to_string(),
+                    |(set, o)| format!("{}{}", unit_prefix(set.index()), o.as_str()),
+                );
             text.push_str(&format!(
                 "{:>10.3} ms {name} -> {}\n",
                 ms(e.at),
@@ -628,6 +715,28 @@ fn wait_cnc_port_ready(qtest: &Qtest) -> Result<()> {
         std::thread::sleep(POLL);
     }
     Ok(())
+}
+
+/// Every unit set's input signals, a board-wide one once (with the first unit).
+fn every_input() -> impl Iterator<Item = (usize, Input)> {
+    UnitSet::ALL.into_iter().flat_map(|set| {
+        Input::ALL
+            .into_iter()
+            .filter(move |&i| {
+                set.index() == 0 || !plasma_firmware::platform::pins::is_board_wide(i)
+            })
+            .map(move |i| (set.index(), i))
+    })
+}
+
+/// How the diagnostics name a signal's unit: nothing for the first, `@N ` for another (as the
+/// CNC port addresses it).
+fn unit_prefix(unit: usize) -> String {
+    if unit == 0 {
+        String::new()
+    } else {
+        format!("@{} ", unit + 1)
+    }
 }
 
 fn lock<T>(mutex: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {

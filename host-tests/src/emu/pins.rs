@@ -4,7 +4,7 @@
 
 use plasma_firmware::io::{Input, Output};
 use plasma_firmware::platform::pins::{self, input, output};
-pub use plasma_firmware::platform::pins::{Pin, Port};
+pub use plasma_firmware::platform::pins::{Pin, Port, UNIT_SETS, UnitSet};
 
 /// What the harness needs of a GPIO port under QEMU.
 pub trait QemuPort {
@@ -34,6 +34,35 @@ impl QemuPort for Port {
     }
 }
 
+/// Unit `unit`'s set of the pin table (0 = the first unit).
+///
+/// # Panics
+/// For a unit the board has no set for: the test asked for pins that do not exist.
+pub fn unit_set(unit: usize) -> UnitSet {
+    UnitSet::new(unit)
+        .unwrap_or_else(|| panic!("the board carries {UNIT_SETS} unit sets, not unit {unit}'s"))
+}
+
+/// The pin of unit `unit`'s discrete input (a board-wide input's one pin for every unit).
+pub fn unit_input_pin(unit: usize, signal: Input) -> Pin {
+    unit_set(unit).input(signal).pin
+}
+
+/// The pin of unit `unit`'s discrete output.
+pub fn unit_output_pin(unit: usize, signal: Output) -> Pin {
+    unit_set(unit).output(signal).pin
+}
+
+/// The level to drive on unit `unit`'s `signal` pin for it to be `active`.
+pub fn unit_input_level(unit: usize, signal: Input, active: bool) -> bool {
+    unit_set(unit).input(signal).level(active)
+}
+
+/// Whether unit `unit`'s `signal` is active at pin level `high`.
+pub fn unit_output_active(unit: usize, signal: Output, high: bool) -> bool {
+    unit_set(unit).output(signal).is_on(high)
+}
+
 /// The pin of a discrete input.
 pub const fn input_pin(signal: Input) -> Pin {
     input(signal).pin
@@ -54,16 +83,21 @@ pub const fn output_active(signal: Output, high: bool) -> bool {
     output(signal).is_on(high)
 }
 
-/// The port whose output edges the harness streams with qtest's `irq_intercept_out`: START,
-/// ARC_OK, READY and PS_CORNER_CURRENT. Intercepting detaches the port from EXTI, so it must
-/// hold outputs only; GPIOA (TORCH_ON, MOTION) must never be intercepted.
+/// The port whose output edges the harness streams with qtest's `irq_intercept_out`: every
+/// unit's START, ARC_OK and READY, and the first unit's PS_CORNER_CURRENT. Intercepting
+/// detaches the port from EXTI, so it must hold no input whose edge a test waits for: every
+/// unit's TORCH_ON and MOTION are on GPIOA and GPIOC, which are never intercepted.
 pub const WATCHED_PORT: Port = Port::B;
 
-/// The inputs on the watched port (their EXTI is detached while it is watched).
-pub fn watched_port_inputs() -> impl Iterator<Item = Input> {
-    Input::ALL
-        .into_iter()
-        .filter(|&i| input_pin(i).port == WATCHED_PORT)
+/// Every unit's inputs on the watched port (their EXTI is detached while it is watched: the
+/// firmware reads their levels at its next wake, within 50 ms).
+pub fn watched_port_inputs() -> impl Iterator<Item = (UnitSet, Input)> {
+    UnitSet::ALL.into_iter().flat_map(|set| {
+        Input::ALL
+            .into_iter()
+            .filter(move |&i| set.input(i).pin.port == WATCHED_PORT)
+            .map(move |i| (set, i))
+    })
 }
 
 /// A failure the test images make on request (the emulated board's `test-hooks`, see
@@ -121,10 +155,20 @@ mod tests {
     }
 
     #[test]
-    fn the_watched_port_holds_start_and_arc_ok_and_no_torch_input() {
-        assert_eq!(output_pin(Output::Start).port, WATCHED_PORT);
-        assert_eq!(output_pin(Output::ArcOk).port, WATCHED_PORT);
-        assert!(watched_port_inputs().all(|i| i == Input::RampdownError));
+    fn the_watched_port_holds_every_units_start_and_arc_ok_and_no_torch_input() {
+        for unit in 0..UNIT_SETS {
+            assert_eq!(unit_output_pin(unit, Output::Start).port, WATCHED_PORT);
+            assert_eq!(unit_output_pin(unit, Output::ArcOk).port, WATCHED_PORT);
+            assert_ne!(unit_input_pin(unit, Input::TorchOn).port, WATCHED_PORT);
+            assert_ne!(unit_input_pin(unit, Input::Motion).port, WATCHED_PORT);
+        }
+        assert!(
+            watched_port_inputs().all(|(_, i)| matches!(i, Input::RampdownError | Input::NotReady)),
+            "only supply status inputs, read by level"
+        );
+        assert_eq!(unit_output_pin(1, Output::Start).to_string(), "PB1");
+        assert!(!unit_input_level(1, Input::TorchOn, true));
+        assert!(unit_output_active(1, Output::Start, true));
     }
 
     #[test]

@@ -14,6 +14,10 @@
 //! The test controls the unit while it runs ([`SimPort::with_unit`]): raise and clear faults,
 //! power it off and on, or cut the cable ([`SimPort::set_connected`]) so it neither hears nor
 //! answers while it keeps its state.
+//!
+//! Several units can share the line ([`SimPortOptions::more_units`]: a [`MultiDrop`], ids 0,
+//! 1, ... as `pbtool sim` numbers them); each unit's Start follows its own unit set's START pin
+//! and its Motion drives its own set's MOTION ([`SimPort::with_unit_at`] reaches each).
 
 use std::io::{ErrorKind, Read, Write};
 use std::os::unix::net::UnixStream;
@@ -27,11 +31,12 @@ use plasma_protocol::time::{Duration, Instant};
 use plasma_firmware::io::Output;
 
 use super::error::{Error, Result};
-use super::pins::{output_active, output_pin};
+use super::pins::{UnitSet, unit_output_active};
 use super::qtest::{Edge, Qtest};
 use super::usart::Usart;
 use crate::harness::{Direction, TraceFrame, WireTrace};
 use plasma_sim::line::{End, Line, Wiring};
+use plasma_sim::multidrop::{MultiDrop, units_for_one_line};
 use plasma_sim::{Model, SimOptions, SimulatedUnit};
 
 /// The longest the thread sleeps between two looks at the socket and the test's commands.
@@ -65,12 +70,16 @@ pub struct SimPortOptions {
     pub model: Model,
     /// Simulator options (seed, addresses).
     pub sim: SimOptions,
+    /// Further units on the same line after the first (`model`), in order: HPRs take the ids
+    /// after `sim.hpr_id`, Powermax units the nodes after `sim.modbus_address`.
+    pub more_units: Vec<Model>,
     /// Where the firmware's framing comes from.
     pub framing: Framing,
-    /// Called on the port's thread whenever the unit's Motion output changes (the harness
-    /// wires it to the board's MOTION input).
-    pub on_motion: Option<Box<dyn FnMut(bool) + Send>>,
-    /// Edges of the board's outputs (qtest's stream): START drives the unit's Start input.
+    /// Called on the port's thread with the unit's index on the line whenever that unit's
+    /// Motion output changes (the harness wires it to its unit set's MOTION input).
+    pub on_motion: Option<Box<dyn FnMut(usize, bool) + Send>>,
+    /// Edges of the board's outputs (qtest's stream): each unit set's START drives its unit's
+    /// Start input.
     pub output_edges: Option<Receiver<Edge>>,
     /// Seed of the line model.
     pub seed: u64,
@@ -82,6 +91,7 @@ impl SimPortOptions {
         SimPortOptions {
             model,
             sim: SimOptions::default(),
+            more_units: Vec::new(),
             framing: Framing::Matched,
             on_motion: None,
             output_edges: None,
@@ -121,12 +131,24 @@ impl SimPort {
             .set_write_timeout(Some(WRITE_TIMEOUT))
             .map_err(|e| Error::io("PS socket", e))?;
         let model = options.model;
+        let models: Vec<Model> = std::iter::once(model)
+            .chain(options.more_units.iter().copied())
+            .collect();
+        // Checked here, where the error can be returned (the units are built on the thread).
+        units_for_one_line(&models, &options.sim)
+            .map_err(|e| Error::Protocol(format!("the simulated line: {e}")))?;
         let for_thread = Arc::clone(&published);
         let thread = std::thread::Builder::new()
             .name(format!("sim-{model}"))
             .spawn(move || {
                 // The unit is built on its own thread: simulators need not be Send.
-                let unit = options.model.build(&options.sim);
+                let unit = match build_line(&models, &options.sim) {
+                    Ok(unit) => unit,
+                    Err(e) => {
+                        lock(&for_thread).stopped = Some(e);
+                        return;
+                    }
+                };
                 let port = unit.port();
                 let mut station = Station {
                     line: Line::new(port, port, Wiring::FourWire, options.seed),
@@ -134,7 +156,7 @@ impl SimPort {
                     framing: options.framing,
                     on_motion: options.on_motion,
                     output_edges: options.output_edges,
-                    motion: false,
+                    motion: vec![false; models.len()],
                     last_rx: None,
                     epoch,
                     published: for_thread,
@@ -162,6 +184,22 @@ impl SimPort {
     /// The simulator's clock now.
     pub fn now(&self) -> Instant {
         instant_since(self.epoch)
+    }
+
+    /// Runs `act` on unit `index` of the line (0 = the first; on its thread, between two
+    /// steps) and returns its result; `None` for no such unit.
+    pub fn with_unit_at<R: Send + 'static>(
+        &self,
+        index: usize,
+        act: impl FnOnce(&mut dyn SimulatedUnit, Instant) -> R + Send + 'static,
+    ) -> Result<Option<R>> {
+        self.with_station(move |station, now| station.line_unit(index).map(|u| act(u, now)))
+    }
+
+    /// Raises a fault on unit `index` of the line (as [`SimPort::inject_fault`]).
+    pub fn inject_fault_at(&self, index: usize, code: u16) -> Result<()> {
+        self.with_unit_at(index, move |unit, now| unit.inject_fault(now, code))?
+            .ok_or_else(|| Error::Protocol(format!("no unit {index} on the simulated line")))
     }
 
     /// Runs `act` on the unit (on its thread, between two steps) and returns its result.
@@ -277,14 +315,30 @@ fn std_duration(d: Duration) -> std::time::Duration {
     std::time::Duration::from_micros(d.as_micros())
 }
 
+/// The units of `models` on one line: one unit as it is, more in a [`MultiDrop`].
+fn build_line(
+    models: &[Model],
+    options: &SimOptions,
+) -> std::result::Result<Box<dyn SimulatedUnit>, String> {
+    let mut units = units_for_one_line(models, options).map_err(|e| e.to_string())?;
+    if units.len() == 1
+        && let Some(unit) = units.pop()
+    {
+        return Ok(unit);
+    }
+    Ok(Box::new(MultiDrop::new(units).map_err(|e| e.to_string())?))
+}
+
 /// The unit, its line and the socket's bookkeeping, owned by the port's thread.
 struct Station {
+    /// The unit, or a [`MultiDrop`] of several.
     unit: Box<dyn SimulatedUnit>,
     line: Line,
     framing: Framing,
-    on_motion: Option<Box<dyn FnMut(bool) + Send>>,
+    on_motion: Option<Box<dyn FnMut(usize, bool) + Send>>,
     output_edges: Option<Receiver<Edge>>,
-    motion: bool,
+    /// Each unit's Motion as last passed on.
+    motion: Vec<bool>,
     /// When the firmware's last character arrived.
     last_rx: Option<Instant>,
     epoch: std::time::Instant,
@@ -294,6 +348,15 @@ struct Station {
 impl Station {
     fn now(&self) -> Instant {
         instant_since(self.epoch)
+    }
+
+    /// Unit `index` of the line.
+    fn line_unit(&mut self, index: usize) -> Option<&mut (dyn SimulatedUnit + 'static)> {
+        if self.unit.as_any().is::<MultiDrop>() {
+            let line = self.unit.as_any_mut().downcast_mut::<MultiDrop>()?;
+            return line.unit_mut(index);
+        }
+        (index == 0).then_some(&mut *self.unit)
     }
 
     /// The loop: jobs, the socket, the unit and the line, until the socket or the job channel
@@ -334,20 +397,26 @@ impl Station {
         }
     }
 
-    /// START edges from the board to the unit's Start input.
+    /// Each unit set's START edges from the board to its unit's Start input.
     fn take_output_edges(&mut self) {
         let Some(edges) = &self.output_edges else {
             return;
         };
-        let start = output_pin(Output::Start);
-        let changes: Vec<bool> = edges
+        let changes: Vec<(usize, bool)> = edges
             .try_iter()
-            .filter(|e| e.pin == start)
-            .map(|e| e.high)
+            .filter_map(|e| {
+                let set = UnitSet::ALL
+                    .into_iter()
+                    .find(|set| set.output(Output::Start).pin == e.pin)?;
+                let on = unit_output_active(set.index(), Output::Start, e.high);
+                Some((set.index(), on))
+            })
             .collect();
-        for high in changes {
+        for (index, on) in changes {
             let now = self.now();
-            self.unit.set_start(now, output_active(Output::Start, high));
+            if let Some(unit) = self.line_unit(index) {
+                unit.set_start(now, on);
+            }
         }
     }
 
@@ -407,11 +476,17 @@ impl Station {
                 .write_all(&out)
                 .map_err(|e| Error::io("writing the PS socket", e))?;
         }
-        let motion = self.unit.motion();
-        if motion != self.motion {
-            self.motion = motion;
-            if let Some(on_motion) = &mut self.on_motion {
-                on_motion(motion);
+        for index in 0..self.motion.len() {
+            let Some(motion) = self.line_unit(index).map(|u| u.motion()) else {
+                continue;
+            };
+            if self.motion.get(index) != Some(&motion) {
+                if let Some(seen) = self.motion.get_mut(index) {
+                    *seen = motion;
+                }
+                if let Some(on_motion) = &mut self.on_motion {
+                    on_motion(index, motion);
+                }
             }
         }
         Ok(())
@@ -459,6 +534,7 @@ impl Station {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::emu::pins::unit_output_pin;
     use std::io::Read;
 
     fn read_until(stream: &mut UnixStream, end: &[u8]) -> (Vec<u8>, std::time::Duration) {
@@ -542,7 +618,7 @@ mod tests {
         let (_firmware, theirs) = UnixStream::pair().unwrap();
         let (tx, rx) = mpsc::channel();
         let options = SimPortOptions {
-            on_motion: Some(Box::new(move |on| tx.send(on).unwrap())),
+            on_motion: Some(Box::new(move |_, on| tx.send(on).unwrap())),
             ..SimPortOptions::new(Model::Sync65)
         };
         let port = SimPort::start(theirs, options).unwrap();
@@ -568,11 +644,18 @@ mod tests {
             pin,
             high,
         };
-        // Another pin of the port changes nothing.
-        edges.send(edge(output_pin(Output::Ready), true)).unwrap();
+        // Another pin of the port changes nothing, nor another unit set's START.
+        edges
+            .send(edge(unit_output_pin(0, Output::Ready), true))
+            .unwrap();
+        edges
+            .send(edge(unit_output_pin(1, Output::Start), true))
+            .unwrap();
         std::thread::sleep(std::time::Duration::from_millis(300));
         assert!(!port.motion().unwrap());
-        edges.send(edge(output_pin(Output::Start), true)).unwrap();
+        edges
+            .send(edge(unit_output_pin(0, Output::Start), true))
+            .unwrap();
         let began = std::time::Instant::now();
         while !port.motion().unwrap() {
             assert!(
@@ -581,6 +664,64 @@ mod tests {
             );
             std::thread::sleep(std::time::Duration::from_millis(5));
         }
+    }
+
+    #[test]
+    fn each_unit_sets_start_drives_its_own_unit_on_a_shared_line() {
+        let (_firmware, theirs) = UnixStream::pair().unwrap();
+        let (edges, output_edges) = mpsc::channel();
+        let (tx, rx) = mpsc::channel();
+        // Two Powermax units at nodes 1 and 2 (an HPR would purge for seconds before a start).
+        let options = SimPortOptions {
+            sim: SimOptions {
+                modbus_address: 1,
+                ..SimOptions::default()
+            },
+            more_units: vec![Model::Sync65],
+            output_edges: Some(output_edges),
+            on_motion: Some(Box::new(move |unit, on| tx.send((unit, on)).unwrap())),
+            ..SimPortOptions::new(Model::Sync65)
+        };
+        let port = SimPort::start(theirs, options).unwrap();
+        let motion_of = |index| port.with_unit_at(index, |u, _| u.motion()).unwrap();
+        assert_eq!(port.with_unit_at(2, |_, _| ()).unwrap(), None, "two units");
+        let edge = |pin, high| Edge {
+            at: std::time::Instant::now(),
+            pin,
+            high,
+        };
+        edges
+            .send(edge(unit_output_pin(1, Output::Start), true))
+            .unwrap();
+        let timeout = std::time::Duration::from_secs(5);
+        assert_eq!(
+            rx.recv_timeout(timeout),
+            Ok((1, true)),
+            "the second unit's arc"
+        );
+        assert_eq!((motion_of(0), motion_of(1)), (Some(false), Some(true)));
+        port.inject_fault_at(0, 44).unwrap();
+        assert_eq!(
+            port.with_unit_at(0, |u, _| u.active_fault()).unwrap(),
+            Some(44)
+        );
+        assert_eq!(
+            port.with_unit_at(1, |u, _| u.active_fault()).unwrap(),
+            Some(0)
+        );
+    }
+
+    #[test]
+    fn a_line_units_cannot_share_is_refused() {
+        let (_firmware, theirs) = UnixStream::pair().unwrap();
+        let options = SimPortOptions {
+            more_units: vec![Model::Sync65],
+            ..SimPortOptions::new(Model::Hpr260)
+        };
+        assert!(matches!(
+            SimPort::start(theirs, options),
+            Err(Error::Protocol(_))
+        ));
     }
 
     #[test]
