@@ -241,7 +241,14 @@ impl Board {
         let cnc = CncPort::new(sockets.cnc)?;
         let log = FirmwareLog::start(&elf, qemu.log_path())?;
         qemu.resume()?;
-        wait_cnc_port_ready(&qtest)?;
+        if let Err(e) = wait_cnc_port_ready(&qtest) {
+            // A firmware that never gets that far says why in its log (a fault at boot, a
+            // reset loop); the board is dropped with this error, so it goes with it.
+            return Err(Error::Timeout(format!(
+                "{e}; the firmware's log (last 20 lines):\n{}",
+                log.tail(20)
+            )));
+        }
         Ok(Board {
             qemu,
             qtest,
