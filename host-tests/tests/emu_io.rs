@@ -4,6 +4,9 @@
 //! output change); the harness's view, read through qtest, is checked too, with a tolerance.
 //! Every board also checks the safety rules on what it observed when dropped.
 //!
+//! Two units on one line, each with its own unit set of pins: one unit's TORCH_ON starts
+//! that unit only, and one unit's fault does not block another's START.
+//!
 //! The fault path (`plasma_tasks::safe_state::fail`) is driven through the test images' hooks:
 //! a panic and a HardFault while the torch cuts make every output safe, reset the board, and
 //! the next boot reports why; a TORCH_ON held through the reset does not fire the torch.
@@ -13,7 +16,7 @@ mod common;
 use std::time::Duration;
 
 use common::emu::{
-    EDGE, HOLD, LINK_EVENT, boot, command, expect_held, expect_output, press_again, ready,
+    EDGE, HOLD, LINK, LINK_EVENT, boot, command, expect_held, expect_output, press_again, ready,
     ready_board, set, value, wait_logged,
 };
 use host_tests::emu::log::LogLine;
@@ -317,4 +320,97 @@ fn a_stack_overflow_makes_the_outputs_safe_resets_and_is_reported_at_the_next_bo
     a_fault_while_cutting(TestHook::StackOverflow, |l| {
         l.text.starts_with("hard fault: stack overflow (sp 0x0fff")
     });
+}
+
+/// Waits until unit `unit`'s `STATUS` (`@N STATUS`) shows its link up and the unit ready, then
+/// its READY output.
+fn wait_unit_ready(board: &mut Board, unit: usize) {
+    let status = if unit == 0 {
+        "STATUS".to_string()
+    } else {
+        format!("@{} STATUS", unit + 1)
+    };
+    let began = std::time::Instant::now();
+    loop {
+        let reply = command(board, &status);
+        if reply.contains(" link=UP ") && reply.contains(" ready=ON") {
+            break;
+        }
+        assert!(
+            began.elapsed() < LINK,
+            "unit {} never ready: {reply}",
+            unit + 1
+        );
+        std::thread::sleep(Duration::from_millis(100));
+    }
+    board
+        .wait_unit_output(unit, Output::Ready, true, EDGE)
+        .unwrap_or_else(|e| panic!("{e}"));
+}
+
+/// Drives unit `unit`'s input.
+fn set_unit(board: &Board, unit: usize, input: Input, active: bool) {
+    board
+        .set_unit_input(unit, input, active)
+        .unwrap_or_else(|e| panic!("unit {} {} {active}: {e}", unit + 1, input.as_str()));
+}
+
+/// Waits for unit `unit`'s output.
+fn expect_unit_output(board: &Board, unit: usize, output: Output, on: bool) {
+    board
+        .wait_unit_output(unit, output, on, EDGE)
+        .unwrap_or_else(|e| panic!("{e}"));
+}
+
+/// Two HPR260s (ids 0 and 1) on one simulated multi-drop line, each wired to its own unit set
+/// of the pin table (its START to the unit's Start, the unit's Machine Motion to its MOTION):
+/// the second unit's TORCH_ON starts the second unit only, and a fault on the first unit (HPR
+/// error 044, which refuses a start) does not block the second's START. Every unit's START is
+/// under the safety rules when the board is dropped.
+#[test]
+fn two_units_on_one_line_each_torch_on_starts_its_own_unit_only() {
+    let options = BoardOptions {
+        more_units: vec![Model::Hpr260],
+        ..BoardOptions::new(Model::Hpr260)
+    };
+    let mut board = boot(options);
+    let reply = command(&mut board, "CONFIG units HPR:0,HPR:1");
+    assert!(reply.starts_with("OK units=HPR:0,HPR:1"), "{reply}");
+    wait_unit_ready(&mut board, 0);
+    wait_unit_ready(&mut board, 1);
+
+    set_unit(&board, 1, Input::TorchOn, true);
+    expect_unit_output(&board, 1, Output::Start, true);
+    // The second unit's arc transfers: its own MOTION, its own ARC_OK.
+    expect_unit_output(&board, 1, Output::ArcOk, true);
+    expect_held(&board, Output::Start, false, HOLD);
+    assert!(!board.output(Output::ArcOk).unwrap());
+    set_unit(&board, 1, Input::TorchOn, false);
+    expect_unit_output(&board, 1, Output::Start, false);
+    assert!(
+        board.edges(Output::Start).is_empty(),
+        "the first START never moved"
+    );
+
+    // A fault on the first unit: its FAULT on, its START refused; the second starts.
+    board.sim().inject_fault_at(0, 44).unwrap();
+    board
+        .wait_unit_output(0, Output::Fault, true, LINK_EVENT)
+        .unwrap_or_else(|e| panic!("{e}"));
+    set(&board, Input::TorchOn, true);
+    std::thread::sleep(Duration::from_millis(300));
+    set_unit(&board, 1, Input::TorchOn, true);
+    expect_unit_output(&board, 1, Output::Start, true);
+    board
+        .expect_held(Output::Start, false, HOLD)
+        .unwrap_or_else(|e| panic!("{e}"));
+    assert!(!board.unit_output(1, Output::Fault).unwrap());
+    set(&board, Input::TorchOn, false);
+    set_unit(&board, 1, Input::TorchOn, false);
+    expect_unit_output(&board, 1, Output::Start, false);
+    assert!(
+        board.edges(Output::Start).is_empty(),
+        "the first START never moved"
+    );
+    board.assert_safe();
 }
