@@ -227,6 +227,15 @@ impl UnitSet {
         }
     }
 
+    /// Every output's wiring of this unit, in [`Output::ALL`] order (START first): for loops
+    /// that drive a set without a lookup per pin.
+    pub fn outputs(self) -> &'static [Wiring; 8] {
+        match UNIT_OUTPUTS.get(self.index()) {
+            Some(outputs) => outputs,
+            None => &OUTPUTS,
+        }
+    }
+
     /// Whether this unit's `input` has an EXTI line of its own, whose edges wake the I/O task
     /// (which reads every level at each wake, and at least every 50 ms). A board-wide input
     /// has its line in unit 0's set. Unit 1's SYSTEM_ERROR has none: the sixteen lines are
@@ -330,6 +339,22 @@ pub const INPUTS: [Wiring; 8] = {
     let mut i = 0;
     while i < all.len() {
         all[i] = input(Input::ALL[i]);
+        i += 1;
+    }
+    all
+};
+
+/// Every unit set's outputs, each set's in [`Output::ALL`] order ([`UnitSet::outputs`]).
+#[allow(
+    clippy::indexing_slicing,
+    reason = "evaluated at compile time: an index out of range fails the build"
+)]
+const UNIT_OUTPUTS: [[Wiring; 8]; UNIT_SETS] = {
+    let mut all = [OUTPUTS; UNIT_SETS];
+    let mut i = 0;
+    while i < Output::ALL.len() * UNIT_SETS {
+        let (set, output) = (i / Output::ALL.len(), i % Output::ALL.len());
+        all[set][output] = UnitSet::ALL[set].output(Output::ALL[output]);
         i += 1;
     }
     all
@@ -577,6 +602,12 @@ mod tests {
         for i in Input::ALL {
             assert_eq!(first.input(i), input(i), "{i}");
             assert_eq!(second.input(i) == input(i), is_board_wide(i), "{i}");
+        }
+        for (set, outputs) in UnitSet::ALL.into_iter().zip(UNIT_OUTPUTS) {
+            assert_eq!(*set.outputs(), outputs);
+            for (o, wiring) in Output::ALL.into_iter().zip(outputs) {
+                assert_eq!(wiring, set.output(o), "{set:?} {o}");
+            }
         }
         for o in Output::ALL {
             assert_eq!(first.output(o), output(o), "{o}");

@@ -137,9 +137,8 @@ pub async fn run(
                 && units.set_unit_count(now, count, levels)
             {
                 info!(
-                    "I/O: {=usize} of the board's {=usize} unit sets driven",
-                    count.min(UNIT_SETS),
-                    UNIT_SETS
+                    "I/O: {=u8} of the board's unit sets driven",
+                    count.min(UNIT_SETS) as u8
                 );
             }
         }
@@ -203,8 +202,8 @@ pub fn log_transitions() {
             );
         } else {
             info!(
-                "I/O @{=usize} {=u64}.{=u16:03} ms: {=istr} {=str}: {}",
-                set.index() + 1,
+                "I/O @{=u8} {=u64}.{=u16:03} ms: {=istr} {=str}: {}",
+                unit_number(set),
                 ms,
                 us,
                 output_name(t.output),
@@ -228,18 +227,18 @@ pub fn log_transitions() {
 
 /// Thread mode: logs an I/O event as it is passed to the CNC session.
 pub fn log_event(set: UnitSet, at: Instant, event: IoEvent) {
-    let unit = set.index() + 1;
+    let unit = unit_number(set);
     match event {
         IoEvent::ArcOn | IoEvent::ArcOff => {
             debug!(
-                "I/O event @{} at {} us: {}",
+                "I/O event @{=u8} at {} us: {}",
                 unit,
                 at.as_micros(),
                 EventText(event)
             )
         }
         _ => warn!(
-            "I/O event @{} at {} us: {}",
+            "I/O event @{=u8} at {} us: {}",
             unit,
             at.as_micros(),
             EventText(event)
@@ -272,8 +271,8 @@ impl IoExchange for BoardIo {
 
     fn send_supply(&mut self, unit: UnitSet, supply: SupplyState) {
         debug!(
-            "supply @{}: link {=bool}, ready {=bool}, fault {=bool} (requires action {=bool})",
-            unit.index() + 1,
+            "supply @{=u8}: link {=bool}, ready {=bool}, fault {=bool} (requires action {=bool})",
+            unit_number(unit),
             supply.link_up,
             supply.unit_ready,
             supply.fault_active,
@@ -289,6 +288,11 @@ impl IoExchange for BoardIo {
     fn send_io_config(&mut self, config: IoConfig) {
         tell(|news| news.config = Some(config));
     }
+}
+
+/// How the CNC port numbers `set`'s unit (`@1` is the first).
+fn unit_number(set: UnitSet) -> u8 {
+    set.index() as u8 + 1
 }
 
 /// The names of the io outputs as docs/board.md writes them, for logs (interned: the texts stay

@@ -186,8 +186,7 @@ impl OutputPins {
 
 impl plasma_tasks::board::OutputPins for OutputPins {
     fn drive(&mut self, unit: UnitSet, outputs: Outputs) {
-        for output in io::Output::ALL {
-            let wiring = unit.output(output);
+        for (output, wiring) in io::Output::ALL.into_iter().zip(unit.outputs()) {
             set(wiring.pin, wiring.level(outputs.get(output)));
         }
         // The probe times the first unit's TORCH_ON to START.

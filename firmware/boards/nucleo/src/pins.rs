@@ -46,8 +46,9 @@ impl plasma_tasks::board::OutputPins for OutputPins {
         let Some(pins) = self.0.get_mut(set.index()) else {
             return;
         };
-        for (pin, o) in pins.iter_mut().zip(io::Output::ALL) {
-            pin.set_level(level(set.output(o).level(outputs.get(o))));
+        let all = pins.iter_mut().zip(io::Output::ALL).zip(set.outputs());
+        for ((pin, o), wiring) in all {
+            pin.set_level(level(wiring.level(outputs.get(o))));
         }
     }
 }
