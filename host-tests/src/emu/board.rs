@@ -241,13 +241,17 @@ impl Board {
         let cnc = CncPort::new(sockets.cnc)?;
         let log = FirmwareLog::start(&elf, qemu.log_path())?;
         qemu.resume()?;
-        if let Err(e) = wait_cnc_port_ready(&qtest) {
+        match wait_cnc_port_ready(&qtest) {
+            Ok(()) => {}
             // A firmware that never gets that far says why in its log (a fault at boot, a
             // reset loop); the board is dropped with this error, so it goes with it.
-            return Err(Error::Timeout(format!(
-                "{e}; the firmware's log (last 20 lines):\n{}",
-                log.tail(20)
-            )));
+            Err(Error::Timeout(why)) => {
+                return Err(Error::Timeout(format!(
+                    "{why}; the firmware's log (last 20 lines):\n{}",
+                    log.tail(20)
+                )));
+            }
+            Err(other) => return Err(other),
         }
         Ok(Board {
             qemu,
