@@ -25,7 +25,7 @@ use plasma_firmware::storage::ram_flash::{PAGE_SIZE, RamFlash};
 use plasma_firmware::bridge::SimCommand;
 use plasma_firmware::bridge::{Bridge, SaveRequest};
 use plasma_firmware::consumables::ConsumableSet;
-use plasma_firmware::io::{Inputs, IoConfig, IoEvent, Outputs};
+use plasma_firmware::io::{Inputs, IoConfig, IoEvent, Outputs, SupplyState};
 use plasma_firmware::link::{Diagnostics, LinkEvent, UnitStatus};
 use plasma_firmware::platform::PsEndpoint;
 use plasma_firmware::settings::{SaveError, Settings};
@@ -59,22 +59,25 @@ impl WorldEndpoint for Bridge {
         Bridge::diagnostics(self)
     }
 
-    fn set_io_snapshot(&mut self, inputs: Inputs, outputs: Outputs) {
-        Bridge::set_io_snapshot(self, inputs, outputs);
+    fn supply_state_of(&self, unit: usize) -> SupplyState {
+        Bridge::supply_state_of(self, unit)
     }
 
-    fn on_io_event(&mut self, now: Instant, event: IoEvent) {
-        Bridge::on_io_event(self, now, event);
+    fn set_io_snapshot_of(&mut self, unit: usize, inputs: Inputs, outputs: Outputs) {
+        Bridge::set_io_snapshot_of(self, unit, inputs, outputs);
+    }
+
+    fn on_io_event_of(&mut self, unit: usize, now: Instant, event: IoEvent) {
+        Bridge::on_io_event_of(self, unit, now, event);
     }
 
     fn take_io_config_change(&mut self) -> Option<IoConfig> {
         Bridge::take_io_config_change(self)
     }
 
-    fn poll_torch_request(&mut self) -> Option<bool> {
+    fn poll_torch_request(&mut self) -> Option<(usize, bool)> {
         match self.poll_sim_command()? {
-            SimCommand::Torch { unit: 0, on } => Some(on),
-            SimCommand::Torch { .. } => None,
+            SimCommand::Torch { unit, on } => Some((unit, on)),
         }
     }
 }
@@ -154,7 +157,7 @@ pub struct BridgeEndpoint {
     /// The bytes split into ACK, NAK and lines.
     records: Vec<CncRecord>,
     partial: Vec<u8>,
-    torch: VecDeque<bool>,
+    torch: VecDeque<(usize, bool)>,
     /// The stored record payload (what the flash would hold).
     stored: Option<Vec<u8>>,
     /// The consumable record stored last (saved by the bridge itself, at most once a minute).
@@ -322,8 +325,7 @@ impl BridgeEndpoint {
             }
             while let Some(command) = self.bridge.poll_sim_command() {
                 match command {
-                    SimCommand::Torch { unit: 0, on } => self.torch.push_back(on),
-                    SimCommand::Torch { .. } => {}
+                    SimCommand::Torch { unit, on } => self.torch.push_back((unit, on)),
                 }
             }
             if self.serve_history(now) {
@@ -436,12 +438,16 @@ impl WorldEndpoint for BridgeEndpoint {
         self.bridge.diagnostics()
     }
 
-    fn set_io_snapshot(&mut self, inputs: Inputs, outputs: Outputs) {
-        self.bridge.set_io_snapshot(inputs, outputs);
+    fn supply_state_of(&self, unit: usize) -> SupplyState {
+        self.bridge.supply_state_of(unit)
     }
 
-    fn on_io_event(&mut self, now: Instant, event: IoEvent) {
-        self.bridge.on_io_event(now, event);
+    fn set_io_snapshot_of(&mut self, unit: usize, inputs: Inputs, outputs: Outputs) {
+        self.bridge.set_io_snapshot_of(unit, inputs, outputs);
+    }
+
+    fn on_io_event_of(&mut self, unit: usize, now: Instant, event: IoEvent) {
+        self.bridge.on_io_event_of(unit, now, event);
         // `!ARC ON` reaches the CNC at this instant, not at the next poll.
         self.collect(now);
     }
@@ -450,7 +456,7 @@ impl WorldEndpoint for BridgeEndpoint {
         self.bridge.take_io_config_change()
     }
 
-    fn poll_torch_request(&mut self) -> Option<bool> {
+    fn poll_torch_request(&mut self) -> Option<(usize, bool)> {
         self.torch.pop_front()
     }
 }

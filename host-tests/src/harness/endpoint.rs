@@ -21,22 +21,27 @@ pub trait WorldEndpoint: PsEndpoint {
     fn status(&self) -> &UnitStatus;
     /// Link counters.
     fn diagnostics(&self) -> &Diagnostics;
-    /// The copy of the link's view that goes to the discrete I/O (the firmware's own
-    /// translation, what `Bridge::supply_state` uses: not a copy of it).
-    fn supply_state(&self) -> SupplyState {
-        SupplyState::from(self.status())
+    /// The copy of unit `unit`'s link view that goes to its discrete I/O (0 = the first
+    /// unit; the firmware's own translation, what `Bridge::supply_state_of` uses: not a copy
+    /// of it). An endpoint of one unit knows no other: a supply without a link.
+    fn supply_state_of(&self, unit: usize) -> SupplyState {
+        match unit {
+            0 => SupplyState::from(self.status()),
+            _ => SupplyState::default(),
+        }
     }
-    /// The discrete I/O levels after a step (the `Bridge` shows them in STATUS).
-    fn set_io_snapshot(&mut self, _inputs: Inputs, _outputs: Outputs) {}
-    /// An event of the discrete I/O (arc on/off, transfer time-out...).
-    fn on_io_event(&mut self, _now: Instant, _event: IoEvent) {}
-    /// A new interlock configuration to apply now (the `Bridge` after `CONFIG <io key>`).
+    /// Unit `unit`'s discrete I/O levels after a step (the `Bridge` shows them in STATUS).
+    fn set_io_snapshot_of(&mut self, _unit: usize, _inputs: Inputs, _outputs: Outputs) {}
+    /// An event of unit `unit`'s discrete I/O (arc on/off, transfer time-out...).
+    fn on_io_event_of(&mut self, _unit: usize, _now: Instant, _event: IoEvent) {}
+    /// A new interlock configuration to apply now (the `Bridge` after `CONFIG <io key>`);
+    /// it is every unit's.
     fn take_io_config_change(&mut self) -> Option<IoConfig> {
         None
     }
-    /// A level the simulated CNC's TORCH_ON input should take now (the `Bridge`'s
-    /// simulator-only `TORCH ON|OFF`), oldest first.
-    fn poll_torch_request(&mut self) -> Option<bool> {
+    /// A level the simulated CNC's TORCH_ON input of a unit (0 = the first) should take now
+    /// (the `Bridge`'s simulator-only `TORCH ON|OFF`, `@N TORCH ON`), oldest first.
+    fn poll_torch_request(&mut self) -> Option<(usize, bool)> {
         None
     }
 }

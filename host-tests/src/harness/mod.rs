@@ -46,6 +46,7 @@ mod bridge;
 mod endpoint;
 pub mod measure;
 mod options;
+mod pins;
 mod shared;
 mod trace;
 mod world;

@@ -1,21 +1,25 @@
-//! A [`World`] with several units on one line: the firmware's [`SharedLine`] as the endpoint
+//! A [`World`] with several units on one line: the firmware's [`SharedLine`] (or the whole
+//! bridge with `CONFIG units` naming them, [`World::with_bridge_on_line`]) as the endpoint
 //! and a [`MultiDrop`] of simulated units at the far end of the world's [`Line`], so the
 //! line's wiring, noise and damage apply to all of them as to one unit.
 //!
-//! The world's discrete I/O is one set, the first unit's: its START drives unit 0, its
-//! safety monitor checks unit 0's view (per-unit pins come with the bridge's side of a shared
-//! line). The line has its own independent observer: the [`MultiDrop`] counts every character
-//! two units sent at once ([`World::collisions`]).
+//! The world has one set of discrete I/O per unit: unit k's START drives unit k alone, its
+//! MOTION comes from unit k, its interlocks follow unit k's link and its own safety monitor
+//! checks it. The line has its own independent observer: the [`MultiDrop`] counts every
+//! character two units sent at once ([`World::collisions`]).
 //!
 //! [`Line`]: plasma_sim::line::Line
 
 use std::fmt;
 
-use plasma_firmware::link::{Diagnostics, LineUnit, LinkEvent, SharedLine, UnitStatus};
+use plasma_firmware::io::SupplyState;
+use plasma_firmware::link::{Diagnostics, LineUnit, LinkEvent, NamedUnits, SharedLine, UnitStatus};
+use plasma_firmware::settings::Settings;
 use plasma_protocol::time::{Duration, Instant};
 use plasma_sim::multidrop::{self, MultiDrop, units_for_one_line};
 use plasma_sim::{Family, Model};
 
+use super::bridge::BridgeEndpoint;
 use super::endpoint::WorldEndpoint;
 use super::options::WorldOptions;
 use super::world::World;
@@ -40,8 +44,9 @@ impl fmt::Display for SharedLineError {
 
 impl std::error::Error for SharedLineError {}
 
-/// The world observes the first unit: its status, diagnostics and the I/O; every unit's
-/// events go to the world's record (without the unit: [`World::unit_status`] tells them apart).
+/// The world observes the first unit's status and diagnostics, and each unit's supply state
+/// for its own discrete I/O; every unit's events go to the world's record (without the unit:
+/// [`World::unit_status`] tells them apart).
 impl WorldEndpoint for SharedLine {
     fn poll(&mut self, _now: Instant, events: &mut Vec<LinkEvent>) {
         while let Some((_, event)) = self.poll_event() {
@@ -55,6 +60,12 @@ impl WorldEndpoint for SharedLine {
 
     fn diagnostics(&self) -> &Diagnostics {
         self.unit(0).expect("a line has a unit").diagnostics()
+    }
+
+    fn supply_state_of(&self, unit: usize) -> SupplyState {
+        self.unit(unit)
+            .map(|link| SupplyState::from(link.status()))
+            .unwrap_or_default()
     }
 }
 
@@ -77,6 +88,43 @@ fn addresses(models: &[Model], options: &WorldOptions) -> Vec<LineUnit> {
             }
         })
         .collect()
+}
+
+/// `models` on one simulated line and how the bridge addresses them, with the options the
+/// world is built with (a Powermax node 0 becomes 1).
+fn simulated_line(
+    models: &[Model],
+    mut options: WorldOptions,
+) -> Result<(MultiDrop, Vec<LineUnit>, WorldOptions), SharedLineError> {
+    options.sim.modbus_address = options.sim.modbus_address.max(1);
+    let units = units_for_one_line(models, &options.sim).map_err(SharedLineError::Units)?;
+    let units = MultiDrop::new(units).map_err(SharedLineError::Units)?;
+    Ok((units, addresses(models, &options), options))
+}
+
+/// The whole bridge driving several units on one line.
+impl World<BridgeEndpoint> {
+    /// The bridge with `settings` and `CONFIG units` naming `models` as they sit on one
+    /// simulated line (HPR ids and Powermax nodes in order from those of `options.sim`; a
+    /// Powermax node 0 becomes 1): one set of discrete I/O and one safety monitor per unit.
+    pub fn with_bridge_on_line(
+        models: &[Model],
+        options: WorldOptions,
+        mut settings: Settings,
+    ) -> Result<Self, SharedLineError> {
+        let (units, addresses, options) = simulated_line(models, options)?;
+        settings.units =
+            NamedUnits::new(settings.link, &addresses).map_err(SharedLineError::Bridge)?;
+        Ok(World::with_bridge_unit(Box::new(units), options, settings))
+    }
+
+    /// Run until the bridge has every unit's link up.
+    pub fn wait_units_up(&mut self, timeout: Duration) -> Result<Instant, super::Timeout> {
+        self.run_until(
+            |w| (0..w.bridge().unit_count()).all(|i| w.bridge().status_of(i).link_up),
+            timeout,
+        )
+    }
 }
 
 impl World<SharedLine> {
@@ -112,11 +160,8 @@ impl<E: WorldEndpoint> World<E> {
         options: WorldOptions,
         wrap: impl FnOnce(SharedLine) -> E,
     ) -> Result<Self, SharedLineError> {
-        let mut options = options;
-        options.sim.modbus_address = options.sim.modbus_address.max(1);
-        let units = units_for_one_line(models, &options.sim).map_err(SharedLineError::Units)?;
-        let units = MultiDrop::new(units).map_err(SharedLineError::Units)?;
-        let line = SharedLine::new(options.link, &addresses(models, &options), Instant::ZERO)
+        let (units, addresses, options) = simulated_line(models, options)?;
+        let line = SharedLine::new(options.link, &addresses, Instant::ZERO)
             .map_err(SharedLineError::Bridge)?;
         Ok(World::with_endpoint(wrap(line), Box::new(units), options))
     }

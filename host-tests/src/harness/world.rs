@@ -3,9 +3,7 @@
 
 use std::fmt;
 
-use plasma_firmware::io::{
-    Input, Inputs, Interlocks, IoConfig, IoEvent, SafetyMonitor, SupplyState, Transition,
-};
+use plasma_firmware::io::{Input, Interlocks, IoConfig, IoEvent, SafetyMonitor, Transition};
 use plasma_firmware::link::{
     CommandFailure, CommandOutput, LinkCommand, LinkEvent, PsLink, Refusal, Ticket,
 };
@@ -14,9 +12,11 @@ use plasma_protocol::time::{Duration, Instant};
 
 use super::endpoint::WorldEndpoint;
 use super::options::{RxErrors, WorldOptions};
+use super::pins::UnitPins;
 use super::trace::{Direction, TraceFrame, WireTrace};
 use plasma_sim::hpr::Hpr;
 use plasma_sim::line::{End, Line};
+use plasma_sim::multidrop::MultiDrop;
 use plasma_sim::{Model, SimulatedUnit};
 
 /// Times the loop processes one instant again because something still asks for it; beyond
@@ -67,28 +67,14 @@ pub struct World<E: WorldEndpoint = PsLink> {
     endpoint: E,
     unit: Box<dyn SimulatedUnit>,
     line: Line,
-    io: Interlocks,
-    /// The input levels at the board's pins, as driven: what the monitors and a reset see,
-    /// kept apart from the interlocks' own view.
-    pins_in: Inputs,
-    monitor: SafetyMonitor,
-    /// A second monitor started at the last [`World::reset_bridge`]: the power-up rules
-    /// (START off at reset, a held TORCH_ON ignored) apply again from there.
-    reset_monitor: Option<SafetyMonitor>,
+    /// Each simulated unit's discrete I/O (one set per unit of a [`MultiDrop`]), the first
+    /// unit's first.
+    pins: Vec<UnitPins>,
     rx_errors: RxErrors,
     events: Vec<(Instant, LinkEvent)>,
-    io_events: Vec<(Instant, IoEvent)>,
-    transitions: Vec<Transition>,
     trace: WireTrace,
     heard: Vec<(Instant, u8)>,
     noise_bursts: Vec<(Instant, Duration)>,
-    start_given: bool,
-    /// HOLD and CORNER_CURRENT as last given to an HPR simulator.
-    hpr_inputs_given: (bool, bool),
-    /// REMOTE_POWER as last seen, and whether its falling edge switched the unit off.
-    remote_power_given: bool,
-    off_by_remote_power: bool,
-    last_supply: SupplyState,
     scratch: Vec<LinkEvent>,
     repeats: u32,
     stats: WorldStats,
@@ -162,28 +148,21 @@ impl<E: WorldEndpoint> World<E> {
         if let Some(density) = options.noise_density {
             line.set_noise_density(density);
         }
-        let io = Interlocks::new(options.io, Instant::ZERO, Inputs::NONE);
+        let units = unit
+            .as_any()
+            .downcast_ref::<MultiDrop>()
+            .map_or(1, MultiDrop::len);
         let mut world = World {
             now: Instant::ZERO,
             endpoint,
             unit,
             line,
-            io,
-            pins_in: Inputs::NONE,
-            monitor: power_up_monitor(&options.io, Inputs::NONE),
-            reset_monitor: None,
+            pins: (0..units).map(|_| UnitPins::new(options.io)).collect(),
             rx_errors: options.rx_errors,
             events: Vec::new(),
-            io_events: Vec::new(),
-            transitions: Vec::new(),
             trace: WireTrace::default(),
             heard: Vec::new(),
             noise_bursts: Vec::new(),
-            start_given: false,
-            hpr_inputs_given: (false, false),
-            remote_power_given: false,
-            off_by_remote_power: false,
-            last_supply: SupplyState::default(),
             scratch: Vec::new(),
             repeats: 0,
             stats: WorldStats::default(),
@@ -245,22 +224,19 @@ impl<E: WorldEndpoint> World<E> {
     /// The earliest instant at which something is due (a real-time driver sleeps until
     /// then).
     pub fn next_wakeup(&self) -> Option<Instant> {
-        self.wakeups().into_iter().flatten().min()
+        self.wakeups().min()
     }
 
     /// The bridge's board restarts now: `reset` rebuilds the endpoint (keeping whatever
-    /// survives a power cycle), the interlocks start again from reset with `io` and the input
-    /// levels of this moment (a TORCH_ON held through the reset is ignored until released),
-    /// and the power-up safety rules are checked again from here.
+    /// survives a power cycle), every unit's interlocks start again from reset with `io` and
+    /// the input levels of this moment (a TORCH_ON held through the reset is ignored until
+    /// released), and the power-up safety rules are checked again from here.
     pub fn reset_bridge(&mut self, io: IoConfig, reset: impl FnOnce(&mut E, Instant)) {
         let now = self.now;
         reset(&mut self.endpoint, now);
-        while let Some(t) = self.io.poll_transition() {
-            self.transitions.push(t);
+        for pins in &mut self.pins {
+            pins.reset(now, io);
         }
-        self.io = Interlocks::new(io, now, self.pins_in);
-        self.last_supply = SupplyState::default();
-        self.reset_monitor = Some(power_up_monitor(&io, self.pins_in));
         self.process();
     }
 
@@ -285,65 +261,96 @@ impl<E: WorldEndpoint> World<E> {
 
     // --- the discrete I/O -------------------------------------------------------------------
 
-    /// Drive the CNC's TORCH_ON input.
+    /// Drive the CNC's TORCH_ON input (the first unit's).
     pub fn set_torch(&mut self, on: bool) {
-        self.set_input(Input::TorchOn, on);
+        self.set_torch_of(0, on);
     }
 
-    /// Drive another CNC input (HOLD, CORNER_CURRENT...).
+    /// Drive unit `unit`'s TORCH_ON input (0 = the first unit).
+    pub fn set_torch_of(&mut self, unit: usize, on: bool) {
+        self.set_input_of(unit, Input::TorchOn, on);
+    }
+
+    /// Drive another CNC input (HOLD, CORNER_CURRENT...) of the first unit.
     pub fn set_input(&mut self, input: Input, on: bool) {
-        self.drive_input(input, on);
+        self.set_input_of(0, input, on);
+    }
+
+    /// Drive an input of unit `unit`'s set.
+    pub fn set_input_of(&mut self, unit: usize, input: Input, on: bool) {
+        self.drive_input(unit, input, on);
         self.process();
     }
 
-    /// An edge at the board's input pin now: the monitors see it as it arrives, then the
-    /// interlocks get it.
-    fn drive_input(&mut self, input: Input, on: bool) {
-        self.pins_in.set(input, on);
-        self.monitor.input(input, on);
-        if let Some(monitor) = &mut self.reset_monitor {
-            monitor.input(input, on);
+    /// An edge at unit `unit`'s input pin now (ignored for a unit the world does not have).
+    fn drive_input(&mut self, unit: usize, input: Input, on: bool) {
+        let now = self.now;
+        if let Some(pins) = self.pins.get_mut(unit) {
+            pins.drive_input(now, input, on);
         }
-        self.io.on_input(self.now, input, on);
     }
 
-    /// The interlocks.
+    /// How many sets of discrete I/O the world has: one per simulated unit.
+    pub fn pin_sets(&self) -> usize {
+        self.pins.len()
+    }
+
+    fn pins(&self, unit: usize) -> &UnitPins {
+        self.pins
+            .get(unit)
+            .unwrap_or_else(|| panic!("no unit {unit}: the world has {}", self.pins.len()))
+    }
+
+    /// The interlocks (the first unit's).
     pub fn io(&self) -> &Interlocks {
-        &self.io
+        self.io_of(0)
     }
 
-    /// Every output change of the interlocks so far.
+    /// Unit `unit`'s interlocks.
+    pub fn io_of(&self, unit: usize) -> &Interlocks {
+        &self.pins(unit).io
+    }
+
+    /// Every output change of the (first unit's) interlocks so far.
     pub fn transitions(&self) -> &[Transition] {
-        &self.transitions
+        self.transitions_of(0)
     }
 
-    /// Every discrete I/O event so far.
+    /// Every output change of unit `unit`'s interlocks so far.
+    pub fn transitions_of(&self, unit: usize) -> &[Transition] {
+        &self.pins(unit).transitions
+    }
+
+    /// Every discrete I/O event (of the first unit) so far.
     pub fn io_events(&self) -> &[(Instant, IoEvent)] {
-        &self.io_events
+        self.io_events_of(0)
     }
 
-    /// The safety monitor (checked after every step).
+    /// Every discrete I/O event of unit `unit` so far.
+    pub fn io_events_of(&self, unit: usize) -> &[(Instant, IoEvent)] {
+        &self.pins(unit).io_events
+    }
+
+    /// The (first unit's) safety monitor (checked after every step).
     pub fn monitor(&self) -> &SafetyMonitor {
-        &self.monitor
+        self.monitor_of(0)
     }
 
-    /// Panics when a safety rule was broken.
+    /// Unit `unit`'s own safety monitor, fed only that unit's pins and supply state.
+    pub fn monitor_of(&self, unit: usize) -> &SafetyMonitor {
+        &self.pins(unit).monitor
+    }
+
+    /// Panics when a safety rule was broken, of any unit.
     pub fn assert_safe(&self) {
-        if let Some(monitor) = self.reset_monitor.as_ref().filter(|m| !m.is_clean()) {
-            panic!(
-                "safety rule broken after the bridge reset ({} times): {:?}\nlast frames:\n{}",
-                monitor.count(),
-                monitor.violations(),
-                self.trace.tail(20)
-            );
-        }
-        if !self.monitor.is_clean() {
-            panic!(
-                "safety rule broken ({} times): {:?}\nlast frames:\n{}",
-                self.monitor.count(),
-                self.monitor.violations(),
-                self.trace.tail(20)
-            );
+        for (unit, pins) in self.pins.iter().enumerate() {
+            if let Some(violation) = pins.violation() {
+                let which = match self.pins.len() {
+                    1 => String::new(),
+                    _ => format!("unit {}: ", unit + 1),
+                };
+                panic!("{which}{violation}\nlast frames:\n{}", self.trace.tail(20));
+            }
         }
     }
 
@@ -494,20 +501,23 @@ impl<E: WorldEndpoint> World<E> {
 
     // --- the loop -------------------------------------------------------------------------
 
-    fn wakeups(&self) -> [Option<Instant>; 4] {
+    /// Every instant something asked to be called at: the endpoint, the line, the
+    /// simulator, each unit's interlocks.
+    fn wakeups(&self) -> impl Iterator<Item = Instant> + '_ {
         [
             self.endpoint.poll_at(),
             self.line.next_delivery(),
             self.unit.next_wakeup(),
-            self.io.poll_at(),
         ]
+        .into_iter()
+        .chain(self.pins.iter().map(|p| p.io.poll_at()))
+        .flatten()
     }
 
     /// Process the next instant at which something happens, if it is not after `limit`;
     /// otherwise move to `limit`, process it and return false.
     fn step(&mut self, limit: Instant) -> bool {
-        let wakeups = self.wakeups();
-        let mut next = wakeups.iter().flatten().min().copied();
+        let mut next = self.wakeups().min();
         if next.is_some_and(|t| t <= self.now) {
             if self.repeats >= MAX_REPEATS_AT_ONE_INSTANT {
                 self.stats.stale_wakeups += 1;
@@ -516,13 +526,7 @@ impl<E: WorldEndpoint> World<E> {
                     .poll_at()
                     .filter(|&t| t <= self.now)
                     .map(|_| self.now + BUSY_LOOP_TICK);
-                next = wakeups
-                    .iter()
-                    .flatten()
-                    .copied()
-                    .filter(|&t| t > self.now)
-                    .chain(spin)
-                    .min();
+                next = self.wakeups().filter(|&t| t > self.now).chain(spin).min();
             } else {
                 self.repeats += 1;
             }
@@ -567,9 +571,12 @@ impl<E: WorldEndpoint> World<E> {
             self.send(End::Unit, &bytes);
         }
         self.take_unit_noise();
-        let motion = self.unit.motion();
-        if motion != self.pins_in.motion {
-            self.drive_input(Input::Motion, motion);
+        // Each unit's Motion output to its own set's MOTION input.
+        for index in 0..self.pins.len() {
+            let motion = unit_on_line(&mut *self.unit, index).is_some_and(|u| u.motion());
+            if motion != self.pins[index].pins_in.motion {
+                self.drive_input(index, Input::Motion, motion);
+            }
         }
 
         // The bridge side.
@@ -605,61 +612,51 @@ impl<E: WorldEndpoint> World<E> {
         self.drain_endpoint();
 
         // What the endpoint asks of the machine: a simulator-only TORCH_ON level, a new
-        // interlock configuration.
-        while let Some(on) = self.endpoint.poll_torch_request() {
-            self.drive_input(Input::TorchOn, on);
+        // interlock configuration (one for every unit's set).
+        while let Some((unit, on)) = self.endpoint.poll_torch_request() {
+            self.drive_input(unit, Input::TorchOn, on);
         }
         if let Some(config) = self.endpoint.take_io_config_change() {
-            // The world's pins are the CNC's meaning: a change of TORCH_ON's wiring keeps the
-            // level and re-arms the power-up rule, as DiscreteIo does on the board.
-            let torch_on = |c: &IoConfig| c.inputs.get(Input::TorchOn);
-            if torch_on(self.io.config()) != torch_on(&config) {
-                self.io.rearm_torch_on(now, self.pins_in.torch_on);
-                self.monitor.torch_on_redefined(self.pins_in.torch_on);
-                if let Some(monitor) = &mut self.reset_monitor {
-                    monitor.torch_on_redefined(self.pins_in.torch_on);
-                }
+            for pins in &mut self.pins {
+                pins.reconfigure(now, config);
             }
-            self.monitor.ready_interlock(config.ready_required);
-            if let Some(monitor) = &mut self.reset_monitor {
-                monitor.ready_interlock(config.ready_required);
-            }
-            self.io.set_config(now, config);
         }
 
-        // The discrete I/O, from the link's view at this instant.
-        let supply = self.endpoint.supply_state();
-        self.monitor.link_reports(supply.link_up, supply.unit_ready);
-        if let Some(monitor) = &mut self.reset_monitor {
-            monitor.link_reports(supply.link_up, supply.unit_ready);
-        }
-        if supply != self.last_supply {
-            self.io.on_supply(now, supply);
-            self.last_supply = supply;
-        }
-        self.io.poll(now);
-        let start = self.io.outputs().start;
-        if start != self.start_given {
-            self.unit.set_start(now, start);
-            self.start_given = start;
-        }
-        self.pass_through_to_hpr();
-        self.follow_remote_power();
-        while let Some(t) = self.io.poll_transition() {
-            self.transitions.push(t);
-        }
-        while let Some(e) = self.io.poll_event() {
-            self.endpoint.on_io_event(now, e);
-            self.io_events.push((now, e));
-        }
-        self.endpoint
-            .set_io_snapshot(self.io.inputs(), self.io.outputs());
-        self.monitor
-            .check(now, start, supply.restart_blackout_until);
-        if let Some(monitor) = &mut self.reset_monitor {
-            monitor.check(now, start, supply.restart_blackout_until);
+        // Each unit's discrete I/O, from its link's view at this instant.
+        for index in 0..self.pins.len() {
+            self.step_unit_io(index);
         }
         self.assert_safe();
+    }
+
+    /// Unit `index`'s interlocks follow its supply state; its START drives that unit alone,
+    /// its events and levels go back to the endpoint as that unit's, its monitors check it.
+    fn step_unit_io(&mut self, index: usize) {
+        let now = self.now;
+        let supply = self.endpoint.supply_state_of(index);
+        let pins = &mut self.pins[index];
+        pins.supply(now, supply);
+        pins.io.poll(now);
+        let start = pins.io.outputs().start;
+        if start != pins.start_given {
+            if let Some(unit) = unit_on_line(&mut *self.unit, index) {
+                unit.set_start(now, start);
+            }
+            pins.start_given = start;
+        }
+        self.pass_through_to_hpr(index);
+        self.follow_remote_power(index);
+        let pins = &mut self.pins[index];
+        while let Some(t) = pins.io.poll_transition() {
+            pins.transitions.push(t);
+        }
+        while let Some(e) = pins.io.poll_event() {
+            self.endpoint.on_io_event_of(index, now, e);
+            pins.io_events.push((now, e));
+        }
+        self.endpoint
+            .set_io_snapshot_of(index, pins.io.inputs(), pins.io.outputs());
+        pins.check(now);
     }
 
     /// Hand the characters in `chunk` to the endpoint (and log them as heard).
@@ -713,55 +710,69 @@ impl<E: WorldEndpoint> World<E> {
         }
     }
 
-    /// HOLD and CORNER_CURRENT to an HPR simulator (it has no PIERCE_COMPLETE input).
-    fn pass_through_to_hpr(&mut self) {
-        let outputs = self.io.outputs();
+    /// Unit `index`'s HOLD and CORNER_CURRENT to its HPR simulator (it has no
+    /// PIERCE_COMPLETE input).
+    fn pass_through_to_hpr(&mut self, index: usize) {
+        let pins = &mut self.pins[index];
+        let outputs = pins.io.outputs();
         let levels = (outputs.hold, outputs.corner_current);
-        if levels == self.hpr_inputs_given {
+        let given = pins.hpr_inputs_given;
+        if levels == given {
             return;
         }
+        pins.hpr_inputs_given = levels;
         let now = self.now;
-        if let Some(hpr) = self.unit.as_any_mut().downcast_mut::<Hpr>() {
-            if levels.0 != self.hpr_inputs_given.0 {
+        let hpr =
+            unit_on_line(&mut *self.unit, index).and_then(|u| u.as_any_mut().downcast_mut::<Hpr>());
+        if let Some(hpr) = hpr {
+            if levels.0 != given.0 {
                 hpr.set_hold(now, levels.0);
             }
-            if levels.1 != self.hpr_inputs_given.1 {
+            if levels.1 != given.1 {
                 hpr.set_corner(now, levels.1);
             }
         }
-        self.hpr_inputs_given = levels;
     }
-}
 
-impl<E: WorldEndpoint> World<E> {
-    /// The unit's Remote Power input wired to REMOTE_POWER, edge by edge: the unit starts
-    /// switched on by its operator (REMOTE_POWER is off from the bridge's reset), a falling
-    /// edge switches it off and the next rising edge back on.
-    fn follow_remote_power(&mut self) {
-        let on = self.io.outputs().remote_power;
-        if on == self.remote_power_given {
+    /// Unit `index`'s Remote Power input wired to its REMOTE_POWER, edge by edge: the unit
+    /// starts switched on by its operator (REMOTE_POWER is off from the bridge's reset), a
+    /// falling edge switches it off and the next rising edge back on. A unit alone takes its
+    /// end of the line with it; a unit on a multi-drop line falls silent by itself.
+    fn follow_remote_power(&mut self, index: usize) {
+        let pins = &mut self.pins[index];
+        let on = pins.io.outputs().remote_power;
+        if on == pins.remote_power_given {
             return;
         }
-        self.remote_power_given = on;
+        pins.remote_power_given = on;
         let now = self.now;
+        let alone = !self.unit.as_any().is::<MultiDrop>();
         if !on {
-            self.unit.power_off(now);
-            self.line.set_unit_powered(now, false);
-            self.off_by_remote_power = true;
-        } else if core::mem::take(&mut self.off_by_remote_power) {
-            self.line.set_unit_powered(now, true);
-            self.unit.power_on(now);
+            pins.off_by_remote_power = true;
+            if let Some(unit) = unit_on_line(&mut *self.unit, index) {
+                unit.power_off(now);
+            }
+            if alone {
+                self.line.set_unit_powered(now, false);
+            }
+        } else if core::mem::take(&mut pins.off_by_remote_power) {
+            if alone {
+                self.line.set_unit_powered(now, true);
+            }
+            if let Some(unit) = unit_on_line(&mut *self.unit, index) {
+                unit.power_on(now);
+            }
         }
     }
 }
 
-/// A monitor watching from a power-up with these settings and input levels: the operator's
-/// ready interlock as saved, NOT_READY as it reads at the pin.
-fn power_up_monitor(io: &IoConfig, pins_in: Inputs) -> SafetyMonitor {
-    let mut monitor = SafetyMonitor::new(pins_in.torch_on);
-    monitor.ready_interlock(io.ready_required);
-    monitor.input(Input::NotReady, pins_in.not_ready);
-    monitor
+/// Simulated unit `index` of `unit`: a unit of a [`MultiDrop`], or a lone unit as unit 0.
+fn unit_on_line(unit: &mut dyn SimulatedUnit, index: usize) -> Option<&mut dyn SimulatedUnit> {
+    if unit.as_any().is::<MultiDrop>() {
+        let line = unit.as_any_mut().downcast_mut::<MultiDrop>()?;
+        return line.unit_mut(index).map(|u| u as &mut dyn SimulatedUnit);
+    }
+    (index == 0).then_some(unit)
 }
 
 impl<E: WorldEndpoint> Drop for World<E> {
