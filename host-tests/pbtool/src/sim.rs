@@ -1,6 +1,10 @@
 //! `pbtool sim`: the bridge's real behaviour against a simulated unit, with the CNC text
 //! protocol on stdin/stdout.
 //!
+//! Several units share one simulated line as the bridge's `CONFIG units` names them
+//! ([`World::with_bridge_on_line`]): `@N` addresses unit N on the console, `@N TORCH ON`
+//! drives its TORCH_ON.
+//!
 //! The [`World`] of the scenario tests ([`World::with_bridge`]) runs either in real time
 //! (advanced by the wall clock; a person types `SET PROCESS CUT 45 AUTO` and `STATUS` and sees
 //! what a CNC would see) or in virtual time (`--fast`: no sleeps, the same output on every
@@ -19,16 +23,18 @@ use std::str::FromStr;
 use std::sync::mpsc::{Receiver, RecvTimeoutError};
 
 use plasma_firmware::bridge::Bridge;
+use plasma_firmware::link::LineUnit;
 use plasma_firmware::settings::Settings;
 use plasma_protocol::cnc::phoenix::{EOT, ETX, SOH, STX};
 use plasma_protocol::powermax::FaultCode;
 use plasma_protocol::serial::PortConfig;
 use plasma_protocol::time::{Duration, Instant};
 
-use host_tests::harness::{BridgeEndpoint, CncItem, World, WorldOptions};
+use host_tests::harness::{BridgeEndpoint, CncItem, SharedLineError, World, WorldOptions};
 
 use crate::realtime::{Arrival, Clock, wait};
 use crate::serial::{Port, Rx, SerialError};
+use plasma_sim::multidrop::MultiDrop;
 use plasma_sim::{Family, Model, SimOptions};
 
 /// The longest wait for the link (and the unit's limits) before the first command.
@@ -43,11 +49,12 @@ const LINGER: Duration = Duration::from_millis(100);
 const TICK: std::time::Duration = std::time::Duration::from_millis(10);
 
 /// How `pbtool sim` runs.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct ConsoleOptions {
-    /// The simulated unit.
-    pub model: Model,
-    /// A fault the unit has from the start (Powermax decimal code, HPR error number).
+    /// The simulated units on the line, in order (HPR ids from 0, Powermax nodes from 1 when
+    /// there are several).
+    pub models: Vec<Model>,
+    /// A fault the (first) unit has from the start (Powermax decimal code, HPR error number).
     pub fault: Option<u16>,
     /// Event lines on from the start.
     pub events: bool,
@@ -90,13 +97,15 @@ pub struct Console {
     printed: usize,
     /// The CNC bytes written before the console took over (not the CNC's to see).
     before_console: usize,
-    transitions_printed: usize,
+    /// Per unit: its output transitions printed so far.
+    transitions_printed: Vec<usize>,
     pacer: Pacer,
 }
 
 impl Console {
-    /// The bridge (default settings, events as asked) against a fresh simulated unit.
-    pub fn new(options: ConsoleOptions) -> Self {
+    /// The bridge (default settings, events as asked) against fresh simulated units; refused
+    /// (with the reason) when they cannot share a line.
+    pub fn new(options: ConsoleOptions) -> Result<Self, SharedLineError> {
         let world_options = WorldOptions {
             seed: options.seed,
             sim: SimOptions {
@@ -110,18 +119,52 @@ impl Console {
             ..Settings::default()
         };
         settings.cnc.framing = options.cnc_framing;
-        let mut world = World::with_bridge(options.model, world_options, settings);
+        let mut world = match options.models.as_slice() {
+            [one] => World::with_bridge(*one, world_options, settings),
+            several => World::with_bridge_on_line(several, world_options, settings)?,
+        };
         if let Some(code) = options.fault {
             world.inject_fault(code);
         }
-        Console {
+        Ok(Console {
             world,
             verbose: options.verbose,
             printed: 0,
             before_console: 0,
-            transitions_printed: 0,
+            transitions_printed: Vec::new(),
             pacer: Pacer::default(),
-        }
+        })
+    }
+
+    /// What the bridge drives, for a banner: `a simulated HPR260`, or `2 simulated units on
+    /// one line: @1 HPR260 (id 0), @2 HPR130 (id 1)` (the addresses as `CONFIG units` names
+    /// them).
+    pub fn describe_units(&self) -> String {
+        let named = self.world.bridge().settings().units;
+        let Some(line) = self.world.unit_ref().as_any().downcast_ref::<MultiDrop>() else {
+            return format!("a simulated {}", self.world.unit_ref().model());
+        };
+        let units: Vec<String> = named
+            .as_slice()
+            .iter()
+            .enumerate()
+            .map(|(index, unit)| {
+                let model = line
+                    .unit(index)
+                    .map_or(String::new(), |u| format!("{} ", u.model()));
+                let address = match unit {
+                    LineUnit::Hpr { id } => format!("id {id}"),
+                    LineUnit::Powermax { node } => format!("node {node}"),
+                    LineUnit::MaxPro200 => "id 0".to_string(),
+                };
+                format!("@{} {model}({address})", index + 1)
+            })
+            .collect();
+        format!(
+            "{} simulated units on one line: {}",
+            units.len(),
+            units.join(", ")
+        )
     }
 
     /// The world (for tests).
@@ -322,11 +365,19 @@ impl Console {
     /// transitions (stderr).
     fn flush(&mut self, out: &mut dyn Write, err: &mut dyn Write) -> io::Result<()> {
         if self.verbose {
-            let transitions = self.world.transitions();
-            for t in &transitions[self.transitions_printed..] {
-                writeln!(err, "[io] {t}")?;
+            let units = self.world.pin_sets();
+            self.transitions_printed.resize(units, 0);
+            for (unit, printed) in self.transitions_printed.iter_mut().enumerate() {
+                let transitions = self.world.transitions_of(unit);
+                let which = match units {
+                    1 => String::new(),
+                    _ => format!(" @{}", unit + 1),
+                };
+                for t in &transitions[*printed..] {
+                    writeln!(err, "[io{which}] {t}")?;
+                }
+                *printed = transitions.len();
             }
-            self.transitions_printed = transitions.len();
         }
         let records = self.world.cnc_output();
         for record in &records[self.printed..] {
@@ -342,11 +393,13 @@ impl Console {
     }
 }
 
-/// True once the bridge's link is up and what the first commands need is known (a
+/// True once every unit's link is up and what the first commands need is known (a
 /// Powermax's limits, an HPR's state): a console sends its first command then.
 pub fn settled(bridge: &Bridge) -> bool {
-    let status = bridge.status();
-    status.link_up && (status.limits.is_some() || status.hpr.state.is_some())
+    (0..bridge.unit_count()).all(|unit| {
+        let status = bridge.status_of(unit);
+        status.link_up && (status.limits.is_some() || status.hpr.state.is_some())
+    })
 }
 
 /// Which console lines a reply is due for, so that a console sends the next line only once

@@ -284,3 +284,80 @@ fn run_keeps_its_flash_in_a_file_and_sets_its_clock() {
     );
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn several_ps_share_one_simulated_line_and_at_n_addresses_each() {
+    // HPR ids 0 and 1 on one line: `CONFIG units` names them, `@2` is the second.
+    let output = sim(
+        &["--ps", "hpr260", "--ps", "hpr130", "--fast"],
+        "CONFIG units\nID\n@2 ID\n@3 ID\n",
+    );
+    assert!(output.status.success());
+    let lines = stdout_lines(&output);
+    assert_eq!(lines.len(), 4, "{lines:?}");
+    assert_eq!(lines[0], "OK units=HPR:0,HPR:1");
+    assert!(lines[1].contains(" model=HPR260 "), "{lines:?}");
+    assert!(!lines[1].contains("unit="), "{lines:?}");
+    assert!(lines[2].contains(" model=HPR130 "), "{lines:?}");
+    assert!(lines[2].ends_with(" unit=2"), "{lines:?}");
+    assert!(lines[3].starts_with("ERR RANGE "), "{lines:?}");
+
+    // Powermax units take nodes 1, 2...; `TORCH ON` and `@2 TORCH ON` drive each unit's
+    // TORCH_ON, and only its START follows.
+    let script = "CONFIG units\n@2 TORCH ON\n\n@2 TORCH OFF\nTORCH ON\n\nTORCH OFF\n";
+    let output = sim(
+        &["--ps", "sync65", "--ps", "pm85", "--fast", "--verbose"],
+        script,
+    );
+    assert!(output.status.success());
+    let lines = stdout_lines(&output);
+    assert_eq!(lines[0], "OK units=POWERMAX:1,POWERMAX:2", "{lines:?}");
+    assert!(
+        lines.contains(&"OK torch=ON unit=2".to_string()),
+        "{lines:?}"
+    );
+    assert!(lines.contains(&"OK torch=ON".to_string()), "{lines:?}");
+    let err = String::from_utf8(output.stderr).unwrap();
+    assert!(err.contains("2 simulated units on one line: @1 "), "{err}");
+    for unit in ["@1", "@2"] {
+        let starts = err
+            .lines()
+            .filter(|l| l.starts_with(&format!("[io {unit}]")) && l.contains("START on:"))
+            .count();
+        assert_eq!(
+            starts, 1,
+            "{unit}'s START once, for its own TORCH_ON: {err}"
+        );
+    }
+}
+
+#[test]
+fn units_that_cannot_share_a_line_are_refused_with_the_reason() {
+    let output = sim(&["--ps", "hpr260", "--ps", "sync65", "--fast"], "");
+    assert_eq!(output.status.code(), Some(2));
+    let err = String::from_utf8(output.stderr).unwrap();
+    assert!(err.contains("cannot share a line"), "{err}");
+    let output = sim(&["--ps", "maxpro200", "--ps", "hpr260", "--fast"], "");
+    assert_eq!(output.status.code(), Some(2));
+    let err = String::from_utf8(output.stderr).unwrap();
+    assert!(err.contains("WAKE/SLEEP"), "{err}");
+    // The emulated board drives one unit so far, and says so.
+    let output = pbtool("emu", &["--ps", "hpr260", "--ps", "hpr130"], "");
+    assert_eq!(output.status.code(), Some(2));
+    let err = String::from_utf8(output.stderr).unwrap();
+    assert!(err.contains("one --ps only"), "{err}");
+}
+
+#[test]
+fn run_on_the_simulator_takes_several_ps_as_sim_does() {
+    let output = pbtool(
+        "run",
+        &["--sim", "--fast", "--ps", "hpr260", "--ps", "hpr400"],
+        "@2 ID\n",
+    );
+    assert!(output.status.success());
+    let lines = stdout_lines(&output);
+    assert_eq!(lines.len(), 1, "{lines:?}");
+    assert!(lines[0].contains(" model=HPR400 "), "{lines:?}");
+    assert!(lines[0].ends_with(" unit=2"), "{lines:?}");
+}

@@ -12,7 +12,7 @@ use pbtool::emu::measure::{MeasureOptions, measure};
 use plasma_protocol::serial::PortConfig;
 
 use super::sim::cnc_framing;
-use super::{UnitArgs, serial_failure, simulated_unit, stdin_lines};
+use super::{UnitArgs, serial_failure, stdin_lines};
 
 #[derive(Args)]
 pub struct EmuArgs {
@@ -48,7 +48,7 @@ pub struct EmuArgs {
 
 /// The firmware on the emulated board: the CNC console, or the measurements.
 pub fn emu(args: &EmuArgs) -> ExitCode {
-    let (model, fault) = match simulated_unit("emu", &args.unit.model, args.unit.fault.as_deref()) {
+    let (model, fault) = match args.unit.one_unit("emu") {
         Ok(unit) => unit,
         Err(status) => return status,
     };

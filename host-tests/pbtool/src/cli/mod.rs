@@ -28,10 +28,13 @@ pub const USAGE: u8 = 2;
 #[derive(Args, Clone)]
 pub struct UnitArgs {
     /// The simulated unit: sync45 sync65 sync85 sync105 pm45xp pm65 pm85 pm105 pm125 hpr130
-    /// hpr260 hpr400 hpr130xd hpr260xd hpr400xd maxpro200.
+    /// hpr260 hpr400 hpr130xd hpr260xd hpr400xd maxpro200. Given again (`sim`, `run` on the
+    /// simulator), several units share one line as `CONFIG units` names them: HPRs with ids
+    /// 0, 1... (SLEEP/WAKE), Powermax units at nodes 1, 2...; `@N` addresses unit N.
     #[arg(long = "ps", value_name = "MODEL", default_value = "sync65")]
-    pub model: String,
-    /// Start the unit with a fault: Powermax `0-50-0` (or decimal `500`), HPR error number.
+    pub models: Vec<String>,
+    /// Start the (first) unit with a fault: Powermax `0-50-0` (or decimal `500`), HPR error
+    /// number.
     #[arg(long, value_name = "CODE")]
     pub fault: Option<String>,
     /// Event lines (`!LINK UP ...`, `!ARC ON`) on from the start.
@@ -65,6 +68,49 @@ pub fn simulated_unit(
             eprintln!("pbtool {command}: {e}");
             Err(ExitCode::from(USAGE))
         }
+    }
+}
+
+impl UnitArgs {
+    /// The `--ps` models as given, space-separated (for messages).
+    pub fn model_names(&self) -> String {
+        self.models.join(" ")
+    }
+
+    /// The `--ps` arguments again, as a hint prints them (`--ps hpr260 --ps hpr130`).
+    pub fn ps_args(&self) -> String {
+        self.models
+            .iter()
+            .map(|m| format!("--ps {m}"))
+            .collect::<Vec<_>>()
+            .join(" ")
+    }
+
+    /// The one unit `--ps` names and its `--fault` (a command that drives one unit: says so
+    /// when several were given), or the usage status after saying what is wrong.
+    pub fn one_unit(&self, command: &str) -> Result<(Model, Option<u16>), ExitCode> {
+        if let [_, _, ..] = self.models.as_slice() {
+            eprintln!(
+                "pbtool {command}: one --ps only: the emulated board drives one unit so far \
+                 (several units on one line: pbtool sim {})",
+                self.ps_args()
+            );
+            return Err(ExitCode::from(USAGE));
+        }
+        self.units(command)
+            .map(|(models, fault)| (models[0], fault))
+    }
+
+    /// Every unit `--ps` names (at least one) and the first one's `--fault`, or the usage
+    /// status after saying what is wrong.
+    pub fn units(&self, command: &str) -> Result<(Vec<Model>, Option<u16>), ExitCode> {
+        let mut models = Vec::with_capacity(self.models.len());
+        for name in &self.models {
+            models.push(simulated_unit(command, name, None)?.0);
+        }
+        let first = self.models.first().map_or("", String::as_str);
+        let (_, fault) = simulated_unit(command, first, self.fault.as_deref())?;
+        Ok((models, fault))
     }
 }
 

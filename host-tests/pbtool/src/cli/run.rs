@@ -16,7 +16,7 @@ use super::sim::{SimArgs, sim_bridge};
 pub struct RunArgs {
     /// Run the bridge here, in real time, on this serial port wired to the power supply
     /// (/dev/ttyUSB0, COM3); the CNC protocol on stdin/stdout, or on --cnc-port.
-    #[arg(long, value_name = "DEV", conflicts_with_all = ["sim", "fast", "model", "fault"])]
+    #[arg(long, value_name = "DEV", conflicts_with_all = ["sim", "fast", "models", "fault"])]
     ps_port: Option<String>,
     /// Use the simulator even when a probe is attached.
     #[arg(long)]
@@ -47,8 +47,8 @@ pub fn run(args: &RunArgs) -> ExitCode {
         // is this process keeps it in a file.
         eprintln!(
             "pbtool run: --flash keeps the flash of the bridge on this PC in a file: running \
-             the simulator (pbtool sim --ps {} --flash ...)",
-            args.sim_args.unit.model
+             the simulator (pbtool sim {} --flash ...)",
+            args.sim_args.unit.ps_args()
         );
     }
     if !args.sim && flash.is_none() {
@@ -66,21 +66,33 @@ pub fn run(args: &RunArgs) -> ExitCode {
                 Probe::NoneAttached => {}
             }
         }
-        let unit = Model::from_name(&args.sim_args.unit.model)
-            .map_or("unit".to_string(), |m| m.to_string());
+        let units = &args.sim_args.unit.models;
+        let unit = match units.as_slice() {
+            [one] => {
+                Model::from_name(one).map_or("unit".to_string(), |m| format!("a simulated {m}"))
+            }
+            several => format!("{} simulated units on one line", several.len()),
+        };
+        let ps_args = args.sim_args.unit.ps_args();
         let on_port = cnc_port.map_or(String::new(), |dev| {
             format!(
                 " --cnc-port {dev} --cnc-framing {}",
                 framing_arg(args.sim_args.cnc_framing)
             )
         });
-        if !args.sim_args.fast {
+        // The emulated board drives one unit so far: several go to the simulator.
+        if !args.sim_args.fast && units.len() > 1 {
+            eprintln!(
+                "pbtool run: the emulated board drives one unit so far; {} units go to the \
+                 simulator",
+                units.len()
+            );
+        } else if !args.sim_args.fast {
             match ensure_qemu() {
                 Ok(_) => {
                     eprintln!(
                         "pbtool run: {no_board}; running the firmware on the emulated \
-                         board against a simulated {unit} (pbtool emu --ps {}{on_port})",
-                        args.sim_args.unit.model
+                         board against {unit} (pbtool emu {ps_args}{on_port})"
                     );
                     return emu(&EmuArgs {
                         unit: args.sim_args.unit.clone(),
@@ -98,9 +110,8 @@ pub fn run(args: &RunArgs) -> ExitCode {
             }
         }
         eprintln!(
-            "pbtool run: {no_board}; running the bridge against a simulated {unit} \
-             (pbtool sim --ps {}{on_port})",
-            args.sim_args.unit.model,
+            "pbtool run: {no_board}; running the bridge against {unit} \
+             (pbtool sim {ps_args}{on_port})"
         );
     }
     // Virtual time (`--fast`) repeats its output exactly: no wall clock there.

@@ -11,7 +11,7 @@ use pbtool::serial::{Port, describe};
 use plasma_firmware::settings::CNC_BAUDS;
 use plasma_protocol::serial::PortConfig;
 
-use super::{UnitArgs, serial_failure, simulated_unit, stdin_lines};
+use super::{UnitArgs, serial_failure, stdin_lines};
 
 #[derive(Args)]
 pub struct SimArgs {
@@ -49,18 +49,26 @@ pub fn sim(args: &SimArgs) -> ExitCode {
 /// `pbtool sim`, or `pbtool run` on the simulator: with `own_clock`, the bridge's wall clock
 /// is set to the PC's at start (after the boot from `--flash`, which clears it as a reset does).
 pub fn sim_bridge(args: &SimArgs, own_clock: bool) -> ExitCode {
-    let (model, fault) = match simulated_unit("sim", &args.unit.model, args.unit.fault.as_deref()) {
-        Ok(unit) => unit,
+    let (models, fault) = match args.unit.units("sim") {
+        Ok(units) => units,
         Err(status) => return status,
     };
-    let mut console = Console::new(ConsoleOptions {
-        model,
+    let console = Console::new(ConsoleOptions {
+        models,
         fault,
         events: args.unit.events,
         seed: args.unit.seed,
         verbose: args.verbose,
         cnc_framing: args.cnc_framing,
     });
+    let mut console = match console {
+        Ok(console) => console,
+        Err(e) => {
+            eprintln!("pbtool sim: --ps {}: {e}", args.unit.model_names());
+            return ExitCode::from(super::USAGE);
+        }
+    };
+    let units = console.describe_units();
     if let Some(path) = &args.flash
         && let Err(e) = boot_from_flash(&mut console, path)
     {
@@ -74,14 +82,17 @@ pub fn sim_bridge(args: &SimArgs, own_clock: bool) -> ExitCode {
         }
     }
     if let Some(name) = &args.cnc_port {
-        return on_cnc_port(&mut console, name, model);
+        return on_cnc_port(&mut console, name, &units);
     }
     let interactive = io::stdin().is_terminal();
     if interactive || args.verbose {
+        let torch = match console.world().pin_sets() {
+            1 => "TORCH ON|OFF drives torch-on",
+            _ => "[@N] TORCH ON|OFF drives unit N's torch-on",
+        };
         eprintln!(
-            "pbtool sim: the bridge against a simulated {model}{}; CNC protocol on stdin/stdout. \
-             HELP lists the commands, TORCH ON|OFF drives torch-on (simulator only), \
-             end of input (Ctrl-D) quits.",
+            "pbtool sim: the bridge against {units}{}; CNC protocol on stdin/stdout. \
+             HELP lists the commands, {torch} (simulator only), end of input (Ctrl-D) quits.",
             if args.fast { " in virtual time" } else { "" },
         );
     }
@@ -120,7 +131,7 @@ fn boot_from_flash(console: &mut Console, path: &std::path::Path) -> Result<(), 
 }
 
 /// The simulator with its CNC side on the serial port `name`, until the port fails.
-fn on_cnc_port(console: &mut Console, name: &str, model: plasma_sim::Model) -> ExitCode {
+fn on_cnc_port(console: &mut Console, name: &str, units: &str) -> ExitCode {
     let framing = console.cnc_port_config();
     let opened = Port::open(name, framing).and_then(|port| Ok((port.try_clone()?, port)));
     let (reader, mut port) = match opened {
@@ -130,7 +141,7 @@ fn on_cnc_port(console: &mut Console, name: &str, model: plasma_sim::Model) -> E
     let (inbox, arrivals) = std::sync::mpsc::channel();
     spawn_reader(reader, 0, inbox);
     eprintln!(
-        "pbtool sim: the bridge against a simulated {model}; CNC protocol on {name} at {}. \
+        "pbtool sim: the bridge against {units}; CNC protocol on {name} at {}. \
          Ctrl-C quits.",
         describe(framing)
     );

@@ -210,7 +210,8 @@ impl LineBridge {
         if let Some(config) = self.endpoint.take_io_config_change() {
             self.io.set_config(now, config);
         }
-        let supply = self.endpoint.supply_state();
+        // The PC has no discrete I/O of its own: one set, the first unit's.
+        let supply = self.endpoint.supply_state_of(0);
         if supply != self.supply {
             self.io.on_supply(now, supply);
             self.supply = supply;
@@ -218,10 +219,10 @@ impl LineBridge {
         self.io.poll(now);
         while self.io.poll_transition().is_some() {}
         while let Some(event) = self.io.poll_event() {
-            self.endpoint.on_io_event(now, event);
+            self.endpoint.on_io_event_of(0, now, event);
         }
         self.endpoint
-            .set_io_snapshot(self.io.inputs(), self.io.outputs());
+            .set_io_snapshot_of(0, self.io.inputs(), self.io.outputs());
         Ok(())
     }
 
