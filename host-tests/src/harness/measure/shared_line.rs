@@ -2,15 +2,19 @@
 //! and fault reads per second, with every unit answering or one silent (its drop cut). The
 //! figures show what sharing costs: each unit waits for one attempt of every other unit (and
 //! the SLEEP / WAKE that hands the line over), a silent unit one reply time-out per round.
+//! The same measurement runs on the bare line and through the whole bridge
+//! ([`World::with_bridge_on_line`], with each unit's discrete I/O), so the two can be compared.
 
-use plasma_firmware::link::{LinkConfig, SharedLine};
+use plasma_firmware::bridge::Bridge;
+use plasma_firmware::link::{LinkConfig, SharedLine, UnitStatus, Units};
+use plasma_firmware::settings::Settings;
 use plasma_protocol::hpr::command::id;
 use plasma_protocol::time::{Duration, Instant};
 use rand::rngs::Xoshiro256PlusPlus;
 use rand::{RngExt, SeedableRng};
 
 use super::Latencies;
-use crate::harness::{World, WorldOptions};
+use crate::harness::{BridgeEndpoint, World, WorldEndpoint, WorldOptions};
 use plasma_sim::Model;
 
 /// The HPR error injected (as in the single-unit table).
@@ -33,21 +37,62 @@ pub struct SharedLineFigures {
     pub switches_per_s: f64,
 }
 
+/// What drives the measured line: the bare [`SharedLine`] or the whole bridge.
+pub trait LineDriver: WorldEndpoint + Sized {
+    /// `models` on one line with `options`.
+    fn on_line(models: &[Model], options: WorldOptions) -> World<Self>;
+    /// Unit `unit`'s status as the driver knows it.
+    fn status_of(&self, unit: usize) -> &UnitStatus;
+    /// WAKEs the line's arbiter sent so far.
+    fn wakes(&self) -> u32;
+}
+
+impl LineDriver for SharedLine {
+    fn on_line(models: &[Model], options: WorldOptions) -> World<Self> {
+        World::on_one_line(models, options).expect("HPRs share a line")
+    }
+    fn status_of(&self, unit: usize) -> &UnitStatus {
+        self.unit(unit).expect("no such unit on the line").status()
+    }
+    fn wakes(&self) -> u32 {
+        self.stats().wakes
+    }
+}
+
+impl LineDriver for BridgeEndpoint {
+    fn on_line(models: &[Model], options: WorldOptions) -> World<Self> {
+        let settings = Settings {
+            link: options.link,
+            ..Settings::default()
+        };
+        World::with_bridge_on_line(models, options, settings).expect("HPRs share a line")
+    }
+    fn status_of(&self, unit: usize) -> &UnitStatus {
+        Bridge::status_of(self.bridge(), unit)
+    }
+    fn wakes(&self) -> u32 {
+        match self.bridge().units() {
+            Units::Line(line) => line.stats().wakes,
+            Units::One(_) => 0,
+        }
+    }
+}
+
 /// A line of `units` HPR260s (ids 0, 1...), `silent` cut off, every other unit up and past its
 /// purge and first slow data.
-fn line(units: usize, silent: Option<usize>, seed: u64) -> World<SharedLine> {
+fn line<E: LineDriver>(units: usize, silent: Option<usize>, seed: u64) -> World<E> {
     let mut options = WorldOptions::with_link(LinkConfig::default());
     options.seed = seed;
     options.sim.seed = seed;
     let models = vec![Model::Hpr260; units];
-    let mut world = World::on_one_line(&models, options).expect("HPRs share a line");
+    let mut world = E::on_line(&models, options);
     if let Some(silent) = silent {
         world.connect_unit(silent, false);
     }
     let live: Vec<usize> = (0..units).filter(|&u| Some(u) != silent).collect();
     world
         .run_until(
-            |w| live.iter().all(|&u| w.unit_status(u).link_up),
+            |w| live.iter().all(|&u| w.endpoint().status_of(u).link_up),
             Duration::from_secs(10),
         )
         .expect("every connected unit detected");
@@ -57,7 +102,7 @@ fn line(units: usize, silent: Option<usize>, seed: u64) -> World<SharedLine> {
 
 /// Fault reads (GET_PS_INFO or CURRENT_ERROR) per unit from `from`, each counted for the unit the line's SLEEP /
 /// WAKE traffic had awake when it went out.
-fn polls_per_unit(world: &World<SharedLine>, units: usize, from: Instant) -> Vec<usize> {
+fn polls_per_unit<E: LineDriver>(world: &World<E>, units: usize, from: Instant) -> Vec<usize> {
     let mut counts = vec![0; units];
     let mut awake: Option<usize> = None;
     for frame in world.trace().requests() {
@@ -80,8 +125,8 @@ fn polls_per_unit(world: &World<SharedLine>, units: usize, from: Instant) -> Vec
     counts
 }
 
-/// Measure a line of `units` HPR260s (`silent` cut off): `trials` faults per answering unit,
-/// at random phases, and the fault reads over `window` of idle polling.
+/// Measure a line of `units` HPR260s (`silent` cut off) on the bare line: `trials` faults
+/// per answering unit, at random phases, and the fault reads over `window` of idle polling.
 pub fn shared_line(
     units: usize,
     silent: Option<usize>,
@@ -89,16 +134,38 @@ pub fn shared_line(
     window: Duration,
     seed: u64,
 ) -> SharedLineFigures {
-    let mut world = line(units, silent, seed);
+    measure_line::<SharedLine>(units, silent, trials, window, seed)
+}
+
+/// As [`shared_line`], through the whole bridge (`CONFIG units` naming the line's units,
+/// each unit's discrete I/O running): the fault counts when the bridge's status shows it.
+pub fn bridge_line(
+    units: usize,
+    silent: Option<usize>,
+    trials: usize,
+    window: Duration,
+    seed: u64,
+) -> SharedLineFigures {
+    measure_line::<BridgeEndpoint>(units, silent, trials, window, seed)
+}
+
+fn measure_line<E: LineDriver>(
+    units: usize,
+    silent: Option<usize>,
+    trials: usize,
+    window: Duration,
+    seed: u64,
+) -> SharedLineFigures {
+    let mut world = line::<E>(units, silent, seed);
     let from = world.now();
-    let wakes_before = world.endpoint().stats().wakes;
+    let wakes_before = world.endpoint().wakes();
     world.run_for(window);
     let secs = window.as_micros() as f64 / 1e6;
     let cycles_per_s = polls_per_unit(&world, units, from)
         .into_iter()
         .map(|n| n as f64 / secs)
         .collect();
-    let switches_per_s = f64::from(world.endpoint().stats().wakes - wakes_before) / secs;
+    let switches_per_s = f64::from(world.endpoint().wakes() - wakes_before) / secs;
 
     let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed);
     let live: Vec<usize> = (0..units).filter(|&u| Some(u) != silent).collect();
@@ -111,7 +178,7 @@ pub fn shared_line(
         world.inject_fault_on(unit, FAULT);
         let seen = world
             .run_until(
-                |w| w.unit_status(unit).active_fault.is_some(),
+                |w| w.endpoint().status_of(unit).active_fault.is_some(),
                 Duration::from_secs(3),
             )
             .expect("fault seen");
@@ -119,7 +186,7 @@ pub fn shared_line(
         world.clear_fault_on(unit);
         world
             .run_until(
-                |w| w.unit_status(unit).active_fault.is_none(),
+                |w| w.endpoint().status_of(unit).active_fault.is_none(),
                 Duration::from_secs(3),
             )
             .expect("fault cleared");
@@ -139,14 +206,26 @@ pub const LINES: [(usize, Option<usize>); 4] = [(1, None), (2, None), (4, None),
 /// Faults injected per answering unit in the benchmark's table.
 pub const SHARED_LINE_TRIALS: usize = 200;
 
-/// The table `cargo bench --bench bus` prints for [`LINES`].
+/// The tables `cargo bench --bench bus` prints for [`LINES`]: the bare line, then through
+/// the bridge.
 pub fn report(out: &mut String) {
+    table(out, "on the bare line (SharedLine)", shared_line);
+    table(
+        out,
+        "through the bridge (CONFIG units, each unit's discrete I/O)",
+        bridge_line,
+    );
+}
+
+type Measure = fn(usize, Option<usize>, usize, Duration, u64) -> SharedLineFigures;
+
+fn table(out: &mut String, through: &str, measure: Measure) {
     use std::fmt::Write;
     let ms = |d: Duration| d.as_micros() as f64 / 1000.0;
     let window = Duration::from_secs(20);
     let _ = writeln!(
         out,
-        "\n(d) Several HPR260s on one line (ids 0-3, SLEEP/WAKE), default schedule: per unit, fault-detection latency over {} injections\n    at random phases (p50/p99/max ms) and fault reads (079 or 003) per second ({} s idle); the bridge's WAKEs (line hand-overs) per second",
+        "\n(d) Several HPR260s on one line (ids 0-3, SLEEP/WAKE), {through}, default schedule: per unit, fault-detection latency over {} injections\n    at random phases (p50/p99/max ms) and fault reads (079 or 003) per second ({} s idle); the bridge's WAKEs (line hand-overs) per second",
         SHARED_LINE_TRIALS,
         window.as_micros() / 1_000_000
     );
@@ -156,7 +235,7 @@ pub fn report(out: &mut String) {
         "line", "unit", "p50 ms", "p99 ms", "max ms", "c/s", "wakes/s"
     );
     for (units, silent) in LINES {
-        let f = shared_line(units, silent, SHARED_LINE_TRIALS, window, 13);
+        let f = measure(units, silent, SHARED_LINE_TRIALS, window, 13);
         let label = match silent {
             Some(s) => format!("{units} x HPR260, {} silent", s + 1),
             None => format!("{units} x HPR260"),
