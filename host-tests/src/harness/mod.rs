@@ -19,6 +19,11 @@
 //!    START and the blackout. A broken rule panics at once (with the last frames on the wire), so
 //!    every scenario enforces the safety rules.
 //!
+//! With several units on a multi-drop line ([`World::with_bridge_on_line`],
+//! [`World::on_one_line`]) steps 2, 4 and 5 run once per unit, each with its own interlocks and
+//! monitor: unit k's MOTION, supply state and TORCH_ON reach only unit k's set, whose START
+//! drives only unit k.
+//!
 //! The endpoint is anything implementing [`WorldEndpoint`] (the firmware's
 //! [`PsEndpoint`](plasma_firmware::platform::PsEndpoint) for its port, plus what the world
 //! observes): a bare
