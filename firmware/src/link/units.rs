@@ -21,7 +21,7 @@ use plasma_protocol::serial::PortConfig;
 use plasma_protocol::time::Instant;
 
 use crate::link::{
-    LineError, LineUnit, LinkConfig, LinkEvent, PowermaxProcess, PsLink, SharedLine,
+    LineError, LineStats, LineUnit, LinkConfig, LinkEvent, PowermaxProcess, PsLink, SharedLine,
 };
 
 /// One unit, or several on one line. See the [module docs](self).
@@ -62,6 +62,11 @@ impl Units {
         self.line.rebuild(base, named, process, now)?;
         self.alone = named.is_empty();
         Ok(())
+    }
+
+    /// The line's own traffic (SLEEP / WAKE hand-overs; none for a unit alone).
+    pub fn line_stats(&self) -> LineStats {
+        self.line.stats()
     }
 
     /// How many units (1-4).

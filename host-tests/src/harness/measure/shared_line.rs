@@ -6,7 +6,7 @@
 //! ([`World::with_bridge_on_line`], with each unit's discrete I/O), so the two can be compared.
 
 use plasma_firmware::bridge::Bridge;
-use plasma_firmware::link::{LinkConfig, SharedLine, UnitStatus, Units};
+use plasma_firmware::link::{LinkConfig, SharedLine, UnitStatus};
 use plasma_firmware::settings::Settings;
 use plasma_protocol::hpr::command::id;
 use plasma_protocol::time::{Duration, Instant};
@@ -71,10 +71,7 @@ impl LineDriver for BridgeEndpoint {
         Bridge::status_of(self.bridge(), unit)
     }
     fn wakes(&self) -> u32 {
-        match self.bridge().units() {
-            Units::Line(line) => line.stats().wakes,
-            Units::One(_) => 0,
-        }
+        self.bridge().units().line_stats().wakes
     }
 }
 
