@@ -233,7 +233,7 @@ fn a_fault_raised_by_the_unit_reaches_the_cnc_and_holds_start_off() {
     };
     let refused_line = format!(" us: {refused}");
     logged(&board, log_mark, &refused_line, |l| {
-        l.starts_with("I/O event at ") && l.ends_with(&refused_line)
+        l.starts_with("I/O event @1 at ") && l.ends_with(&refused_line)
     });
 
     // Cleared: the fault is gone, but the refused TORCH_ON stays refused until released.

@@ -62,6 +62,10 @@ pub fn history_flash() -> HistoryFlash {
 }
 
 impl<const SIZE: usize> KeptFlash<SIZE> {
+    // Out of line: its erased flash (up to 16 KB, built and copied at the first boot) is in
+    // this frame only while it runs, not in the boot task's for its whole life (the stack is
+    // 32 KB).
+    #[inline(never)]
     fn take(store: &'static mut Kept<SIZE>) -> Self {
         // SAFETY: every bit pattern the previous run can have left is a valid RamFlash (it
         // only ever stores whole valid values: bytes, counters, flags written as 0 or 1), and

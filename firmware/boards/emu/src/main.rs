@@ -77,7 +77,9 @@ mod image {
     use stm32_metapac::{Interrupt, USART1, USART2, interrupt};
 
     use crate::board::{Emulated, start_tasks};
-    use crate::flash::{HISTORY_SIZE, SETTINGS_SIZE, history_flash, settings_flash};
+    use crate::flash::{
+        HISTORY_SIZE, HistoryFlash, SETTINGS_SIZE, SettingsFlash, history_flash, settings_flash,
+    };
     use crate::gpio::{InputPins, Led, OutputPins};
     use crate::{executor, probe, rcc, reset_flags, time_driver, watchdog};
     use plasma_tasks::uart::{Uart, UartState, on_interrupt};
@@ -133,19 +135,23 @@ mod image {
             );
         }
 
+        // The kept flash models here, on main's small frame: the first boot erases them
+        // (16 KB at most on the stack, while nothing else is on it).
+        let flashes = (settings_flash(), history_flash());
+
         // Serial interrupts below the I/O executor, as on the Nucleo.
         set_serial_priorities();
         executor::run(
-            |spawner| spawner.spawn(boot_task(spawner, boot).unwrap()),
+            |spawner| spawner.spawn(boot_task(spawner, boot, flashes).unwrap()),
             probe::report,
         )
     }
 
     #[embassy_executor::task]
-    async fn boot_task(spawner: Spawner, boot: BootReport) {
-        let mut store =
-            shared_settings::open::<Emulated>(settings_flash(), 0..SETTINGS_SIZE as u32);
-        let history = history::open::<Emulated>(history_flash(), 0..HISTORY_SIZE as u32);
+    async fn boot_task(spawner: Spawner, boot: BootReport, flashes: (SettingsFlash, HistoryFlash)) {
+        let (settings_flash, history_flash) = flashes;
+        let mut store = shared_settings::open::<Emulated>(settings_flash, 0..SETTINGS_SIZE as u32);
+        let history = history::open::<Emulated>(history_flash, 0..HISTORY_SIZE as u32);
         let loaded = shared_settings::load::<Emulated>(store.as_mut()).await;
         let consumables = shared_settings::load_consumables::<Emulated>(store.as_mut()).await;
         let settings = shared_settings::at_boot(loaded.settings, user_button_held());
