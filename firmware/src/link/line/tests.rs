@@ -466,3 +466,26 @@ fn from_start_on_a_units_state_is_read_every_turn_and_its_ignition_quiets_the_wh
     );
     assert_eq!(bench.units.collisions(), 0);
 }
+
+#[test]
+fn three_sync_units_each_get_their_limits_read() {
+    let mut bench = LineBench::new(
+        &[Model::Sync65, Model::Sync65, Model::Sync65],
+        &[
+            LineUnit::Powermax { node: 1 },
+            LineUnit::Powermax { node: 2 },
+            LineUnit::Powermax { node: 3 },
+        ],
+    );
+    bench.run(ms(10_000));
+    assert!(bench.all_up());
+    for unit in 0..3 {
+        let status = bench.line.unit(unit).unwrap().status();
+        assert!(
+            status.limits.is_some(),
+            "unit {unit}: {:?}",
+            bench.line.unit(unit).unwrap().diagnostics()
+        );
+    }
+    assert_eq!(bench.units.collisions(), 0);
+}

@@ -135,6 +135,8 @@ pub(crate) struct PowermaxDriver {
     turns: [Turn; 3],
     /// When the fault register is due to be read again.
     fault_check_at: Instant,
+    /// The last request read the fault register (see `next_request` on a shared line).
+    fault_read_last: bool,
     /// The unit refused a read of the fault register alone: the polls alone read it.
     fault_read_refused: bool,
     now: Instant,
@@ -172,6 +174,7 @@ impl PowermaxDriver {
             identify_refused: false,
             turns: [Turn::Status, Turn::Command, Turn::Other],
             fault_check_at: now,
+            fault_read_last: false,
             fault_read_refused: false,
             now,
         }
@@ -248,20 +251,30 @@ impl PowermaxDriver {
         } else {
             None
         };
+        let fault_due = !self.fault_read_refused && now >= self.fault_check_at;
+        // On a shared line every turn of this unit comes a round of the others' apart, so the
+        // fault read would be due at each: after one, the next turn goes to whatever else is
+        // due (slow data, limits first), the fault read only when nothing else is.
+        let fault_first = fault_due && !(core.shared_line && self.fault_read_last);
         let next = if active.is_some() {
             active
-        } else if !self.fault_read_refused && now >= self.fault_check_at {
+        } else if fault_first {
             self.fault_check(now)
         } else if self.poll.in_cycle() {
             // A poll cycle split into parts finishes first.
             self.poll_part()
         } else {
-            self.next_turn(now, core)
+            match self.next_turn(now, core) {
+                None if fault_due => self.fault_check(now),
+                next => next,
+            }
         };
+        self.fault_read_last = false;
         if let Some((purpose, request, _)) = &next
             && self.sees_fault(*purpose, request)
         {
             self.fault_check_at = now + FAULT_CHECK_INTERVAL;
+            self.fault_read_last = true;
         }
         next
     }
