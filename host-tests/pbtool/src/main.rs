@@ -99,7 +99,8 @@ enum Command {
     /// and a plot of current and pressure.
     ///
     /// Attaches through the CNC text protocol to a board's CNC port (`--port DEV`), the
-    /// emulated board (`--emu`) or the simulator (`--sim MODEL`), sets the bridge's clock to
+    /// emulated board (`--emu`: `pbtool emu --ps MODEL --events` as a child) or the simulator
+    /// (`--sim MODEL`: `pbtool sim --ps MODEL --events` as a child), sets the bridge's clock to
     /// the PC's (`CLOCK`), and keeps reconnecting when the port goes away or the child exits.
     /// Keys: g gas check, r remote off, c clear warnings, q quit. `--snapshot` prints one frame to stdout instead (for docs and bug
     /// reports).
@@ -107,8 +108,8 @@ enum Command {
     /// The bridge's event history (faults, link, resets, refused STARTs, process changes),
     /// newest first, as a table (`--json`, `--csv` for a spreadsheet).
     ///
-    /// From the board's CNC port (`--port DEV`), the emulated board (`--emu [--ps MODEL]`) or
-    /// a simulated bridge (`--sim MODEL`). Sets the bridge's clock to the PC's first
+    /// From the board's CNC port (`--port DEV`), the emulated board in real time (`--emu [--ps
+    /// MODEL]`) or a simulated bridge in virtual time (`--sim MODEL`). Sets the bridge's clock to the PC's first
     /// (`CLOCK`), so this boot's entries carry the time. Each entry names the unit's family
     /// and model.
     /// Exit status 0 with the entries, 1 when the bridge refused, 2 on a port error (or an

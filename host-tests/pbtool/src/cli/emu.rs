@@ -11,7 +11,7 @@ use pbtool::emu::measure::{MeasureOptions, measure};
 
 use plasma_protocol::serial::PortConfig;
 
-use super::sim::cnc_framing;
+use super::sim::{CNC_FRAMING_DEFAULT, cnc_framing};
 use super::{UnitArgs, serial_failure, stdin_lines};
 
 #[derive(Args)]
@@ -39,7 +39,7 @@ pub struct EmuArgs {
     pub cnc_port: Option<String>,
     /// With --cnc-port: the CNC's framing, BAUD:DPS (data bits 7|8, parity N|E|O, stop bits 1|2); the board is set to it at start
     /// (`CONFIG cnc_baud`, `cnc_parity`, `cnc_stop_bits`). 19200:8E1 for LinuxCNC's pmx485.
-    #[arg(long, value_name = "FRAMING", default_value = "115200:8N1", value_parser = cnc_framing, requires = "cnc_port")]
+    #[arg(long, value_name = "FRAMING", default_value = CNC_FRAMING_DEFAULT, value_parser = cnc_framing, requires = "cnc_port")]
     pub cnc_framing: PortConfig,
     /// Set the board's wall clock to the PC's at start (`pbtool run`, which is the bridge).
     #[arg(skip)]

@@ -1,5 +1,6 @@
 //! The subcommands: their arguments and how each maps onto the library.
 
+pub mod bridge;
 pub mod config;
 pub mod decode;
 pub mod emu;

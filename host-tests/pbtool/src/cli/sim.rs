@@ -27,7 +27,7 @@ pub struct SimArgs {
     pub cnc_port: Option<String>,
     /// The CNC port's framing, BAUD:DPS, e.g. 9600:7E1 (the bridge's `cnc_baud`,
     /// `cnc_data_bits`, `cnc_parity`, `cnc_stop_bits`): 115200:8N1 by default, 19200:8E1 for LinuxCNC's pmx485.
-    #[arg(long, value_name = "FRAMING", default_value = "115200:8N1", value_parser = cnc_framing)]
+    #[arg(long, value_name = "FRAMING", default_value = CNC_FRAMING_DEFAULT, value_parser = cnc_framing)]
     pub cnc_framing: PortConfig,
     /// Keep the bridge's flash (stored settings and history) in FILE: read at start (a power
     /// cycle of the board: settings and history as the last run left them), written when
@@ -149,6 +149,9 @@ fn on_cnc_port(console: &mut Console, name: &str, units: &str) -> ExitCode {
     serial_failure("sim", &e)
 }
 
+/// `--cnc-framing`'s default: the board's CNC port out of the box (a test ties the two).
+pub(super) const CNC_FRAMING_DEFAULT: &str = "115200:8N1";
+
 /// `--cnc-framing`: `BAUD:DPS` (data bits 7 or 8, parity, stop bits) with a baud `cnc_baud`
 /// accepts.
 pub(super) fn cnc_framing(text: &str) -> Result<PortConfig, String> {
@@ -161,4 +164,19 @@ pub(super) fn cnc_framing(text: &str) -> Result<PortConfig, String> {
         return Err(bad());
     }
     PortConfig::from_framing(baud, framing).ok_or_else(bad)
+}
+
+#[cfg(test)]
+mod tests {
+    use plasma_firmware::settings::CncPort;
+
+    use super::*;
+
+    #[test]
+    fn the_default_cnc_framing_is_the_boards() {
+        assert_eq!(
+            cnc_framing(CNC_FRAMING_DEFAULT),
+            Ok(CncPort::DEFAULT.framing)
+        );
+    }
 }
