@@ -316,10 +316,9 @@ fn parse_error(ctx: &Context<'_>, error: &ParseError) -> ReplyLine {
     let status = ctx.link().status();
     let family = status.family.filter(|_| status.link_up);
     match (error, AmpsRange::of(status, family)) {
-        (ParseError::OutOfRange { what, .. }, Some(range)) if *what == AMPS_ARGUMENT => err_line(
-            ErrorCode::Range,
-            format_args!("{what} out of range {range} {}", texts::limit_scope(family)),
-        ),
+        (ParseError::OutOfRange { what, .. }, Some(range)) if *what == AMPS_ARGUMENT => {
+            texts::amps_out_of_range(range, family)
+        }
         _ => line(|l| write_parse_error(l, error)),
     }
 }

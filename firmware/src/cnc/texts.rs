@@ -1,7 +1,7 @@
 //! The texts of the CNC side's `ERR` replies, in one place: the session writes them and the
 //! tests read them from here, so a reworded text changes one line and no test. (Two kinds
 //! come from elsewhere: a line that does not parse, from the protocol crate's
-//! `write_parse_error`, and a `CONFIG` value refused, from the settings' `ConfigError`.)
+//! `write_parse_error`, and a `CONFIG` value refused, from the settings' `SetError`.)
 //!
 //! Texts that carry values (limits, fault codes, check bytes) are built here from the typed
 //! reason (a link `Refusal` or `CommandFailure`, a frame error); tests match those by their
@@ -10,7 +10,7 @@
 use core::fmt::{self, Display, Write};
 
 use plasma_protocol::cnc::reply::write_error;
-use plasma_protocol::cnc::{Amps, ErrorCode, phoenix};
+use plasma_protocol::cnc::{AMPS_ARGUMENT, Amps, ErrorCode, phoenix};
 use plasma_protocol::hpr::ErrorCode as HprError;
 use plasma_protocol::hpr::{GasConsole, SystemId};
 use plasma_protocol::modbus_ascii::ExceptionCode;
@@ -278,6 +278,18 @@ pub(super) fn limit_scope(family: Option<Family>) -> &'static str {
         Some(Family::PowermaxSync) => "for this cartridge",
         _ => "for this unit",
     }
+}
+
+/// A current outside every unit's bounds: the range of the unit on the line (what LIMITS
+/// shows), where the parser's own text quotes the bounds.
+pub(super) fn amps_out_of_range(range: impl Display, family: Option<Family>) -> ReplyLine {
+    err_line(
+        ErrorCode::Range,
+        format_args!(
+            "{AMPS_ARGUMENT} out of range {range} {}",
+            limit_scope(family)
+        ),
+    )
 }
 
 /// Write the `ERR` line for a command the link refused (nothing was sent).
