@@ -248,7 +248,7 @@ impl Display for TransactionText {
                 write!(
                     f,
                     "the unit answered with exception {:02X} ({})",
-                    crate::link::diagnostics::exception_code_byte(code),
+                    code.to_u8(),
                     ExceptionName(code)
                 )
             }

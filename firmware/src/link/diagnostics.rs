@@ -50,22 +50,6 @@ fn bump(counter: &mut u32) {
     *counter = counter.saturating_add(1);
 }
 
-/// The raw code byte of an exception.
-pub(crate) fn exception_code_byte(code: ExceptionCode) -> u8 {
-    match code {
-        ExceptionCode::IllegalFunction => 0x01,
-        ExceptionCode::IllegalDataAddress => 0x02,
-        ExceptionCode::IllegalDataValue => 0x03,
-        ExceptionCode::ServerDeviceFailure => 0x04,
-        ExceptionCode::Acknowledge => 0x05,
-        ExceptionCode::ServerDeviceBusy => 0x06,
-        ExceptionCode::MemoryParityError => 0x08,
-        ExceptionCode::GatewayPathUnavailable => 0x0A,
-        ExceptionCode::GatewayTargetFailed => 0x0B,
-        ExceptionCode::Other(byte) => byte,
-    }
-}
-
 impl Diagnostics {
     /// Count one failed attempt by its class.
     pub(crate) fn record_error(&mut self, error: TransactionError) {
@@ -73,7 +57,7 @@ impl Diagnostics {
             TransactionError::Timeout => bump(&mut self.timeouts),
             TransactionError::BadChecksum => bump(&mut self.bad_checksums),
             TransactionError::Exception(code) => {
-                let byte = exception_code_byte(code);
+                let byte = code.to_u8();
                 match self.exceptions.get_mut(usize::from(byte).wrapping_sub(1)) {
                     Some(counter) => bump(counter),
                     None => bump(&mut self.exceptions_other),
@@ -88,7 +72,7 @@ impl Diagnostics {
 
     /// Exception replies seen with this code.
     pub fn exceptions_with(&self, code: ExceptionCode) -> u32 {
-        let byte = exception_code_byte(code);
+        let byte = code.to_u8();
         match self.exceptions.get(usize::from(byte).wrapping_sub(1)) {
             Some(count) => *count,
             None => self.exceptions_other,
