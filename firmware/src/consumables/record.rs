@@ -3,7 +3,7 @@
 //! `None`, and the bridge starts a new set.
 
 use super::ConsumableSet;
-use crate::storage::Persistent;
+use crate::storage::{self, Persistent};
 
 // --- record layout, version 1 ------------------------------------------------------------
 // 0-3 starts (LE) | 4-11 arc ms (LE) | 12-13 wear faults (LE) | 14-15 rampdown errors (LE)
@@ -31,14 +31,7 @@ impl Persistent for ConsumableSet {
             | flag(self.warned_90, FLAG_WARNED_90)
             | flag(self.warned_100, FLAG_WARNED_100);
         r[17..].copy_from_slice(&self.uid.unwrap_or([0; 16]));
-        match out.get_mut(..RECORD_LEN) {
-            Some(slot) => {
-                slot.copy_from_slice(&r);
-                RECORD_LEN
-            }
-            // Too small a buffer: report a length the store refuses.
-            None => out.len().saturating_add(1),
-        }
+        storage::write_payload(out, &r)
     }
 
     fn decode(payload: &[u8]) -> Option<Self> {

@@ -174,14 +174,7 @@ impl storage::Persistent for Settings {
         limits.copy_from_slice(&encode_limits(self.consumable_limits));
         units.copy_from_slice(&encode_units(&self.units));
         data_bits.copy_from_slice(&[self.cnc.framing.data_bits.number()]);
-        match out.get_mut(..RECORD_LEN) {
-            Some(slot) => {
-                slot.copy_from_slice(&r);
-                RECORD_LEN
-            }
-            // Too small a buffer: report a length the store refuses.
-            None => out.len().saturating_add(1),
-        }
+        storage::write_payload(out, &r)
     }
 
     fn decode(payload: &[u8]) -> Option<Self> {

@@ -100,6 +100,19 @@ pub trait Persistent: Default + Sized {
     }
 }
 
+/// Copies an encoded `payload` into [`Persistent::encode`]'s `out` and returns what `encode`
+/// returns: its length, or, when `out` is too small, a length over `out.len()` that the store
+/// refuses.
+pub(crate) fn write_payload(out: &mut [u8], payload: &[u8]) -> usize {
+    match out.get_mut(..payload.len()) {
+        Some(slot) => {
+            slot.copy_from_slice(payload);
+            payload.len()
+        }
+        None => out.len().saturating_add(1),
+    }
+}
+
 /// Where the settings a load returned came from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum LoadOutcome {
