@@ -106,7 +106,7 @@ pub(crate) mod event;
 pub(crate) mod hpr;
 pub(crate) mod kept;
 mod line;
-pub mod model_code;
+pub(crate) mod model_code;
 mod phase;
 pub(crate) mod powermax;
 mod receive;

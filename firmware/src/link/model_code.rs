@@ -84,16 +84,16 @@ pub fn model_name(code: u8) -> Option<&'static str> {
     MODEL_NAMES.get(usize::from(code).checked_sub(1)?).copied()
 }
 
-/// The code of the model named `name` (as [`model_name`] gives it).
-pub fn model_code_of(name: &str) -> Option<u8> {
-    MODEL_NAMES.iter().position(|&n| n == name).map(code)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
     use plasma_protocol::hpr::GasConsole;
     use plasma_protocol::powermax::SyncModel;
+
+    /// The code of the model named `name` (as [`model_name`] gives it).
+    fn model_code_of(name: &str) -> Option<u8> {
+        MODEL_NAMES.iter().position(|&n| n == name).map(code)
+    }
 
     fn status(model: Option<Model>, sync: Option<SyncModel>) -> UnitStatus {
         UnitStatus {
