@@ -3,6 +3,7 @@
 //! reader threads, stdin lines), waited on with a time-out up to the next instant the piece
 //! asked to be woken. Every wait blocks in the kernel: nothing spins.
 
+use std::collections::VecDeque;
 use std::sync::mpsc::{Receiver, RecvTimeoutError, Sender};
 
 use plasma_protocol::time::Instant;
@@ -14,6 +15,23 @@ use crate::serial::{Port, Rx, SerialError};
 pub const MAX_WAIT: std::time::Duration = std::time::Duration::from_millis(100);
 /// How long a reader thread blocks in one read (it then simply reads again).
 const READ_TICK: std::time::Duration = std::time::Duration::from_millis(200);
+
+/// Waits up to `wait` for a line of `input` (stdin's, from a reader thread), then takes whatever
+/// else has arrived (a paste, a pipe) in one go; all go to the back of `lines`. False once the
+/// input has ended.
+pub fn receive_lines(
+    input: &Receiver<Vec<u8>>,
+    wait: std::time::Duration,
+    lines: &mut VecDeque<Vec<u8>>,
+) -> bool {
+    match input.recv_timeout(wait) {
+        Ok(line) => lines.push_back(line),
+        Err(RecvTimeoutError::Timeout) => {}
+        Err(RecvTimeoutError::Disconnected) => return false,
+    }
+    lines.extend(input.try_iter());
+    true
+}
 
 /// The wall clock, from zero at [`Clock::start`].
 #[derive(Debug, Clone, Copy)]

@@ -20,7 +20,7 @@
 
 use std::io::{self, BufRead, Write};
 use std::str::FromStr;
-use std::sync::mpsc::{Receiver, RecvTimeoutError};
+use std::sync::mpsc::Receiver;
 
 use plasma_firmware::bridge::Bridge;
 use plasma_firmware::link::LineUnit;
@@ -32,7 +32,7 @@ use plasma_protocol::time::{Duration, Instant};
 
 use host_tests::harness::{BridgeEndpoint, CncItem, SharedLineError, World, WorldOptions};
 
-use crate::realtime::{Arrival, Clock, wait};
+use crate::realtime::{Arrival, Clock, receive_lines, wait};
 use crate::serial::{Port, Rx, SerialError};
 use plasma_sim::multidrop::MultiDrop;
 use plasma_sim::{Family, Model, SimOptions};
@@ -304,15 +304,7 @@ impl Console {
                 std::thread::sleep(sleep);
                 continue;
             }
-            match input.recv_timeout(sleep) {
-                Ok(line) => lines.push_back(line),
-                Err(RecvTimeoutError::Timeout) => {}
-                Err(RecvTimeoutError::Disconnected) => ended = true,
-            }
-            // Take whatever else has arrived (a paste, a pipe) in one go.
-            while let Ok(line) = input.try_recv() {
-                lines.push_back(line);
-            }
+            ended = !receive_lines(&input, sleep, &mut lines);
         }
     }
 

@@ -7,7 +7,7 @@
 
 use std::collections::VecDeque;
 use std::io::{self, Write};
-use std::sync::mpsc::{Receiver, RecvTimeoutError};
+use std::sync::mpsc::Receiver;
 use std::time::{Duration, Instant};
 
 use plasma_firmware::io::{Input, Output};
@@ -15,6 +15,7 @@ use plasma_firmware::io::{Input, Output};
 use host_tests::emu::{Board, Error, Result};
 
 use super::EmuUnit;
+use crate::realtime::receive_lines;
 
 /// The longest wait for the link (and the unit's limits) before the first command.
 pub(crate) const SETTLE_TIMEOUT: Duration = Duration::from_secs(10);
@@ -186,14 +187,7 @@ pub fn run(
             std::thread::sleep(TICK);
             continue;
         }
-        match input.recv_timeout(TICK) {
-            Ok(line) => lines.push_back(line),
-            Err(RecvTimeoutError::Timeout) => {}
-            Err(RecvTimeoutError::Disconnected) => ended = true,
-        }
-        while let Ok(line) = input.try_recv() {
-            lines.push_back(line);
-        }
+        ended = !receive_lines(&input, TICK, &mut lines);
     }
 }
 
