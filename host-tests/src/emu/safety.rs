@@ -1,4 +1,4 @@
-//! The START safety rules (ARCHITECTURE.md), checked on what the harness observed of the
+//! The START safety rules (docs/architecture.md, "Safety rules"), checked on what the harness observed of the
 //! emulated board: the TORCH_ON levels it drove and the START edges QEMU streamed, in the order
 //! QEMU saw them (both travel on the one qtest socket, see
 //! [`Qtest::command_marked`](super::qtest::Qtest::command_marked)).
