@@ -46,6 +46,14 @@ impl Instant {
     }
 }
 
+/// The earlier of two optional deadlines (`None`: no deadline).
+pub fn earliest(a: Option<Instant>, b: Option<Instant>) -> Option<Instant> {
+    match (a, b) {
+        (Some(a), Some(b)) => Some(a.min(b)),
+        (a, b) => a.or(b),
+    }
+}
+
 impl Duration {
     /// No time.
     pub const ZERO: Duration = Duration(0);
@@ -189,6 +197,16 @@ mod tests {
             u32::MAX
         );
         assert_eq!(Duration::from_micros(u64::MAX).as_millis_u32(), u32::MAX);
+    }
+
+    #[test]
+    fn the_earliest_deadline_is_the_earlier_one_that_is_set() {
+        let (two, three) = (Instant::from_millis(2), Instant::from_millis(3));
+        assert_eq!(earliest(Some(three), Some(two)), Some(two));
+        assert_eq!(earliest(Some(two), Some(three)), Some(two));
+        assert_eq!(earliest(None, Some(Instant::ZERO)), Some(Instant::ZERO));
+        assert_eq!(earliest(Some(three), None), Some(three));
+        assert_eq!(earliest(None, None), None);
     }
 
     #[test]

@@ -1,16 +1,9 @@
-//! Small helpers for virtual time: earliest deadline, and time accumulators that report whole
-//! seconds the way the power supplies' counters do.
+//! Small helpers for virtual time: the earliest deadline (the protocol crate's), and time
+//! accumulators that report whole seconds the way the power supplies' counters do.
 
-use plasma_protocol::time::{Duration, Instant};
+use plasma_protocol::time::Duration;
 
-/// The earlier of two optional deadlines.
-pub fn earliest(a: Option<Instant>, b: Option<Instant>) -> Option<Instant> {
-    match (a, b) {
-        (Some(a), Some(b)) => Some(a.min(b)),
-        (a, None) => a,
-        (None, b) => b,
-    }
-}
+pub use plasma_protocol::time::earliest;
 
 /// Microsecond-exact running total of some duration (arc time, pilot time...).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
@@ -53,10 +46,5 @@ mod tests {
         assert_eq!(a.secs(), 2);
         a.add(Duration::from_millis(1));
         assert_eq!(a.secs(), 3);
-        assert_eq!(
-            earliest(Some(Instant::from_millis(3)), Some(Instant::from_millis(2))),
-            Some(Instant::from_millis(2))
-        );
-        assert_eq!(earliest(None, Some(Instant::ZERO)), Some(Instant::ZERO));
     }
 }

@@ -24,7 +24,7 @@ use plasma_firmware::io::{Inputs, Interlocks, SupplyState};
 use plasma_firmware::platform::PsEndpoint;
 use plasma_firmware::settings::Settings;
 use plasma_protocol::serial::PortConfig;
-use plasma_protocol::time::{Duration, Instant};
+use plasma_protocol::time::{Duration, Instant, earliest};
 
 use crate::realtime::{Arrival, Clock, wait};
 use crate::serial::{Port, Rx, SerialError};
@@ -228,10 +228,7 @@ impl LineBridge {
 
     /// When [`LineBridge::service`] is next due.
     pub fn wake(&self) -> Option<Instant> {
-        match (self.endpoint.poll_at(), self.io.poll_at()) {
-            (Some(a), Some(b)) => Some(a.min(b)),
-            (a, b) => a.or(b),
-        }
+        earliest(self.endpoint.poll_at(), self.io.poll_at())
     }
 
     /// Now, on the bridge's clock.
