@@ -227,8 +227,13 @@ impl NamedUnits {
         }
         let mut units: Vec<LineUnit, MAX_UNITS> = Vec::new();
         let mut count = 0;
-        // A byte predicate, not `split(',')`: the char searcher costs flash.
-        for word in text.split(|c: char| c == ',') {
+        // A predicate, not `split(',')`: the char searcher costs flash.
+        #[allow(
+            clippy::manual_pattern_char_comparison,
+            reason = "the char searcher costs flash"
+        )]
+        let words = text.split(|c: char| c == ',');
+        for word in words {
             count += 1;
             let unit = LineUnit::parse(word).ok_or(UnitsError::Syntax)?;
             // Past MAX_UNITS the count alone is reported.
