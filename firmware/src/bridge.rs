@@ -39,13 +39,14 @@
 //! ```
 
 use crate::cnc::history::HistoryLog;
+use crate::cnc::units::{restart_units, unit_process};
 use crate::cnc::{Context, Session, SessionStats};
 pub use crate::cnc::{FRAME_IDLE_TIMEOUT, MAX_REPLY_LEN, OUTPUT_CAPACITY, SimCommand};
 use crate::consumables::{ConsumableSet, Consumables};
 use crate::io::{Inputs, IoConfig, IoEvent, Outputs, SupplyState};
-use crate::link::{Diagnostics, MAX_UNITS, PowermaxProcess, PsLink, UnitStatus, Units};
+use crate::link::{Diagnostics, MAX_UNITS, PsLink, UnitStatus, Units};
 use crate::platform::safe_state::ResetCause;
-use crate::settings::{Process, SaveError, Settings};
+use crate::settings::{SaveError, Settings};
 use crate::storage::history::{Draft, Event, HistoryAnswer, HistoryRequest, Unit};
 use plasma_protocol::cnc::HistoryCommand;
 use plasma_protocol::serial::PortConfig;
@@ -413,17 +414,6 @@ impl Bridge {
     }
 }
 
-/// The units `settings` name start afresh in `units`, in place, the persisted process
-/// restored to the first (`CONFIG units`). Settings that cannot name them were refused when
-/// typed; should they get here, the bridge drives one unit rather than none.
-pub(crate) fn restart_units(units: &mut Units, settings: &Settings, now: Instant) {
-    let process = settings.process.as_ref().map(unit_process);
-    let named = settings.units.as_slice();
-    if units.rebuild(settings.link, named, process, now).is_err() {
-        let _ = units.rebuild(settings.link, &[], process, now);
-    }
-}
-
 /// The one translation of the link's view into what the interlocks need: the board's
 /// [`Bridge::supply_state`] and a host loop driving a bare [`PsLink`] both use it.
 impl From<&UnitStatus> for SupplyState {
@@ -435,15 +425,6 @@ impl From<&UnitStatus> for SupplyState {
             restart_blackout_until: status.restart_blackout_until,
             unit_ready: status.link_up && status.state_ready(),
         }
-    }
-}
-
-/// A persisted process in the unit's terms (`CPA` and `EXPANDED` are one mode).
-fn unit_process(process: &Process) -> PowermaxProcess {
-    PowermaxProcess {
-        mode: Some(crate::cnc::unit_mode(process.mode)),
-        current: process.amps,
-        pressure: process.pressure,
     }
 }
 

@@ -228,7 +228,7 @@ impl Session {
         if new_units {
             // Other units on the line: every link starts afresh, the kept process goes to
             // the first unit as at power-up.
-            crate::bridge::restart_units(ctx.units, ctx.settings, ctx.now);
+            super::units::restart_units(ctx.units, ctx.settings, ctx.now);
         } else if before.link != ctx.settings.link {
             ctx.units.reconfigure(ctx.now, ctx.settings.link);
         }

@@ -46,6 +46,7 @@ mod replies;
 pub(crate) mod rig;
 mod table;
 pub mod texts;
+pub(crate) mod units;
 
 use core::fmt::{self, Display, Write};
 
