@@ -45,7 +45,9 @@ pub use crate::cnc::{FRAME_IDLE_TIMEOUT, MAX_REPLY_LEN, OUTPUT_CAPACITY, SimComm
 use crate::consumables::{ConsumableSet, Consumables};
 use crate::io::{Inputs, IoConfig, IoEvent, Outputs, SupplyState};
 use crate::link::{Diagnostics, MAX_UNITS, PsLink, UnitStatus, Units};
+use crate::platform::runner::PsEndpoint;
 use crate::platform::safe_state::ResetCause;
+use crate::platform::supervisor::BridgeEndpoint;
 use crate::settings::{SaveError, Settings};
 use crate::storage::history::{Draft, Event, HistoryAnswer, HistoryRequest, Unit};
 use plasma_protocol::cnc::HistoryCommand;
@@ -425,6 +427,85 @@ impl From<&UnitStatus> for SupplyState {
             restart_blackout_until: status.restart_blackout_until,
             unit_ready: status.link_up && status.state_ready(),
         }
+    }
+}
+
+// --- the loops' view ------------------------------------------------------------------
+
+impl PsEndpoint for Bridge {
+    fn handle_ps_rx(&mut self, now: Instant, bytes: &[u8]) {
+        Bridge::handle_ps_rx(self, now, bytes);
+    }
+
+    fn handle_ps_rx_error(&mut self, now: Instant) {
+        Bridge::handle_ps_rx_error(self, now);
+    }
+
+    fn poll_ps_transmit(&mut self, now: Instant) -> Option<&[u8]> {
+        Bridge::poll_ps_transmit(self, now)
+    }
+
+    fn ps_transmitted(&mut self, at: Instant) {
+        Bridge::ps_transmitted(self, at);
+    }
+
+    fn ps_port_config(&self) -> PortConfig {
+        Bridge::ps_port_config(self)
+    }
+
+    fn poll_at(&self) -> Option<Instant> {
+        Bridge::poll_at(self)
+    }
+}
+
+impl BridgeEndpoint for Bridge {
+    type Saved = SaveRequest;
+    type SaveError = SaveError;
+
+    fn handle_cnc_rx(&mut self, now: Instant, bytes: &[u8]) {
+        Bridge::handle_cnc_rx(self, now, bytes);
+    }
+    fn poll_cnc_output(&mut self) -> Option<&[u8]> {
+        Bridge::poll_cnc_output(self)
+    }
+    fn cnc_port_config(&self) -> PortConfig {
+        Bridge::cnc_port_config(self)
+    }
+    fn poll(&mut self, now: Instant) {
+        Bridge::poll(self, now);
+    }
+    fn unit_count(&self) -> usize {
+        Bridge::unit_count(self)
+    }
+    fn supply_state_of(&self, unit: usize) -> SupplyState {
+        Bridge::supply_state_of(self, unit)
+    }
+    fn io_config(&self) -> IoConfig {
+        Bridge::io_config(self)
+    }
+    fn set_io_snapshot_of(&mut self, unit: usize, inputs: Inputs, outputs: Outputs) {
+        Bridge::set_io_snapshot_of(self, unit, inputs, outputs);
+    }
+    fn on_io_event_of(&mut self, unit: usize, now: Instant, event: IoEvent) {
+        Bridge::on_io_event_of(self, unit, now, event);
+    }
+    fn take_save_request(&mut self) -> Option<SaveRequest> {
+        Bridge::take_save_request(self)
+    }
+    fn save_finished(&mut self, now: Instant, result: Result<(), SaveError>) {
+        Bridge::save_finished(self, now, result);
+    }
+    fn take_history_draft(&mut self) -> Option<Draft> {
+        Bridge::take_history_draft(self)
+    }
+    fn history_drafts_waiting(&self) -> bool {
+        Bridge::history_drafts_waiting(self)
+    }
+    fn take_history_request(&mut self) -> Option<HistoryRequest> {
+        Bridge::take_history_request(self)
+    }
+    fn history_finished(&mut self, now: Instant, answer: &HistoryAnswer) {
+        Bridge::history_finished(self, now, answer);
     }
 }
 

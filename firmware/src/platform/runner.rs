@@ -30,7 +30,6 @@ use core::future::Future;
 use embedded_io_async::{Error as _, ErrorKind, Read, ReadReady, Write};
 use heapless::Vec;
 
-use crate::bridge::Bridge;
 use crate::link::transaction::TX_CAPACITY;
 use crate::link::{PsLink, SharedLine};
 use plasma_protocol::serial::PortConfig;
@@ -55,7 +54,7 @@ pub trait ConfigurablePort: Read + ReadReady + Write {
     fn set_port_config(&mut self, config: PortConfig) -> Result<(), UnsupportedConfig>;
 }
 
-/// What a driver of the power-supply port drives: the [`Bridge`] (the board's tasks, pbtool,
+/// What a driver of the power-supply port drives: the [`Bridge`](crate::bridge::Bridge) (the board's tasks, pbtool,
 /// the scenario harness, the fuzz target), a bare [`PsLink`] (the link's own tests and
 /// scenarios) or a [`SharedLine`] of several links. The one trait for it: a loop that moves
 /// bytes between a port (a UART, a simulated line) and an endpoint is written against this,
@@ -111,32 +110,6 @@ macro_rules! endpoint_by_link_names {
 }
 
 endpoint_by_link_names!(PsLink, SharedLine);
-
-impl PsEndpoint for Bridge {
-    fn handle_ps_rx(&mut self, now: Instant, bytes: &[u8]) {
-        Bridge::handle_ps_rx(self, now, bytes);
-    }
-
-    fn handle_ps_rx_error(&mut self, now: Instant) {
-        Bridge::handle_ps_rx_error(self, now);
-    }
-
-    fn poll_ps_transmit(&mut self, now: Instant) -> Option<&[u8]> {
-        Bridge::poll_ps_transmit(self, now)
-    }
-
-    fn ps_transmitted(&mut self, at: Instant) {
-        Bridge::ps_transmitted(self, at);
-    }
-
-    fn ps_port_config(&self) -> PortConfig {
-        Bridge::ps_port_config(self)
-    }
-
-    fn poll_at(&self) -> Option<Instant> {
-        Bridge::poll_at(self)
-    }
-}
 
 /// Longest wait in one [`Supervisor::turn`](super::supervisor::Supervisor::turn), so that a
 /// task reports progress at least this often.

@@ -33,19 +33,18 @@ use embassy_futures::select::{Either6, select6};
 use embassy_futures::yield_now;
 use embedded_io_async::Read;
 
-use crate::bridge::{Bridge, SaveRequest};
 use crate::io::{Inputs, IoConfig, IoEvent, Outputs, SupplyState};
 use crate::platform::pins::{UNIT_SETS, UnitSet};
 use crate::platform::runner::{
     Clock, ConfigurablePort, MAX_WAIT, PS_RX_CHUNK, PortError, PsEndpoint, PsPort,
     UnsupportedConfig,
 };
-use crate::settings::SaveError;
+
 use crate::storage::history::{Draft, HistoryAnswer, HistoryRequest, HistoryUnavailable};
 use plasma_protocol::serial::PortConfig;
 use plasma_protocol::time::Instant;
 
-/// What the supervisor needs from the bridge ([`Bridge`] implements it; the names follow
+/// What the supervisor needs from the bridge ([`Bridge`](crate::bridge::Bridge) implements it; the names follow
 /// its API).
 pub trait BridgeEndpoint: PsEndpoint {
     /// The settings a save request carries.
@@ -82,57 +81,6 @@ pub trait BridgeEndpoint: PsEndpoint {
     fn take_history_request(&mut self) -> Option<HistoryRequest>;
     /// The store's answer.
     fn history_finished(&mut self, now: Instant, answer: &HistoryAnswer);
-}
-
-impl BridgeEndpoint for Bridge {
-    type Saved = SaveRequest;
-    type SaveError = SaveError;
-
-    fn handle_cnc_rx(&mut self, now: Instant, bytes: &[u8]) {
-        Bridge::handle_cnc_rx(self, now, bytes);
-    }
-    fn poll_cnc_output(&mut self) -> Option<&[u8]> {
-        Bridge::poll_cnc_output(self)
-    }
-    fn cnc_port_config(&self) -> PortConfig {
-        Bridge::cnc_port_config(self)
-    }
-    fn poll(&mut self, now: Instant) {
-        Bridge::poll(self, now);
-    }
-    fn unit_count(&self) -> usize {
-        Bridge::unit_count(self)
-    }
-    fn supply_state_of(&self, unit: usize) -> SupplyState {
-        Bridge::supply_state_of(self, unit)
-    }
-    fn io_config(&self) -> IoConfig {
-        Bridge::io_config(self)
-    }
-    fn set_io_snapshot_of(&mut self, unit: usize, inputs: Inputs, outputs: Outputs) {
-        Bridge::set_io_snapshot_of(self, unit, inputs, outputs);
-    }
-    fn on_io_event_of(&mut self, unit: usize, now: Instant, event: IoEvent) {
-        Bridge::on_io_event_of(self, unit, now, event);
-    }
-    fn take_save_request(&mut self) -> Option<SaveRequest> {
-        Bridge::take_save_request(self)
-    }
-    fn save_finished(&mut self, now: Instant, result: Result<(), SaveError>) {
-        Bridge::save_finished(self, now, result);
-    }
-    fn take_history_draft(&mut self) -> Option<Draft> {
-        Bridge::take_history_draft(self)
-    }
-    fn history_drafts_waiting(&self) -> bool {
-        Bridge::history_drafts_waiting(self)
-    }
-    fn take_history_request(&mut self) -> Option<HistoryRequest> {
-        Bridge::take_history_request(self)
-    }
-    fn history_finished(&mut self, now: Instant, answer: &HistoryAnswer) {
-        Bridge::history_finished(self, now, answer);
-    }
 }
 
 /// The supervisor's side of the exchange with the I/O task, which runs one unit's I/O per set
