@@ -107,6 +107,7 @@ impl Bridge {
     /// The process persisted in the settings goes to the first unit's link, which applies it
     /// again once a Powermax answers (the link decides what is re-applied and when:
     /// [`crate::link::kept`]).
+    ///
     /// Named units (`CONFIG units`) start at the first call that drives the line: the
     /// bridge is built with the first unit's link alone, so that the board builds it (23 KB)
     /// straight in its static slot, and the others are filled in place.
@@ -217,7 +218,7 @@ impl Bridge {
     /// When [`Bridge::poll`] / [`Bridge::poll_ps_transmit`] need to be called next: at once
     /// while the link holds events the session has not taken.
     pub fn poll_at(&self) -> Option<Instant> {
-        if self.units.has_events() {
+        if self.units_pending || self.units.has_events() {
             return Some(self.now);
         }
         match (self.units.poll_at(), self.session.poll_at()) {

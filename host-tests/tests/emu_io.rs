@@ -362,6 +362,16 @@ fn expect_unit_output(board: &Board, unit: usize, output: Output, on: bool) {
         .unwrap_or_else(|e| panic!("{e}"));
 }
 
+/// The first unit's START never came on (its edges, the boot's safe-state write included,
+/// are all off).
+fn assert_first_start_never_on(board: &Board) {
+    let first_start = board.edges(Output::Start);
+    assert!(
+        first_start.iter().all(|e| !e.1),
+        "the first START never came on: {first_start:?}"
+    );
+}
+
 /// Two HPR260s (ids 0 and 1) on one simulated multi-drop line, each wired to its own unit set
 /// of the pin table (its START to the unit's Start, the unit's Machine Motion to its MOTION):
 /// the second unit's TORCH_ON starts the second unit only, and a fault on the first unit (HPR
@@ -387,11 +397,7 @@ fn two_units_on_one_line_each_torch_on_starts_its_own_unit_only() {
     assert!(!board.output(Output::ArcOk).unwrap());
     set_unit(&board, 1, Input::TorchOn, false);
     expect_unit_output(&board, 1, Output::Start, false);
-    let first_start = board.edges(Output::Start);
-    assert!(
-        first_start.iter().all(|e| !e.1),
-        "the first START never came on: {first_start:?}"
-    );
+    assert_first_start_never_on(&board);
 
     // A fault on the first unit: its FAULT on, its START refused; the second starts.
     board.sim().inject_fault_at(0, 44).unwrap();
@@ -422,10 +428,6 @@ fn two_units_on_one_line_each_torch_on_starts_its_own_unit_only() {
     set(&board, Input::TorchOn, false);
     set_unit(&board, 1, Input::TorchOn, false);
     expect_unit_output(&board, 1, Output::Start, false);
-    let first_start = board.edges(Output::Start);
-    assert!(
-        first_start.iter().all(|e| !e.1),
-        "the first START never came on: {first_start:?}"
-    );
+    assert_first_start_never_on(&board);
     board.assert_safe();
 }

@@ -171,6 +171,19 @@ fn unit_2s_torch_on_never_starts_unit_1_and_the_reverse() {
     assert_clean(&world);
 }
 
+/// The nominal current each of the first `count` simulated HPRs holds.
+fn nominal_amps(world: &mut World<BridgeEndpoint>, count: usize) -> Vec<u16> {
+    (0..count)
+        .map(|u| {
+            sim(world, u)
+                .as_any()
+                .downcast_ref::<Hpr>()
+                .unwrap()
+                .nominal_amps()
+        })
+        .collect()
+}
+
 #[test]
 fn mixed_hpr_models_answer_for_themselves_and_a_setting_reaches_only_its_unit() {
     let models = [Model::Hpr260, Model::Hpr130, Model::Hpr400];
@@ -179,30 +192,14 @@ fn mixed_hpr_models_answer_for_themselves_and_a_setting_reaches_only_its_unit() 
         let reply = world.cnc_line(&format!("@{} ID", unit + 1));
         assert!(reply.contains(&format!(" model={name} ")), "{reply}");
     }
-    let before: Vec<u16> = (0..3)
-        .map(|u| {
-            sim(&mut world, u)
-                .as_any()
-                .downcast_ref::<Hpr>()
-                .unwrap()
-                .nominal_amps()
-        })
-        .collect();
+    let before = nominal_amps(&mut world, 3);
     let reply = world.cnc_line("@2 SET AMPS 80");
     assert!(
         reply.starts_with("OK ") && field(&reply, "unit") == Some("2"),
         "{reply}"
     );
     world.run_for(secs(1));
-    let after: Vec<u16> = (0..3)
-        .map(|u| {
-            sim(&mut world, u)
-                .as_any()
-                .downcast_ref::<Hpr>()
-                .unwrap()
-                .nominal_amps()
-        })
-        .collect();
+    let after = nominal_amps(&mut world, 3);
     assert_eq!(after, [before[0], 80, before[2]]);
     assert_eq!(field(&world.cnc_line("@2 STATUS"), "amps"), Some("80"));
     assert_clean(&world);
