@@ -195,7 +195,7 @@ impl Session {
                 self.gas_stop_owed = Some((self.answering, check.steps.stop));
                 check.outcome = match failure {
                     CommandFailure::LinkDown => Outcome::LinkLost,
-                    _ if check.outcome == Outcome::Measured => Outcome::Failed(failure),
+                    _ if matches!(check.outcome, Outcome::Measured) => Outcome::Failed(failure),
                     _ => check.outcome,
                 };
                 self.gas_check_reply(ctx, check);
@@ -312,7 +312,7 @@ impl Session {
             }
             Err(refusal) => {
                 self.gas_stop_owed = Some((self.answering, check.steps.stop));
-                if check.outcome == Outcome::Pending || check.outcome == Outcome::Measured {
+                if matches!(check.outcome, Outcome::Pending | Outcome::Measured) {
                     check.outcome = Outcome::Refused(refusal);
                 }
                 self.gas_check_reply(ctx, check);
