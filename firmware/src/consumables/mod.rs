@@ -96,10 +96,7 @@ impl Usage {
     /// limits), `None` with both limits OFF.
     pub fn used_percent(&self, limits: Limits) -> Option<u32> {
         let share = |used: u32, limit: Option<u32>| {
-            limit.filter(|&l| l > 0).map(|l| {
-                let percent = u64::from(used) * 100 / u64::from(l);
-                u32::try_from(percent).unwrap_or(u32::MAX)
-            })
+            limit.filter(|&l| l > 0).map(|l| percent_of(used, l))
         };
         match (
             share(self.starts, limits.starts),
@@ -304,6 +301,24 @@ impl Consumables {
     }
 }
 
+/// `used × 100 / limit` rounded down, saturated at `u32::MAX`: a binary long division of
+/// the 39-bit product, so the board image has no 64-bit division routine (1 KB of flash).
+fn percent_of(used: u32, limit: u32) -> u32 {
+    let product = u64::from(used) * 100;
+    let divisor = u64::from(limit);
+    let (mut quotient, mut remainder) = (0u64, 0u64);
+    // `used × 100` < 2^39: the bits above are zero.
+    for bit in (0..39).rev() {
+        remainder = (remainder << 1) | ((product >> bit) & 1);
+        quotient <<= 1;
+        if remainder >= divisor {
+            remainder -= divisor;
+            quotient |= 1;
+        }
+    }
+    u32::try_from(quotient).unwrap_or(u32::MAX)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -457,5 +472,27 @@ mod tests {
         // A new set does not wait.
         c.new_set(at(64_000), None);
         assert_eq!(c.take_save(at(64_000)), Some(ConsumableSet::default()));
+    }
+
+    #[test]
+    fn percent_of_is_the_exact_quotient_rounded_down() {
+        for (used, limit) in [
+            (0, 1),
+            (1, 3),
+            (89, 99),
+            (999_999, 1_000_000),
+            (1_000_000, 1_000_000),
+            (u32::MAX, 1),
+            (u32::MAX, u32::MAX),
+            (u32::MAX - 1, u32::MAX),
+            (123_456_789, 987_654),
+        ] {
+            let exact = u64::from(used) * 100 / u64::from(limit);
+            assert_eq!(
+                percent_of(used, limit),
+                u32::try_from(exact).unwrap_or(u32::MAX),
+                "{used} / {limit}"
+            );
+        }
     }
 }

@@ -3,7 +3,7 @@
 use core::fmt;
 
 use super::signals::Output;
-use plasma_protocol::time::Instant;
+use plasma_protocol::time::{Decimal, Instant};
 
 /// A condition that keeps START off although the CNC asks for it.
 ///
@@ -195,7 +195,7 @@ impl fmt::Display for IoEvent {
             IoEvent::StartRefused { reason } => write!(f, "start refused: {reason}"),
             IoEvent::StartDropped { reason } => write!(f, "start dropped: {reason}"),
             IoEvent::StartDelayed { until } => {
-                write!(f, "start delayed until {} us", until.as_micros())
+                write!(f, "start delayed until {} us", Decimal(until.as_micros()))
             }
             IoEvent::StuckTorchOnAtPowerUp => {
                 f.write_str("torch-on active at power-up, ignored until released")

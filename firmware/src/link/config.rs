@@ -3,7 +3,7 @@
 use core::fmt;
 
 use plasma_protocol::serial::{Parity, PortConfig, StopBits};
-use plasma_protocol::time::Duration;
+use plasma_protocol::time::{Decimal, Duration};
 
 /// Which protocol family the link speaks.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
@@ -242,7 +242,8 @@ pub enum ConfigError {
 impl fmt::Display for ConfigError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         type C = LinkConfig;
-        let ms = |d: Duration| d.as_millis();
+        // Decimal: `u64`'s own Display would bring the 64-bit division into the board image.
+        let ms = |d: Duration| Decimal(d.as_millis());
         match self {
             ConfigError::NodeAddressZero => write!(
                 f,
@@ -252,7 +253,8 @@ impl fmt::Display for ConfigError {
             ),
             ConfigError::ResponseTimeoutOutOfRange { ms: value } => write!(
                 f,
-                "response time-out {value} ms is outside {}-{} ms",
+                "response time-out {} ms is outside {}-{} ms",
+                Decimal(*value),
                 ms(C::MIN_RESPONSE_TIMEOUT),
                 ms(C::MAX_RESPONSE_TIMEOUT)
             ),
@@ -263,15 +265,17 @@ impl fmt::Display for ConfigError {
             ),
             ConfigError::PollIntervalOutOfRange { ms: value } => write!(
                 f,
-                "poll interval {value} ms is outside {}-{} ms",
+                "poll interval {} ms is outside {}-{} ms",
+                Decimal(*value),
                 ms(C::MIN_POLL_INTERVAL),
                 ms(C::MAX_POLL_INTERVAL)
             ),
             ConfigError::SlowDataIntervalOutOfRange { ms: value } => write!(
                 f,
-                "slow-data interval {value} ms is outside {} s - {} h",
-                ms(C::MIN_SLOW_DATA_INTERVAL) / 1000,
-                ms(C::MAX_SLOW_DATA_INTERVAL) / 3_600_000
+                "slow-data interval {} ms is outside {} s - {} h",
+                Decimal(*value),
+                Decimal(const { C::MIN_SLOW_DATA_INTERVAL.as_millis() / 1000 }),
+                Decimal(const { C::MAX_SLOW_DATA_INTERVAL.as_millis() / 3_600_000 })
             ),
             ConfigError::HprIdOutOfRange { id } => {
                 write!(f, "HPR id {id} is outside 0-{}", C::MAX_HPR_ID)

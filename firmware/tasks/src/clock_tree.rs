@@ -72,9 +72,11 @@ impl RccSnapshot {
         let m = field(self.pllcfgr, 4, 3) + 1;
         let n = field(self.pllcfgr, 8, 7);
         let r = 2 * (field(self.pllcfgr, 25, 2) + 1);
-        // In u64: the VCO (input × N) may exceed u32 only for settings out of the datasheet.
-        let hz = u64::from(input) / u64::from(m) * u64::from(n) / u64::from(r);
-        u32::try_from(hz).ok().filter(|&hz| hz > 0)
+        // A VCO (input / M × N) beyond u32 is far out of the datasheet (344 MHz at most):
+        // `None`, as for a setting that gives no clock. (No u64: its division is 1 KB of
+        // flash.)
+        let vco = (input / m).checked_mul(n)?;
+        Some(vco / r).filter(|&hz| hz > 0)
     }
 
     /// HCLK: SYSCLK / the AHB prescaler.

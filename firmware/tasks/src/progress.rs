@@ -84,9 +84,10 @@ pub async fn judge(mut watchdog: impl Watchdog) {
         Timer::at(due).await;
         let late = embassy_time::Instant::now().saturating_duration_since(due);
         if late > FEED_PERIOD {
+            // In microseconds (the tick): `as_millis` is a 64-bit division, 1 KB of flash.
             warn!(
-                "the stall judge woke {=u64} ms late: progress not judged this round",
-                late.as_millis()
+                "the stall judge woke {=u64} us late: progress not judged this round",
+                late.as_micros()
             );
             continue;
         }
