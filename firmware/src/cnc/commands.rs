@@ -3,8 +3,9 @@
 //! the line.
 
 use plasma_protocol::cnc::{
-    Amps, Command, ConfigCommand, ConfigKey, ErrorCode, Gas, Mode, Pressure,
+    AllParameters, Amps, Command, ConfigCommand, ConfigKey, ErrorCode, Gas, Mode, Pressure,
 };
+use plasma_protocol::hpr::{HprParameters, MaxProParameters};
 
 use super::describe::{cnc_mode, on_off, unit_mode};
 use super::replies::{cartridge, counters, fault, help, id, limits, status_line};
@@ -15,6 +16,16 @@ use crate::link::command::RAW_CAPACITY;
 use crate::link::{CommandFailure, CommandOutput, Family, LinkCommand};
 use crate::settings::Process;
 use crate::storage::history::ChangedBy;
+
+/// The current of an HPR / MaxPro200 setting, which takes whole amps; else its `ERR` line.
+fn whole_amps(amps: Amps) -> Result<u16, ReplyLine> {
+    let steps = amps.raw();
+    if steps.is_multiple_of(Amps::STEPS_PER_UNIT) {
+        Ok(steps / Amps::STEPS_PER_UNIT)
+    } else {
+        Err(texts::whole_amps(amps))
+    }
+}
 
 impl Session {
     /// Carry out one command: its reply, or `None` when it waits for the link or a save.
@@ -32,6 +43,7 @@ impl Session {
             Route::HprProcess(amps, plasma, shield) => {
                 self.set_hpr_process(ctx, amps, plasma, shield)
             }
+            Route::HprParameters(parameters) => self.set_hpr_parameters(ctx, parameters),
             // The table answers only CARTRIDGE (SYNC) and COUNTERS (MaxPro200, no unit)
             // locally.
             Route::Local => Some(match command {
@@ -132,13 +144,11 @@ impl Session {
     }
 
     fn set_hpr_amps(&mut self, ctx: &mut Context<'_>, amps: Amps) -> Option<ReplyLine> {
-        let steps = amps.raw();
-        if !steps.is_multiple_of(Amps::STEPS_PER_UNIT) {
-            return Some(texts::whole_amps(amps));
-        }
-        let command = LinkCommand::HprSetNominalAmps {
-            amps: steps / Amps::STEPS_PER_UNIT,
+        let amps = match whole_amps(amps) {
+            Ok(amps) => amps,
+            Err(refused) => return Some(refused),
         };
+        let command = LinkCommand::HprSetNominalAmps { amps };
         self.submit(ctx, command, Awaiting::HprAmps)
     }
 
@@ -150,16 +160,54 @@ impl Session {
         plasma: Gas,
         shield: Gas,
     ) -> Option<ReplyLine> {
-        let steps = amps.raw();
-        if !steps.is_multiple_of(Amps::STEPS_PER_UNIT) {
-            return Some(texts::whole_amps(amps));
-        }
-        let amps = steps / Amps::STEPS_PER_UNIT;
+        let amps = match whole_amps(amps) {
+            Ok(amps) => amps,
+            Err(refused) => return Some(refused),
+        };
         let command = LinkCommand::MaxProSetProcess {
             amps,
             gases: gas_pair(plasma, shield),
         };
         self.submit(ctx, command, Awaiting::HprProcess(amps, plasma, shield))
+    }
+
+    /// `SET HPR_PARAMETERS` in the unit's form: 095, read back, kept and re-applied like
+    /// `SET AMPS`.
+    fn set_hpr_parameters(
+        &mut self,
+        ctx: &mut Context<'_>,
+        parameters: AllParameters,
+    ) -> Option<ReplyLine> {
+        let (AllParameters::Hpr { amps, .. } | AllParameters::MaxPro200 { amps, .. }) = parameters;
+        let amps = match whole_amps(amps) {
+            Ok(amps) => amps,
+            Err(refused) => return Some(refused),
+        };
+        let command = match parameters {
+            AllParameters::Hpr {
+                corner,
+                plasma,
+                shield,
+                flows,
+                ..
+            } => LinkCommand::HprSetAllParameters(HprParameters {
+                amps,
+                corner_percent: corner,
+                gases: gas_pair(plasma, shield),
+                flows,
+            }),
+            AllParameters::MaxPro200 {
+                plasma,
+                shield,
+                pressures,
+                ..
+            } => LinkCommand::MaxProSetAllParameters(MaxProParameters {
+                amps,
+                gases: gas_pair(plasma, shield),
+                pressures,
+            }),
+        };
+        self.submit(ctx, command, Awaiting::HprParameters(parameters))
     }
 
     fn raw(&mut self, ctx: &mut Context<'_>, frame: &str) -> Option<ReplyLine> {

@@ -4,7 +4,9 @@
 use core::fmt::{self, Display, Write};
 
 use plasma_protocol::cnc::reply::ReplyWriter;
-use plasma_protocol::cnc::{ErrorCode, Gas, Pressure};
+use plasma_protocol::cnc::{
+    AllGasFlows, AllParameters, ErrorCode, Gas, HPR_GAS_FLOW_WORDS, MAXPRO_GAS_FLOW_WORDS, Pressure,
+};
 use plasma_protocol::hpr;
 
 use super::describe::{
@@ -29,7 +31,7 @@ const HELP_COMMANDS: &str = "HELP,ID,STATUS,LIMITS,FAULT,FAULTLOG,COUNTERS,CARTR
                              GASTEST,POWER,RESTART,GASES,CORNER,RESET,CLEARWARN,EVENTS,CONFIG,HISTORY,\
                              CLOCK,CONSUMABLES,UNITS,RAW";
 /// The parser's [`SET_WORDS`](plasma_protocol::cnc::command::SET_WORDS) as HELP writes them.
-const HELP_SET: &str = "MODE,AMPS,PSI,PROCESS,HPR_PROCESS";
+const HELP_SET: &str = "MODE,AMPS,PSI,PROCESS,HPR_PROCESS,HPR_PARAMETERS,HPR_GAS_FLOWS";
 /// The parser's [`GASTEST_WORDS`](plasma_protocol::cnc::command::GASTEST_WORDS).
 const HELP_GASTEST: &str = "ON,OFF,PREFLOW,CUTFLOW,CHECK";
 
@@ -224,16 +226,24 @@ fn hpr_status(
     {
         w.field("console", console)?;
     }
+    // Named as the set points of SET HPR_GAS_FLOWS.
+    let [
+        plasma_cutflow,
+        plasma_preflow,
+        shield_cutflow,
+        shield_preflow,
+        ..,
+    ] = HPR_GAS_FLOW_WORDS;
     if let Some(p) = hpr.ps_info.map(|i| i.pressures) {
-        w.field("plasma_cutflow_psi", p.plasma_cutflow)?;
-        w.field("plasma_preflow_psi", p.plasma_preflow)?;
-        w.field("shield_cutflow_psi", p.shield_cutflow)?;
-        w.field("shield_preflow_psi", p.shield_preflow)?;
+        w.field(plasma_cutflow, p.plasma_cutflow)?;
+        w.field(plasma_preflow, p.plasma_preflow)?;
+        w.field(shield_cutflow, p.shield_cutflow)?;
+        w.field(shield_preflow, p.shield_preflow)?;
     }
     if let Some(m) = hpr.maxpro_info {
         // Display mode 3 is "Test Mode" (line 168): the 143 test gas is on.
         w.field("gastest", on_off(m.display_mode == 3))?;
-        w.field("shield_psi", m.shield_setpoint)?;
+        w.field(MAXPRO_GAS_FLOW_WORDS[1], m.shield_setpoint)?;
         w.field("plasma", GasName(m.plasma_gas))?;
         w.field("shield", GasName(m.shield_gas))?;
     }
@@ -468,6 +478,8 @@ pub(super) fn complete(
             w.field("plasma", plasma.name())?;
             w.field("shield", shield.name())
         }),
+        Awaiting::HprParameters(parameters) => ok_line(|w| all_parameters(w, &parameters)),
+        Awaiting::HprGasFlows(flows) => ok_line(|w| all_gas_flows(w, &flows)),
         Awaiting::Gases(plasma, shield) => ok_line(|w| {
             w.field("plasma", plasma.name())?;
             w.field("shield", shield.name())
@@ -482,6 +494,48 @@ pub(super) fn complete(
         Awaiting::FaultLog => fault_log_done(ctx, output),
         Awaiting::Counters => counters_done(ctx),
     }
+}
+
+/// `SET HPR_PARAMETERS` confirmed: the values sent, which the unit read back (the link's
+/// `hpr::confirm`).
+fn all_parameters(w: &mut ReplyWriter<&mut ReplyLine>, parameters: &AllParameters) -> fmt::Result {
+    let (plasma, shield, flows) = match *parameters {
+        AllParameters::Hpr {
+            amps,
+            corner,
+            plasma,
+            shield,
+            flows,
+        } => {
+            w.field("amps", amps)?;
+            w.field("corner", corner)?;
+            (plasma, shield, AllGasFlows::Hpr(flows))
+        }
+        AllParameters::MaxPro200 {
+            amps,
+            plasma,
+            shield,
+            pressures,
+        } => {
+            w.field("amps", amps)?;
+            (plasma, shield, AllGasFlows::MaxPro200(pressures))
+        }
+    };
+    w.field("plasma", plasma.name())?;
+    w.field("shield", shield.name())?;
+    all_gas_flows(w, &flows)
+}
+
+/// `SET HPR_GAS_FLOWS` confirmed: the set points sent, which the unit read back.
+fn all_gas_flows(w: &mut ReplyWriter<&mut ReplyLine>, flows: &AllGasFlows) -> fmt::Result {
+    let (names, pressures): (&[&str], [u16; 6]) = match *flows {
+        AllGasFlows::Hpr(flows) => (&HPR_GAS_FLOW_WORDS, flows.to_array()),
+        AllGasFlows::MaxPro200(p) => (&MAXPRO_GAS_FLOW_WORDS, [p.plasma, p.shield, 0, 0, 0, 0]),
+    };
+    names
+        .iter()
+        .zip(pressures)
+        .try_for_each(|(name, psi)| w.field(name, psi))
 }
 
 /// `SET ...` confirmed: the settings as the unit reads them back.

@@ -4,7 +4,9 @@
 //! without the function. This is the only place that maps CNC commands to link requests; the
 //! link checks each request against the family once ([`LinkCommand::runs_on`]).
 
-use plasma_protocol::cnc::{Amps, Command, ConsumablesCommand, Gas, GasFlow, Mode, Pressure};
+use plasma_protocol::cnc::{
+    AllGasFlows, AllParameters, Amps, Command, ConsumablesCommand, Gas, GasFlow, Mode, Pressure,
+};
 use plasma_protocol::hpr::{GasCode, GasPair};
 
 use super::texts::{Unsupported, unsupported};
@@ -22,6 +24,8 @@ pub(super) enum Awaiting {
     Restart,
     HprAmps,
     HprProcess(u16, Gas, Gas),
+    HprParameters(AllParameters),
+    HprGasFlows(AllGasFlows),
     Gases(Gas, Gas),
     Corner,
     Reset,
@@ -47,6 +51,9 @@ pub(super) enum Route<'a> {
     HprAmps(Amps),
     /// `SET HPR_PROCESS` on a MaxPro200: sent as `MaxProSetProcess` when it is whole amps.
     HprProcess(Amps, Gas, Gas),
+    /// `SET HPR_PARAMETERS` in the form of the unit's family: sent as `HprSetAllParameters`
+    /// or `MaxProSetAllParameters` when it is whole amps.
+    HprParameters(AllParameters),
     /// Answered from what the bridge knows; nothing is sent.
     Local,
     /// The family has no such function.
@@ -128,6 +135,22 @@ pub(super) fn route<'a>(command: &Command<'a>, family: Option<Family>) -> Route<
             Some(MaxPro200),
         ) => Route::HprProcess(amps, plasma, shield),
         (Command::SetHprProcess { .. }, _) => No(&text::HPR_PROCESS),
+        // 095 and 078 take other fields on an HPR and on a MaxPro200 (HPR manual lines 165,
+        // 180): each family only its own form.
+        (Command::SetHprParameters(p @ AllParameters::Hpr { .. }), Some(Hpr))
+        | (Command::SetHprParameters(p @ AllParameters::MaxPro200 { .. }), Some(MaxPro200)) => {
+            Route::HprParameters(p)
+        }
+        (Command::SetHprParameters(_), Some(Hpr | MaxPro200)) => No(&text::HPR_PARAMETERS_FORM),
+        (Command::SetHprParameters(_), _) => No(&text::HPR_PARAMETERS),
+        (Command::SetHprGasFlows(f @ AllGasFlows::Hpr(flows)), Some(Hpr)) => {
+            Send(L::HprSetAllGasFlows(flows), Awaiting::HprGasFlows(f))
+        }
+        (Command::SetHprGasFlows(f @ AllGasFlows::MaxPro200(pressures)), Some(MaxPro200)) => {
+            Send(L::MaxProSetAllGasFlows(pressures), Awaiting::HprGasFlows(f))
+        }
+        (Command::SetHprGasFlows(_), Some(Hpr | MaxPro200)) => No(&text::HPR_GAS_FLOWS_FORM),
+        (Command::SetHprGasFlows(_), _) => No(&text::HPR_GAS_FLOWS),
         (Command::RemoteOff, Some(Sync | Legacy)) => Send(L::ExitRemote, Awaiting::RemoteOff),
         (Command::RemoteOff, _) => No(&text::REMOTE_OFF),
         (Command::GasTest(on), Some(Sync | Legacy)) => {
@@ -200,7 +223,7 @@ pub(super) fn route<'a>(command: &Command<'a>, family: Option<Family>) -> Route<
     }
 }
 
-/// The HPR gas codes of a `GASES` or `SET HPR_PROCESS` command.
+/// The HPR gas codes of a `GASES`, `SET HPR_PROCESS` or `SET HPR_PARAMETERS` command.
 pub(super) fn gas_pair(plasma: Gas, shield: Gas) -> GasPair {
     GasPair {
         plasma: GasCode(u16::from(plasma.hpr_code())),
@@ -211,6 +234,7 @@ pub(super) fn gas_pair(plasma: Gas, shield: Gas) -> GasPair {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use plasma_protocol::hpr::{GasFlows, MaxProPressures};
 
     const FAMILIES: [Family; 4] = [
         Family::PowermaxSync,
@@ -220,7 +244,7 @@ mod tests {
     ];
 
     /// One command of each kind the table routes to the unit.
-    fn unit_commands() -> [Command<'static>; 18] {
+    fn unit_commands() -> [Command<'static>; 22] {
         let amps = Amps::from_raw(45 * Amps::STEPS_PER_UNIT);
         [
             Command::SetMode(Mode::Cut),
@@ -236,6 +260,29 @@ mod tests {
                 plasma: Gas::O2,
                 shield: Gas::Air,
             },
+            Command::SetHprParameters(AllParameters::Hpr {
+                amps,
+                corner: 80,
+                plasma: Gas::O2,
+                shield: Gas::Air,
+                flows: GasFlows::from_array([55, 45, 35, 25, 0, 0]),
+            }),
+            Command::SetHprParameters(AllParameters::MaxPro200 {
+                amps,
+                plasma: Gas::O2,
+                shield: Gas::Air,
+                pressures: MaxProPressures {
+                    plasma: 50,
+                    shield: 58,
+                },
+            }),
+            Command::SetHprGasFlows(AllGasFlows::Hpr(GasFlows::from_array([
+                55, 45, 35, 25, 0, 0,
+            ]))),
+            Command::SetHprGasFlows(AllGasFlows::MaxPro200(MaxProPressures {
+                plasma: 50,
+                shield: 58,
+            })),
             Command::RemoteOff,
             Command::GasTest(true),
             Command::GasCheck,
@@ -288,6 +335,25 @@ mod tests {
                 assert!(matches!(route, Route::Settings { amps: Some(a), .. } if a == amps));
             } else {
                 assert_eq!(route, Route::HprAmps(amps));
+            }
+        }
+    }
+
+    #[test]
+    fn set_hpr_parameters_goes_out_only_in_the_units_own_form() {
+        let commands = unit_commands();
+        let [hpr_form, maxpro_form] = [commands[5], commands[6]];
+        for family in FAMILIES {
+            for (command, own) in [(hpr_form, Family::Hpr), (maxpro_form, Family::MaxPro200)] {
+                let Command::SetHprParameters(parameters) = command else {
+                    panic!("{command:?}");
+                };
+                let routed = route(&command, Some(family));
+                assert_eq!(
+                    routed == Route::HprParameters(parameters),
+                    family == own,
+                    "{command:?} on {family:?}"
+                );
             }
         }
     }

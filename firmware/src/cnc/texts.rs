@@ -174,6 +174,27 @@ pub mod unsupported {
         "SET HPR_PROCESS is a MaxPro200 command (137 set process), not available on ",
         "; an HPR takes SET AMPS, GASES and CORNER",
     );
+    /// `SET HPR_PARAMETERS` on a Powermax.
+    pub const HPR_PARAMETERS: Unsupported = words(
+        "SET HPR_PARAMETERS is an HPR/MaxPro200 command (095 set all parameters), not available on ",
+        "; a Powermax takes SET PROCESS",
+    );
+    /// `SET HPR_PARAMETERS` in the other family's form (095 takes other fields on each).
+    pub const HPR_PARAMETERS_FORM: Unsupported = words(
+        "SET HPR_PARAMETERS in this form is not taken by ",
+        ": an HPR takes <A> <corner> <plasma> <shield> and six psi, a MaxPro200 \
+         <A> <plasma> <shield> and two psi",
+    );
+    /// `SET HPR_GAS_FLOWS` on a Powermax.
+    pub const HPR_GAS_FLOWS: Unsupported = words(
+        "SET HPR_GAS_FLOWS is an HPR/MaxPro200 command (078 set all gas flows), not available on ",
+        "; a Powermax takes SET PSI",
+    );
+    /// `SET HPR_GAS_FLOWS` in the other family's form (078 takes other fields on each).
+    pub const HPR_GAS_FLOWS_FORM: Unsupported = words(
+        "SET HPR_GAS_FLOWS in this form is not taken by ",
+        ": an HPR takes six psi, a MaxPro200 two",
+    );
     /// `RESTART` on anything but a Powermax SYNC.
     pub const RESTART: Unsupported = words(
         "RESTART (quick restart, clears 0-50-0) is a Powermax SYNC function, not available on ",

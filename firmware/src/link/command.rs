@@ -1,6 +1,9 @@
 //! What the CNC session can ask of the link, and why the link may refuse before sending.
 
-use plasma_protocol::hpr::{ErrorCode, GasPair, StateCode, SystemId};
+use plasma_protocol::hpr::{
+    ErrorCode, GasFlows, GasPair, HprParameters, MaxProParameters, MaxProPressures, StateCode,
+    SystemId,
+};
 use plasma_protocol::powermax::sync::PermittedModes;
 use plasma_protocol::powermax::{Amps, FaultCode, OperatingMode, Pressure, Psi};
 
@@ -55,6 +58,19 @@ pub enum LinkCommand<'a> {
         /// Plasma and shield gases.
         gases: GasPair,
     },
+    /// HPR (automatic gas console): 095 SET_ALL_PARAMETERS, current, corner current, gases and
+    /// the six pressure set points. The unit only acknowledges it: the link reads the values
+    /// back before it counts as done (`hpr::confirm`), then keeps and re-applies it.
+    HprSetAllParameters(HprParameters),
+    /// MaxPro200: 095 SET_ALL_PARAMETERS, current, gases and the two pressure set points; read
+    /// back, kept and re-applied as the HPR's.
+    MaxProSetAllParameters(MaxProParameters),
+    /// HPR (automatic gas console): 078 SET_ALL_GAS_FLOWS, the six pressure set points; read
+    /// back, kept and re-applied.
+    HprSetAllGasFlows(GasFlows),
+    /// MaxPro200: 078 SET_ALL_GAS_FLOWS, the plasma and shield pressure set points; read back,
+    /// kept and re-applied.
+    MaxProSetAllGasFlows(MaxProPressures),
     /// HPR (auto gas) / MaxPro200: set the inlet gases (096).
     HprSetInletGases(GasPair),
     /// HPR: corner current percent 50-100 (070).
@@ -119,9 +135,13 @@ impl LinkCommand<'_> {
             | LinkCommand::HprGasTest { .. }
             | LinkCommand::HprReadGasPressures
             | LinkCommand::HprReadErrorLog
-            | LinkCommand::HprReadTimers => matches!(family, Family::Hpr),
+            | LinkCommand::HprReadTimers
+            | LinkCommand::HprSetAllParameters(_)
+            | LinkCommand::HprSetAllGasFlows(_) => matches!(family, Family::Hpr),
             LinkCommand::MaxProTestGas { .. }
             | LinkCommand::MaxProSetProcess { .. }
+            | LinkCommand::MaxProSetAllParameters(_)
+            | LinkCommand::MaxProSetAllGasFlows(_)
             | LinkCommand::MaxProReadGasPressures => {
                 matches!(family, Family::MaxPro200)
             }
@@ -272,6 +292,11 @@ mod tests {
         assert!(!cutflow_test.runs_on(MaxPro200));
         assert!(LinkCommand::MaxProTestGas { on: true }.runs_on(MaxPro200));
         assert!(!LinkCommand::MaxProTestGas { on: true }.runs_on(Hpr));
+        // 095 and 078 take another form on each (HPR manual lines 165 and 180).
+        let hpr_flows = LinkCommand::HprSetAllGasFlows(GasFlows::default());
+        let maxpro_flows = LinkCommand::MaxProSetAllGasFlows(MaxProPressures::default());
+        assert!(hpr_flows.runs_on(Hpr) && !hpr_flows.runs_on(MaxPro200));
+        assert!(maxpro_flows.runs_on(MaxPro200) && !maxpro_flows.runs_on(Hpr));
         assert!(LinkCommand::QuickRestart.runs_on(PowermaxSync));
         assert!(!LinkCommand::QuickRestart.runs_on(PowermaxLegacy));
         assert!(LinkCommand::RefreshSlowData.runs_on(PowermaxLegacy));

@@ -2,6 +2,7 @@
 
 use super::clock::{CLOCK_FORM, WallClock};
 use super::error::ParseError;
+use crate::hpr::{GasFlows, MAX_FLOW_PSI, MAX_MIX_PSI, MaxProPressures};
 use crate::units::{self, Amps, Pressure, Psi, Rounding};
 
 /// Lowest current any supported supply accepts (HPR: 5 A).
@@ -387,6 +388,10 @@ pub enum Command<'a> {
         /// Shield gas.
         shield: Gas,
     },
+    /// `SET HPR_PARAMETERS ...`: 095 SET_ALL_PARAMETERS, in the HPR's or the MaxPro200's form.
+    SetHprParameters(AllParameters),
+    /// `SET HPR_GAS_FLOWS ...`: 078 SET_ALL_GAS_FLOWS, in the HPR's or the MaxPro200's form.
+    SetHprGasFlows(AllGasFlows),
     /// `REMOTE OFF`: hand control back to the supply's front panel.
     RemoteOff,
     /// `GASTEST ON|OFF`: the unit's gas test (HPR: preflow, MaxPro200: 143 test gas).
@@ -437,6 +442,66 @@ pub enum Command<'a> {
     /// `UNITS`: every unit on the power-supply line and its state.
     Units,
 }
+
+/// The values of `SET HPR_PARAMETERS` (095 SET_ALL_PARAMETERS). The HPR and the MaxPro200
+/// take different fields (HPR manual, 095); the second word tells the forms apart: a corner
+/// percent (HPR) or a gas (MaxPro200). Pressure set points are whole psi.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum AllParameters {
+    /// HPR: `<A> <corner %> <plasma> <shield>` then the six set points of
+    /// [`HPR_GAS_FLOW_WORDS`].
+    Hpr {
+        /// Current (whole amps on the unit).
+        amps: Amps,
+        /// Corner current, percent of the cutting current (50..100).
+        corner: u8,
+        /// Plasma gas.
+        plasma: Gas,
+        /// Shield gas.
+        shield: Gas,
+        /// Pressure set points.
+        flows: GasFlows,
+    },
+    /// MaxPro200: `<A> <plasma> <shield> <plasma psi> <shield psi>`.
+    MaxPro200 {
+        /// Current (whole amps on the unit).
+        amps: Amps,
+        /// Plasma gas.
+        plasma: Gas,
+        /// Shield gas.
+        shield: Gas,
+        /// Pressure set points.
+        pressures: MaxProPressures,
+    },
+}
+
+/// The values of `SET HPR_GAS_FLOWS` (078 SET_ALL_GAS_FLOWS): six set points on an HPR, two on
+/// a MaxPro200 (told apart by their number), whole psi.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum AllGasFlows {
+    /// HPR: the six set points of [`HPR_GAS_FLOW_WORDS`].
+    Hpr(GasFlows),
+    /// MaxPro200: `<plasma psi> <shield psi>`.
+    MaxPro200(MaxProPressures),
+}
+
+/// The HPR's pressure set points in the order 078 and 095 take them (and [`GasFlows`] holds
+/// them): the names of their arguments in errors and of their fields in replies.
+pub const HPR_GAS_FLOW_WORDS: [&str; 6] = [
+    "plasma_cutflow_psi",
+    "plasma_preflow_psi",
+    "shield_cutflow_psi",
+    "shield_preflow_psi",
+    "n2_mix_psi",
+    "gas2_mix_psi",
+];
+/// The MaxPro200's pressure set points in the order 078 and 095 take them (names as above).
+pub const MAXPRO_GAS_FLOW_WORDS: [&str; 2] = ["plasma_psi", "shield_psi"];
+/// `0..MAX_FLOW_PSI` and `0..MAX_MIX_PSI` as written in an error reply (a test ties them).
+const FLOW_RANGE_TEXT: &str = "0..99";
+const MIX_RANGE_TEXT: &str = "0..100";
 
 /// The forms of `CONSUMABLES`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -609,10 +674,16 @@ fn pressure(args: &mut Args<'_>) -> Result<Pressure, ParseError> {
     Ok(Pressure::Set(psi))
 }
 
+const CORNER_WORD: &str = "percent";
+
 fn corner(args: &mut Args<'_>) -> Result<u8, ParseError> {
-    const WHAT: &str = "percent";
+    corner_of(args.expect(CORNER_WORD)?)
+}
+
+fn corner_of(word: &str) -> Result<u8, ParseError> {
+    const WHAT: &str = CORNER_WORD;
     const RANGE: &str = "50..100";
-    let percent = number(args.expect(WHAT)?, 0, WHAT, RANGE, "1")?;
+    let percent = number(word, 0, WHAT, RANGE, "1")?;
     match u8::try_from(percent) {
         Ok(p) if (CORNER_MIN..=CORNER_MAX).contains(&p) => Ok(p),
         _ => Err(ParseError::OutOfRange {
@@ -622,15 +693,81 @@ fn corner(args: &mut Args<'_>) -> Result<u8, ParseError> {
     }
 }
 
+/// One pressure set point in whole psi, 0..`max`.
+fn setpoint(args: &mut Args<'_>, what: &'static str, mix: bool) -> Result<u16, ParseError> {
+    let (max, range) = if mix {
+        (MAX_MIX_PSI, MIX_RANGE_TEXT)
+    } else {
+        (MAX_FLOW_PSI, FLOW_RANGE_TEXT)
+    };
+    let psi = number(args.expect(what)?, 0, what, range, "1")?;
+    match u16::try_from(psi) {
+        Ok(psi) if psi <= max => Ok(psi),
+        _ => Err(ParseError::OutOfRange { what, range }),
+    }
+}
+
+/// The HPR's six set points (the last two are the mix set points, 0..100).
+fn hpr_flows(args: &mut Args<'_>) -> Result<GasFlows, ParseError> {
+    let mut values = [0; 6];
+    for (i, (value, what)) in values.iter_mut().zip(HPR_GAS_FLOW_WORDS).enumerate() {
+        *value = setpoint(args, what, i >= 4)?;
+    }
+    Ok(GasFlows::from_array(values))
+}
+
+/// The MaxPro200's two set points, 0..99.
+fn maxpro_pressures(args: &mut Args<'_>) -> Result<MaxProPressures, ParseError> {
+    let [plasma, shield] = MAXPRO_GAS_FLOW_WORDS;
+    Ok(MaxProPressures {
+        plasma: setpoint(args, plasma, false)?,
+        shield: setpoint(args, shield, false)?,
+    })
+}
+
+/// `SET HPR_PARAMETERS`: the second word is a gas on a MaxPro200, the corner percent on an HPR.
+fn all_parameters(args: &mut Args<'_>) -> Result<AllParameters, ParseError> {
+    let amps = amps(args)?;
+    let second = args.expect("corner percent or plasma gas")?;
+    if let Some(plasma) = Gas::from_name(second) {
+        return Ok(AllParameters::MaxPro200 {
+            amps,
+            plasma,
+            shield: gas(args, "shield gas")?,
+            pressures: maxpro_pressures(args)?,
+        });
+    }
+    Ok(AllParameters::Hpr {
+        amps,
+        corner: corner_of(second)?,
+        plasma: gas(args, "plasma gas")?,
+        shield: gas(args, "shield gas")?,
+        flows: hpr_flows(args)?,
+    })
+}
+
+/// `SET HPR_GAS_FLOWS`: two set points on a MaxPro200, six on an HPR.
+fn all_gas_flows(args: &mut Args<'_>) -> Result<AllGasFlows, ParseError> {
+    let mut ahead = Args { rest: args.rest };
+    let count = core::iter::from_fn(|| ahead.next()).take(3).count();
+    Ok(if count == MAXPRO_GAS_FLOW_WORDS.len() {
+        AllGasFlows::MaxPro200(maxpro_pressures(args)?)
+    } else {
+        AllGasFlows::Hpr(hpr_flows(args)?)
+    })
+}
+
 fn set(args: &mut Args<'_>) -> Result<Command<'static>, ParseError> {
     const WHAT: &str = "SET parameter";
-    const EXPECTED: &str = "MODE|AMPS|PSI|PROCESS|HPR_PROCESS";
+    const EXPECTED: &str = "MODE|AMPS|PSI|PROCESS|HPR_PROCESS|HPR_PARAMETERS|HPR_GAS_FLOWS";
     let [
         mode_word,
         amps_word,
         psi_word,
         process_word,
         hpr_process_word,
+        hpr_parameters_word,
+        hpr_gas_flows_word,
     ] = SET_WORDS;
     let word = args
         .next()
@@ -653,6 +790,10 @@ fn set(args: &mut Args<'_>) -> Result<Command<'static>, ParseError> {
             plasma: gas(args, "plasma gas")?,
             shield: gas(args, "shield gas")?,
         }
+    } else if is(word, hpr_parameters_word) {
+        Command::SetHprParameters(all_parameters(args)?)
+    } else if is(word, hpr_gas_flows_word) {
+        Command::SetHprGasFlows(all_gas_flows(args)?)
     } else {
         return Err(ParseError::BadKeyword {
             what: WHAT,
@@ -756,7 +897,15 @@ pub const COMMAND_WORDS: [&str; 24] = [
 ];
 
 /// The words that may follow `SET`.
-pub const SET_WORDS: [&str; 5] = ["MODE", "AMPS", "PSI", "PROCESS", "HPR_PROCESS"];
+pub const SET_WORDS: [&str; 7] = [
+    "MODE",
+    "AMPS",
+    "PSI",
+    "PROCESS",
+    "HPR_PROCESS",
+    "HPR_PARAMETERS",
+    "HPR_GAS_FLOWS",
+];
 
 /// The words that may follow `GASTEST`.
 pub const GASTEST_WORDS: [&str; 5] = ["ON", "OFF", "PREFLOW", "CUTFLOW", "CHECK"];
@@ -959,7 +1108,7 @@ mod tests {
             );
         }
         for word in SET_WORDS {
-            let mut line = heapless::String::<16>::new();
+            let mut line = heapless::String::<24>::new();
             write!(line, "SET {word}").unwrap();
             assert!(
                 !matches!(Command::parse(&line), Err(ParseError::BadKeyword { .. })),
@@ -1090,7 +1239,8 @@ mod tests {
         assert_eq!(text(err("SET")), "SYNTAX missing SET parameter");
         assert_eq!(
             text(err("SET VOLTS 5")),
-            "SYNTAX SET parameter: expected MODE|AMPS|PSI|PROCESS|HPR_PROCESS"
+            "SYNTAX SET parameter: expected \
+             MODE|AMPS|PSI|PROCESS|HPR_PROCESS|HPR_PARAMETERS|HPR_GAS_FLOWS"
         );
         assert_eq!(
             Command::parse("set hpr_process 200 o2 air"),
@@ -1105,6 +1255,103 @@ mod tests {
             "SYNTAX missing shield gas"
         );
         assert_eq!(err("SET HPR_PROCESS 4 O2 AIR").code(), ErrorCode::Range);
+    }
+
+    /// The values of the HPR manual's 095 and 078 samples (002_72b43a5685974c77.txt line 180,
+    /// `>095100 75 1 6 55 45 35 25 00 0084<`: gas codes 1 and 6 are O2 and N2; line 165,
+    /// `>07855 45 35 25 50 50AB<`; the MaxPro200 078 set points "0050" and "0058").
+    #[test]
+    fn set_hpr_parameters_and_gas_flows_in_both_forms() {
+        assert_eq!(
+            Command::parse("SET HPR_PARAMETERS 100 75 O2 N2 55 45 35 25 0 0"),
+            Ok(Command::SetHprParameters(AllParameters::Hpr {
+                amps: amps(100.0),
+                corner: 75,
+                plasma: Gas::O2,
+                shield: Gas::N2,
+                flows: GasFlows::from_array([55, 45, 35, 25, 0, 0]),
+            }))
+        );
+        assert_eq!(
+            Command::parse("set hpr_parameters 200 o2 air 50 58"),
+            Ok(Command::SetHprParameters(AllParameters::MaxPro200 {
+                amps: amps(200.0),
+                plasma: Gas::O2,
+                shield: Gas::Air,
+                pressures: MaxProPressures {
+                    plasma: 50,
+                    shield: 58
+                },
+            }))
+        );
+        assert_eq!(
+            Command::parse("SET HPR_GAS_FLOWS 55 45 35 25 50 50"),
+            Ok(Command::SetHprGasFlows(AllGasFlows::Hpr(
+                GasFlows::from_array([55, 45, 35, 25, 50, 50])
+            )))
+        );
+        assert_eq!(
+            Command::parse("SET HPR_GAS_FLOWS 50 58"),
+            Ok(Command::SetHprGasFlows(AllGasFlows::MaxPro200(
+                MaxProPressures {
+                    plasma: 50,
+                    shield: 58
+                }
+            )))
+        );
+        // The flows are 0..99 psi, the two mix set points 0..100 (lines 165 and 180).
+        assert!(Command::parse("SET HPR_GAS_FLOWS 99 45 35 25 100 100").is_ok());
+        assert_eq!(
+            text(err("SET HPR_GAS_FLOWS 55 45 35 25 100 101")),
+            "RANGE gas2_mix_psi out of range 0..100"
+        );
+        assert_eq!(
+            text(err("SET HPR_GAS_FLOWS 55 100 35 25 0 0")),
+            "RANGE plasma_preflow_psi out of range 0..99"
+        );
+        assert_eq!(
+            text(err("SET HPR_GAS_FLOWS 50 100")),
+            "RANGE shield_psi out of range 0..99"
+        );
+        assert_eq!(
+            text(err("SET HPR_GAS_FLOWS 55 45 35")),
+            "SYNTAX missing shield_preflow_psi"
+        );
+        assert_eq!(
+            err("SET HPR_GAS_FLOWS 55 45 35 25 0 0 0"),
+            ParseError::UnexpectedArgument
+        );
+        assert_eq!(
+            text(err("SET HPR_PARAMETERS 100 75 O2 N2 55 45 35 25 0")),
+            "SYNTAX missing gas2_mix_psi"
+        );
+        assert_eq!(
+            text(err("SET HPR_PARAMETERS 100 40 O2 N2 55 45 35 25 0 0")),
+            "RANGE percent out of range 50..100"
+        );
+        assert_eq!(
+            text(err("SET HPR_PARAMETERS 100 O2 N2 55")),
+            "SYNTAX missing shield_psi"
+        );
+        assert_eq!(
+            text(err("SET HPR_PARAMETERS 100")),
+            "SYNTAX missing corner percent or plasma gas"
+        );
+        assert_eq!(
+            err("SET HPR_PARAMETERS 401 O2 N2 55 45").code(),
+            ErrorCode::Range
+        );
+        assert_eq!(
+            err("SET HPR_PARAMETERS 200 O2 N2 55 45 35").code(),
+            ErrorCode::Syntax
+        );
+        let upper = |range: &str| {
+            range
+                .strip_prefix("0..")
+                .and_then(|n| n.parse::<u16>().ok())
+        };
+        assert_eq!(upper(FLOW_RANGE_TEXT), Some(MAX_FLOW_PSI));
+        assert_eq!(upper(MIX_RANGE_TEXT), Some(MAX_MIX_PSI));
     }
 
     #[test]

@@ -65,9 +65,10 @@ pub mod unit;
 
 pub use crate::units::{Amps, Pressure, Psi};
 pub use command::{
-    AMPS_ARGUMENT, AMPS_MAX, AMPS_MIN, AMPS_RANGE_TEXT, Command, ConfigCommand, ConfigKey,
-    ConsumablesCommand, Gas, GasFlow, HISTORY_DEFAULT, HISTORY_MAX, HistoryCommand, Mode, PSI_MAX,
-    PSI_MIN, PSI_RANGE_TEXT,
+    AMPS_ARGUMENT, AMPS_MAX, AMPS_MIN, AMPS_RANGE_TEXT, AllGasFlows, AllParameters, Command,
+    ConfigCommand, ConfigKey, ConsumablesCommand, Gas, GasFlow, HISTORY_DEFAULT, HISTORY_MAX,
+    HPR_GAS_FLOW_WORDS, HistoryCommand, MAXPRO_GAS_FLOW_WORDS, Mode, PSI_MAX, PSI_MIN,
+    PSI_RANGE_TEXT,
 };
 pub use error::{ErrorCode, ParseError};
 pub use line::{LineAssembler, LineError, MAX_LINE_LEN};

@@ -84,7 +84,7 @@ impl GasFlows {
     }
 
     /// Manual limit of the value at wire position `i`.
-    pub(crate) const fn limit(i: usize) -> u16 {
+    pub const fn limit(i: usize) -> u16 {
         if i < 4 { MAX_FLOW_PSI } else { MAX_MIX_PSI }
     }
 }

@@ -243,8 +243,8 @@ fn every_command_on_a_sync_unit() {
         rig.cmd("HELP"),
         "OK commands=HELP,ID,STATUS,LIMITS,FAULT,FAULTLOG,COUNTERS,CARTRIDGE,SET,REMOTE,\
          GASTEST,POWER,RESTART,GASES,CORNER,RESET,CLEARWARN,EVENTS,CONFIG,HISTORY,CLOCK,CONSUMABLES,UNITS,RAW \
-         set=MODE,AMPS,PSI,PROCESS,HPR_PROCESS remote=OFF gastest=ON,OFF,PREFLOW,CUTFLOW,CHECK \
-         config=SAVE history=CLEAR consumables=NEW simulator_only=TORCH simulator=NO"
+         set=MODE,AMPS,PSI,PROCESS,HPR_PROCESS,HPR_PARAMETERS,HPR_GAS_FLOWS remote=OFF \
+         gastest=ON,OFF,PREFLOW,CUTFLOW,CHECK config=SAVE history=CLEAR consumables=NEW simulator_only=TORCH simulator=NO"
     );
     assert!(rig.cmd("help").starts_with("OK commands=HELP,ID,STATUS,"));
     assert_eq!(
@@ -548,6 +548,87 @@ fn every_command_on_an_hpr() {
     assert_eq!(
         rig.cmd("FAULT"),
         "OK fault=044 action=required text=LOW PLASMA GAS PRESSURE"
+    );
+}
+
+/// `SET HPR_PARAMETERS` (095) and `SET HPR_GAS_FLOWS` (078) in each family's form, with the
+/// HPR manual's sample values (002_72b43a5685974c77.txt lines 165 and 180), answered once the
+/// unit read them back; the other family's form and a Powermax are refused.
+#[test]
+fn hpr_parameters_and_gas_flows_in_each_familys_form() {
+    let mut rig = Rig::hpr("hpr130");
+    assert_eq!(
+        rig.cmd("SET HPR_PARAMETERS 100 75 O2 N2 55 45 35 25 0 0"),
+        "OK amps=100 corner=75 plasma=O2 shield=N2 plasma_cutflow_psi=55 plasma_preflow_psi=45 \
+         shield_cutflow_psi=35 shield_preflow_psi=25 n2_mix_psi=0 gas2_mix_psi=0"
+    );
+    assert_eq!(rig.ps().hpr().nominal_amps(), 100);
+    assert_eq!(
+        rig.cmd("SET HPR_GAS_FLOWS 55 45 35 25 50 50"),
+        "OK plasma_cutflow_psi=55 plasma_preflow_psi=45 shield_cutflow_psi=35 \
+         shield_preflow_psi=25 n2_mix_psi=50 gas2_mix_psi=50"
+    );
+    let sent: std::vec::Vec<u16> = rig
+        .hpr_commands()
+        .into_iter()
+        .filter(|id| [78, 95, 97, 98, 99].contains(id))
+        .collect();
+    assert_eq!(&sent[sent.len() - 6..], [95, 99, 97, 98, 78, 99]);
+    assert_err(
+        &rig.cmd("SET HPR_PARAMETERS 131 75 O2 N2 55 45 35 25 0 0"),
+        "ERR RANGE *131*130*",
+    );
+    assert_err(
+        &rig.cmd("SET HPR_PARAMETERS 100.5 75 O2 N2 55 45 35 25 0 0"),
+        "ERR RANGE *100.5*whole amps",
+    );
+    assert_eq!(
+        rig.cmd("SET HPR_GAS_FLOWS 50 58"),
+        err(
+            ErrorCode::Unsupported,
+            UnsupportedText(unsupported::HPR_GAS_FLOWS_FORM, Family::Hpr)
+        )
+    );
+    assert_eq!(
+        rig.cmd("SET HPR_PARAMETERS 150 O2 AIR 50 58"),
+        err(
+            ErrorCode::Unsupported,
+            UnsupportedText(unsupported::HPR_PARAMETERS_FORM, Family::Hpr)
+        )
+    );
+
+    let mut rig = Rig::hpr("maxpro200");
+    assert_eq!(
+        rig.cmd("SET HPR_PARAMETERS 150 O2 AIR 60 40"),
+        "OK amps=150 plasma=O2 shield=AIR plasma_psi=60 shield_psi=40"
+    );
+    assert_eq!(
+        rig.cmd("SET HPR_GAS_FLOWS 50 58"),
+        "OK plasma_psi=50 shield_psi=58"
+    );
+    assert_eq!(rig.ps().hpr().nominal_amps(), 150);
+    assert_eq!(
+        rig.cmd("SET HPR_GAS_FLOWS 55 45 35 25 50 50"),
+        err(
+            ErrorCode::Unsupported,
+            UnsupportedText(unsupported::HPR_GAS_FLOWS_FORM, Family::MaxPro200)
+        )
+    );
+
+    let mut rig = Rig::sync65(Settings::default());
+    assert_eq!(
+        rig.cmd("SET HPR_PARAMETERS 150 O2 AIR 50 58"),
+        err(
+            ErrorCode::Unsupported,
+            UnsupportedText(unsupported::HPR_PARAMETERS, Family::PowermaxSync)
+        )
+    );
+    assert_eq!(
+        rig.cmd("SET HPR_GAS_FLOWS 50 58"),
+        err(
+            ErrorCode::Unsupported,
+            UnsupportedText(unsupported::HPR_GAS_FLOWS, Family::PowermaxSync)
+        )
     );
 }
 

@@ -11,6 +11,7 @@ pub(crate) const KEPT_CAPACITY: usize = 6;
 const SETS_AMPS: u8 = 1;
 const SETS_CORNER: u8 = 2;
 const SETS_GASES: u8 = 4;
+const SETS_PRESSURES: u8 = 8;
 
 /// What `request` sets; 0 for a request that is no setting.
 pub(super) fn sets(request: &Request) -> u8 {
@@ -18,7 +19,13 @@ pub(super) fn sets(request: &Request) -> u8 {
         Request::SetNominalAmps { .. } => SETS_AMPS,
         Request::SetCornerCurrent { .. } => SETS_CORNER,
         Request::SetInletGases(_) => SETS_GASES,
-        Request::SetProcess { .. } => SETS_AMPS | SETS_GASES,
+        // 137: "the plasma system will automatically set all system parameters, including the
+        // gas pressures" (HPR manual line 275).
+        Request::SetProcess { .. } | Request::SetAllParametersMaxPro200(_) => {
+            SETS_AMPS | SETS_GASES | SETS_PRESSURES
+        }
+        Request::SetAllParameters(_) => SETS_AMPS | SETS_CORNER | SETS_GASES | SETS_PRESSURES,
+        Request::SetAllGasFlows(_) | Request::SetAllGasFlowsMaxPro200(_) => SETS_PRESSURES,
         _ => 0,
     }
 }
@@ -27,6 +34,8 @@ pub(super) fn sets(request: &Request) -> u8 {
 fn amps_of(request: &Request) -> Option<u16> {
     match request {
         Request::SetNominalAmps { amps } | Request::SetProcess { amps, .. } => Some(*amps),
+        Request::SetAllParameters(p) => Some(p.amps),
+        Request::SetAllParametersMaxPro200(p) => Some(p.amps),
         _ => None,
     }
 }
@@ -134,6 +143,39 @@ mod tests {
             [process, Request::SetCornerCurrent { percent: 60 }]
         );
         assert_eq!(kept.amps(), Some(150));
+        // 078 sets the pressures only; a later 137 sets them too ("including the gas
+        // pressures", HPR manual (002_72b43a5685974c77.txt) line 275) and replaces it.
+        let flows = Request::SetAllGasFlowsMaxPro200(hpr::MaxProPressures {
+            plasma: 50,
+            shield: 58,
+        });
+        kept.keep(SYSTEM, flows);
+        assert_eq!(
+            kept.as_slice(),
+            [process, Request::SetCornerCurrent { percent: 60 }, flows]
+        );
+        kept.keep(SYSTEM, process);
+        assert_eq!(
+            kept.as_slice(),
+            [Request::SetCornerCurrent { percent: 60 }, process]
+        );
+        // 095 sets everything 137 and 078 set, and its current is the kept one.
+        let all = Request::SetAllParametersMaxPro200(hpr::MaxProParameters {
+            amps: 120,
+            gases,
+            pressures: hpr::MaxProPressures {
+                plasma: 50,
+                shield: 58,
+            },
+        });
+        kept.keep(SYSTEM, flows);
+        kept.keep(SYSTEM, all);
+        assert_eq!(
+            kept.as_slice(),
+            [Request::SetCornerCurrent { percent: 60 }, all]
+        );
+        assert_eq!(kept.amps(), Some(120));
+        kept.keep(SYSTEM, process);
         // Not settings: not kept.
         kept.keep(SYSTEM, Request::ClearWarnings);
         assert_eq!(kept.as_slice().len(), 2);

@@ -13,6 +13,7 @@
 //! [`kept`] keeps the settings to re-apply, `reply` reads what the unit answers, and `submit`
 //! checks a command against the manual's rules before it is queued.
 
+mod confirm;
 pub(crate) mod kept;
 mod reply;
 mod submit;
@@ -151,6 +152,20 @@ struct ActiveJob {
     job: HprJob,
     /// Sent again once after the unit did not take it (remote mode entered again first).
     retried: bool,
+    /// The reads back of the setting done so far (`confirm`): 0 while the setting itself is
+    /// out, then the index + 1 of the read that is out.
+    reads_done: u8,
+}
+
+impl ActiveJob {
+    fn new(ticket: Option<Ticket>, job: HprJob) -> Self {
+        ActiveJob {
+            ticket,
+            job,
+            retried: false,
+            reads_done: 0,
+        }
+    }
 }
 
 /// Driver state for one detected HPR or MaxPro200.
@@ -320,12 +335,20 @@ impl HprDriver {
         if self.active.is_none() {
             self.next_job(now, core);
         }
-        if let Some(ActiveJob { job, .. }) = &self.active {
+        if let Some(ActiveJob {
+            job, reads_done, ..
+        }) = &self.active
+        {
             if job.needs_remote() && !core.status.hpr.remote_accepted {
                 return typed(HprPurpose::RemoteMode, Request::RemoteMode);
             }
             return match job {
-                HprJob::Typed(request) => typed(HprPurpose::Active, *request),
+                // The setting, then the reads that confirm it.
+                HprJob::Typed(request) => {
+                    let read = usize::from(*reads_done).checked_sub(1);
+                    let out = read.and_then(|i| confirm::reads(request).get(i));
+                    typed(HprPurpose::Active, *out.unwrap_or(request))
+                }
                 HprJob::Raw { id, frame } => {
                     Some((HprPurpose::Active, HprExpect::Raw(*id), frame.clone()))
                 }
@@ -370,18 +393,13 @@ impl HprDriver {
             }
         }
         if let Some(request) = self.reapply.pop_front() {
-            self.active = Some(ActiveJob {
-                ticket: None,
-                job: HprJob::Typed(request),
-                retried: false,
-            });
+            self.active = Some(ActiveJob::new(None, HprJob::Typed(request)));
             return;
         }
-        self.active = self.queue.pop_front().map(|(ticket, job)| ActiveJob {
-            ticket: Some(ticket),
-            job,
-            retried: false,
-        });
+        self.active = self
+            .queue
+            .pop_front()
+            .map(|(ticket, job)| ActiveJob::new(Some(ticket), job));
     }
     fn start_poll(
         &mut self,

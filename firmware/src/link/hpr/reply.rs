@@ -5,6 +5,7 @@
 use plasma_protocol::hpr::{Acceptance, DiagnosticReply, ErrorCode, Reply, Request, StateCode};
 use plasma_protocol::time::Instant;
 
+use super::confirm;
 use super::kept::sets;
 use super::{
     ActiveJob, HprDriver, HprJob, HprPurpose, PILOT_ARC_PAUSE, REAPPLY_BACKOFF,
@@ -206,7 +207,8 @@ impl HprDriver {
     }
 
     /// The reply to the active job arrived. A setting counts as done only when the unit's
-    /// answer shows the value asked for; otherwise it is sent once more after entering remote
+    /// answer shows the value asked for (for 095 and 078, which only acknowledge, when the
+    /// reads of `confirm` show it too); otherwise it is sent once more after entering remote
     /// mode again (the unit may have restarted and left remote mode), then reported as not
     /// accepted. Never success with another value.
     fn finish_job(
@@ -224,12 +226,21 @@ impl HprDriver {
         let Some(request) = request.filter(|r| sets(r) != 0) else {
             return Self::finish_other(active, reply, raw_len, core);
         };
-        if setting_taken(request, reply, core) {
+        let taken = match active.reads_done {
+            0 => setting_taken(request, reply, core),
+            _ => confirm::shows(&request, reply),
+        };
+        if taken && usize::from(active.reads_done) < confirm::reads(&request).len() {
+            // Acknowledged (or read back) so far: the next read confirms the rest.
+            active.reads_done += 1;
+            self.active = Some(active);
+        } else if taken {
             self.setting_confirmed(active, request, reply, core);
         } else if !active.retried {
             // Perhaps out of remote mode after a restart: 004 again, then once more.
             core.status.hpr.remote_accepted = false;
             active.retried = true;
+            active.reads_done = 0;
             self.active = Some(active);
         } else {
             self.job_failed(
@@ -251,6 +262,10 @@ impl HprDriver {
         reply: Option<&Reply<'_>>,
         core: &mut Core,
     ) {
+        let Some(ticket) = active.ticket else {
+            // A re-apply: the request is kept already, and the rest of its run is newer.
+            return;
+        };
         core.kept.hpr.keep(self.system, request);
         // A re-apply run still to come must not set older values again.
         let new = sets(&request);
@@ -262,18 +277,16 @@ impl HprDriver {
                 let _ = self.reapply.push_back(old);
             }
         }
-        if let Some(ticket) = active.ticket {
-            let output = match reply {
-                Some(Reply::NominalAmps(set)) | Some(Reply::CornerCurrentSet(set)) => {
-                    CommandOutput::Value(*set)
-                }
-                _ => CommandOutput::Done,
-            };
-            core.emit(LinkEvent::CommandDone {
-                ticket,
-                result: Ok(output),
-            });
-        }
+        let output = match reply {
+            Some(Reply::NominalAmps(set)) | Some(Reply::CornerCurrentSet(set)) => {
+                CommandOutput::Value(*set)
+            }
+            _ => CommandOutput::Done,
+        };
+        core.emit(LinkEvent::CommandDone {
+            ticket,
+            result: Ok(output),
+        });
     }
 
     /// The reply to a job that sets nothing (RAW, gas tests, logs...).

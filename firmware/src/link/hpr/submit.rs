@@ -3,7 +3,10 @@
 
 use heapless::Vec;
 use plasma_protocol::hpr::command::id;
-use plasma_protocol::hpr::{self, Frame, GasCode, GasPair, Request, StateCode, TestMode};
+use plasma_protocol::hpr::{
+    self, Frame, GasCode, GasFlows, GasPair, MAX_FLOW_PSI, MaxProPressures, Request, StateCode,
+    TestMode,
+};
 use plasma_protocol::time::Instant;
 
 use super::{HprDriver, HprJob, is_cutting, slow_items};
@@ -88,6 +91,38 @@ impl HprDriver {
             LinkCommand::HprSetCornerCurrent { percent } => {
                 check_corner(*percent)?;
                 Request::SetCornerCurrent { percent: *percent }
+            }
+            // "Gas type changes are not allowed when the system is cutting (state 4 - state
+            // 10)" (line 180).
+            LinkCommand::HprSetAllParameters(p) => {
+                check_amps(p.amps, self.max_amps())?;
+                check_corner(p.corner_percent)?;
+                check_gases(&p.gases)?;
+                check_flows(&p.flows)?;
+                if is_cutting(state) {
+                    return Err(forbidden(core));
+                }
+                Request::SetAllParameters(*p)
+            }
+            // The MaxPro200 answers "2 = data invalid or system not in state #2 or #3" (line
+            // 180).
+            LinkCommand::MaxProSetAllParameters(p) => {
+                check_amps(p.amps, self.max_amps())?;
+                check_gases(&p.gases)?;
+                check_pressures(&p.pressures)?;
+                if !state.is_some_and(|s| matches!(s.0, 2 | 3)) {
+                    return Err(forbidden(core));
+                }
+                Request::SetAllParametersMaxPro200(*p)
+            }
+            // 078 names no state it needs (line 165).
+            LinkCommand::HprSetAllGasFlows(flows) => {
+                check_flows(flows)?;
+                Request::SetAllGasFlows(*flows)
+            }
+            LinkCommand::MaxProSetAllGasFlows(pressures) => {
+                check_pressures(pressures)?;
+                Request::SetAllGasFlowsMaxPro200(*pressures)
             }
             command => return self.service_request(command, core),
         })
@@ -207,6 +242,22 @@ fn check_corner(percent: u8) -> Result<(), Refusal> {
 fn check_gases(gases: &GasPair) -> Result<(), Refusal> {
     for gas in [gases.plasma, gases.shield] {
         check_range(HprValue::GasParameter, gas.0, 1, GasCode::MAX)?;
+    }
+    Ok(())
+}
+
+/// The HPR's pressure set points: 0-99 psi, the two mix set points 0-100 (lines 165, 180).
+fn check_flows(flows: &GasFlows) -> Result<(), Refusal> {
+    for (i, psi) in flows.to_array().into_iter().enumerate() {
+        check_range(HprValue::GasParameter, psi, 0, GasFlows::limit(i))?;
+    }
+    Ok(())
+}
+
+/// The MaxPro200's pressure set points, 0-99 psi (line 180).
+fn check_pressures(pressures: &MaxProPressures) -> Result<(), Refusal> {
+    for psi in [pressures.plasma, pressures.shield] {
+        check_range(HprValue::GasParameter, psi, 0, MAX_FLOW_PSI)?;
     }
     Ok(())
 }

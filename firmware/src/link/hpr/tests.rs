@@ -687,3 +687,347 @@ fn firmware_and_torch_are_read_once_where_the_system_takes_them() {
     };
     assert_eq!(status.inlet_gases, Some(o2_n2));
 }
+
+/// The HPR manual's 095 sample values (002_72b43a5685974c77.txt line 180): 100 A, corner 75 %,
+/// plasma O2 (1), shield N2 (6), set points 55 45 35 25, no mix.
+fn manual_095() -> plasma_protocol::hpr::HprParameters {
+    use plasma_protocol::hpr::{GasCode, GasFlows, GasPair, HprParameters};
+    HprParameters {
+        amps: 100,
+        corner_percent: 75,
+        gases: GasPair {
+            plasma: GasCode(1),
+            shield: GasCode(6),
+        },
+        flows: GasFlows::from_array([55, 45, 35, 25, 0, 0]),
+    }
+}
+
+/// An HPR130 with an automatic console in state 3 at 130 A, past its slow data.
+fn hpr130_auto_ready() -> Bench {
+    let mut bench = hpr_bench("HYPERFORMANCE130AUTO");
+    while bench.link.status().hpr.timers.is_none() {
+        let frame = bench.next_tx(bench.now + Duration::from_secs(1)).unwrap();
+        let reply = match &frame[1..4] {
+            b"079" => ps_info_at(3, 130),
+            _ => slow_reply(&frame),
+        };
+        bench.rx(2, &reply);
+    }
+    bench.events();
+    bench
+}
+
+/// 095 sent as the manual's sample and acknowledged with it, then read back (099, 097, 098,
+/// 079: see `confirm`) with the manual's sample requests and, where they carry these values,
+/// its sample replies.
+fn send_manual_095(bench: &mut Bench) {
+    assert_eq!(
+        bench.next_tx(bench.now).unwrap(),
+        b">095100 75 1 6 55 45 35 25 00 0084<"
+    );
+    bench.rx(2, b">0951CF<");
+    // Line 192: `>099A2<`; its sample reply has other mix set points, so one of its format.
+    assert_eq!(bench.next_tx(bench.now).unwrap(), b">099A2<");
+    bench.rx(2, &hf(99, "0055 0045 0035 0025 0000 0000"));
+    // Line 186: `>097A0< >09700756C<` (75%).
+    assert_eq!(bench.next_tx(bench.now).unwrap(), b">097A0<");
+    bench.rx(2, b">09700756C<");
+    // Line 187: `>098A1< >0980001 000648<` (plasma O2, shield N2).
+    assert_eq!(bench.next_tx(bench.now).unwrap(), b">098A1<");
+    bench.rx(2, b">0980001 000648<");
+    // Line 168: `>079A0<`, with the current set point 100 A.
+    assert_eq!(bench.next_tx(bench.now).unwrap(), b">079A0<");
+    bench.rx(2, &ps_info_at(3, 100));
+}
+
+#[test]
+fn hpr_095_goes_out_as_the_manuals_sample_is_read_back_and_kept() {
+    use plasma_protocol::hpr::Request;
+    let mut bench = hpr130_auto_ready();
+    let parameters = manual_095();
+    // The HPR130 takes up to 130 A (line 149); nothing in the gas change while cutting.
+    let over = plasma_protocol::hpr::HprParameters {
+        amps: 131,
+        ..parameters
+    };
+    assert!(matches!(
+        bench
+            .link
+            .submit(bench.now, LinkCommand::HprSetAllParameters(over)),
+        Err(Refusal::HprValueOutOfRange { max: 130, .. })
+    ));
+    let ticket = bench
+        .link
+        .submit(bench.now, LinkCommand::HprSetAllParameters(parameters))
+        .unwrap();
+    assert_eq!(bench.next_tx(bench.now).unwrap(), b">00494<");
+    bench.rx(2, b">0041C5<");
+    send_manual_095(&mut bench);
+    assert!(bench.events().contains(&LinkEvent::CommandDone {
+        ticket,
+        result: Ok(CommandOutput::Done)
+    }));
+    assert_eq!(
+        bench.link.kept().hpr_requests(),
+        [Request::SetAllParameters(parameters)]
+    );
+    // A MaxPro200's form never goes to an HPR.
+    let maxpro = plasma_protocol::hpr::MaxProPressures {
+        plasma: 50,
+        shield: 58,
+    };
+    assert_eq!(
+        bench
+            .link
+            .submit(bench.now, LinkCommand::MaxProSetAllGasFlows(maxpro)),
+        Err(Refusal::NotSupported {
+            family: Family::Hpr
+        })
+    );
+}
+
+#[test]
+fn hpr_078_is_confirmed_by_099_or_reported_failed() {
+    use plasma_protocol::hpr::{GasFlows, Request};
+    let mut bench = hpr130_auto_ready();
+    let flows = GasFlows::from_array([55, 45, 35, 25, 50, 50]);
+    let ticket = bench
+        .link
+        .submit(bench.now, LinkCommand::HprSetAllGasFlows(flows))
+        .unwrap();
+    assert_eq!(bench.next_tx(bench.now).unwrap(), b">00494<");
+    bench.rx(2, b">0041C5<");
+    // HPR manual (002_72b43a5685974c77.txt) line 165: `>07855 45 35 25 50 50AB< >0781D0<`;
+    // line 192: `>099A2< >0990055 0045 0035 0025 0050 0050EE<`, the same set points.
+    assert_eq!(
+        bench.next_tx(bench.now).unwrap(),
+        b">07855 45 35 25 50 50AB<"
+    );
+    bench.rx(2, b">0781D0<");
+    assert_eq!(bench.next_tx(bench.now).unwrap(), b">099A2<");
+    bench.rx(2, b">0990055 0045 0035 0025 0050 0050EE<");
+    assert!(bench.events().contains(&LinkEvent::CommandDone {
+        ticket,
+        result: Ok(CommandOutput::Done)
+    }));
+    assert_eq!(
+        bench.link.kept().hpr_requests(),
+        [Request::SetAllGasFlows(flows)]
+    );
+    // Accepted but read back with other set points: 004 again and once more, then failed;
+    // the kept set points stay those the unit confirmed.
+    let other = GasFlows::from_array([60, 45, 35, 25, 50, 50]);
+    let ticket = bench
+        .link
+        .submit(bench.now, LinkCommand::HprSetAllGasFlows(other))
+        .unwrap();
+    for _ in 0..2 {
+        let mut frame = bench.next_tx(bench.now + Duration::from_secs(1)).unwrap();
+        if frame == b">00494<" {
+            bench.rx(2, b">0041C5<");
+            frame = bench.next_tx(bench.now).unwrap();
+        }
+        assert_eq!(frame, hf(78, "60 45 35 25 50 50"));
+        bench.rx(2, b">0781D0<");
+        assert_eq!(bench.next_tx(bench.now).unwrap(), b">099A2<");
+        bench.rx(2, b">0990055 0045 0035 0025 0050 0050EE<");
+    }
+    assert!(bench.events().contains(&LinkEvent::CommandDone {
+        ticket,
+        result: Err(CommandFailure::NotAccepted)
+    }));
+    assert_eq!(
+        bench.link.kept().hpr_requests(),
+        [Request::SetAllGasFlows(flows)]
+    );
+}
+
+#[test]
+fn hpr_095_and_078_are_kept_and_reapplied_after_a_link_loss() {
+    use plasma_protocol::hpr::{GasFlows, Request};
+    let mut bench = hpr130_auto_ready();
+    bench
+        .link
+        .submit(bench.now, LinkCommand::HprSetAllParameters(manual_095()))
+        .unwrap();
+    assert_eq!(bench.next_tx(bench.now).unwrap(), b">00494<");
+    bench.rx(2, b">0041C5<");
+    send_manual_095(&mut bench);
+    // 078 afterwards sets the pressures again: both are kept, the 095 first.
+    let flows = GasFlows::from_array([55, 45, 35, 25, 50, 50]);
+    bench
+        .link
+        .submit(bench.now, LinkCommand::HprSetAllGasFlows(flows))
+        .unwrap();
+    assert_eq!(
+        bench.next_tx(bench.now).unwrap(),
+        b">07855 45 35 25 50 50AB<"
+    );
+    bench.rx(2, b">0781D0<");
+    assert_eq!(bench.next_tx(bench.now).unwrap(), b">099A2<");
+    bench.rx(2, b">0990055 0045 0035 0025 0050 0050EE<");
+    let kept = [
+        Request::SetAllParameters(manual_095()),
+        Request::SetAllGasFlows(flows),
+    ];
+    assert_eq!(bench.link.kept().hpr_requests(), kept);
+    // The cable is pulled: link down, the kept settings stay.
+    while bench.link.status().link_up {
+        bench.next_tx(bench.now + Duration::from_secs(10)).unwrap();
+    }
+    assert_eq!(bench.link.kept().hpr_requests(), kept);
+    loop {
+        let frame = bench.next_tx(bench.now + Duration::from_secs(10)).unwrap();
+        if frame == b">00090<" {
+            break;
+        }
+    }
+    bench.events();
+    bench.rx(3, &hf(0, "HYPERFORMANCE130AUTO"));
+    // Back in state 3 on the kept set point: a lost link, not a power cycle; 095 and 078 go
+    // out again (after 004) and are read back again.
+    let frame = loop {
+        let frame = bench.next_tx(bench.now + Duration::from_secs(1)).unwrap();
+        match &frame[1..4] {
+            b"079" => bench.rx(2, &ps_info_at(3, 100)),
+            b"004" => break frame,
+            _ => bench.rx(2, &slow_reply(&frame)),
+        }
+    };
+    assert_eq!(frame, b">00494<");
+    bench.rx(2, b">0041C5<");
+    send_manual_095(&mut bench);
+    assert_eq!(
+        bench.next_tx(bench.now).unwrap(),
+        b">07855 45 35 25 50 50AB<"
+    );
+    bench.rx(2, b">0781D0<");
+    assert_eq!(bench.next_tx(bench.now).unwrap(), b">099A2<");
+    bench.rx(2, b">0990055 0045 0035 0025 0050 0050EE<");
+    let events = bench.events();
+    assert!(!events.contains(&LinkEvent::UnitPowerCycled { reapply: false }));
+    assert!(
+        !events
+            .iter()
+            .any(|e| matches!(e, LinkEvent::ProcessFailed { .. }))
+    );
+    assert_eq!(bench.link.kept().hpr_requests(), kept);
+    // Once: then the polls and the slow data, nothing set again.
+    loop {
+        let frame = bench.next_tx(bench.now + Duration::from_secs(1)).unwrap();
+        if frame == b">079A0<" {
+            break;
+        }
+        assert!(!matches!(&frame[1..4], b"095" | b"078"));
+        bench.rx(2, &slow_reply(&frame));
+    }
+}
+
+#[test]
+fn maxpro200_095_and_078_are_read_back_from_its_079() {
+    use plasma_protocol::hpr::{GasCode, GasPair, MaxProParameters, MaxProPressures, Request};
+    let mut bench = hpr_bench("MaxPro200");
+    bench.next_tx(bench.now).unwrap();
+    let info = |amps: u16, plasma: u16, shield: u16| {
+        hf(
+            79,
+            &std::format!(
+                "st0003 er0000 pg0001 ps{plasma:04} sg0005 ss{shield:04} cs{amps:04} dm0001 lm0000"
+            ),
+        )
+    };
+    bench.rx(2, &info(130, 56, 58));
+    let parameters = MaxProParameters {
+        amps: 150,
+        gases: GasPair {
+            plasma: GasCode(1),
+            shield: GasCode(5),
+        },
+        pressures: MaxProPressures {
+            plasma: 60,
+            shield: 40,
+        },
+    };
+    let ticket = bench
+        .link
+        .submit(bench.now, LinkCommand::MaxProSetAllParameters(parameters))
+        .unwrap();
+    assert_eq!(bench.next_tx(bench.now).unwrap(), b">00494<");
+    bench.rx(2, b">0041C5<");
+    // The MaxPro200 form (HPR manual (002_72b43a5685974c77.txt) line 180): current, plasma
+    // and shield gas codes, plasma and shield pressure set points; no sample is printed.
+    assert_eq!(bench.next_tx(bench.now).unwrap(), hf(95, "150 1 5 60 40"));
+    bench.rx(2, &hf(95, "1"));
+    // Its 079 carries gases, set points and current (line 168).
+    assert_eq!(bench.next_tx(bench.now).unwrap(), b">079A0<");
+    bench.rx(2, &info(150, 60, 40));
+    assert!(bench.events().contains(&LinkEvent::CommandDone {
+        ticket,
+        result: Ok(CommandOutput::Done)
+    }));
+    // 078, MaxPro200 form: the set points as the manual writes them ("0050", "0058").
+    let pressures = MaxProPressures {
+        plasma: 50,
+        shield: 58,
+    };
+    bench
+        .link
+        .submit(bench.now, LinkCommand::MaxProSetAllGasFlows(pressures))
+        .unwrap();
+    assert_eq!(bench.next_tx(bench.now).unwrap(), hf(78, "0050 0058"));
+    bench.rx(2, &hf(78, "1"));
+    assert_eq!(bench.next_tx(bench.now).unwrap(), b">079A0<");
+    bench.rx(2, &info(150, 50, 58));
+    assert_eq!(
+        bench.link.kept().hpr_requests(),
+        [
+            Request::SetAllParametersMaxPro200(parameters),
+            Request::SetAllGasFlowsMaxPro200(pressures)
+        ]
+    );
+    // "2 = data invalid or system not in state #2 or #3" (line 180): not sent while cutting.
+    loop {
+        let frame = bench.next_tx(bench.now + Duration::from_secs(1)).unwrap();
+        if frame == b">079A0<" {
+            break;
+        }
+        bench.rx(2, &slow_reply(&frame));
+    }
+    bench.rx(
+        2,
+        &hf(
+            79,
+            "st0009 er0000 pg0001 ps0050 sg0005 ss0058 cs0150 dm0001 lm0000",
+        ),
+    );
+    assert!(matches!(
+        bench
+            .link
+            .submit(bench.now, LinkCommand::MaxProSetAllParameters(parameters)),
+        Err(Refusal::StateForbids { .. })
+    ));
+}
+
+#[test]
+fn a_manual_gas_console_hpr_is_sent_no_095_or_078() {
+    use plasma_protocol::hpr::{GasFlows, SystemId};
+    let mut bench = hpr_bench("HYPERFORMANCE130MANUAL");
+    bench.next_tx(bench.now).unwrap();
+    bench.rx(2, &ps_info(3, 0));
+    let system = SystemId::parse(b"HYPERFORMANCE130MANUAL").unwrap();
+    // HPR manual (002_72b43a5685974c77.txt) lines 165 and 180: "Auto Gas System MaxPro200".
+    assert_eq!(
+        bench
+            .link
+            .submit(bench.now, LinkCommand::HprSetAllParameters(manual_095())),
+        Err(Refusal::NotOnThisSystem { id: 95, system })
+    );
+    assert_eq!(
+        bench.link.submit(
+            bench.now,
+            LinkCommand::HprSetAllGasFlows(GasFlows::from_array([55, 45, 35, 25, 50, 50]))
+        ),
+        Err(Refusal::NotOnThisSystem { id: 78, system })
+    );
+}

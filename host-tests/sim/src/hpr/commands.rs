@@ -83,6 +83,10 @@ impl Hpr {
                 reply(format!("{:04}", self.corner_pct))
             }
             72 if hpr => reply("1200".into()),
+            // 078 SET_ALL_GAS_FLOWS (line 165): 1 = accepted, 0 = not accepted.
+            78 if auto => reply(Self::flag(
+                self.settings_allowed() && self.set_all_gas_flows(numbers.as_deref()),
+            )),
             79 if hpr => {
                 let [pc, pp, sc, sp, _, _] = self.flows.map(|f| self.measured_psi(f));
                 let measured = |v: u16| if auto { v } else { 0 };
@@ -294,6 +298,29 @@ impl Hpr {
                     self.flows[0] = pp;
                     self.flows[2] = sp;
                     self.change_gases((p, s), now);
+                }
+                ok
+            }
+            _ => false,
+        }
+    }
+
+    /// 078's set points: six on an HPR (flows 0-99 psi, mix 0-100), the plasma and shield
+    /// set points (0-99) on a MaxPro200; no state is named for it.
+    pub(super) fn set_all_gas_flows(&mut self, numbers: Option<&[u16]>) -> bool {
+        match numbers {
+            Some(&[pc, pp, sc, sp, n2, g2]) if !self.is_maxpro() => {
+                let ok = [pc, pp, sc, sp].iter().all(|&v| v <= 99) && n2 <= 100 && g2 <= 100;
+                if ok {
+                    self.flows = [pc, pp, sc, sp, n2, g2];
+                }
+                ok
+            }
+            Some(&[plasma, shield]) if self.is_maxpro() => {
+                let ok = plasma <= 99 && shield <= 99;
+                if ok {
+                    self.flows[0] = plasma;
+                    self.flows[2] = shield;
                 }
                 ok
             }

@@ -27,7 +27,7 @@
 //! - MaxPro200 143 SET TEST MODE 1 (Test Gas, state 3 only) and 0; the gases flow (079 display
 //!   mode 3), no start is taken until mode 0 or a software reset ends it.
 //! - Settings: 004 remote mode, 058 nominal amps (clamped to 5..=130/260/400/200 and echoed),
-//!   070 corner current (50-100 %), 095 all parameters, 096 inlet gases (a change of gas purges;
+//!   070 corner current (50-100 %), 078 all gas flows, 095 all parameters, 096 inlet gases (a change of gas purges;
 //!   refused in states 4-10), 137 process (MaxPro200, states 2-3 only), 136 response delay (XD).
 //!   By default settings commands are refused until 004 has been accepted
 //!   ([`HprConfig::require_remote_mode`]); the manual does not say a unit requires it, so a

@@ -314,6 +314,19 @@ fn remote_settings_on_an_auto_gas_hpr() {
             hpr_wire::checksum(b"0990055 0045 0035 0025 0000 0000")
         )
     );
+    // All gas flows, the manual's sample (line 165), read back with 099's sample (line 192).
+    assert_eq!(
+        talk(&mut u, ms(3_090), ">07855 45 35 25 50 50AB<").unwrap(),
+        ">0781D0<"
+    );
+    assert_eq!(
+        talk(&mut u, ms(3_100), ">099A2<").unwrap(),
+        ">0990055 0045 0035 0025 0050 0050EE<"
+    );
+    assert_eq!(
+        cmd(&mut u, ms(3_110), 78, "55 45 35 25 50 101").unwrap(),
+        ">0780CF<"
+    );
     // Inlet gases: same gases, no purge needed; invalid gas refused.
     u.advance(ms(6_000));
     assert_eq!(talk(&mut u, ms(6_000), ">0961 626<").unwrap(), ">0961D0<");
@@ -336,6 +349,10 @@ fn a_manual_gas_console_has_no_remote_gas_commands() {
     cmd(&mut u, ms(0), 4, "");
     assert_eq!(talk(&mut u, ms(10), ">05813031<").unwrap(), ">50196<");
     assert_eq!(talk(&mut u, ms(20), ">0961 626<").unwrap(), ">50196<");
+    assert_eq!(
+        talk(&mut u, ms(22), ">07855 45 35 25 50 50AB<").unwrap(),
+        ">50196<"
+    );
     // Corner current and gas tests work.
     assert_eq!(talk(&mut u, ms(30), ">0707503<").unwrap(), ">070007563<");
     u.advance(ms(3_000));
@@ -360,6 +377,15 @@ fn maxpro_process_and_info() {
     let info = cmd(&mut u, ms(3_010), 79, "").unwrap();
     assert!(info.starts_with(">079st0002 er0000 pg0005"), "{info}");
     assert!(info.contains("cs0200"));
+    // 078 in the MaxPro200 form, the set points as the manual writes them ("0050", "0058",
+    // line 165): its 079 shows them.
+    assert_eq!(cmd(&mut u, ms(3_012), 78, "0050 0058").unwrap(), ">0781D0<");
+    let info = cmd(&mut u, ms(3_014), 79, "").unwrap();
+    assert!(info.contains("ps0050 sg0005 ss0058"), "{info}");
+    assert_eq!(
+        cmd(&mut u, ms(3_016), 78, "55 45 35 25 0 0").unwrap(),
+        ">0780CF<"
+    );
     // HPR-only commands are unknown here.
     assert_eq!(cmd(&mut u, ms(3_020), 85, "0").unwrap(), ">50196<");
     assert_eq!(cmd(&mut u, ms(3_030), 125, "").unwrap(), ">50196<");
