@@ -151,6 +151,20 @@ fn an_hpr_session_sets_amps_gases_corner_and_cuts() {
             ("EVENTS ON", "OK events=ON"),
             ("SET AMPS 200", "OK amps=200"),
             ("CORNER 80", "OK corner=80"),
+            // The HPR manual's 095 and 078 samples (002_72b43a5685974c77.txt lines 180, 165).
+            (
+                "SET HPR_PARAMETERS 100 75 O2 N2 55 45 35 25 0 0",
+                "OK amps=100 corner=75 plasma=O2 shield=N2 plasma_cutflow_psi=55 \
+                 plasma_preflow_psi=45 shield_cutflow_psi=35 shield_preflow_psi=25 n2_mix_psi=0 \
+                 gas2_mix_psi=0",
+            ),
+            (
+                "SET HPR_GAS_FLOWS 55 45 35 25 50 50",
+                "OK plasma_cutflow_psi=55 plasma_preflow_psi=45 shield_cutflow_psi=35 \
+                 shield_preflow_psi=25 n2_mix_psi=50 gas2_mix_psi=50",
+            ),
+            ("SET AMPS 200", "OK amps=200"),
+            ("CORNER 80", "OK corner=80"),
         ],
     );
     assert_eq!(w.sim_ref::<Hpr>().nominal_amps(), 200);
@@ -423,10 +437,25 @@ fn maxpro200_commands_ok_and_err() {
                 "ERR RANGE *150.5*whole amps",
             ),
             ("SET HPR_PROCESS 201 N2 AIR", "ERR RANGE *201*5..200*"),
+            // 095 and 078 in the MaxPro200's form (HPR manual (002_72b43a5685974c77.txt)
+            // lines 180 and 165), answered once its 079 shows them.
+            (
+                "SET HPR_PARAMETERS 120 O2 AIR 60 40",
+                "OK amps=120 plasma=O2 shield=AIR plasma_psi=60 shield_psi=40",
+            ),
+            ("SET HPR_GAS_FLOWS 50 58", "OK plasma_psi=50 shield_psi=58"),
+            (
+                "SET HPR_GAS_FLOWS 55 45 35 25 50 50",
+                err(
+                    ErrorCode::Unsupported,
+                    UnsupportedText(unsupported::HPR_GAS_FLOWS_FORM, Family::MaxPro200),
+                )
+                .as_str(),
+            ),
             ("RESET", "OK reset=done"),
         ],
     );
-    assert_eq!(w.sim_ref::<Hpr>().nominal_amps(), 150);
+    assert_eq!(w.sim_ref::<Hpr>().nominal_amps(), 120);
 }
 
 /// `GASTEST ON|OFF` on a MaxPro200 is 143 SET TEST MODE 1 / 0: "1 Test Gas, plasma and
@@ -1118,6 +1147,12 @@ fn a_manual_gas_console_hpr_gets_no_setting_its_console_does_not_take() {
             ("LIMITS", "OK amps=- corner=50..100 console=MANUAL"),
             ("SET AMPS 100", refusal(58).as_str()),
             ("GASES O2 N2", refusal(96).as_str()),
+            // Lines 165 and 180: 078 and 095 are "Auto Gas System MaxPro200" too.
+            (
+                "SET HPR_PARAMETERS 100 75 O2 N2 55 45 35 25 0 0",
+                refusal(95).as_str(),
+            ),
+            ("SET HPR_GAS_FLOWS 55 45 35 25 50 50", refusal(78).as_str()),
             ("CORNER 80", "OK corner=80"),
             ("RAW >05813031<", refusal(58).as_str()),
         ],

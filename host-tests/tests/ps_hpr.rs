@@ -455,3 +455,115 @@ fn firmware_torch_and_inlet_gases_are_read_where_the_system_takes_them() {
     assert!(!received.contains(&145), "145 is the MaxPro200's only");
     assert_eq!(received.iter().filter(|&&r| r == 1).count(), 1);
 }
+
+/// 095 SET_ALL_PARAMETERS and 078 SET_ALL_GAS_FLOWS (HPR manual (002_72b43a5685974c77.txt)
+/// lines 180 and 165, its sample values) only answer "1 = accepted": the link reads them back
+/// (099, 097, 098 and 079 on an HPR) before they count, keeps them, and sends them again, in
+/// order and read back again, when the unit answers after the cable was pulled.
+#[test]
+fn hpr_all_parameters_and_gas_flows_are_reapplied_after_a_link_loss() {
+    use plasma_protocol::hpr::{GasFlows, HprParameters};
+    let mut world = ready(Model::Hpr260);
+    let parameters = HprParameters {
+        amps: 100,
+        corner_percent: 75,
+        gases: GasPair {
+            plasma: GasCode::OXYGEN,
+            shield: GasCode::NITROGEN,
+        },
+        flows: GasFlows::from_array([55, 45, 35, 25, 0, 0]),
+    };
+    let flows = GasFlows::from_array([55, 45, 35, 25, 50, 50]);
+    assert_eq!(
+        world.command(LinkCommand::HprSetAllParameters(parameters), secs(3)),
+        Ok(CommandOutput::Done)
+    );
+    assert_eq!(
+        world.command(LinkCommand::HprSetAllGasFlows(flows), secs(3)),
+        Ok(CommandOutput::Done)
+    );
+    assert_eq!(world.sim::<Hpr>().nominal_amps(), 100);
+    assert_eq!(world.sim::<Hpr>().gases(), (1, 6));
+    let sent = |world: &mut World, id: u16| {
+        let received = world.sim::<Hpr>().commands_received();
+        received.iter().filter(|&&r| r == id).count()
+    };
+    assert_eq!((sent(&mut world, 95), sent(&mut world, 78)), (1, 1));
+    assert_eq!(sent(&mut world, 99), 2, "each read back with 099");
+    world.pull_cable(true);
+    world
+        .wait_event(|e| matches!(e, LinkEvent::LinkDown { .. }), secs(6))
+        .expect("link down");
+    world.pull_cable(false);
+    world.wait_link_up(secs(20)).expect("link back");
+    world
+        .run_until(
+            |w| {
+                let received = w.sim_ref::<Hpr>().commands_received();
+                received.iter().filter(|&&r| r == 78).count() == 2
+            },
+            secs(10),
+        )
+        .expect("set again");
+    world.run_for(secs(1));
+    assert_eq!((sent(&mut world, 95), sent(&mut world, 78)), (2, 2));
+    assert_eq!(sent(&mut world, 99), 4, "read back again");
+    let received = world.sim::<Hpr>().commands_received().to_vec();
+    let last_95 = received.iter().rposition(|&id| id == 95);
+    let last_78 = received.iter().rposition(|&id| id == 78);
+    assert!(last_95 < last_78, "the older setting first");
+    assert!(
+        !world.events().iter().any(|(_, e)| matches!(
+            e,
+            LinkEvent::UnitPowerCycled { .. } | LinkEvent::ProcessFailed { .. }
+        )),
+        "a lost link, re-applied"
+    );
+    assert_eq!(world.sim::<Hpr>().nominal_amps(), 100);
+}
+
+/// The MaxPro200 forms of 095 and 078 (HPR manual (002_72b43a5685974c77.txt) lines 180 and
+/// 165), read back from its 079 (line 168), which carries gases, set points and current.
+#[test]
+fn maxpro200_all_parameters_and_gas_flows_are_read_back_from_its_079() {
+    use plasma_protocol::hpr::{MaxProParameters, MaxProPressures};
+    let mut world = ready(Model::MaxPro200);
+    let parameters = MaxProParameters {
+        amps: 150,
+        gases: GasPair {
+            plasma: GasCode::OXYGEN,
+            shield: GasCode::AIR,
+        },
+        pressures: MaxProPressures {
+            plasma: 60,
+            shield: 40,
+        },
+    };
+    assert_eq!(
+        world.command(LinkCommand::MaxProSetAllParameters(parameters), secs(3)),
+        Ok(CommandOutput::Done)
+    );
+    let pressures = MaxProPressures {
+        plasma: 50,
+        shield: 58,
+    };
+    assert_eq!(
+        world.command(LinkCommand::MaxProSetAllGasFlows(pressures), secs(3)),
+        Ok(CommandOutput::Done)
+    );
+    assert_eq!(world.sim::<Hpr>().nominal_amps(), 150);
+    assert_eq!(world.sim::<Hpr>().gases(), (1, 5));
+    let info = world.link().status().hpr.maxpro_info.expect("079 read");
+    world
+        .run_until(
+            |w| {
+                w.link()
+                    .status()
+                    .hpr
+                    .maxpro_info
+                    .is_some_and(|i| (i.plasma_setpoint, i.shield_setpoint) == (50, 58))
+            },
+            secs(2),
+        )
+        .unwrap_or_else(|_| panic!("polled set points {info:?}"));
+}
