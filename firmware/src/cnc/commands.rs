@@ -17,14 +17,14 @@ use crate::link::{CommandFailure, CommandOutput, Family, LinkCommand};
 use crate::settings::Process;
 use crate::storage::history::ChangedBy;
 
-/// The current of an HPR / MaxPro200 setting, which takes whole amps; else its `ERR` line.
-fn whole_amps(amps: Amps) -> Result<u16, ReplyLine> {
+/// The current of an HPR / MaxPro200 setting, which takes whole amps (`None`: a fraction).
+// Out of line: three settings call it, and inlined it cost 144 B more flash (measured).
+#[inline(never)]
+fn whole_amps(amps: Amps) -> Option<u16> {
     let steps = amps.raw();
-    if steps.is_multiple_of(Amps::STEPS_PER_UNIT) {
-        Ok(steps / Amps::STEPS_PER_UNIT)
-    } else {
-        Err(texts::whole_amps(amps))
-    }
+    steps
+        .is_multiple_of(Amps::STEPS_PER_UNIT)
+        .then_some(steps / Amps::STEPS_PER_UNIT)
 }
 
 impl Session {
@@ -144,9 +144,8 @@ impl Session {
     }
 
     fn set_hpr_amps(&mut self, ctx: &mut Context<'_>, amps: Amps) -> Option<ReplyLine> {
-        let amps = match whole_amps(amps) {
-            Ok(amps) => amps,
-            Err(refused) => return Some(refused),
+        let Some(amps) = whole_amps(amps) else {
+            return Some(texts::whole_amps(amps));
         };
         let command = LinkCommand::HprSetNominalAmps { amps };
         self.submit(ctx, command, Awaiting::HprAmps)
@@ -160,9 +159,8 @@ impl Session {
         plasma: Gas,
         shield: Gas,
     ) -> Option<ReplyLine> {
-        let amps = match whole_amps(amps) {
-            Ok(amps) => amps,
-            Err(refused) => return Some(refused),
+        let Some(amps) = whole_amps(amps) else {
+            return Some(texts::whole_amps(amps));
         };
         let command = LinkCommand::MaxProSetProcess {
             amps,
@@ -179,9 +177,8 @@ impl Session {
         parameters: AllParameters,
     ) -> Option<ReplyLine> {
         let (AllParameters::Hpr { amps, .. } | AllParameters::MaxPro200 { amps, .. }) = parameters;
-        let amps = match whole_amps(amps) {
-            Ok(amps) => amps,
-            Err(refused) => return Some(refused),
+        let Some(amps) = whole_amps(amps) else {
+            return Some(texts::whole_amps(amps));
         };
         let command = match parameters {
             AllParameters::Hpr {
