@@ -192,7 +192,7 @@ pub fn from_emu(unit: &crate::emu::EmuUnit, count: u8) -> Result<(Vec<String>, S
     use crate::emu::console::{REPLY_TIMEOUT, settle};
     let mut board = unit.boot().map_err(|e| e.to_string())?;
     // A unit not found still leaves the bridge's own entries (its reset) to read.
-    settle(&mut board).map_err(|e| e.to_string())?;
+    settle(&mut board, unit.count()).map_err(|e| e.to_string())?;
     board
         .command(&clock_command(pc_unix_seconds()), REPLY_TIMEOUT)
         .map_err(|e| e.to_string())?;

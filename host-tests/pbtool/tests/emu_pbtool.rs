@@ -63,6 +63,42 @@ fn emu_gives_the_cnc_console_of_the_emulated_board() {
 }
 
 #[test]
+fn emu_drives_two_units_on_one_line_and_at_n_torch_on_starts_unit_n_only() {
+    let mut emu = Pbtool::spawn(&["emu", "--ps", "hpr260", "--ps", "hpr130"]);
+    // The second unit answers for itself: the board was told both (`CONFIG units`).
+    emu.send("@2 ID");
+    let id = emu.expect_prefix("OK bridge=");
+    assert!(id.split(' ').any(|w| w == "unit=2"), "{id}");
+    assert!(id.contains(" model=HPR130 "), "{id}");
+    // A TORCH_ON the unit is not ready for stays refused until released: wait for READY,
+    // asking at most 100 times (each a full CNC round trip).
+    let mut ready = false;
+    for _ in 0..100 {
+        emu.send("@2 STATUS");
+        let status = emu.expect_prefix("OK link=");
+        if status.contains(" link=UP ") && status.contains(" ready=ON") {
+            ready = true;
+            break;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(100));
+    }
+    assert!(ready, "unit 2 never ready\n{}", emu.transcript());
+    emu.send("@2 TORCH ON");
+    emu.expect("OK torch=ON unit=2", |l| l == "OK torch=ON unit=2");
+    // Unit 2's START is on (the console answers once it followed), unit 1's is not.
+    emu.send("@2 STATUS");
+    let second = emu.expect_prefix("OK link=");
+    assert!(second.contains(" start=ON "), "{second}");
+    emu.send("STATUS");
+    let first = emu.expect_prefix("OK link=");
+    assert!(first.contains(" start=OFF "), "{first}");
+    emu.send("@2 TORCH OFF");
+    emu.expect("OK torch=OFF unit=2", |l| l == "OK torch=OFF unit=2");
+    emu.close_stdin();
+    assert!(emu.wait().success(), "{}", emu.transcript());
+}
+
+#[test]
 fn run_without_a_probe_boots_the_emulated_board() {
     let output = pbtool(&["run", "--ps", "pm85"], "ID\nCLOCK\n");
     let stderr = String::from_utf8_lossy(&output.stderr);

@@ -341,11 +341,22 @@ fn units_that_cannot_share_a_line_are_refused_with_the_reason() {
     assert_eq!(output.status.code(), Some(2));
     let err = String::from_utf8(output.stderr).unwrap();
     assert!(err.contains("WAKE/SLEEP"), "{err}");
-    // The emulated board drives one unit so far, and says so.
-    let output = pbtool("emu", &["--ps", "hpr260", "--ps", "hpr130"], "");
-    assert_eq!(output.status.code(), Some(2));
-    let err = String::from_utf8(output.stderr).unwrap();
-    assert!(err.contains("one --ps only"), "{err}");
+    // The emulated board refuses them in the same words, before QEMU starts.
+    for ps in [["hpr260", "sync65"], ["maxpro200", "hpr260"]] {
+        let args = ["--ps", ps[0], "--ps", ps[1]];
+        let refusal = |output: Output, command: &str| {
+            assert_eq!(output.status.code(), Some(2));
+            let err = String::from_utf8(output.stderr).unwrap();
+            let prefix = format!("pbtool {command}: ");
+            let Some(reason) = err.strip_prefix(&prefix) else {
+                panic!("{err}");
+            };
+            reason.to_string()
+        };
+        let from_sim = refusal(sim(&[&args[..], &["--fast"]].concat(), ""), "sim");
+        let from_emu = refusal(pbtool("emu", &args, ""), "emu");
+        assert_eq!(from_emu, from_sim);
+    }
 }
 
 #[test]

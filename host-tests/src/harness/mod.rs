@@ -59,6 +59,6 @@ mod world;
 pub use bridge::{BridgeEndpoint, CNC_REPLY_TIMEOUT, CncItem, CncRecord, is_reply_line};
 pub use endpoint::WorldEndpoint;
 pub use options::{RxErrors, WorldOptions};
-pub use shared::SharedLineError;
+pub use shared::{SharedLineError, named_units_on_line};
 pub use trace::{Direction, TraceFrame, WireTrace};
 pub use world::{Timeout, World, WorldStats};

@@ -13,11 +13,13 @@
 use std::fmt;
 
 use plasma_firmware::io::SupplyState;
-use plasma_firmware::link::{Diagnostics, LineUnit, LinkEvent, NamedUnits, SharedLine, UnitStatus};
+use plasma_firmware::link::{
+    Diagnostics, LineUnit, LinkConfig, LinkEvent, NamedUnits, SharedLine, UnitStatus,
+};
 use plasma_firmware::settings::Settings;
 use plasma_protocol::time::{Duration, Instant};
 use plasma_sim::multidrop::{self, MultiDrop, units_for_one_line};
-use plasma_sim::{Family, Model};
+use plasma_sim::{Family, Model, SimOptions};
 
 use super::bridge::BridgeEndpoint;
 use super::endpoint::WorldEndpoint;
@@ -70,8 +72,8 @@ impl WorldEndpoint for SharedLine {
 }
 
 /// How the bridge addresses the simulated units [`units_for_one_line`] builds: HPR ids and
-/// Powermax nodes in order from `options`' first.
-fn addresses(models: &[Model], options: &WorldOptions) -> Vec<LineUnit> {
+/// Powermax nodes in order from `sim`'s first.
+fn addresses(models: &[Model], sim: &SimOptions) -> Vec<LineUnit> {
     models
         .iter()
         .enumerate()
@@ -80,10 +82,10 @@ fn addresses(models: &[Model], options: &WorldOptions) -> Vec<LineUnit> {
             match (model, model.family()) {
                 (Model::MaxPro200, _) => LineUnit::MaxPro200,
                 (_, Family::Hpr) => LineUnit::Hpr {
-                    id: options.sim.hpr_id.wrapping_add(offset),
+                    id: sim.hpr_id.wrapping_add(offset),
                 },
                 _ => LineUnit::Powermax {
-                    node: options.sim.modbus_address.wrapping_add(offset),
+                    node: sim.modbus_address.wrapping_add(offset),
                 },
             }
         })
@@ -99,7 +101,37 @@ fn simulated_line(
     options.sim.modbus_address = options.sim.modbus_address.max(1);
     let units = units_for_one_line(models, &options.sim).map_err(SharedLineError::Units)?;
     let units = MultiDrop::new(units).map_err(SharedLineError::Units)?;
-    Ok((units, addresses(models, &options), options))
+    Ok((units, addresses(models, &options.sim), options))
+}
+
+/// `models` on one simulated line as [`simulated_line`] builds them, with the bridge's
+/// `CONFIG units` naming them (`link`: the link settings they share).
+fn bridge_line(
+    models: &[Model],
+    options: WorldOptions,
+    link: LinkConfig,
+) -> Result<(MultiDrop, NamedUnits, WorldOptions), SharedLineError> {
+    let (units, addresses, options) = simulated_line(models, options)?;
+    let named = NamedUnits::new(link, &addresses).map_err(SharedLineError::Bridge)?;
+    Ok((units, named, options))
+}
+
+/// What the bridge's `CONFIG units` says for `models` on one simulated line (`link`: the link
+/// settings they share), and the simulator options that build them there (HPR ids and
+/// Powermax nodes in order from `sim`'s; a Powermax node 0 becomes 1); refused, with the
+/// reason, exactly as [`World::with_bridge_on_line`] refuses them. For a bridge that is not a
+/// world's (the emulated board), told the units as a CNC tells it.
+pub fn named_units_on_line(
+    models: &[Model],
+    sim: SimOptions,
+    link: LinkConfig,
+) -> Result<(NamedUnits, SimOptions), SharedLineError> {
+    let options = WorldOptions {
+        sim,
+        ..WorldOptions::default()
+    };
+    let (_, named, options) = bridge_line(models, options, link)?;
+    Ok((named, options.sim))
 }
 
 /// The whole bridge driving several units on one line.
@@ -112,9 +144,8 @@ impl World<BridgeEndpoint> {
         options: WorldOptions,
         mut settings: Settings,
     ) -> Result<Self, SharedLineError> {
-        let (units, addresses, options) = simulated_line(models, options)?;
-        settings.units =
-            NamedUnits::new(settings.link, &addresses).map_err(SharedLineError::Bridge)?;
+        let (units, named, options) = bridge_line(models, options, settings.link)?;
+        settings.units = named;
         Ok(World::with_bridge_unit(Box::new(units), options, settings))
     }
 

@@ -12,7 +12,7 @@ use pbtool::emu::measure::{MeasureOptions, measure};
 use plasma_protocol::serial::PortConfig;
 
 use super::sim::{CNC_FRAMING_DEFAULT, cnc_framing};
-use super::{UnitArgs, serial_failure, stdin_lines};
+use super::{USAGE, UnitArgs, serial_failure, stdin_lines};
 
 #[derive(Args)]
 pub struct EmuArgs {
@@ -48,15 +48,33 @@ pub struct EmuArgs {
 
 /// The firmware on the emulated board: the CNC console, or the measurements.
 pub fn emu(args: &EmuArgs) -> ExitCode {
-    let (model, fault) = match args.unit.one_unit("emu") {
-        Ok(unit) => unit,
+    let (models, fault) = match args.unit.units("emu") {
+        Ok(units) => units,
         Err(status) => return status,
+    };
+    let Some((&model, more_units)) = models.split_first() else {
+        return ExitCode::from(USAGE);
     };
     let unit = EmuUnit {
         model,
+        more_units: more_units.to_vec(),
         fault,
         seed: args.unit.seed,
     };
+    // Refused here, before QEMU starts, in `pbtool sim`'s words.
+    let named = match unit.line() {
+        Ok((_, named)) => named,
+        Err(e) => return args.unit.refuse_line("emu", &e),
+    };
+    if args.measure && !more_units.is_empty() {
+        // The figures are one unit's: its START path, and the board's idle time polling it;
+        // a second unit's polls would change the idle figures the reports are compared by.
+        eprintln!(
+            "pbtool emu --measure: one --ps only: the figures are those of one unit's START \
+             path and of the board polling that unit alone"
+        );
+        return ExitCode::from(USAGE);
+    }
     if args.measure {
         let options = MeasureOptions {
             model,
@@ -90,10 +108,20 @@ pub fn emu(args: &EmuArgs) -> ExitCode {
         };
     }
     if io::stdin().is_terminal() {
+        let (against, torch) = match &named {
+            None => (
+                format!("a simulated {model}"),
+                "TORCH ON|OFF drives the TORCH_ON pin",
+            ),
+            Some(named) => (
+                format!("{} simulated units on one line ({named})", unit.count()),
+                "@N addresses unit N, [@N] TORCH ON|OFF drives unit N's TORCH_ON pin",
+            ),
+        };
         eprintln!(
-            "pbtool emu: the firmware on an emulated board (QEMU) against a simulated {model}; \
-             CNC port on stdin/stdout. HELP lists the commands, TORCH ON|OFF drives the \
-             TORCH_ON pin, end of input (Ctrl-D) quits."
+            "pbtool emu: the firmware on an emulated board (QEMU) against {against}; CNC \
+             port on stdin/stdout. HELP lists the commands, {torch}, \
+             end of input (Ctrl-D) quits."
         );
     }
     let options = EmuConsoleOptions {

@@ -42,6 +42,7 @@ pub fn history(args: &HistoryArgs) -> ExitCode {
             if emulated {
                 let unit = EmuUnit {
                     model,
+                    more_units: Vec::new(),
                     fault,
                     seed: 1,
                 };

@@ -18,6 +18,7 @@ use std::process::ExitCode;
 use std::sync::mpsc::Receiver;
 
 use clap::Args;
+use host_tests::harness::SharedLineError;
 use pbtool::serial::SerialError;
 use pbtool::sim::{parse_fault, read_line};
 use plasma_sim::Model;
@@ -29,9 +30,9 @@ pub const USAGE: u8 = 2;
 #[derive(Args, Clone)]
 pub struct UnitArgs {
     /// The simulated unit: sync45 sync65 sync85 sync105 pm45xp pm65 pm85 pm105 pm125 hpr130
-    /// hpr260 hpr400 hpr130xd hpr260xd hpr400xd maxpro200. Given again (`sim`, `run` on the
-    /// simulator), several units share one line as `CONFIG units` names them: HPRs with ids
-    /// 0, 1... (SLEEP/WAKE), Powermax units at nodes 1, 2...; `@N` addresses unit N.
+    /// hpr260 hpr400 hpr130xd hpr260xd hpr400xd maxpro200. Given again, several units share
+    /// one line as `CONFIG units` names them: HPRs with ids 0, 1... (SLEEP/WAKE), Powermax
+    /// units at nodes 1, 2...; `@N` addresses unit N, `@N TORCH ON` drives its TORCH_ON.
     #[arg(long = "ps", value_name = "MODEL", default_value = "sync65")]
     pub models: Vec<String>,
     /// Start the (first) unit with a fault: Powermax `0-50-0` (or decimal `500`), HPR error
@@ -87,19 +88,11 @@ impl UnitArgs {
             .join(" ")
     }
 
-    /// The one unit `--ps` names and its `--fault` (a command that drives one unit: says so
-    /// when several were given), or the usage status after saying what is wrong.
-    pub fn one_unit(&self, command: &str) -> Result<(Model, Option<u16>), ExitCode> {
-        if let [_, _, ..] = self.models.as_slice() {
-            eprintln!(
-                "pbtool {command}: one --ps only: the emulated board drives one unit so far \
-                 (several units on one line: pbtool sim {})",
-                self.ps_args()
-            );
-            return Err(ExitCode::from(USAGE));
-        }
-        self.units(command)
-            .map(|(models, fault)| (models[0], fault))
+    /// Says that the `--ps` units cannot share a line, and why (`sim`, `emu` and `run` in the
+    /// same words); the usage status.
+    pub fn refuse_line(&self, command: &str, why: &SharedLineError) -> ExitCode {
+        eprintln!("pbtool {command}: --ps {}: {why}", self.model_names());
+        ExitCode::from(USAGE)
     }
 
     /// Every unit `--ps` names (at least one) and the first one's `--fault`, or the usage

@@ -80,14 +80,7 @@ pub fn run(args: &RunArgs) -> ExitCode {
                 framing_arg(args.sim_args.cnc_framing)
             )
         });
-        // The emulated board drives one unit so far: several go to the simulator.
-        if !args.sim_args.fast && units.len() > 1 {
-            eprintln!(
-                "pbtool run: the emulated board drives one unit so far; {} units go to the \
-                 simulator",
-                units.len()
-            );
-        } else if !args.sim_args.fast {
+        if !args.sim_args.fast {
             match ensure_qemu() {
                 Ok(_) => {
                     eprintln!(

@@ -63,10 +63,7 @@ pub fn sim_bridge(args: &SimArgs, own_clock: bool) -> ExitCode {
     });
     let mut console = match console {
         Ok(console) => console,
-        Err(e) => {
-            eprintln!("pbtool sim: --ps {}: {e}", args.unit.model_names());
-            return ExitCode::from(super::USAGE);
-        }
+        Err(e) => return args.unit.refuse_line("sim", &e),
     };
     let units = console.describe_units();
     if let Some(path) = &args.flash

@@ -115,11 +115,11 @@ fn relay(
     let mut port = Port::open(device, options.framing)?;
     let reader = port.try_clone()?;
     let mut board = options.unit.boot()?;
-    if !settle(&mut board)? {
+    if !settle(&mut board, options.unit.count())? {
         note(
             err,
             &format!(
-                "the simulated unit was not found within {} s; relaying without it",
+                "the simulated units were not all found within {} s; relaying without them",
                 SETTLE_TIMEOUT.as_secs()
             ),
         );

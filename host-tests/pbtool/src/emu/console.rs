@@ -1,9 +1,9 @@
-//! `pbtool emu`: the firmware image on the emulated board with a simulated unit, and the CNC
-//! port on stdin/stdout, like `pbtool sim` (whose rules it follows: the first command once the
-//! link is up and the unit's limits are read, one command at a time, every line the board
-//! writes printed as it arrives). `TORCH ON` / `TORCH OFF` are not sent to the board: they
-//! drive its TORCH_ON input pin, as the CNC's output would. With `log`, the firmware's own
-//! log goes to stderr.
+//! `pbtool emu`: the firmware image on the emulated board with simulated units, and the CNC
+//! port on stdin/stdout, like `pbtool sim` (whose rules it follows: the first command once
+//! every unit's link is up and its limits are read, one command at a time, every line the
+//! board writes printed as it arrives; `@N` addresses unit N). `TORCH ON` / `TORCH OFF` (`@N
+//! TORCH ON`: unit N's) are not sent to the board: they drive its TORCH_ON input pin (unit
+//! N's set's), as the CNC's output would. With `log`, the firmware's own log goes to stderr.
 
 use std::collections::VecDeque;
 use std::io::{self, Write};
@@ -12,6 +12,7 @@ use std::time::{Duration, Instant};
 
 use plasma_firmware::io::{Input, Output};
 
+use host_tests::emu::pins::UNIT_SETS;
 use host_tests::emu::{Board, Error, Result};
 
 use super::EmuUnit;
@@ -51,8 +52,13 @@ pub struct EmuConsoleOptions {
 pub enum ConsoleLine {
     /// Nothing (a blank line).
     Blank,
-    /// Drive TORCH_ON.
-    Torch(bool),
+    /// Drive unit `unit`'s TORCH_ON (0 = the first; `@N TORCH ON|OFF` is unit N's).
+    Torch {
+        /// The unit, from 0.
+        unit: usize,
+        /// The level: the CNC asks for the arc.
+        on: bool,
+    },
     /// Send to the board's CNC port.
     Cnc(String),
 }
@@ -65,15 +71,18 @@ pub fn classify(line: &[u8]) -> ConsoleLine {
         .split_ascii_whitespace()
         .map(str::to_ascii_uppercase)
         .collect();
-    match words
-        .iter()
-        .map(String::as_str)
-        .collect::<Vec<_>>()
-        .as_slice()
-    {
-        [] => ConsoleLine::Blank,
-        ["TORCH", "ON"] => ConsoleLine::Torch(true),
-        ["TORCH", "OFF"] => ConsoleLine::Torch(false),
+    let words: Vec<&str> = words.iter().map(String::as_str).collect();
+    // `@N ` in front addresses unit N (N from 1), as on the CNC port.
+    let (unit, command) = match words.split_first() {
+        Some((first, rest)) => match first.strip_prefix('@').map(str::parse::<usize>) {
+            Some(Ok(n)) if n >= 1 => (n - 1, rest),
+            _ => (0, words.as_slice()),
+        },
+        None => return ConsoleLine::Blank,
+    };
+    match command {
+        ["TORCH", "ON"] => ConsoleLine::Torch { unit, on: true },
+        ["TORCH", "OFF"] => ConsoleLine::Torch { unit, on: false },
         _ => ConsoleLine::Cnc(text.to_string()),
     }
 }
@@ -103,10 +112,11 @@ pub fn run(
         let command = crate::history::clock_command(unix_seconds);
         board.command(&command, REPLY_TIMEOUT)?;
     }
-    if !settle(&mut board)? {
+    if !settle(&mut board, options.unit.count())? {
         writeln!(
             err,
-            "pbtool emu: the simulated unit was not found within {} s; commands go on without it",
+            "pbtool emu: the simulated units were not all found within {} s; commands go on \
+             without them",
             SETTLE_TIMEOUT.as_secs()
         )
         .map_err(io)?;
@@ -156,13 +166,32 @@ pub fn run(
             let Some(line) = lines.pop_front() else { break };
             match classify(&line) {
                 ConsoleLine::Blank => {}
-                ConsoleLine::Torch(on) => {
-                    board.set_input(Input::TorchOn, on)?;
+                // A unit the board does not drive: the board says so (`ERR RANGE`).
+                ConsoleLine::Torch { unit, .. } if unit >= options.unit.count() => {
+                    board.cnc().send_bytes(&line)?;
+                    waiting = Some(Instant::now());
+                }
+                ConsoleLine::Torch { unit, .. } if unit >= UNIT_SETS => {
+                    writeln!(
+                        out,
+                        "ERR UNSUPPORTED unit={n} the emulated board has {UNIT_SETS} unit sets: \
+                         unit {n} has no TORCH_ON pin",
+                        n = unit + 1
+                    )
+                    .map_err(io)?;
+                }
+                ConsoleLine::Torch { unit, on } => {
+                    board.set_unit_input(unit, Input::TorchOn, on)?;
                     // Like the simulator's TORCH command, answer once the interlocks have
                     // acted: START follows at once unless a rule holds it (the 50 ms gap at
                     // most delays it).
-                    let _ = board.wait_output(Output::Start, on, TORCH_SETTLE);
-                    writeln!(out, "OK torch={}", if on { "ON" } else { "OFF" }).map_err(io)?;
+                    let _ = board.wait_unit_output(unit, Output::Start, on, TORCH_SETTLE);
+                    // As the simulator tags a reply about a unit beyond the first.
+                    let tag = match unit {
+                        0 => String::new(),
+                        _ => format!(" unit={}", unit + 1),
+                    };
+                    writeln!(out, "OK torch={}{tag}", if on { "ON" } else { "OFF" }).map_err(io)?;
                 }
                 ConsoleLine::Cnc(command) => {
                     board.cnc().send_bytes(&line)?;
@@ -191,20 +220,31 @@ pub fn run(
     }
 }
 
-/// Waits until the link is up and the unit's limits (or an HPR's state) are read; false when
-/// that did not happen within [`SETTLE_TIMEOUT`].
-pub fn settle(board: &mut Board) -> Result<bool> {
+/// Waits until each of the `units` has its link up and its limits (or an HPR's state) read;
+/// false when that did not happen within [`SETTLE_TIMEOUT`].
+pub fn settle(board: &mut Board, units: usize) -> Result<bool> {
     let began = Instant::now();
+    let mut settled = 0;
     while began.elapsed() < SETTLE_TIMEOUT {
-        let status = board.command("STATUS", REPLY_TIMEOUT)?;
-        if status.contains(" link=UP ")
-            && board.command("LIMITS", REPLY_TIMEOUT)?.starts_with("OK ")
-        {
+        if settled == units {
             return Ok(true);
+        }
+        let at = match settled {
+            0 => String::new(),
+            unit => format!("@{} ", unit + 1),
+        };
+        let status = board.command(&format!("{at}STATUS"), REPLY_TIMEOUT)?;
+        if status.contains(" link=UP ")
+            && board
+                .command(&format!("{at}LIMITS"), REPLY_TIMEOUT)?
+                .starts_with("OK ")
+        {
+            settled += 1;
+            continue;
         }
         std::thread::sleep(Duration::from_millis(50));
     }
-    Ok(false)
+    Ok(settled == units)
 }
 
 #[cfg(test)]
@@ -213,13 +253,38 @@ mod tests {
 
     #[test]
     fn torch_lines_drive_the_pin_and_the_rest_goes_to_the_board() {
-        assert_eq!(classify(b"torch on\n"), ConsoleLine::Torch(true));
-        assert_eq!(classify(b"  TORCH   OFF \r\n"), ConsoleLine::Torch(false));
+        assert_eq!(
+            classify(b"torch on\n"),
+            ConsoleLine::Torch { unit: 0, on: true }
+        );
+        assert_eq!(
+            classify(b"  TORCH   OFF \r\n"),
+            ConsoleLine::Torch { unit: 0, on: false }
+        );
         assert_eq!(classify(b"\r\n"), ConsoleLine::Blank);
         assert_eq!(
             classify(b"SET PROCESS CUT 45 AUTO\n"),
             ConsoleLine::Cnc("SET PROCESS CUT 45 AUTO".to_string())
         );
         assert_eq!(classify(b"TORCH\n"), ConsoleLine::Cnc("TORCH".to_string()));
+    }
+
+    #[test]
+    fn an_at_n_torch_line_drives_unit_ns_pin_and_other_at_lines_go_to_the_board() {
+        assert_eq!(
+            classify(b"@2 TORCH ON\n"),
+            ConsoleLine::Torch { unit: 1, on: true }
+        );
+        assert_eq!(
+            classify(b"@4 torch off\n"),
+            ConsoleLine::Torch { unit: 3, on: false }
+        );
+        // The board answers what is no unit: `@0`, `@x`, and `@N` alone.
+        for line in ["@0 TORCH ON", "@x TORCH ON", "@2", "@2 ID"] {
+            assert_eq!(
+                classify(format!("{line}\n").as_bytes()),
+                ConsoleLine::Cnc(line.to_string())
+            );
+        }
     }
 }
