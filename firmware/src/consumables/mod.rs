@@ -95,9 +95,8 @@ impl Usage {
     /// The share of life used, percent (the larger of starts and arc time against their
     /// limits), `None` with both limits OFF.
     pub fn used_percent(&self, limits: Limits) -> Option<u32> {
-        let share = |used: u32, limit: Option<u32>| {
-            limit.filter(|&l| l > 0).map(|l| percent_of(used, l))
-        };
+        let share =
+            |used: u32, limit: Option<u32>| limit.filter(|&l| l > 0).map(|l| percent_of(used, l));
         match (
             share(self.starts, limits.starts),
             share(self.arc_seconds, limits.arc_seconds),

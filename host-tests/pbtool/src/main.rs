@@ -55,10 +55,12 @@ enum Command {
     /// the board's CNC port on stdin/stdout.
     ///
     /// Builds the image (`cargo emu-fw`), starts qemu-system-arm 10 with it, puts the simulated
-    /// unit on its power-supply port in real time and wires START and MOTION between them.
-    /// Type CNC commands as for `sim`; `TORCH ON` / `TORCH OFF` drive the board's TORCH_ON
-    /// input pin. `--measure` instead toggles TORCH_ON under QEMU's instruction counting and
-    /// reports the instructions from the edge to START and the idle figures.
+    /// unit on its power-supply port in real time and wires START and MOTION between them;
+    /// several `--ps` share the line, each on its own unit set, and the board is told them
+    /// with `CONFIG units`. Type CNC commands as for `sim`; `TORCH ON` / `TORCH OFF` (`@N
+    /// TORCH ON`: unit N's) drive the board's TORCH_ON input pin. `--measure` (one unit)
+    /// instead toggles TORCH_ON under QEMU's instruction counting and reports the
+    /// instructions from the edge to START and the idle figures.
     Emu(cli::emu::EmuArgs),
     /// Serve a simulated power supply on a serial port in real time, answering any master.
     ///

@@ -119,6 +119,24 @@ fn run_without_a_probe_boots_the_emulated_board() {
 }
 
 #[test]
+fn run_without_a_probe_boots_the_emulated_board_for_several_units() {
+    let output = pbtool(&["run", "--ps", "hpr260", "--ps", "hpr130"], "@2 ID\n");
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    if stderr.contains("flashing the board image") {
+        return; // A board is attached: `run` flashes it.
+    }
+    assert!(output.status.success(), "{stderr}");
+    assert!(
+        stderr.contains("running the firmware on the emulated board against 2 simulated units"),
+        "{stderr}"
+    );
+    let lines = lines(&output);
+    assert_eq!(lines.len(), 1, "{lines:?}");
+    assert!(lines[0].contains(" model=HPR130 "), "{lines:?}");
+    assert!(lines[0].split(' ').any(|w| w == "unit=2"), "{lines:?}");
+}
+
+#[test]
 fn history_from_the_emulated_board() {
     let output = pbtool(
         &[

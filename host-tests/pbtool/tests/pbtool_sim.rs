@@ -357,6 +357,18 @@ fn units_that_cannot_share_a_line_are_refused_with_the_reason() {
         let from_emu = refusal(pbtool("emu", &args, ""), "emu");
         assert_eq!(from_emu, from_sim);
     }
+    // Its measurements are one unit's, and it says so.
+    let output = pbtool(
+        "emu",
+        &["--measure", "--ps", "hpr260", "--ps", "hpr130"],
+        "",
+    );
+    assert_eq!(output.status.code(), Some(2));
+    let err = String::from_utf8(output.stderr).unwrap();
+    assert!(
+        err.starts_with("pbtool emu --measure: one --ps only"),
+        "{err}"
+    );
 }
 
 #[test]
