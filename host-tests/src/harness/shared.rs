@@ -233,3 +233,39 @@ impl<E: WorldEndpoint> World<E> {
         self.drive(|_, _| ());
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_named_units_are_the_ids_and_nodes_the_simulated_line_answers_at() {
+        let link = Settings::default().link;
+        let (named, sim) =
+            named_units_on_line(&[Model::Hpr260, Model::Hpr130], SimOptions::default(), link)
+                .unwrap();
+        assert_eq!(named.to_string(), "HPR:0,HPR:1");
+        assert_eq!(sim.hpr_id, 0);
+        // A node 0 (learned by a unit alone) cannot be shared: the line starts at node 1.
+        let (named, sim) =
+            named_units_on_line(&[Model::Sync65, Model::Pm85], SimOptions::default(), link)
+                .unwrap();
+        assert_eq!(named.to_string(), "POWERMAX:1,POWERMAX:2");
+        assert_eq!(sim.modbus_address, 1);
+    }
+
+    #[test]
+    fn units_that_cannot_share_a_line_are_refused_as_the_world_refuses_them() {
+        let link = Settings::default().link;
+        for models in [
+            [Model::Hpr260, Model::Sync65],
+            [Model::MaxPro200, Model::Hpr260],
+        ] {
+            let named = named_units_on_line(&models, SimOptions::default(), link);
+            let world =
+                World::with_bridge_on_line(&models, WorldOptions::default(), Settings::default());
+            assert!(named.is_err(), "{models:?}");
+            assert_eq!(named.err(), world.err(), "{models:?}");
+        }
+    }
+}
