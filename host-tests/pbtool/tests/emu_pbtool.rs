@@ -70,10 +70,10 @@ fn emu_drives_two_units_on_one_line_and_at_n_torch_on_starts_unit_n_only() {
     let id = emu.expect_prefix("OK bridge=");
     assert!(id.split(' ').any(|w| w == "unit=2"), "{id}");
     assert!(id.contains(" model=HPR130 "), "{id}");
-    // A TORCH_ON the unit is not ready for stays refused until released: wait for READY,
-    // asking at most 100 times (each a full CNC round trip).
+    // A TORCH_ON the unit is not ready for stays refused until released: wait for READY
+    // (an HPR purges for about 2 s), asking at most 300 times (each a full CNC round trip).
     let mut ready = false;
-    for _ in 0..100 {
+    for _ in 0..300 {
         emu.send("@2 STATUS");
         let status = emu.expect_prefix("OK link=");
         if status.contains(" link=UP ") && status.contains(" ready=ON") {

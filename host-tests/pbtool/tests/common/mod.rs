@@ -3,6 +3,7 @@
 #![allow(dead_code)] // each test file uses a part
 
 use std::io::{BufRead, BufReader, Read, Write};
+use std::path::PathBuf;
 use std::process::{Child, ChildStdin, Command, ExitStatus, Output, Stdio};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{Receiver, RecvTimeoutError, channel};
@@ -10,6 +11,7 @@ use std::sync::{Arc, Mutex};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
+use host_tests::emu::image;
 use serialport::{SerialPort, TTYPort};
 
 /// Generous: the machine is shared and loaded.
@@ -155,13 +157,31 @@ fn spawn_piped(args: &[&str]) -> Child {
 
 /// `pbtool ARGS` started with `stdin`, stdout and stderr piped.
 fn spawn_with_stdin(args: &[&str], stdin: Stdio) -> Child {
-    Command::new(env!("CARGO_BIN_EXE_pbtool"))
+    let mut command = Command::new(env!("CARGO_BIN_EXE_pbtool"));
+    if may_boot_the_emulated_board(args) {
+        command.env(image::ELF_ENV, emulated_board_image());
+    }
+    command
         .args(args)
         .stdin(stdin)
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .spawn()
         .expect("pbtool starts")
+}
+
+/// `emu`, `--emu`, and `run` in real time (without a board it boots the emulated one).
+fn may_boot_the_emulated_board(args: &[&str]) -> bool {
+    let run_in_real_time =
+        args.first() == Some(&"run") && !args.iter().any(|a| matches!(*a, "--fast" | "--sim"));
+    args.first() == Some(&"emu") || args.contains(&"--emu") || run_in_real_time
+}
+
+/// The emulated board's image, built here (once per test process, for as long as it takes)
+/// rather than by the pbtool under test: that build can outlast the time a test waits for
+/// pbtool's first line.
+fn emulated_board_image() -> PathBuf {
+    image::firmware_elf().unwrap_or_else(|e| panic!("the emulated board's image: {e}"))
 }
 
 /// Runs `pbtool ARGS` with `input` on stdin until it exits.
