@@ -22,9 +22,9 @@ pub(crate) struct Core {
     /// The unit shares its line with others (set by the line's arbiter): an HPR's polls are
     /// mostly the short fault read (see `hpr::SHARED_LINE_FULL_POLL_EVERY`).
     pub(crate) shared_line: bool,
-    /// On a shared line, the arbiter allows a full poll in this turn (no other unit's went
-    /// out in the last round); always true for a unit alone.
-    pub(crate) full_poll_allowed: bool,
+    /// On a shared line, the arbiter allows a long attempt in this turn (a full poll or slow
+    /// data: no unit's went out in the last round); always true for a unit alone.
+    pub(crate) long_allowed: bool,
     /// On a shared line, the unit's START is on (the bridge drives it): its state is polled
     /// in full every turn, so its pilot arc is seen and the line falls quiet for it.
     pub(crate) start_on: bool,
@@ -40,7 +40,7 @@ impl Core {
             diagnostics: Diagnostics::default(),
             kept: Kept::default(),
             shared_line: false,
-            full_poll_allowed: true,
+            long_allowed: true,
             start_on: false,
             events: EventQueue::new(),
         }

@@ -288,6 +288,11 @@ impl HprDriver {
             .is_some_and(|s| is_pilot_arc(self.maxpro(), s))
     }
 
+    /// The last transaction started was a poll.
+    pub(crate) fn polled_last(&self) -> bool {
+        self.polled_last
+    }
+
     /// The end of the pilot-arc pause under way, if any: the HF ignition's quiet.
     pub(crate) fn quiet_until(&self, now: Instant) -> Option<Instant> {
         self.pause_until.filter(|&until| now < until)
@@ -358,9 +363,10 @@ impl HprDriver {
             return typed(HprPurpose::PollAmps, Request::ReadPlasmaAmps);
         }
         // Round robin: after a poll, due slow data gets one transaction before the next
-        // poll, so a short poll interval cannot starve it.
+        // poll, so a short poll interval cannot starve it. On a shared line a due poll goes
+        // first: the arbiter lets slow data follow a poll in the same turn, once a round.
         let poll_due = now >= self.next_poll_at;
-        if poll_due && !self.polled_last {
+        if poll_due && (!self.polled_last || core.shared_line) {
             return self.start_poll(now, core);
         }
         if let Some(request) = self.slow_request(now, core) {
@@ -415,18 +421,18 @@ impl HprDriver {
         typed(HprPurpose::Poll, Request::GetPsInfo)
     }
 
-    /// Whether this poll may be the short fault read: on a shared line, while the state is
-    /// known (a new driver's first poll is full), START is off and the unit is not cutting,
-    /// between full polls or while the line's arbiter holds a full one back (another unit's
-    /// went out this round). From START on and while cutting (states 4-10) every poll is the
+    /// Whether this poll may be the short fault read: on a shared line, while START is off
+    /// and the unit is not cutting, between full polls or while the line's arbiter holds a
+    /// full one back (another unit's long attempt went out this round; a new driver's first
+    /// full poll waits for it too, so that units detected together do not fill one round
+    /// with full polls). From START on and while cutting (states 4-10) every poll is the
     /// full one: the state drives the pilot-arc pause, which the whole line keeps, and 028.
     fn fault_read_will_do(&self, core: &Core) -> bool {
         let state = core.status.hpr.state;
         core.shared_line
             && !core.start_on
-            && state.is_some()
             && !is_cutting(state)
-            && (self.fault_reads_left > 0 || !core.full_poll_allowed)
+            && (self.fault_reads_left > 0 || !core.long_allowed)
     }
 
     fn slow_request(
@@ -434,6 +440,9 @@ impl HprDriver {
         now: Instant,
         core: &Core,
     ) -> Option<(HprPurpose, HprExpect, Vec<u8, RAW_HPR_CAPACITY>)> {
+        if !core.long_allowed {
+            return None;
+        }
         if self.slow.refresh_due(now, core.config.slow_data_interval) && !self.maxpro() {
             self.slow.request(slow_items(&self.system));
         }

@@ -114,7 +114,7 @@ pub struct SharedLine {
     control_len: usize,
     /// Unit turns since the last full status poll went out (HPR 079): the next is allowed
     /// once every other unit had a turn, so at most one goes out per round.
-    turns_since_full_poll: usize,
+    turns_since_long: usize,
     /// The HF-ignition quiet the line keeps, as of the last [`SharedLine::poll_transmit`].
     quiet_until: Option<Instant>,
     stats: LineStats,
@@ -146,7 +146,7 @@ impl SharedLine {
             out: None,
             control: [0; CONTROL_CAPACITY],
             control_len: 0,
-            turns_since_full_poll: usize::MAX,
+            turns_since_long: usize::MAX,
             quiet_until: None,
             stats: LineStats::default(),
         }
@@ -187,7 +187,7 @@ impl SharedLine {
         self.switch = None;
         self.out = None;
         self.control_len = 0;
-        self.turns_since_full_poll = usize::MAX;
+        self.turns_since_long = usize::MAX;
         self.quiet_until = None;
         self.stats = LineStats::default();
         Ok(())
@@ -406,26 +406,38 @@ impl SharedLine {
             return None;
         }
         let count = self.links.len();
-        for step in 1..=count {
-            let index = (self.owner + step) % count;
-            let Some(link) = self.links.get_mut(index) else {
-                continue;
+        let long_due = self.turns_since_long >= count;
+        // A long attempt waits for its place in the round unless nothing else is due.
+        for long_allowed in [long_due, true] {
+            // The round's long attempt may be the slow data of the unit that just polled,
+            // in its own turn: no switch.
+            let first = match long_allowed && count > 1 {
+                true => usize::from(!self.links.get(self.owner).is_some_and(PsLink::polled_last)),
+                false => 1,
             };
-            let due = link.poll_at().is_some_and(|at| at <= now);
-            if !due {
-                continue;
+            for step in first..=count {
+                let index = (self.owner + step) % count;
+                let Some(link) = self.links.get_mut(index) else {
+                    continue;
+                };
+                let due = link.poll_at().is_some_and(|at| at <= now);
+                if !due {
+                    continue;
+                }
+                link.allow_long(long_allowed);
+                if link.poll_transmit(now).is_none() {
+                    continue;
+                }
+                self.turns_since_long = match step == 0 || link.full_poll_on_wire() {
+                    true => 0,
+                    false => self.turns_since_long.saturating_add(1),
+                };
+                self.owner = index;
+                return self.begin_turn(now);
             }
-            link.allow_full_poll(self.turns_since_full_poll >= count - 1);
-            if link.poll_transmit(now).is_none() {
-                continue;
+            if long_due {
+                break;
             }
-            self.turns_since_full_poll = if link.full_poll_on_wire() {
-                0
-            } else {
-                self.turns_since_full_poll.saturating_add(1)
-            };
-            self.owner = index;
-            return self.begin_turn(now);
         }
         None
     }

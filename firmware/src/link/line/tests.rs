@@ -380,6 +380,63 @@ fn on_a_shared_line_a_polls_turn_is_the_short_fault_read_and_every_nth_the_full_
     assert!(bench.line.unit(2).unwrap().status().active_fault.is_some());
 }
 
+/// Each unit's fault reads (GET_PS_INFO or CURRENT_ERROR) from its first: when they went
+/// out, by the id awake.
+fn fault_reads_at(bench: &LineBench, units: usize) -> Vec<Vec<Instant>> {
+    let mut awake = None;
+    let mut reads = std::vec![Vec::new(); units];
+    for (at, frame) in &bench.sent {
+        match &frame[..4] {
+            b">086" => awake = None,
+            b">085" => awake = Some(usize::from(frame[4] - b'0')),
+            b">003" | b">079" => reads[awake.unwrap()].push(*at),
+            _ => {}
+        }
+    }
+    reads
+}
+
+/// The worst gap between two fault reads of one unit: see the module docs' bound.
+#[test]
+fn on_a_line_of_four_hprs_a_units_fault_reads_are_never_more_than_a_bounded_round_apart() {
+    let mut bench = LineBench::hprs(4);
+    // Detection, the first slow data (version, error log, timers, gases of every unit), the
+    // steady state and the first refresh (30 s).
+    bench.run(ms(34_000));
+    assert!(bench.all_up());
+    // HPR manual (002_72b43a5685974c77.txt): SLEEP `>0869E<` 7 characters, WAKE and its echo
+    // 8 each, 003 CURRENT_ERROR 7 out and 11 back, 079 GET_PS_INFO 7 out and up to 90 back;
+    // a simulated unit answers within 7 ms.
+    let char_time_ns = bench.units.port().char_time_ns();
+    let answer_us = 7_000;
+    let attempt_us = |chars: u64| chars * char_time_ns / 1000 + answer_us;
+    let (switch, fault_read, long_read) = (
+        attempt_us(7 + 8 + 8),
+        attempt_us(7 + 11),
+        attempt_us(7 + 90),
+    );
+    let bound = Duration::from_micros(4 * (switch + fault_read) + long_read);
+    for (unit, reads) in fault_reads_at(&bench, 4).iter().enumerate() {
+        assert!(
+            reads.len() > 100,
+            "unit {unit}: {} fault reads",
+            reads.len()
+        );
+        let (longest, at) = reads
+            .windows(2)
+            .map(|w| (w[1].saturating_since(w[0]), w[0]))
+            .max()
+            .unwrap();
+        assert!(
+            longest <= bound,
+            "unit {unit}: {} ms from {at:?}, bound {} ms",
+            longest.as_millis(),
+            bound.as_millis()
+        );
+    }
+    assert_eq!(bench.units.collisions(), 0);
+}
+
 #[test]
 fn a_unit_alone_on_its_line_polls_the_full_status_only() {
     let mut bench = LineBench::hprs(1);

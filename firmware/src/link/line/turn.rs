@@ -49,9 +49,19 @@ impl PsLink {
         self.core.shared_line = true;
     }
 
-    /// Whether a full status poll may go out in this turn (see [`PsLink::share_line`]).
-    pub(super) fn allow_full_poll(&mut self, allowed: bool) {
-        self.core.full_poll_allowed = allowed;
+    /// Whether a long attempt (a full status poll, slow data) may go out in this turn (see
+    /// [`PsLink::share_line`]).
+    pub(super) fn allow_long(&mut self, allowed: bool) {
+        self.core.long_allowed = allowed;
+    }
+
+    /// True when this unit's last attempt was an answered poll of an HPR: its next one may be
+    /// its slow data, at once in the same turn (no switch, and no second time-out of a unit
+    /// that stopped answering).
+    pub(super) fn polled_last(&self) -> bool {
+        self.txn.is_none()
+            && self.consecutive_failures == 0
+            && matches!(&self.phase, Phase::Hpr(driver) if driver.polled_last())
     }
 
     /// The unit's START output is on (`true`) or off: from START on, its state is polled in
