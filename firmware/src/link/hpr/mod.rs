@@ -50,16 +50,6 @@ pub(crate) enum HprExpect {
 pub(crate) enum HprPurpose {
     /// GET_PS_INFO.
     Poll,
-    /// 003 CURRENT_ERROR: the short fault read a poll on a shared line is, between full
-    /// GET_PS_INFO polls.
-    FaultPoll,
-    /// 028 READ_PLASMA_AMPS after an HPR poll that shows the arc on (the MaxPro200 has no
-    /// 028).
-    PollAmps,
-    /// GET_STATE while the pilot arc lasts.
-    State,
-    /// 004 REMOTE_MODE before the first setting.
-    RemoteMode,
     /// 134 READ ERROR LOG (slow data).
     SlowErrorLog,
     /// 125 GET_TIMER_COUNTER (slow data).
@@ -72,6 +62,16 @@ pub(crate) enum HprPurpose {
     SlowVersion,
     /// 145 READ TORCH ID (once after detection, MaxPro200).
     SlowTorch,
+    /// 003 CURRENT_ERROR: the short fault read a poll on a shared line is, between full
+    /// GET_PS_INFO polls.
+    FaultPoll,
+    /// 028 READ_PLASMA_AMPS after an HPR poll that shows the arc on (the MaxPro200 has no
+    /// 028).
+    PollAmps,
+    /// GET_STATE while the pilot arc lasts.
+    State,
+    /// 004 REMOTE_MODE before the first setting.
+    RemoteMode,
     /// The active command.
     Active,
 }
@@ -123,8 +123,8 @@ fn slow_items(system: &SystemId) -> u8 {
 /// (manual line 168; 52 ms of wire: 7 characters out, about 90 back); the others are the
 /// short fault read 003 CURRENT_ERROR (line 142; 18 characters, `>00393<` and `>00301165B<`).
 /// Eight, not four: the four-unit fault latency in the bus benchmark (docs/developers.md).
-/// The arbiter lets one full poll out per round of turns, so several units' full polls
-/// never add up in one round.
+/// The arbiter lets one long attempt (a full poll or a slow-data read) out per round of
+/// turns, so several units' full polls never add up in one round.
 pub(crate) const SHARED_LINE_FULL_POLL_EVERY: u8 = 8;
 
 /// What does not change while the unit is on the line, read once after detection where the

@@ -20,7 +20,19 @@
 //!   per turn: the others each wait one time-out per round at most.
 //! - Turns are kept short: with more than one unit, each link is told it shares the line
 //!   (an HPR's poll is then mostly the short fault read 003, the full 079 one poll in
-//!   `SHARED_LINE_FULL_POLL_EVERY`), and at most one full poll goes out per round.
+//!   `SHARED_LINE_FULL_POLL_EVERY`), and its due poll goes before its slow data.
+//! - One long attempt per round: a full poll or one slow-data read (version, error log,
+//!   timers, gases) goes out only once as many turns as there are units went by since the
+//!   last one, or when nothing else is due. The slow read follows its unit's answered poll
+//!   at once, in the same turn (no switch); a unit that stopped answering gets no such
+//!   second attempt.
+//!
+//! So with `n` idle HPRs (START off, not cutting) a unit's two fault reads are at most
+//! `n` x (switch + fault read) + one long attempt apart (switch: SLEEP, WAKE and its echo;
+//! long: 079 or a slow read, up to about 97 characters with the answer): four HPR260s at
+//! 19200 baud, each answering within 7 ms, about 200 ms; a silent unit's turn costs a switch
+//! and one reply time-out instead of its fault read. From START on and while cutting a
+//! unit's every poll is the full one.
 //!
 //! # HF ignition
 //! An HPR in pilot arc fires its HF ignition, and the manual has serial traffic stop for it
@@ -112,8 +124,9 @@ pub struct SharedLine {
     out: Option<Out>,
     control: [u8; CONTROL_CAPACITY],
     control_len: usize,
-    /// Unit turns since the last full status poll went out (HPR 079): the next is allowed
-    /// once every other unit had a turn, so at most one goes out per round.
+    /// Unit turns since the last long attempt went out (a full status poll, HPR 079, or
+    /// slow data): the next is allowed after a turn of every unit, so at most one goes out
+    /// per round.
     turns_since_long: usize,
     /// The HF-ignition quiet the line keeps, as of the last [`SharedLine::poll_transmit`].
     quiet_until: Option<Instant>,
@@ -407,14 +420,13 @@ impl SharedLine {
         }
         let count = self.links.len();
         let long_due = self.turns_since_long >= count;
-        // A long attempt waits for its place in the round unless nothing else is due.
+        // A long attempt waits for its place in the round unless nothing else is due (the
+        // second pass).
         for long_allowed in [long_due, true] {
             // The round's long attempt may be the slow data of the unit that just polled,
             // in its own turn: no switch.
-            let first = match long_allowed && count > 1 {
-                true => usize::from(!self.links.get(self.owner).is_some_and(PsLink::polled_last)),
-                false => 1,
-            };
+            let owner = self.links.get(self.owner);
+            let first = usize::from(!(long_allowed && owner.is_some_and(PsLink::polled_last)));
             for step in first..=count {
                 let index = (self.owner + step) % count;
                 let Some(link) = self.links.get_mut(index) else {
@@ -428,15 +440,12 @@ impl SharedLine {
                 if link.poll_transmit(now).is_none() {
                     continue;
                 }
-                self.turns_since_long = match step == 0 || link.full_poll_on_wire() {
+                self.turns_since_long = match step == 0 || link.long_on_wire() {
                     true => 0,
                     false => self.turns_since_long.saturating_add(1),
                 };
                 self.owner = index;
                 return self.begin_turn(now);
-            }
-            if long_due {
-                break;
             }
         }
         None

@@ -79,10 +79,23 @@ impl PsLink {
         }
     }
 
-    /// True when the attempt on the wire is a full status poll (an HPR's 079 GET_PS_INFO).
-    pub(super) fn full_poll_on_wire(&self) -> bool {
+    /// True when the attempt on the wire is a long one: a full status poll (an HPR's 079
+    /// GET_PS_INFO) or slow data.
+    pub(super) fn long_on_wire(&self) -> bool {
+        use HprPurpose::*;
         self.txn.as_ref().is_some_and(|txn| {
-            txn.is_on_wire() && matches!(txn.tag(), Tag::Hpr(HprPurpose::Poll, _))
+            matches!(
+                txn.tag(),
+                Tag::Hpr(
+                    Poll | SlowErrorLog
+                        | SlowTimers
+                        | SlowGases
+                        | SlowInletGases
+                        | SlowVersion
+                        | SlowTorch,
+                    _
+                )
+            )
         })
     }
 }
