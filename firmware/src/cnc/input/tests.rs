@@ -378,7 +378,9 @@ fn two_hprs() -> Rig {
 #[test]
 fn a_line_without_at_n_is_for_the_first_unit_and_at_n_names_another() {
     let mut rig = two_hprs();
-    // As docs/cnc-protocol.md section 10 shows them (unit 2's firmware not read yet).
+    // Each unit's firmware is read after its first polls, once a round of turns.
+    rig.run(1000);
+    // As docs/cnc-protocol.md section 10 shows them.
     let first = rig.cmd("ID");
     assert_eq!(
         first,
@@ -389,7 +391,7 @@ fn a_line_without_at_n_is_for_the_first_unit_and_at_n_names_another() {
     assert_eq!(
         second,
         "OK bridge=plasma-bridge version=0.1.0 reset=unknown link=UP model=HPR130 family=HPR \
-         firmware=- gas_firmware=- unit=2"
+         firmware=A.0 gas_firmware=A.2 unit=2"
     );
     assert_eq!(rig.cmd("@1 ID"), first, "@1 is the line without a prefix");
     // Refused lines of unit 2 say so too, after the code: an ERR text runs to the end.
