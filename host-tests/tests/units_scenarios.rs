@@ -14,6 +14,7 @@ use host_tests::harness::{BridgeEndpoint, SharedLineError, World, WorldOptions};
 use plasma_firmware::io::Interlock;
 use plasma_firmware::link::{LineError, UnitsError};
 use plasma_firmware::settings::Settings;
+use plasma_protocol::hpr::command::id as hpr_id;
 use plasma_protocol::time::Duration;
 use plasma_sim::hpr::Hpr;
 use plasma_sim::multidrop;
@@ -64,6 +65,20 @@ fn wait_ready(world: &mut World<BridgeEndpoint>, unit: usize) {
 /// Simulated unit `index` of the line.
 fn sim(world: &mut World<BridgeEndpoint>, index: usize) -> &mut dyn SimulatedUnit {
     world.units().unit_mut(index).expect("no such unit")
+}
+
+/// The line's last SLEEP / WAKE, complete, is a WAKE of a unit other than `id`.
+fn another_unit_awake(world: &World<BridgeEndpoint>, id: u8) -> bool {
+    let last_switch = world
+        .trace()
+        .requests()
+        .filter(|f| matches!(f.hpr_id(), Some(hpr_id::SLEEP | hpr_id::WAKE)))
+        .last();
+    last_switch.is_some_and(|f| {
+        f.hpr_id() == Some(hpr_id::WAKE)
+            && f.bytes.get(4) != Some(&(b'0' + id))
+            && f.end <= world.now()
+    })
 }
 
 /// Which units' START is on.
@@ -280,6 +295,12 @@ fn a_faulted_unit_does_not_block_anothers_start() {
 #[test]
 fn a_silent_unit_leaves_the_others_their_status_and_start() {
     let mut world = line(&[Model::Hpr260, Model::Hpr130, Model::Hpr400]);
+    // A unit cut while awake stays awake and, mended, answers with the unit awake then until
+    // the next SLEEP, which nothing on the line can hear coming: cut unit 3 while another
+    // unit is awake (HPR manual, 002_72b43a5685974c77.txt, lines 93-109).
+    world
+        .run_until(|w| another_unit_awake(w, 2), secs(1))
+        .expect("a turn of unit 1 or 2");
     world.connect_unit(2, false);
     world
         .run_until(|w| !w.bridge().status_of(2).link_up, secs(5))
