@@ -363,7 +363,8 @@ fn on_a_shared_line_a_polls_turn_is_the_short_fault_read_and_every_nth_the_full_
             assert!(gap >= every && gap < 2 * every, "unit {unit}: {polls:?}");
         }
     }
-    // At most one full poll per round: every other unit has a turn between two of them.
+    // At most one full poll per round (one long attempt): every other unit has a turn
+    // between two of them.
     let turns: Vec<u8> = bench
         .sent
         .iter()
