@@ -418,37 +418,43 @@ impl SharedLine {
         if self.links.get(self.owner).is_some_and(PsLink::holds_line) {
             return None;
         }
-        let count = self.links.len();
-        let long_due = self.turns_since_long >= count;
-        // A long attempt waits for its place in the round unless nothing else is due (the
-        // second pass).
-        for long_allowed in [long_due, true] {
-            // The round's long attempt may be the slow data of the unit that just polled,
-            // in its own turn: no switch.
-            let owner = self.links.get(self.owner);
-            let first = usize::from(!(long_allowed && owner.is_some_and(PsLink::polled_last)));
-            for step in first..=count {
-                let index = (self.owner + step) % count;
-                let Some(link) = self.links.get_mut(index) else {
-                    continue;
-                };
-                let due = link.poll_at().is_some_and(|at| at <= now);
-                if !due {
-                    continue;
-                }
-                link.allow_long(long_allowed);
-                if link.poll_transmit(now).is_none() {
-                    continue;
-                }
-                self.turns_since_long = match step == 0 || link.long_on_wire() {
-                    true => 0,
-                    false => self.turns_since_long.saturating_add(1),
-                };
-                self.owner = index;
-                return self.begin_turn(now);
-            }
+        // A long attempt waits for its place in the round unless nothing else is due.
+        let long_due = self.turns_since_long >= self.links.len();
+        if self.hand_out(now, long_due) || self.hand_out(now, true) {
+            return self.begin_turn(now);
         }
         None
+    }
+
+    /// The next unit in turn with something due hands out an attempt (true), a long one
+    /// only if `long_allowed`; it becomes the owner.
+    fn hand_out(&mut self, now: Instant, long_allowed: bool) -> bool {
+        let count = self.links.len();
+        // The round's long attempt may be the slow data of the unit that just polled, in its
+        // own turn: no switch.
+        let owner = self.links.get(self.owner);
+        let first = usize::from(!(long_allowed && owner.is_some_and(PsLink::polled_last)));
+        for step in first..=count {
+            let index = (self.owner + step) % count;
+            let Some(link) = self.links.get_mut(index) else {
+                continue;
+            };
+            let due = link.poll_at().is_some_and(|at| at <= now);
+            if !due {
+                continue;
+            }
+            link.allow_long(long_allowed);
+            if link.poll_transmit(now).is_none() {
+                continue;
+            }
+            self.turns_since_long = match step == 0 || link.long_on_wire() {
+                true => 0,
+                false => self.turns_since_long.saturating_add(1),
+            };
+            self.owner = index;
+            return true;
+        }
+        false
     }
 
     /// Unit `owner` has handed out an attempt: on an HPR line, switch to it first if needed.
