@@ -32,6 +32,17 @@ impl Line {
     }
 }
 
+/// The unit a reply or event is about: `unit=N` (N = 1-4) before any free-text field (`text=`,
+/// `reply=`, which run to the end of the line); 1 without it (docs/cnc-protocol.md section 10).
+/// An `ERR` line carries it right after the code, which this finds as well.
+pub fn unit_of(line: &str) -> u8 {
+    line.split(' ')
+        .take_while(|word| !word.starts_with("text=") && !word.starts_with("reply="))
+        .find_map(|word| word.strip_prefix("unit=")?.parse().ok())
+        .filter(|unit| (1..=4).contains(unit))
+        .unwrap_or(1)
+}
+
 /// The `key=value` fields of a reply, in order. `text=` runs to the end of the line, as the
 /// protocol says, so a fault's text keeps its spaces.
 #[derive(Debug, Clone, PartialEq, Default)]
@@ -154,6 +165,29 @@ mod tests {
         assert_eq!(fault.action, "required");
         assert!(fault.text.starts_with("The cartridge is off, the torch"));
         assert!(fault.text.ends_with("during a restart."));
+    }
+
+    // Lines of `pbtool sim --ps hpr260 --ps hpr130` and docs/cnc-protocol.md section 10.
+    #[test]
+    fn the_unit_a_line_is_about() {
+        assert_eq!(unit_of("OK fault=none unit=2"), 2);
+        assert_eq!(
+            unit_of("!FAULT 044 action=required unit=2 text=LOW PLASMA GAS PRESSURE"),
+            2
+        );
+        assert_eq!(
+            unit_of("ERR SYNTAX unit=3 unknown command (HELP lists the commands)"),
+            3
+        );
+        assert_eq!(unit_of("!LINK UP model=HPR130 HPR unit=2"), 2);
+        assert_eq!(
+            unit_of("!FAULT 044 action=required text=LOW PLASMA GAS PRESSURE"),
+            1
+        );
+        // A unit named inside free text is not the line's.
+        assert_eq!(unit_of("OK fault=044 action=required text=see unit=2"), 1);
+        assert_eq!(unit_of("OK raw reply=>01 unit=4 00<"), 1);
+        assert_eq!(unit_of("OK unit=9"), 1);
     }
 
     #[test]

@@ -4,7 +4,7 @@
 use std::collections::VecDeque;
 use std::time::Duration;
 
-use super::parse::{ActiveFault, Fields, Line};
+use super::parse::{ActiveFault, Fields, Line, unit_of};
 use crate::history::{Row, clock_command};
 
 /// How often STATUS (and FAULT while a fault is active) is asked.
@@ -319,8 +319,13 @@ impl Dashboard {
 
     /// One line from the bridge.
     pub fn apply_line(&mut self, now: Duration, line: &str) {
+        // The dashboard shows unit 1 and asks without `@N`: another unit's event is logged
+        // only, and its reply answers nothing asked (docs/cnc-protocol.md section 10).
+        let first_unit = unit_of(line) == 1;
         match Line::parse(line) {
+            Line::Event(event) if !first_unit => self.note(now, event),
             Line::Event(event) => self.event(now, event),
+            Line::Ok(_) | Line::Err(_) if !first_unit => {}
             Line::Other(other) => {
                 if let Some(row) = Row::parse(&other) {
                     self.history_lines.push(row);
@@ -746,6 +751,56 @@ mod tests {
             dash.events.back(),
             Some(&(4 * S, "FAULT CLEARED code=0-50-0".to_string()))
         );
+    }
+
+    /// Two HPRs on the line, as `pbtool sim --ps hpr260 --ps hpr130 --fault 044` says it:
+    /// unit 2's events and replies leave unit 1's picture as it was.
+    #[test]
+    fn another_units_lines_do_not_change_the_first_units() {
+        let mut dash = up();
+        assert_eq!(dash.poll(S), [Command::Status, Command::Counters]);
+        dash.apply_line(S, "!LINK UP model=HPR130 HPR unit=2");
+        dash.apply_line(
+            S,
+            "!FAULT 044 action=required unit=2 text=LOW PLASMA GAS PRESSURE",
+        );
+        assert_eq!(dash.fault, None);
+        // Logged as they came, the unit named.
+        assert_eq!(
+            dash.events.back(),
+            Some(&(
+                S,
+                "FAULT 044 action=required unit=2 text=LOW PLASMA GAS PRESSURE".to_string()
+            ))
+        );
+        // A reply of unit 2 pairs with none of unit 1's commands.
+        dash.apply_line(
+            S,
+            "OK link=UP model=HPR130 family=HPR out_amps=0 out_psi=55 fault=044 unit=2",
+        );
+        dash.apply_line(S, "OK link_ok=8 link_failed=5 unit=2");
+        assert_eq!(dash.status, None);
+        assert_eq!(dash.pending, [Command::Status, Command::Counters]);
+        dash.apply_line(
+            S,
+            "OK link=UP model=HPR260 family=HPR out_amps=0 out_psi=55 fault=none",
+        );
+        dash.apply_line(S, "OK link_ok=8 link_failed=0");
+        assert!(dash.pending.is_empty(), "{:?}", dash.pending);
+        assert_eq!(
+            dash.status.as_ref().and_then(|s| s.get("model")),
+            Some("HPR260")
+        );
+        assert_eq!(dash.fault, None);
+        // Unit 1's fault and its clearing still count; unit 2's clearing does not touch it.
+        dash.apply_line(
+            2 * S,
+            "!FAULT 044 action=required text=LOW PLASMA GAS PRESSURE",
+        );
+        dash.apply_line(2 * S, "!FAULT CLEARED code=044 unit=2");
+        assert_eq!(dash.fault.as_ref().map(|f| f.code.as_str()), Some("044"));
+        dash.apply_line(2 * S, "!FAULT CLEARED code=044");
+        assert_eq!(dash.fault, None);
     }
 
     #[test]
