@@ -269,6 +269,31 @@ fn the_real_simulator_through_the_transport() {
     });
 }
 
+/// Two HPRs on the simulated line, unit 1 with a fault: the dashboard shows unit 1, unit 2's
+/// events are listed with their `unit=2`.
+#[test]
+fn two_units_through_the_transport_show_the_first() {
+    let args = [
+        "sim", "--ps", "hpr260", "--ps", "hpr130", "--events", "--fault", "044",
+    ];
+    let source = Source::Child {
+        args: args.map(String::from).into(),
+    };
+    let mut session = Session::new(source, pbtool_exe(), None);
+    step_until(&mut session, |dash| {
+        dash.fault.as_ref().is_some_and(|f| f.action == "required")
+            && dash.status.is_some()
+            && dash
+                .events
+                .iter()
+                .any(|(_, e)| e.starts_with("LINK UP model=HPR130") && e.ends_with(" unit=2"))
+    });
+    let dash = &session.dashboard;
+    let status = dash.status.as_ref().expect("STATUS");
+    assert_eq!(status.get("model"), Some("HPR260"));
+    assert_eq!(dash.fault.as_ref().map(|f| f.code.as_str()), Some("044"));
+}
+
 #[test]
 fn a_child_that_cannot_start_is_shown_and_retried() {
     let source = Source::child("sim", "sync65", None);
