@@ -367,7 +367,7 @@ impl Bridge {
         Some(match command {
             HistoryCommand::Newest(n) => HistoryRequest::Newest(n),
             HistoryCommand::Clear => {
-                let unit = crate::cnc::history::unit_on(self.units.link(0));
+                let unit = crate::cnc::history::unit_on(&self.units, 0);
                 HistoryRequest::Clear(self.history.stamp(self.now, unit))
             }
         })

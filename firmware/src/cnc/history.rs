@@ -16,10 +16,12 @@ use plasma_protocol::time::Instant;
 
 use super::describe::{FaultId, family_word, interlock_word, steps_of, steps_word};
 
-use super::{Context, Pending as Waiting, ReplyLine, Session, err_line, line, ok_line, texts};
+use super::{
+    Context, Pending as Waiting, ReplyLine, Session, err_line, line, ok_line, tag_unit, texts,
+};
 use crate::io::{Interlock, IoEvent};
 use crate::link::model_code::{model_code, model_name};
-use crate::link::{LinkEvent, PsLink};
+use crate::link::{LinkEvent, Units};
 use crate::settings::Process;
 use crate::storage::history::{
     ChangedBy, Draft, Entry, Event, HistoryAnswer, HistoryPage, Pending, Stamp, Unit,
@@ -83,11 +85,14 @@ fn uptime_secs(now: Instant) -> u32 {
     u32::try_from(secs).unwrap_or(u32::MAX)
 }
 
-/// The unit an entry is about: the family and model on `link`.
-pub fn unit_on(link: &PsLink) -> Unit {
+/// The unit an entry is about: the family and model of unit `unit` (its index) on the line.
+pub fn unit_on(units: &Units, unit: usize) -> Unit {
+    let status = units.link(unit).status();
     Unit {
-        family: link.status().family,
-        model: model_code(link.status()),
+        family: status.family,
+        model: model_code(status),
+        // Below MAX_UNITS: the index of a unit the bridge drives.
+        line_index: unit as u8,
     }
 }
 
@@ -223,9 +228,9 @@ pub(super) fn keep_process(ctx: &mut Context<'_>, process: Process, by: ChangedB
     }
 }
 
-/// Queues `event`, now, about the unit on the line.
+/// Queues `event`, now, about the unit this call is about (`ctx.unit`).
 pub(super) fn note(ctx: &mut Context<'_>, event: Event) {
-    let unit = unit_on(ctx.link());
+    let unit = unit_on(ctx.units, ctx.unit);
     ctx.history.note(ctx.now, unit, event);
 }
 
@@ -275,7 +280,8 @@ impl Session {
             (Ok(page), HistoryCommand::Newest(_)) => {
                 for entry in &page.entries {
                     let clock = entry_clock(entry, page, ctx.history.clock_at_boot);
-                    let l = line(|l| write_entry(l, entry, clock));
+                    let mut l = line(|l| write_entry(l, entry, clock));
+                    tag_unit(&mut l, usize::from(entry.unit.line_index));
                     self.push(l.as_bytes());
                 }
                 ok_line(|w| {

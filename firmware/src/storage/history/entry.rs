@@ -8,7 +8,9 @@
 //! 9       4     time since boot, milliseconds, little endian (wraps after 49 days)
 //! 13      1     1 if the wall clock was set (the next field counts), else 0
 //! 14      4     wall clock: unix seconds at boot, little endian
-//! 18      1     unit family code (0 unknown, 1 SYNC, 2 legacy Powermax, 3 HPR, 4 MaxPro200)
+//! 18      1     unit: bits 0-3 its family code (0 unknown, 1 SYNC, 2 legacy Powermax,
+//!               3 HPR, 4 MaxPro200), bits 4-7 its place on the line minus one (0-3: `@1`
+//!               to `@4`); entries from before the place was kept have 0 there (unit 1)
 //! 19      1     unit model code (the caller's small code; 0 unknown)
 //! 20      1     event kind
 //! 21      0..8  event fields (per kind, see `Event::emit_fields`)
@@ -23,10 +25,15 @@ use plasma_protocol::powermax::{FaultCode, StepsRequired};
 use plasma_protocol::units::Psi;
 
 use crate::io::Interlock;
-use crate::link::{ActiveFault, Family};
+use crate::link::{ActiveFault, Family, MAX_UNITS};
 use crate::platform::safe_state::ResetCause;
 
 /// The encoding version this firmware writes and reads.
+///
+/// Still 1 after the unit's place moved into byte 18's high nibble: every entry written
+/// before has 0 there and reads as the first unit, which it was; a new version would make
+/// an older firmware skip every entry, where now it rejects (skips and counts) only those
+/// about units 2-4.
 pub const ENTRY_VERSION: u8 = 1;
 
 /// Bytes before the event fields.
@@ -130,6 +137,8 @@ pub struct Unit {
     pub family: Option<Family>,
     /// A small model code chosen by the caller (0: unknown).
     pub model: u8,
+    /// Its place on the line counted from 0 (`@1` is 0); board-wide events keep 0.
+    pub line_index: u8,
 }
 
 /// One entry of the history.
@@ -148,6 +157,21 @@ pub struct Entry {
     pub unit: Unit,
     /// What happened.
     pub event: Event,
+}
+
+/// Byte 18: the family code in the low nibble, the place on the line in the high one.
+fn unit_byte(unit: &Unit) -> u8 {
+    unit.line_index << 4 | family_code(unit.family)
+}
+
+/// The family and the place on the line of byte 18 (an unknown family or a place beyond
+/// the fourth unit is an error).
+fn unit_from(byte: u8) -> Result<(Option<Family>, u8), EntryError> {
+    let line_index = byte >> 4;
+    if usize::from(line_index) >= MAX_UNITS {
+        return Err(EntryError::UnknownKind(byte));
+    }
+    Ok((family_from(byte & 0x0F)?, line_index))
 }
 
 fn family_code(family: Option<Family>) -> u8 {
@@ -357,7 +381,7 @@ impl Entry {
         out[9..13].copy_from_slice(&self.uptime_ms.to_le_bytes());
         out[13] = u8::from(self.clock_at_boot.is_some());
         out[14..18].copy_from_slice(&self.clock_at_boot.unwrap_or(0).to_le_bytes());
-        out[18] = family_code(self.unit.family);
+        out[18] = unit_byte(&self.unit);
         out[19] = self.unit.model;
         out[20..].copy_from_slice(&event[..event_len]);
         Ok(len)
@@ -372,6 +396,7 @@ impl Entry {
         }
         let kind = byte_at(bytes, 20)?;
         let fields = &bytes[HEADER_LEN..];
+        let (family, line_index) = unit_from(byte_at(bytes, 18)?)?;
         Ok(Entry {
             sequence: u32_at(bytes, 1)?,
             boot: u32_at(bytes, 5)?,
@@ -380,8 +405,9 @@ impl Entry {
                 .then(|| u32_at(bytes, 14))
                 .transpose()?,
             unit: Unit {
-                family: family_from(byte_at(bytes, 18)?)?,
+                family,
                 model: byte_at(bytes, 19)?,
+                line_index,
             },
             event: Event::parse(kind, fields)?,
         })
@@ -401,6 +427,7 @@ mod tests {
             unit: Unit {
                 family: Some(Family::PowermaxSync),
                 model: 3,
+                line_index: 0,
             },
             event,
         }
@@ -472,6 +499,61 @@ mod tests {
                 1, 0, 0x40, 0x01, 0, // fault appeared: Powermax 320, steps Yes
             ]
         );
+    }
+
+    /// Bytes a firmware wrote before byte 18 kept the unit's place: the fault of a SYNC,
+    /// model 3, read as the first unit.
+    const ENTRY_FROM_BEFORE_THE_PLACE: [u8; 25] = [
+        1, 4, 3, 2, 1, 7, 0, 0, 0, 0xE8, 0xFD, 0, 0, 1, 0xC0, 0x86, 0xFD, 0x6A, 1, 3, 1, 0, 0x40,
+        0x01, 0,
+    ];
+
+    #[test]
+    fn an_entry_written_before_the_place_was_kept_reads_as_the_first_unit() {
+        let parsed = Entry::parse(&ENTRY_FROM_BEFORE_THE_PLACE).unwrap();
+        assert_eq!(parsed, entry(every_event()[0]));
+        assert_eq!(parsed.unit.line_index, 0);
+    }
+
+    #[test]
+    fn the_third_unit_is_kept_in_the_family_bytes_high_nibble() {
+        let mut e = entry(Event::FaultCleared {
+            fault: ActiveFault::Hpr(ErrorCode(46)),
+        });
+        e.unit = Unit {
+            family: Some(Family::Hpr),
+            model: 9,
+            line_index: 2,
+        };
+        let mut out = [0u8; MAX_ENTRY];
+        let len = e.emit(&mut out).unwrap();
+        assert_eq!(out[18..20], [0x23, 9]); // unit 3, HPR; model 9
+        assert_eq!(Entry::parse(&out[..len]), Ok(e));
+        for line_index in 0..MAX_UNITS as u8 {
+            e.unit.line_index = line_index;
+            let len = e.emit(&mut out).unwrap();
+            assert_eq!(Entry::parse(&out[..len]), Ok(e));
+        }
+    }
+
+    #[test]
+    fn an_unknown_place_or_family_in_byte_18_is_an_error() {
+        let mut out = [0u8; MAX_ENTRY];
+        let len = entry(Event::LinkLost).emit(&mut out).unwrap();
+        for byte in [0x41, 0xF1, 0x05, 0x3F] {
+            out[18] = byte;
+            assert_eq!(
+                Entry::parse(&out[..len]),
+                Err(EntryError::UnknownKind(if byte & 0xF0 >= 0x40 {
+                    byte
+                } else {
+                    byte & 0x0F
+                })),
+                "{byte:#x}"
+            );
+        }
+        out[18] = 0x31; // unit 4, SYNC
+        assert_eq!(Entry::parse(&out[..len]).map(|e| e.unit.line_index), Ok(3));
     }
 
     #[test]

@@ -135,12 +135,26 @@ fn undecodable_entries_are_skipped_and_counted() {
     );
     block_on(queue.push(&[9, 1, 2, 3], false)).unwrap();
     block_on(queue.push(&[], false)).unwrap();
+    // A well-formed entry but for byte 18: a fifth unit on the line.
+    let mut fifth_unit = [0u8; MAX_ENTRY];
+    let len = Entry {
+        sequence: 1,
+        boot: 0,
+        uptime_ms: 0,
+        clock_at_boot: None,
+        unit: Unit::default(),
+        event: Event::LinkLost,
+    }
+    .emit(&mut fifth_unit)
+    .unwrap();
+    fifth_unit[18] = 0x41;
+    block_on(queue.push(&fifth_unit[..len], false)).unwrap();
     record(&mut store, 1);
     let (entries, skipped) = all(&mut store);
-    assert_eq!(skipped, 2);
+    assert_eq!(skipped, 3);
     assert_eq!(entries.len(), 2);
     let (_, scan) = boot(store.into_flash());
-    assert_eq!((scan.entries, scan.skipped, scan.next_sequence), (2, 2, 2));
+    assert_eq!((scan.entries, scan.skipped, scan.next_sequence), (2, 3, 2));
 }
 
 /// Starts from `before`, cuts the power at every step of `operation` in turn, boots again
