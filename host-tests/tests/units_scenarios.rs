@@ -361,3 +361,53 @@ fn units_that_cannot_share_a_line_are_refused_with_the_reason() {
         ))
     );
 }
+
+/// The `HISTORY` entries of `count` newest, newest first.
+fn history(world: &mut World<BridgeEndpoint>, count: usize) -> Vec<String> {
+    let mark = world.cnc_output().len();
+    let reply = world.cnc_line(&format!("HISTORY {count}"));
+    assert!(reply.starts_with("OK history="), "{reply}");
+    world.cnc_output()[mark..]
+        .iter()
+        .filter_map(|r| r.item.line())
+        .filter(|l| l.starts_with("HISTORY "))
+        .map(str::to_string)
+        .collect()
+}
+
+/// On a two-torch table the history says which torch faulted: unit 2's entry ends in
+/// `unit=2`, unit 1's names no unit (as every reply about the first unit).
+#[test]
+fn the_history_says_which_unit_faulted() {
+    let mut world = line(&[Model::Hpr260, Model::Hpr260]);
+    let now = world.now();
+    sim(&mut world, 1).inject_fault(now, HPR_FAULT);
+    world
+        .wait_cnc_line("!FAULT", secs(2))
+        .expect("unit 2's fault");
+    let now = world.now();
+    sim(&mut world, 0).inject_fault(now, HPR_FAULT);
+    world
+        .wait_cnc_line("!FAULT", secs(2))
+        .expect("unit 1's fault");
+    let entries = history(&mut world, 2);
+    let faults: Vec<(Option<&str>, Option<&str>)> = entries
+        .iter()
+        .map(|l| (field(l, "event"), field(l, "unit")))
+        .collect();
+    assert_eq!(
+        faults,
+        [(Some("FAULT"), None), (Some("FAULT"), Some("2"))],
+        "{entries:?}"
+    );
+    // The unit's tag comes last, after the event's own fields (docs/cnc-protocol.md).
+    // docs/cnc-protocol.md section 10 quotes this line.
+    assert!(
+        entries[1].ends_with(
+            " clock=- family=HPR model=HPR260 event=FAULT code=044 action=required unit=2"
+        ),
+        "{}",
+        entries[1]
+    );
+    assert_clean(&world);
+}

@@ -1,7 +1,9 @@
 //! `pbtool history`: the bridge's event history (`HISTORY N`) as a table, JSON or CSV.
 //!
 //! The bridge writes one `HISTORY seq=.. boot=.. uptime_ms=.. clock=.. family=.. model=.. event=..`
-//! line per entry, newest first, then `OK history=N skipped=K` (docs/cnc-protocol.md). Before
+//! line per entry, newest first, then `OK history=N skipped=K` (docs/cnc-protocol.md); an
+//! entry about a unit beyond the first ends in `unit=N`, and the table and CSV give every
+//! entry its unit (1 where the line has none, as for every reply). Before
 //! reading, pbtool sets the bridge's clock (`CLOCK`) to the PC's, so that the entries of this
 //! boot carry the wall-clock time.
 
@@ -17,11 +19,12 @@ use plasma_protocol::serial::PortConfig;
 use crate::serial::{Port, Rx, SerialError};
 
 /// The columns every entry has, in the table's order; the event's own fields follow.
-pub const COLUMNS: [&str; 7] = [
+pub const COLUMNS: [&str; 8] = [
     "seq",
     "boot",
     "uptime_ms",
     "clock",
+    "unit",
     "family",
     "model",
     "event",
@@ -55,6 +58,15 @@ impl Row {
             .iter()
             .find(|(k, _)| k == key)
             .map_or("", |(_, v)| v.as_str())
+    }
+
+    /// The cell of `column`: its value, and for `unit` the first unit when the line names
+    /// none (only the units beyond the first are tagged).
+    pub fn cell(&self, column: &str) -> &str {
+        match self.get(column) {
+            "" if column == "unit" => "1",
+            value => value,
+        }
     }
 
     /// The event's own fields, `key=value` separated by spaces.
@@ -99,7 +111,7 @@ pub fn table(rows: &[Row]) -> String {
         .map(|r| {
             COLUMNS
                 .iter()
-                .map(|c| r.get(c).to_string())
+                .map(|c| r.cell(c).to_string())
                 .chain([r.details()])
                 .collect()
         })
@@ -140,7 +152,7 @@ pub fn csv(rows: &[Row]) -> String {
     for row in rows {
         let cells: Vec<String> = COLUMNS
             .iter()
-            .map(|c| quote(row.get(c)))
+            .map(|c| quote(row.cell(c)))
             .chain([quote(&row.details())])
             .collect();
         out.push_str(&cells.join(","));
@@ -259,31 +271,37 @@ pub fn over_port(
 mod tests {
     use super::*;
 
-    const LINES: [&str; 3] = [
+    const LINES: [&str; 4] = [
+        "HISTORY seq=5 boot=1 uptime_ms=2100 clock=- family=HPR model=HPR260 event=FAULT code=046 action=required unit=2",
         "HISTORY seq=4 boot=1 uptime_ms=812 clock=- family=- model=- event=RESET cause=power-on",
         "HISTORY seq=3 boot=0 uptime_ms=2500 clock=2026-11-26T07:30:02 family=SYNC model=Powermax65 event=FAULT code=0-50-0 action=required",
-        "OK history=2 skipped=0",
+        "OK history=3 skipped=0",
     ];
 
     #[test]
     fn entries_as_table_csv_and_json() {
         let rows = rows(LINES);
-        assert_eq!(rows.len(), 2);
+        assert_eq!(rows.len(), 3);
         assert_eq!(
             table(&rows),
-            "seq  boot  uptime_ms  clock                family  model       event  details\n\
-             4    1     812        -                    -       -           RESET  cause=power-on\n\
-             3    0     2500       2026-11-26T07:30:02  SYNC    Powermax65  FAULT  code=0-50-0 action=required\n"
+            "seq  boot  uptime_ms  clock                unit  family  model       event  details\n\
+             5    1     2100       -                    2     HPR     HPR260      FAULT  code=046 action=required\n\
+             4    1     812        -                    1     -       -           RESET  cause=power-on\n\
+             3    0     2500       2026-11-26T07:30:02  1     SYNC    Powermax65  FAULT  code=0-50-0 action=required\n"
         );
         assert_eq!(
             csv(&rows),
-            "seq,boot,uptime_ms,clock,family,model,event,details\n\
-             4,1,812,-,-,-,RESET,cause=power-on\n\
-             3,0,2500,2026-11-26T07:30:02,SYNC,Powermax65,FAULT,\"code=0-50-0 action=required\"\n"
+            "seq,boot,uptime_ms,clock,unit,family,model,event,details\n\
+             5,1,2100,-,2,HPR,HPR260,FAULT,\"code=046 action=required\"\n\
+             4,1,812,-,1,-,-,RESET,cause=power-on\n\
+             3,0,2500,2026-11-26T07:30:02,1,SYNC,Powermax65,FAULT,\"code=0-50-0 action=required\"\n"
         );
         let parsed: serde_json::Value = serde_json::from_str(&json(&rows)).unwrap();
-        assert_eq!(parsed[1]["code"], "0-50-0");
-        assert_eq!(parsed[0]["event"], "RESET");
+        assert_eq!(parsed[2]["code"], "0-50-0");
+        assert_eq!(parsed[1]["event"], "RESET");
+        assert_eq!(parsed[0]["unit"], "2");
+        // JSON gives the fields as written: no unit where the line has none.
+        assert!(parsed[1].get("unit").is_none());
     }
 
     #[test]

@@ -148,7 +148,7 @@ fn history_from_the_emulated_board() {
     assert!(output.status.success(), "{stderr}");
     let lines = lines(&output);
     assert_eq!(
-        lines[0], "seq,boot,uptime_ms,clock,family,model,event,details",
+        lines[0], "seq,boot,uptime_ms,clock,unit,family,model,event,details",
         "{lines:?}"
     );
     // Newest first: the unit's fault, then the board's reset; both of this boot, whose clock

@@ -49,7 +49,11 @@ impl<const N: usize> Pending<N> {
         let free = N - self.drafts.len();
         if self.dropped > 0 && free >= 2 {
             let lost = Draft {
-                stamp: draft.stamp,
+                // The lost entries may be about any unit: the count is the whole bridge's.
+                stamp: Stamp {
+                    unit: Unit::default(),
+                    ..draft.stamp
+                },
                 event: Event::EntriesDropped {
                     count: self.dropped,
                 },
@@ -90,11 +94,17 @@ impl<const N: usize> Pending<N> {
 mod tests {
     use super::*;
 
+    /// A link loss of the second unit on the line.
     fn draft(uptime_ms: u32) -> Draft {
         Draft {
             stamp: Stamp {
                 uptime_ms,
-                ..Stamp::default()
+                clock_at_boot: None,
+                unit: Unit {
+                    family: Some(crate::link::Family::Hpr),
+                    model: 9,
+                    line_index: 1,
+                },
             },
             event: Event::LinkLost,
         }
@@ -122,8 +132,12 @@ mod tests {
             &[
                 draft(2),
                 draft(3),
+                // The whole bridge's count: no unit's.
                 Draft {
-                    stamp: draft(101).stamp,
+                    stamp: Stamp {
+                        unit: Unit::default(),
+                        ..draft(101).stamp
+                    },
                     event: Event::EntriesDropped { count: 97 }
                 },
                 draft(101),
