@@ -390,24 +390,34 @@ fn the_history_says_which_unit_faulted() {
     world
         .wait_cnc_line("!FAULT", secs(2))
         .expect("unit 1's fault");
-    let entries = history(&mut world, 2);
-    let faults: Vec<(Option<&str>, Option<&str>)> = entries
+    // Unit 2's own interlock refuses its TORCH_ON: an I/O event of that unit's pin set.
+    let mark = world.cnc_lines().count();
+    world.set_torch_of(1, true);
+    let refused: Vec<&str> = world.cnc_lines().skip(mark).collect();
+    assert_eq!(refused, ["!START REFUSED reason=fault unit=2"]);
+    world.set_torch_of(1, false);
+    let entries = history(&mut world, 3);
+    let kept: Vec<(Option<&str>, Option<&str>)> = entries
         .iter()
         .map(|l| (field(l, "event"), field(l, "unit")))
         .collect();
     assert_eq!(
-        faults,
-        [(Some("FAULT"), None), (Some("FAULT"), Some("2"))],
+        kept,
+        [
+            (Some("START_REFUSED"), Some("2")),
+            (Some("FAULT"), None),
+            (Some("FAULT"), Some("2")),
+        ],
         "{entries:?}"
     );
-    // The unit's tag comes last, after the event's own fields (docs/cnc-protocol.md).
-    // docs/cnc-protocol.md section 10 quotes this line.
+    // The unit's tag comes last, after the event's own fields; docs/cnc-protocol.md
+    // (HISTORY, and section 10) quotes this line.
     assert!(
-        entries[1].ends_with(
+        entries[2].ends_with(
             " clock=- family=HPR model=HPR260 event=FAULT code=044 action=required unit=2"
         ),
         "{}",
-        entries[1]
+        entries[2]
     );
     assert_clean(&world);
 }
