@@ -362,10 +362,15 @@ fn history_line(row: &Row) -> Line<'static> {
         "FAULT" | "LINK_LOST" | "START_REFUSED" | "DROPPED" => Style::new().fg(Color::Red),
         _ => Style::new(),
     };
+    // The unit, beyond the first, as every other line about it says it.
+    let unit = match row.cell("unit") {
+        "1" => String::new(),
+        n => format!(" unit={n}"),
+    };
     Line::from(vec![
         Span::raw(format!("{when} ")),
         Span::styled(event, style),
-        Span::raw(format!(" {}", row.details())),
+        Span::raw(format!(" {}{unit}", row.details())),
     ])
 }
 
@@ -445,4 +450,36 @@ fn time_of_day(dash: &Dashboard, at: Duration) -> String {
         seconds / 60 % 60,
         seconds % 60
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn text(line: &Line<'_>) -> String {
+        line.spans.iter().map(|s| s.content.as_ref()).collect()
+    }
+
+    #[test]
+    fn a_history_line_names_its_unit_beyond_the_first() {
+        // As the bridge writes them (docs/cnc-protocol.md, HISTORY).
+        let second = Row::parse(
+            "HISTORY seq=0 boot=0 uptime_ms=3313 clock=- family=HPR model=HPR260 event=FAULT \
+             code=044 action=required unit=2",
+        )
+        .unwrap();
+        assert_eq!(
+            text(&history_line(&second)),
+            "boot 0 +3 s FAULT code=044 action=required unit=2"
+        );
+        let first = Row::parse(
+            "HISTORY seq=1 boot=0 uptime_ms=4313 clock=- family=HPR model=HPR260 event=FAULT \
+             code=044 action=required",
+        )
+        .unwrap();
+        assert_eq!(
+            text(&history_line(&first)),
+            "boot 0 +4 s FAULT code=044 action=required"
+        );
+    }
 }
