@@ -38,6 +38,7 @@ mod decimal;
 mod error;
 mod text_table;
 pub use error::{Error, Result};
+pub use text_table::{Pieces, Text};
 
 pub mod cnc;
 pub mod errata;

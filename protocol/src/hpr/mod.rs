@@ -25,7 +25,7 @@
 //! let frame = Frame::parse(b">002000355<")?;
 //! let reply = Reply::parse_for(&Request::GetState, &frame)?;
 //! assert_eq!(reply, Reply::State(StateCode(3)));
-//! assert_eq!(StateCode(3).hpr_name(), Some("IDLE2"));
+//! assert_eq!(StateCode(3).hpr_name().unwrap(), "IDLE2");
 //! # Ok::<(), plasma_protocol::Error>(())
 //! ```
 

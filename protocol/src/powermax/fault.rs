@@ -7,6 +7,7 @@ use core::fmt;
 use core::str::FromStr;
 
 use super::fault_table::{LEGACY_FAULT_TEXTS, LEGACY_FAULTS, SYNC_FAULT_TEXTS, SYNC_FAULTS};
+use crate::text_table::{Text, span};
 use crate::{Error, Result};
 
 /// A fault code as read from 0x301A, 0x3044-0x3047 (SYNC) or 0x2098 (legacy).
@@ -46,8 +47,8 @@ pub struct FaultInfo {
     /// The fault code (X-YY-Z as a number). Kept in the row rather than beside it: a
     /// `(code, row)` pair would take 16 bytes of flash per row instead of 12.
     pub code: u16,
-    /// The table's description.
-    pub text: &'static str,
+    /// The table's description (packed, see [`Text`]).
+    pub text: Text,
     /// The table's "Steps Required to Remove?" column.
     pub steps: StepsRequired,
     /// Models the row is restricted to.
@@ -84,13 +85,13 @@ impl FaultCode {
     pub fn info(self) -> Option<FaultInfo> {
         let row = SYNC_FAULTS.iter().position(|row| row.code == self.0)?;
         let found = SYNC_FAULTS.get(row)?;
-        let start = match row.checked_sub(1) {
-            Some(before) => SYNC_FAULTS.get(before)?.end,
-            None => 0,
-        };
         Some(FaultInfo {
             code: found.code,
-            text: SYNC_FAULT_TEXTS.get(usize::from(start)..usize::from(found.end))?,
+            text: span(
+                &SYNC_FAULT_TEXTS,
+                |row| SYNC_FAULTS.get(row).map(|r| r.end),
+                row,
+            )?,
             steps: found.steps,
             models: found.models,
         })
@@ -113,11 +114,11 @@ impl FaultCode {
 
     /// The description in the legacy Powermax65/85 fault list; 0 reads as "No fault" (the
     /// legacy list has no row for it, the value is the SYNC table's "no active fault").
-    pub fn legacy_info(self) -> Option<&'static str> {
+    pub fn legacy_info(self) -> Option<Text> {
         if self.is_none() {
-            return Some("No fault");
+            return Some(Text::plain("No fault"));
         }
-        crate::text_table::text_of(LEGACY_FAULT_TEXTS, &LEGACY_FAULTS, self.0)
+        crate::text_table::text_of(&LEGACY_FAULT_TEXTS, &LEGACY_FAULTS, self.0)
     }
 }
 
@@ -196,8 +197,8 @@ mod tests {
         // Legacy 0x2098 example: 0x006F = 111 = 0-11-1.
         assert_eq!(text(FaultCode(0x006F)).as_str(), "0-11-1");
         assert_eq!(
-            FaultCode(0x006F).legacy_info(),
-            Some("Current setting value is out of range")
+            FaultCode(0x006F).legacy_info().unwrap(),
+            "Current setting value is out of range"
         );
         assert_eq!(text(FaultCode::NONE).as_str(), "0-00-0");
         assert_eq!(text(FaultCode(3700)).as_str(), "3-70-0");
@@ -235,7 +236,7 @@ mod tests {
                 (info.code, info.steps, info.models),
                 (code, row.steps, row.models)
             );
-            assert!(info.text.is_ascii() && !info.text.is_empty());
+            assert!(info.text.bytes().all(|b| b.is_ascii()) && !info.text.is_empty());
         }
         assert_eq!(usize::from(SYNC_FAULTS[65].end), SYNC_FAULT_TEXTS.len());
         // First, a middle and the last text, whole.
@@ -287,22 +288,25 @@ mod tests {
             assert!(previous < Some(code), "{code}");
             previous = Some(code);
             let text = FaultCode(code).legacy_info().unwrap();
-            assert!(text.is_ascii() && !text.is_empty(), "{code}");
+            assert!(
+                text.bytes().all(|b| b.is_ascii()) && !text.is_empty(),
+                "{code}"
+            );
         }
         assert_eq!(usize::from(LEGACY_FAULTS[17].1), LEGACY_FAULT_TEXTS.len());
         assert_eq!(
-            FaultCode(110).legacy_info(),
-            Some("Invalid cut mode setting")
+            FaultCode(110).legacy_info().unwrap(),
+            "Invalid cut mode setting"
         );
         assert_eq!(
-            FaultCode(990).legacy_info(),
-            Some("System hardware fault - service required")
+            FaultCode(990).legacy_info().unwrap(),
+            "System hardware fault - service required"
         );
         assert_eq!(
-            FaultCode(610).legacy_info(),
-            Some("AC input unstable, shutdown")
+            FaultCode(610).legacy_info().unwrap(),
+            "AC input unstable, shutdown"
         );
-        assert_eq!(FaultCode(0).legacy_info(), Some("No fault"));
+        assert_eq!(FaultCode(0).legacy_info().unwrap(), "No fault");
         assert_eq!(FaultCode(199).legacy_info(), None);
     }
 
