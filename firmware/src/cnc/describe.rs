@@ -3,6 +3,7 @@
 
 use core::fmt::{self, Display, Write};
 
+use plasma_protocol::Text as TableText;
 use plasma_protocol::cnc::Mode;
 use plasma_protocol::hpr::StateCode;
 use plasma_protocol::powermax::{FaultCode, OperatingMode, StepsRequired, TorchKind};
@@ -121,7 +122,7 @@ impl Display for FaultId {
 }
 
 /// The manual's description of a Powermax fault for `family`.
-pub fn powermax_fault_text(code: FaultCode, family: Option<Family>) -> Option<&'static str> {
+pub fn powermax_fault_text(code: FaultCode, family: Option<Family>) -> Option<TableText> {
     let sync = code.info().map(|i| i.text);
     let legacy = code.legacy_info();
     match family {
@@ -130,22 +131,23 @@ pub fn powermax_fault_text(code: FaultCode, family: Option<Family>) -> Option<&'
     }
 }
 
-/// The manual's text for a fault (HPR: the error name).
-pub fn fault_text(fault: ActiveFault, family: Option<Family>) -> &'static str {
+/// The manual's text for a fault (HPR: the error name). The tables' texts are printable
+/// ASCII (their build checks it), so they go on a line as they are.
+pub fn fault_text(fault: ActiveFault, family: Option<Family>) -> TableText {
     match fault {
         ActiveFault::Powermax(code) => powermax_fault_text(code, family),
         ActiveFault::Hpr(code) => code.name(),
     }
-    .unwrap_or("unknown fault")
+    .unwrap_or(TableText::plain("unknown fault"))
 }
 
 /// The name of an HPR / MaxPro200 state for `family`.
-pub fn state_name(state: StateCode, family: Option<Family>) -> &'static str {
+pub fn state_name(state: StateCode, family: Option<Family>) -> TableText {
     match family {
         Some(Family::MaxPro200) => state.maxpro200_name(),
         _ => state.hpr_name(),
     }
-    .unwrap_or("unknown")
+    .unwrap_or(TableText::plain("unknown"))
 }
 
 /// Free text that cannot break a line: control and non-ASCII characters become `?`.

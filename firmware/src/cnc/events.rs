@@ -6,7 +6,7 @@ use core::fmt::{self, Write};
 use plasma_protocol::cnc::reply::ReplyWriter;
 
 use super::describe::{
-    ActionWord, FaultId, ModelName, OrDash, ProcessText, Text, Uid, family_word, fault_text,
+    ActionWord, FaultId, ModelName, OrDash, ProcessText, Uid, family_word, fault_text,
     interlock_word, on_off, process_failure_word, state_name, transaction_word,
 };
 use super::replies::complete;
@@ -124,7 +124,7 @@ fn write_link_event(l: &mut ReplyLine, event: &LinkEvent, status: &UnitStatus) -
             "!FAULT {} action={} text={}\r\n",
             FaultId(code),
             ActionWord(code),
-            Text(fault_text(code, family))
+            fault_text(code, family)
         ),
         LinkEvent::FaultCleared { code } => {
             let mut w = ReplyWriter::event(l, "FAULT")?;

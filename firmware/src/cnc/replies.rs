@@ -394,7 +394,7 @@ pub(super) fn fault(
                 "OK fault={} action={} text={}\r\n",
                 FaultId(fault),
                 ActionWord(fault),
-                Text(fault_text(fault, family))
+                fault_text(fault, family)
             )
         }),
     }

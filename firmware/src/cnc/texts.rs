@@ -9,6 +9,7 @@
 
 use core::fmt::{self, Display, Write};
 
+use plasma_protocol::Text as TableText;
 use plasma_protocol::cnc::reply::write_error;
 use plasma_protocol::cnc::{AMPS_ARGUMENT, Amps, ErrorCode, phoenix};
 use plasma_protocol::hpr::ErrorCode as HprError;
@@ -353,9 +354,11 @@ pub fn write_refusal<W: Write>(
             format_args!(
                 "not allowed in state {} ({}) with error {} ({})",
                 OrDash(state.map(|s| s.0)),
-                state.map_or("unknown", |s| state_name(s, family)),
+                state.map_or(TableText::plain("unknown"), |s| state_name(s, family)),
                 OrDash(error.map(HprCode)),
-                error.and_then(|e| e.name()).unwrap_or("unknown"),
+                error
+                    .and_then(|e| e.name())
+                    .unwrap_or(TableText::plain("unknown")),
             ),
         ),
         Refusal::RawMalformed(_)
@@ -475,7 +478,7 @@ pub fn write_failure<W: Write>(
             ErrorCode::Refused,
             format_args!(
                 "the unit rejected the settings with fault {fault} ({})",
-                powermax_fault_text(*fault, family).unwrap_or("unknown fault")
+                powermax_fault_text(*fault, family).unwrap_or(TableText::plain("unknown fault"))
             ),
         ),
         CommandFailure::Process(ProcessFailure::OutsideLimits) => write_error(
