@@ -241,12 +241,12 @@ fn describe_reply(reply: &Reply<'_>, report: &mut FrameReport) {
         Reply::PsInfo(info) => {
             pressures(&info.pressures, report);
             report.field("current setpoint", info.current_setpoint, Some("A"));
-            let name = info.state.hpr_name().unwrap_or("not in the HPR state table");
+            let name = info.state.hpr_name().map_or("not in the HPR state table".into(), |n| n.to_string());
             report.field("state", format!("{} {name}", info.state.0), None);
             error_code(info.error, report);
         }
         Reply::MaxProPsInfo(info) => {
-            let name = info.state.maxpro200_name().unwrap_or("not in the MaxPro200 state table");
+            let name = info.state.maxpro200_name().map_or("not in the MaxPro200 state table".into(), |n| n.to_string());
             report.field("state", format!("{} {name}", info.state.0), None);
             error_code(info.error, report);
             report.field("plasma gas", gas_name(info.plasma_gas), None);
@@ -438,8 +438,8 @@ fn mfg_data2(d: &MfgData2, report: &mut FrameReport) {
 }
 
 fn state_field(name: &str, state: StateCode, report: &mut FrameReport) {
-    let hpr = state.hpr_name().unwrap_or("-");
-    let maxpro = state.maxpro200_name().unwrap_or("-");
+    let hpr = state.hpr_name().map_or("-".into(), |n| n.to_string());
+    let maxpro = state.maxpro200_name().map_or("-".into(), |n| n.to_string());
     report.field(
         name,
         format!("{} (HPR: {hpr}; MaxPro200: {maxpro})", state.0),
@@ -452,7 +452,7 @@ fn error_code(code: ErrorCode, report: &mut FrameReport) {
         (Some(name), Some(description)) if !description.is_empty() => {
             Some(format!("{name}: {description}"))
         }
-        (Some(name), _) => Some(name.to_owned()),
+        (Some(name), _) => Some(name.to_string()),
         _ => None,
     };
     report.faults.push(Fault {

@@ -140,8 +140,8 @@ fn fault(address: u16, raw: u16) -> Fault {
     let code = FaultCode(raw);
     let sync_row = code.info();
     let text = match (is_legacy(address), sync_row, code.legacy_info()) {
-        (true, _, Some(text)) | (false, None, Some(text)) => Some(text.to_owned()),
-        (_, Some(info), _) => Some(info.text.to_owned()),
+        (true, _, Some(text)) | (false, None, Some(text)) => Some(text.to_string()),
+        (_, Some(info), _) => Some(info.text.to_string()),
         (_, None, None) => None,
     };
     // The steps the bridge goes by: the SYNC row's, or the crate's documented choice for a
