@@ -10,6 +10,7 @@ use plasma_firmware::io::IoEvent;
 use plasma_firmware::link::{ActiveFault, Model};
 use plasma_firmware::platform::runner::PortError;
 use plasma_firmware::platform::supervisor::TurnError;
+use plasma_protocol::Text;
 use plasma_protocol::hpr::SystemId;
 use plasma_protocol::serial::PortConfig;
 
@@ -44,9 +45,9 @@ impl Format for FaultName {
             ActiveFault::Powermax(code) => write!(f, "{}", Display2Format(&code)),
             ActiveFault::Hpr(code) => write!(
                 f,
-                "error {=u16:03} {=str}",
+                "error {=u16:03} {}",
                 code.0,
-                code.name().unwrap_or("(not in the manual)")
+                code.name().unwrap_or(Text::plain("(not in the manual)"))
             ),
         }
     }
