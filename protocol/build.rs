@@ -98,20 +98,16 @@ fn main() {
 
     let mut out = String::new();
     out.push_str("// Written by build.rs from the tables' rows; see text_table.rs.\n\n");
-    let entries: Vec<u8> = dictionary.concat();
+    let entries: Vec<u8> = dictionary
+        .iter()
+        .flat_map(|entry| entry.iter().chain(b"\0"))
+        .copied()
+        .collect();
     let _ = writeln!(
         out,
-        "/// The dictionary entries back to back (byte 0x80 + i names entry i).\n\
+        "/// The dictionary entries, each ended by a NUL (byte 0x80 + i names entry i).\n\
          pub(crate) static DICTIONARY: &str = \"{}\";",
         escape(&entries)
-    );
-    let ends = running_ends(dictionary.iter().map(Vec::len));
-    let _ = writeln!(
-        out,
-        "/// The end of each entry in [`DICTIONARY`].\n\
-         pub(crate) static DICTIONARY_ENDS: [u16; {}] = {:?};",
-        ends.len(),
-        ends
     );
     let mut packed_texts = texts.into_iter();
     for (name, table) in TABLES {

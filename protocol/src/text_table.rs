@@ -78,15 +78,20 @@ impl Iterator for Pieces {
     }
 }
 
-/// Dictionary entry `index`.
+/// Dictionary entry `index`: the text before its NUL.
 fn dictionary_entry(index: u8) -> Option<&'static str> {
-    let index = usize::from(index);
-    let end = *DICTIONARY_ENDS.get(index)?;
-    let start = match index.checked_sub(1) {
-        Some(before) => *DICTIONARY_ENDS.get(before)?,
-        None => 0,
-    };
-    DICTIONARY.get(usize::from(start)..usize::from(end))
+    let mut start = 0;
+    let mut entry = 0;
+    for (at, &byte) in DICTIONARY.as_bytes().iter().enumerate() {
+        if byte == 0 {
+            if entry == usize::from(index) {
+                return DICTIONARY.get(start..at);
+            }
+            entry += 1;
+            start = at + 1;
+        }
+    }
+    None
 }
 
 impl fmt::Display for Text {
@@ -206,6 +211,12 @@ mod tests {
         );
         assert_eq!(std::format!("{text:?}"), std::format!("{expected:?}"));
         assert!(text == expected.as_str() && text != "<");
+        // A code past the dictionary (none is written) ends the text rather than panic.
+        assert_eq!(
+            dictionary_entry(0xFF - 0x80).is_some(),
+            DICTIONARY.matches('\0').count() == 0x80
+        );
+        assert_eq!(dictionary_entry(200), None);
     }
 
     #[test]
@@ -224,8 +235,7 @@ mod tests {
             + LEGACY_FAULT_TEXTS.len()
             + ERROR_NAME_TEXTS.len()
             + STATE_NAME_TEXTS.len()
-            + DICTIONARY.len()
-            + 2 * DICTIONARY_ENDS.len();
+            + DICTIONARY.len();
         assert!(
             packed * 10 < plain * 6,
             "packed {packed} B, plain {plain} B"

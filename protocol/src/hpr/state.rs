@@ -102,7 +102,11 @@ fn names(code: u16) -> (Option<Text>, Option<Text>) {
     let cell = |cell: usize| {
         let ends = |cell: usize| {
             let &(_, maxpro200, hpr) = NAME_ENDS.get(cell / 2)?;
-            Some(if cell.is_multiple_of(2) { maxpro200 } else { hpr })
+            Some(if cell.is_multiple_of(2) {
+                maxpro200
+            } else {
+                hpr
+            })
         };
         crate::text_table::span(&crate::text_table::STATE_NAME_TEXTS, ends, cell)
             .filter(|name| !name.is_empty())
