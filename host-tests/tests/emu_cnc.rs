@@ -13,6 +13,7 @@ use common::emu::{
 };
 use host_tests::emu::{Board, BoardOptions};
 use plasma_firmware::io::{Input, Interlock, IoEvent, Output};
+use plasma_protocol::hpr::ErrorCode as HprError;
 use plasma_protocol::serial::{DataBits, Parity, PortConfig, StopBits};
 use plasma_sim::Model;
 use plasma_sim::powermax::Powermax;
@@ -253,6 +254,30 @@ fn a_fault_raised_by_the_unit_reaches_the_cnc_and_holds_start_off() {
     expect_output(&board, Output::Start, false, EDGE);
     event(&mut board, mark, "!START DROPPED reason=fault", EDGE);
     set(&board, Input::TorchOn, false);
+}
+
+/// An HPR error's name (a packed table row) reaches the board's log through its
+/// `defmt::Format` and the CNC through its `Display`: both say the table's row as written.
+#[test]
+fn an_hpr_errors_name_reaches_the_log_and_the_cnc_as_the_table_writes_it() {
+    let mut board = ready_board(Model::Hpr260);
+    assert_eq!(command(&mut board, "EVENTS ON"), "OK events=ON");
+    let name = HprError(134)
+        .name()
+        .expect("134 is in the table")
+        .to_string();
+    assert_eq!(name, "CHOPPER 1 OVERCURRENT");
+    let mark = events_mark(&mut board);
+    let log_mark = board.log().len();
+    board.sim().inject_fault(134).unwrap();
+    let raised = event(&mut board, mark, "!FAULT 134", LINK_EVENT);
+    assert_eq!(raised, format!("!FAULT 134 action=required text={name}"));
+    let fault_line = format!("power supply fault error 134 {name} (action required)");
+    logged(&board, log_mark, &fault_line, |l| l == fault_line);
+    assert_eq!(
+        command(&mut board, "FAULT"),
+        format!("OK fault=134 action=required text={name}")
+    );
 }
 
 #[test]
