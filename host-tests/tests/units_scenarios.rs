@@ -421,3 +421,74 @@ fn the_history_says_which_unit_faulted() {
     );
     assert_clean(&world);
 }
+
+/// One cut of unit `unit` at its own TORCH_ON: until its MOTION is on, then off again.
+fn cut_of(world: &mut World<BridgeEndpoint>, unit: usize) {
+    wait_ready(world, unit);
+    world.set_torch_of(unit, true);
+    world
+        .run_until(|w| w.io_of(unit).inputs().motion, secs(3))
+        .unwrap_or_else(|t| panic!("unit {} never transferred: {t}", unit + 1));
+    world.run_for(Duration::from_millis(500));
+    world.set_torch_of(unit, false);
+    world
+        .run_until(|w| !w.io_of(unit).inputs().motion, secs(3))
+        .expect("arc off");
+    // The interlocks' gap between two starts.
+    world.run_for(secs(1));
+}
+
+fn starts_of(reply: &str) -> u32 {
+    field(reply, "starts")
+        .and_then(|v| v.parse().ok())
+        .unwrap_or_else(|| panic!("no starts in {reply}"))
+}
+
+/// Each unit wears its own consumables: unit 2's cuts count for unit 2 alone (`@2
+/// CONSUMABLES`), unit 1's for unit 1, and a bridge started from the first one's flash image
+/// has both records back.
+#[test]
+fn each_unit_counts_its_own_consumables_and_keeps_them_in_flash() {
+    let models = [Model::Hpr260, Model::Hpr130];
+    let mut world = line(&models);
+    for _ in 0..3 {
+        cut_of(&mut world, 1);
+    }
+    let second = world.cnc_line("@2 CONSUMABLES");
+    assert_eq!(starts_of(&second), 3, "{second}");
+    assert_eq!(field(&second, "unit"), Some("2"), "{second}");
+    let first = world.cnc_line("CONSUMABLES");
+    assert_eq!(starts_of(&first), 0, "{first}");
+    cut_of(&mut world, 0);
+    assert_eq!(starts_of(&world.cnc_line("CONSUMABLES")), 1);
+    assert_eq!(starts_of(&world.cnc_line("@2 CONSUMABLES")), 3);
+    // The units named are kept too, so that the restarted bridge drives both.
+    assert_eq!(world.cnc_line("CONFIG SAVE"), "OK config=saved");
+    // Each record is saved at most once a minute after its first save.
+    world
+        .run_until(
+            |w| {
+                let saved = |unit| w.endpoint().saved_consumables(unit).map(|s| s.starts);
+                saved(0) == Some(1) && saved(1) == Some(3)
+            },
+            secs(70),
+        )
+        .expect("both records saved");
+    let image = world.endpoint_mut().flash_image();
+    assert_clean(&world);
+
+    let mut restarted = line(&models);
+    restarted
+        .endpoint_mut()
+        .load_flash_image(&image)
+        .expect("the image loads");
+    restarted.power_cycle_bridge();
+    restarted
+        .wait_units_up(secs(10))
+        .expect("both units after the restart");
+    assert_eq!(restarted.bridge().unit_count(), 2);
+    assert_eq!(starts_of(&restarted.cnc_line("CONSUMABLES")), 1);
+    let second = restarted.cnc_line("@2 CONSUMABLES");
+    assert_eq!(starts_of(&second), 3, "{second}");
+    assert_clean(&restarted);
+}

@@ -20,6 +20,8 @@
 
 mod record;
 
+pub use record::RECORD_LEN;
+
 use plasma_protocol::powermax::FaultCode;
 use plasma_protocol::powermax::sync::Cartridge;
 use plasma_protocol::time::{Duration, Instant};

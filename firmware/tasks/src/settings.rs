@@ -13,11 +13,14 @@ use embassy_sync::signal::Signal;
 use embassy_time::Timer;
 use plasma_firmware::bridge::SaveRequest;
 use plasma_firmware::consumables::ConsumableSet;
+use plasma_firmware::link::MAX_UNITS;
 use plasma_firmware::platform::supervisor::SettingsSaver;
 use plasma_firmware::platform::watchdog::TaskId;
 use plasma_firmware::settings::{SaveError, Settings};
 use plasma_firmware::storage::verified::VerifiedFlash;
-use plasma_firmware::storage::{CONSUMABLES_KEY, LoadOutcome, LoadedSettings, SettingsStore};
+use plasma_firmware::storage::{
+    CONSUMABLES_KEYS, LoadOutcome, LoadedSettings, SettingsStore, StoreError,
+};
 
 use crate::Board;
 use crate::progress::report;
@@ -70,14 +73,23 @@ pub async fn load<B: Board>(store: Option<&mut Store<B>>) -> LoadedSettings<Sett
     loaded
 }
 
-/// Loads the consumable record at boot (`None` when none was kept: the bridge starts a new
-/// set; a damaged one is logged).
-pub async fn load_consumables<B: Board>(store: Option<&mut Store<B>>) -> Option<ConsumableSet> {
-    let loaded = store?.load_record::<ConsumableSet>(CONSUMABLES_KEY).await;
-    if loaded.outcome.is_problem() {
-        warn!("consumable record: {}", loaded.outcome);
+/// Loads each unit's consumable record at boot (`None` when none was kept: the unit starts
+/// a new set; a damaged one is logged).
+pub async fn load_consumables<B: Board>(
+    store: Option<&mut Store<B>>,
+) -> [Option<ConsumableSet>; MAX_UNITS] {
+    let mut sets = [None; MAX_UNITS];
+    let Some(store) = store else {
+        return sets;
+    };
+    for (set, key) in sets.iter_mut().zip(CONSUMABLES_KEYS) {
+        let loaded = store.load_record::<ConsumableSet>(key).await;
+        if loaded.outcome.is_problem() {
+            warn!("consumable record {}: {}", key, loaded.outcome);
+        }
+        *set = (!loaded.outcome.is_defaults()).then_some(loaded.settings);
     }
-    (!loaded.outcome.is_defaults()).then_some(loaded.settings)
+    sets
 }
 
 /// The loaded settings as this boot runs them ([`Settings::at_boot`]): with the user button
@@ -125,8 +137,8 @@ impl SettingsSaver<SaveRequest, SaveError> for BoardSaver {
     }
 }
 
-/// Writes settings to flash when the bridge asks (`CONFIG SAVE`), and the consumable record
-/// when it is due. The body of the board's settings task.
+/// Writes settings to flash when the bridge asks (`CONFIG SAVE`), and a unit's consumable
+/// record when it is due. The body of the board's settings task.
 pub async fn run<B: Board>(mut store: Option<Store<B>>, progress: TaskId) {
     loop {
         let request = select(SAVE_REQUEST.wait(), Timer::after_millis(250)).await;
@@ -136,12 +148,15 @@ pub async fn run<B: Board>(mut store: Option<Store<B>>, progress: TaskId) {
         };
         let what = match request {
             SaveRequest::Settings(_) => "settings",
-            SaveRequest::Consumables(_) => "consumable record",
+            SaveRequest::Consumables { .. } => "consumable record",
         };
         let result = match store.as_mut() {
             Some(store) => match request {
                 SaveRequest::Settings(settings) => store.save_settings(&settings).await,
-                SaveRequest::Consumables(set) => store.save_record(CONSUMABLES_KEY, &set).await,
+                SaveRequest::Consumables { unit, set } => match CONSUMABLES_KEYS.get(unit) {
+                    Some(&key) => store.save_record(key, &set).await,
+                    None => Err(StoreError::Internal),
+                },
             }
             .map_err(SaveError::from),
             None => Err(SaveError::Flash),

@@ -189,9 +189,7 @@ mod image {
 
         let bridge = BRIDGE.init_with(|| Bridge::new(settings, now()));
         bridge.set_boot_report(now(), boot_text(&boot, loaded.outcome));
-        if let Some(set) = consumables {
-            bridge.restore_consumables(set);
-        }
+        bridge.restore_consumables(consumables);
         bridge.record_reset(now(), boot.cause);
         start_tasks(
             spawner,
