@@ -319,14 +319,12 @@ impl Bridge {
 
     // --- persistence --------------------------------------------------------------------
 
-    /// Each unit's consumable record kept in flash (under its key of
+    /// Unit `unit`'s consumable record kept in flash (under its key of
     /// [`CONSUMABLES_KEYS`](crate::storage::CONSUMABLES_KEYS)), once at boot, whether or not
-    /// the unit is named now; a unit without one (`None`) starts a new set.
-    pub fn restore_consumables(&mut self, sets: [Option<ConsumableSet>; MAX_UNITS]) {
-        for (consumables, set) in self.consumables.iter_mut().zip(sets) {
-            if let Some(set) = set {
-                consumables.restore(set);
-            }
+    /// the unit is named now; a unit without one starts a new set.
+    pub fn restore_consumables(&mut self, unit: usize, set: ConsumableSet) {
+        if let Some(consumables) = self.consumables.get_mut(unit) {
+            consumables.restore(set);
         }
     }
 

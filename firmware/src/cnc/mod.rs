@@ -130,12 +130,14 @@ impl Context<'_> {
 
     /// The consumable set of the unit this call is about (the first unit's for an index out
     /// of range, as [`Context::link`]).
+    #[inline(never)]
     pub fn consumables(&self) -> &crate::consumables::Consumables {
         let [first, others @ ..] = &*self.consumables;
         others.get(self.unit.wrapping_sub(1)).unwrap_or(first)
     }
 
     /// [`Context::consumables`], to count and change.
+    #[inline(never)]
     pub fn consumables_mut(&mut self) -> &mut crate::consumables::Consumables {
         let [first, others @ ..] = &mut *self.consumables;
         others.get_mut(self.unit.wrapping_sub(1)).unwrap_or(first)

@@ -248,7 +248,11 @@ impl Rig {
         let flash = core::mem::replace(&mut self.history, new_history(RamFlash::new()));
         self.history = new_history(flash.into_flash());
         self.bridge = Bridge::new(settings, self.now);
-        self.bridge.restore_consumables(self.saved_consumables);
+        for (unit, set) in self.saved_consumables.into_iter().enumerate() {
+            if let Some(set) = set {
+                self.bridge.restore_consumables(unit, set);
+            }
+        }
         self.bridge.record_reset(self.now, cause);
     }
 

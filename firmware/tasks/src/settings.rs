@@ -11,9 +11,8 @@ use embassy_futures::select::{Either, select};
 use embassy_sync::blocking_mutex::raw::CriticalSectionRawMutex;
 use embassy_sync::signal::Signal;
 use embassy_time::Timer;
-use plasma_firmware::bridge::SaveRequest;
+use plasma_firmware::bridge::{Bridge, SaveRequest};
 use plasma_firmware::consumables::ConsumableSet;
-use plasma_firmware::link::MAX_UNITS;
 use plasma_firmware::platform::supervisor::SettingsSaver;
 use plasma_firmware::platform::watchdog::TaskId;
 use plasma_firmware::settings::{SaveError, Settings};
@@ -73,23 +72,21 @@ pub async fn load<B: Board>(store: Option<&mut Store<B>>) -> LoadedSettings<Sett
     loaded
 }
 
-/// Loads each unit's consumable record at boot (`None` when none was kept: the unit starts
-/// a new set; a damaged one is logged).
-pub async fn load_consumables<B: Board>(
-    store: Option<&mut Store<B>>,
-) -> [Option<ConsumableSet>; MAX_UNITS] {
-    let mut sets = [None; MAX_UNITS];
+/// Gives the bridge each unit's consumable record kept in flash, at boot (a unit without one
+/// starts a new set; a damaged one is logged).
+pub async fn restore_consumables<B: Board>(store: Option<&mut Store<B>>, bridge: &mut Bridge) {
     let Some(store) = store else {
-        return sets;
+        return;
     };
-    for (set, key) in sets.iter_mut().zip(CONSUMABLES_KEYS) {
+    for (unit, key) in CONSUMABLES_KEYS.into_iter().enumerate() {
         let loaded = store.load_record::<ConsumableSet>(key).await;
         if loaded.outcome.is_problem() {
             warn!("consumable record {}: {}", key, loaded.outcome);
         }
-        *set = (!loaded.outcome.is_defaults()).then_some(loaded.settings);
+        if !loaded.outcome.is_defaults() {
+            bridge.restore_consumables(unit, loaded.settings);
+        }
     }
-    sets
 }
 
 /// The loaded settings as this boot runs them ([`Settings::at_boot`]): with the user button

@@ -321,7 +321,11 @@ impl BridgeEndpoint {
         let flash = std::mem::replace(&mut self.history, open_history(HistoryFlash::new()));
         self.history = open_history(flash.into_flash());
         self.bridge = Bridge::new(settings, now);
-        self.bridge.restore_consumables(self.stored_consumables);
+        for (unit, set) in self.stored_consumables.into_iter().enumerate() {
+            if let Some(set) = set {
+                self.bridge.restore_consumables(unit, set);
+            }
+        }
         self.bridge.record_reset(now, ResetCause::PowerOn);
         if self.sim_commands {
             self.bridge.enable_sim_commands();

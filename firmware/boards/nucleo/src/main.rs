@@ -167,7 +167,6 @@ mod image {
 
         let (mut store, history) = flash::open(embassy_stm32::flash::Flash::new(p.FLASH, Irqs));
         let loaded = shared_settings::load::<Nucleo>(store.as_mut()).await;
-        let consumables = shared_settings::load_consumables::<Nucleo>(store.as_mut()).await;
         let settings = shared_settings::at_boot(loaded.settings, user_button_held());
         // The pulls belong to the board's input circuit (the pin table's polarity), not to
         // the level the CNC's wiring settings call active (docs/board.md, the CNC's wiring).
@@ -202,7 +201,7 @@ mod image {
 
         let bridge = BRIDGE.init_with(|| Bridge::new(settings, now()));
         bridge.set_boot_report(now(), boot_text(&boot, loaded.outcome));
-        bridge.restore_consumables(consumables);
+        shared_settings::restore_consumables::<Nucleo>(store.as_mut(), bridge).await;
         bridge.record_reset(now(), boot.cause);
         start_tasks(
             spawner,
