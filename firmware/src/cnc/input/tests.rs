@@ -528,12 +528,17 @@ fn each_unit_keeps_its_own_consumable_record() {
             .starts_with("OK source=bridge starts=0 ")
     );
 
-    // `@2 CONSUMABLES NEW`: unit 2's set alone.
+    // `@2 CONSUMABLES NEW`: unit 2's set alone, its history entry unit 2's.
     assert!(
         rig.cmd("@2 CONSUMABLES NEW")
             .starts_with("OK source=bridge starts=0 ")
     );
     rig.run(100);
+    let tokens = rig.send_bytes(b"HISTORY 1\r\n", 1);
+    assert!(
+        tokens[0].ends_with(" event=CONSUMABLES_CHANGED unit=2"),
+        "{tokens:?}"
+    );
     assert_eq!(rig.saved_consumables[1].map(|s| s.starts), Some(0));
 
     // A unit removed keeps its record until a unit is named in its place again.
