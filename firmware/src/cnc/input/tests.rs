@@ -541,20 +541,25 @@ fn each_unit_keeps_its_own_consumable_record() {
     );
     assert_eq!(rig.saved_consumables[1].map(|s| s.starts), Some(0));
 
-    // A unit removed keeps its record until a unit is named in its place again.
+    // A unit removed keeps its record until a unit is named in its place again; an arc it
+    // had burning ends with it (its arc off never reaches the record).
     rig.bridge
         .on_io_event_of(1, rig.now, IoEvent::TransferTimeout);
+    rig.bridge.on_io_event_of(1, rig.now, IoEvent::ArcOn);
+    rig.run(1500);
     assert!(rig.cmd("CONFIG units HPR:0").starts_with("OK units=HPR:0 "));
     rig.run(2000);
     assert!(
         rig.cmd("CONFIG units HPR:0,HPR:1")
             .starts_with("OK units=HPR:0,HPR:1 ")
     );
-    rig.run(3000);
+    rig.run(60_000);
+    let reply = rig.cmd("@2 CONSUMABLES");
     assert!(
-        rig.cmd("@2 CONSUMABLES")
-            .starts_with("OK source=bridge starts=1 ")
+        reply.starts_with("OK source=bridge starts=2 arc_s=1 "),
+        "{reply}"
     );
+    assert_eq!(rig.saved_consumables[1].map(|s| s.arc_ms), Some(1500));
 }
 
 #[test]
