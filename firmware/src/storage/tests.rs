@@ -592,3 +592,13 @@ fn power_cut_at_every_step_of_a_unit_save_keeps_the_other_records() {
         base = s.into_flash();
     }
 }
+
+/// A board that upgrades keeps its count: unit 1's record is under the key the one record of a
+/// bridge from before several units was (2), and no two keys are the same.
+#[test]
+fn unit_1s_record_keeps_the_key_of_the_one_record_before_units() {
+    assert_eq!(CONSUMABLES_KEYS[0], 2);
+    for (i, key) in KEYS.iter().enumerate() {
+        assert!(!KEYS[i + 1..].contains(key), "key {key} twice");
+    }
+}
