@@ -157,7 +157,8 @@ fn best_phrase(texts: &[Vec<Piece>]) -> Option<Vec<u8>> {
             }
         }
     }
-    // Each use saves all but one byte; the entry costs its bytes and a 2-byte end.
+    // Each use saves all but one byte; the entry costs its bytes and its NUL end, reckoned
+    // at two bytes (one of margin).
     let saving =
         |phrase: &[u8], count: usize| (count * (phrase.len() - 1)) as i64 - phrase.len() as i64 - 2;
     counts
