@@ -16,9 +16,8 @@
 //!   [`Bridge::ps_port_config`]);
 //! - bytes from the CNC → [`Bridge::handle_cnc_rx`]; bytes for it ← [`Bridge::poll_cnc_output`];
 //! - [`Bridge::poll`] no later than [`Bridge::poll_at`];
-//! - after `CONFIG SAVE`, and when a unit's consumable record is due:
-//!   [`Bridge::take_save_request`], store, [`Bridge::save_finished`] (at boot,
-//!   [`Bridge::restore_consumables`] for each unit's record);
+//! - after `CONFIG SAVE`, and when the consumable record is due: [`Bridge::take_save_request`],
+//!   store, [`Bridge::save_finished`] (at boot, [`Bridge::restore_consumables`]);
 //! - the history: write every [`Bridge::take_history_draft`] in the background; after
 //!   `HISTORY`: [`Bridge::take_history_request`], read or erase,
 //!   [`Bridge::history_finished`] (both with [`serve`](crate::storage::history::serve) and its store);
@@ -67,11 +66,9 @@ pub struct Bridge {
     io: [Option<(Inputs, Outputs)>; MAX_UNITS],
     boot_report: Option<&'static str>,
     history: HistoryLog,
-    /// Each unit's consumable record (by place on the line: a unit removed by `CONFIG units`
-    /// leaves its record to the next unit named in its place).
-    consumables: [Consumables; MAX_UNITS],
-    /// The save under way is this unit's consumable record.
-    saving_consumables: Option<usize>,
+    consumables: Consumables,
+    /// The save under way is the consumable record's.
+    saving_consumables: bool,
     now: Instant,
 }
 
@@ -81,14 +78,8 @@ pub struct Bridge {
 pub enum SaveRequest {
     /// The settings, under [`SETTINGS_KEY`](crate::storage::SETTINGS_KEY) (`CONFIG SAVE`).
     Settings(Settings),
-    /// Unit `unit`'s consumable record (0 = the first unit), under its key of
-    /// [`CONSUMABLES_KEYS`](crate::storage::CONSUMABLES_KEYS).
-    Consumables {
-        /// The unit whose record it is.
-        unit: usize,
-        /// The record.
-        set: ConsumableSet,
-    },
+    /// The consumable record, under [`CONSUMABLES_KEY`](crate::storage::CONSUMABLES_KEY).
+    Consumables(ConsumableSet),
 }
 
 /// A [`Context`] of `$bridge` at `$now` about `$unit` (the first unit by default; a macro, so
@@ -133,8 +124,8 @@ impl Bridge {
             io: [None; MAX_UNITS],
             boot_report: None,
             history: HistoryLog::default(),
-            consumables: Default::default(),
-            saving_consumables: None,
+            consumables: Consumables::default(),
+            saving_consumables: false,
             now,
         }
     }
@@ -319,38 +310,30 @@ impl Bridge {
 
     // --- persistence --------------------------------------------------------------------
 
-    /// Unit `unit`'s consumable record kept in flash (under its key of
-    /// [`CONSUMABLES_KEYS`](crate::storage::CONSUMABLES_KEYS)), once at boot, whether or not
-    /// the unit is named now; a unit without one starts a new set.
-    pub fn restore_consumables(&mut self, unit: usize, set: ConsumableSet) {
-        if let Some(consumables) = self.consumables.get_mut(unit) {
-            consumables.restore(set);
-        }
+    /// The consumable record kept in flash ([`CONSUMABLES_KEY`](crate::storage::CONSUMABLES_KEY)),
+    /// once at boot; without one the bridge starts a new set.
+    pub fn restore_consumables(&mut self, set: ConsumableSet) {
+        self.consumables.restore(set);
     }
 
-    /// What to store now (once each): the settings after `CONFIG SAVE`, or a unit's consumable
+    /// What to store now (once each): the settings after `CONFIG SAVE`, or the consumable
     /// record when it is due ([`crate::consumables`] says how often). The board writes it to
     /// flash and calls [`Bridge::save_finished`] before it asks again.
     pub fn take_save_request(&mut self) -> Option<SaveRequest> {
         if self.session.take_save_request() {
             return Some(SaveRequest::Settings(self.settings));
         }
-        let now = self.now;
-        let (unit, set) = self
-            .consumables
-            .iter_mut()
-            .enumerate()
-            .find_map(|(unit, c)| Some((unit, c.take_save(now)?)))?;
-        self.saving_consumables = Some(unit);
-        Some(SaveRequest::Consumables { unit, set })
+        let set = self.consumables.take_save(self.now)?;
+        self.saving_consumables = true;
+        Some(SaveRequest::Consumables(set))
     }
 
     /// The store finished: answers `CONFIG SAVE` (`OK config=saved` or `ERR STORAGE ...`); a
     /// consumable record that was not stored is offered again later.
     pub fn save_finished(&mut self, now: Instant, result: Result<(), SaveError>) {
-        if let Some(unit) = self.saving_consumables.take() {
-            if let (Some(consumables), Err(_)) = (self.consumables.get_mut(unit), result) {
-                consumables.save_failed();
+        if core::mem::take(&mut self.saving_consumables) {
+            if result.is_err() {
+                self.consumables.save_failed();
             }
             return;
         }

@@ -478,7 +478,7 @@ impl Board {
                 self.bridge.save_finished(now, result);
                 self.drain_cnc_output();
             }
-            Some(SaveRequest::Consumables { set, .. }) => {
+            Some(SaveRequest::Consumables(set)) => {
                 let mut payload = [0u8; MAX_PAYLOAD];
                 let len = set.encode(&mut payload);
                 assert_eq!(

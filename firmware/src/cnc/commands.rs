@@ -274,12 +274,6 @@ impl Session {
             // Other units on the line: every link starts afresh, the kept process goes to
             // the first unit as at power-up.
             super::units::restart_units(ctx.units, ctx.settings, ctx.now);
-            // A unit removed keeps its consumable record for the unit named in its place; an
-            // arc it had burning ends there (its I/O events no longer reach the record).
-            let now = ctx.now;
-            for record in ctx.consumables.iter_mut().skip(ctx.units.count()) {
-                record.arc_off(now);
-            }
         } else if before.link != ctx.settings.link {
             ctx.units.reconfigure(ctx.now, ctx.settings.link);
         }

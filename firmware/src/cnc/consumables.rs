@@ -1,14 +1,15 @@
-//! Consumable life as the session sees it, one record per unit: `[@N ]CONSUMABLES [NEW]`,
-//! the `!WARN CONSUMABLE` events, STATUS's `consumables=` field, and what of each unit's
-//! link and discrete-I/O events its record ([`crate::consumables`]) counts. The limits are
-//! the table's, one pair for every unit.
+//! Consumable life as the session sees it: `CONSUMABLES [NEW]`, the `!WARN CONSUMABLE`
+//! events, STATUS's `consumables=` field, and what of the link's and the I/O's events the
+//! record ([`crate::consumables`]) counts.
 
 use core::fmt::Write as _;
 
 use plasma_protocol::cnc::ConsumablesCommand;
 use plasma_protocol::cnc::reply::ReplyWriter;
 
-use super::{Context, ReplyLine, Session, ok_line};
+use plasma_protocol::cnc::ErrorCode;
+
+use super::{Context, ReplyLine, Session, err_line, ok_line, texts};
 use crate::consumables::{Source, Usage};
 use crate::io::IoEvent;
 use crate::link::{ActiveFault, Family, LinkEvent};
@@ -18,42 +19,51 @@ use crate::storage::history::Event;
 /// 000_dd931256418ae627.txt line 1431), not a cartridge of its own.
 const UNREADABLE_UID: [u8; 16] = [0; 16];
 
-/// The counts of the unit's set in use now: a SYNC's cartridge, else the bridge's.
+/// The counts of the set in use now: a SYNC's cartridge, else the bridge's.
 pub(super) fn usage(ctx: &Context<'_>) -> Usage {
     let status = ctx.link().status();
     let cartridge = status
         .cartridge
         .as_ref()
         .filter(|c| status.family == Some(Family::PowermaxSync) && c.uid.0 != UNREADABLE_UID);
-    ctx.consumables().usage(ctx.now, cartridge)
+    ctx.consumables.usage(ctx.now, cartridge)
 }
 
-/// The unit's share of life used, percent, for STATUS (`None`: both limits OFF).
+/// The share of life used, percent, for STATUS (`None`: both limits OFF, or a unit beyond
+/// the first, whose consumables the bridge does not follow).
 pub(super) fn used_percent(ctx: &Context<'_>) -> Option<u32> {
+    if ctx.unit != 0 {
+        return None;
+    }
     usage(ctx).used_percent(ctx.settings.consumable_limits)
 }
 
-/// What of a unit's I/O event its record counts.
+/// What of an I/O event the record counts (the first unit's).
 pub(super) fn note_io_event(ctx: &mut Context<'_>, event: IoEvent) {
-    let now = ctx.now;
-    let c = ctx.consumables_mut();
+    if ctx.unit != 0 {
+        return;
+    }
+    let c = &mut *ctx.consumables;
     match event {
-        IoEvent::ArcOn => c.arc_on(now),
-        IoEvent::ArcOff => c.arc_off(now),
+        IoEvent::ArcOn => c.arc_on(ctx.now),
+        IoEvent::ArcOff => c.arc_off(ctx.now),
         IoEvent::TransferTimeout => c.start_without_transfer(),
         IoEvent::RampdownError => c.rampdown_error(),
         _ => {}
     }
 }
 
-/// What of a unit's link event its record counts: a 0-32-x fault.
+/// What of a link event the record counts: a 0-32-x fault.
 pub(super) fn note_link_event(ctx: &mut Context<'_>, event: &LinkEvent) {
+    if ctx.unit != 0 {
+        return;
+    }
     if let LinkEvent::FaultRaised {
         code: ActiveFault::Powermax(code),
         ..
     } = *event
     {
-        ctx.consumables_mut().fault(code);
+        ctx.consumables.fault(code);
     }
 }
 
@@ -102,19 +112,19 @@ fn source_word(source: Source) -> &'static str {
 }
 
 impl Session {
-    /// `[@N ]CONSUMABLES`: the unit's set in use; `CONSUMABLES NEW`: a new set (the table
-    /// refuses it on a SYNC, whose cartridge names its set). Out of line: inlined into the
-    /// command dispatch it took 152 B more of the board image.
-    #[inline(never)]
+    /// `CONSUMABLES`: the set in use; `CONSUMABLES NEW`: a new set (the table refuses it on a
+    /// SYNC, whose cartridge names its set).
     pub(super) fn consumables(ctx: &mut Context<'_>, command: ConsumablesCommand) -> ReplyLine {
+        if ctx.unit != 0 {
+            return err_line(ErrorCode::Unsupported, texts::CONSUMABLES_FIRST_UNIT);
+        }
         if command == ConsumablesCommand::New {
-            let now = ctx.now;
-            ctx.consumables_mut().new_set(now, None);
+            ctx.consumables.new_set(ctx.now, None);
             super::history::note(ctx, Event::ConsumableChanged);
         }
         let usage = usage(ctx);
         let limits = ctx.settings.consumable_limits;
-        let set = *ctx.consumables().set();
+        let set = *ctx.consumables.set();
         ok_line(|w| {
             w.field("source", source_word(usage.source))?;
             w.field("starts", usage.starts)?;
@@ -137,37 +147,26 @@ impl Session {
         })
     }
 
-    /// Follows every unit's set in use (see [`Session::follow_unit_consumables`]).
+    /// Follows the set in use: another SYNC cartridge starts a new record (and a history
+    /// entry; the first one the bridge sees only a record); a warning due goes out as
+    /// `!WARN CONSUMABLE`.
     pub(super) fn follow_consumables(&mut self, ctx: &mut Context<'_>) {
-        let caller = ctx.unit;
-        for unit in 0..ctx.units.count() {
-            ctx.unit = unit;
-            self.follow_unit_consumables(ctx);
-        }
-        ctx.unit = caller;
-    }
-
-    /// Follows the unit's set in use: another SYNC cartridge starts a new record (and a
-    /// history entry; the first one the bridge sees only a record); a warning due goes out as
-    /// `!WARN CONSUMABLE` (with `unit=N` beyond the first).
-    fn follow_unit_consumables(&mut self, ctx: &mut Context<'_>) {
-        let now = ctx.now;
         let status = ctx.link().status();
         if status.family == Some(Family::PowermaxSync)
             && let Some(cartridge) = status.cartridge
             && cartridge.uid.0 != UNREADABLE_UID
         {
             let counters = cartridge.counters;
-            let c = ctx.consumables_mut();
-            let replaced = c.cartridge_seen(now, cartridge.uid.0);
-            c.cartridge_counts(u32::from(counters.starts), counters.transfer_seconds());
+            let replaced = ctx.consumables.cartridge_seen(ctx.now, cartridge.uid.0);
+            ctx.consumables
+                .cartridge_counts(u32::from(counters.starts), counters.transfer_seconds());
             if replaced {
                 super::history::note(ctx, Event::ConsumableChanged);
             }
         }
         let usage = usage(ctx);
         let limits = ctx.settings.consumable_limits;
-        let Some(warning) = ctx.consumables_mut().warning_due(&usage, limits) else {
+        let Some(warning) = ctx.consumables.warning_due(&usage, limits) else {
             return;
         };
         self.event(ctx, |l| {
@@ -233,7 +232,9 @@ mod tests {
                 "!WARN CONSUMABLE used=100% threshold=100% source=bridge starts=10 arc_s=13"
             ]
         );
-        let saved = rig.saved_consumables[0].expect("the warnings were saved at once");
+        let saved = rig
+            .saved_consumables
+            .expect("the warnings were saved at once");
         assert!(saved.warned_100);
         // After a reset with what was saved: no warning again, the counts go on.
         let settings = *rig.bridge.settings();

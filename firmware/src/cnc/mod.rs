@@ -117,8 +117,8 @@ pub struct Context<'a> {
     pub boot_report: Option<&'static str>,
     /// The history's queue and the wall clock.
     pub history: &'a mut history::HistoryLog,
-    /// Each unit's consumable set in use ([`Context::consumables`]: this unit's).
-    pub consumables: &'a mut [crate::consumables::Consumables; MAX_UNITS],
+    /// The consumable set in use.
+    pub consumables: &'a mut crate::consumables::Consumables,
 }
 
 impl Context<'_> {
@@ -126,21 +126,6 @@ impl Context<'_> {
     #[inline(never)]
     pub fn link(&self) -> &PsLink {
         self.units.link(self.unit)
-    }
-
-    /// The consumable set of the unit this call is about (the first unit's for an index out
-    /// of range, as [`Context::link`]).
-    #[inline(never)]
-    pub fn consumables(&self) -> &crate::consumables::Consumables {
-        let [first, others @ ..] = &*self.consumables;
-        others.get(self.unit.wrapping_sub(1)).unwrap_or(first)
-    }
-
-    /// [`Context::consumables`], to count and change.
-    #[inline(never)]
-    pub fn consumables_mut(&mut self) -> &mut crate::consumables::Consumables {
-        let [first, others @ ..] = &mut *self.consumables;
-        others.get_mut(self.unit.wrapping_sub(1)).unwrap_or(first)
     }
 
     /// Submit `command` to the link of the unit this call is about.

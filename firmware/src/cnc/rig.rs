@@ -51,8 +51,8 @@ pub(crate) struct Rig {
     pub save_result: Option<Result<(), SaveError>>,
     /// What a save stored.
     pub saved: Option<Vec<u8>>,
-    /// Each unit's consumable record a save stored last.
-    pub saved_consumables: [Option<crate::consumables::ConsumableSet>; crate::link::MAX_UNITS],
+    /// The consumable record a save stored last.
+    pub saved_consumables: Option<crate::consumables::ConsumableSet>,
     /// The history, in 8 pages of RAM flash: every draft is written at the next step.
     pub history: HistoryStore<RamFlash<HISTORY_BYTES>>,
 }
@@ -75,7 +75,7 @@ impl Rig {
             partial: Vec::new(),
             save_result: Some(Ok(())),
             saved: None,
-            saved_consumables: [None; crate::link::MAX_UNITS],
+            saved_consumables: None,
             history: new_history(RamFlash::new()),
         }
     }
@@ -203,7 +203,7 @@ impl Rig {
                     let len = settings.encode(&mut record);
                     self.saved = Some(record[..len].to_vec());
                 }
-                SaveRequest::Consumables { unit, set } => self.saved_consumables[unit] = Some(set),
+                SaveRequest::Consumables(set) => self.saved_consumables = Some(set),
             }
             self.bridge.save_finished(self.now, result);
         }
@@ -248,10 +248,8 @@ impl Rig {
         let flash = core::mem::replace(&mut self.history, new_history(RamFlash::new()));
         self.history = new_history(flash.into_flash());
         self.bridge = Bridge::new(settings, self.now);
-        for (unit, set) in self.saved_consumables.into_iter().enumerate() {
-            if let Some(set) = set {
-                self.bridge.restore_consumables(unit, set);
-            }
+        if let Some(set) = self.saved_consumables {
+            self.bridge.restore_consumables(set);
         }
         self.bridge.record_reset(self.now, cause);
     }

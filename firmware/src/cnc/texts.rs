@@ -90,6 +90,10 @@ pub const HISTORY_UNAVAILABLE: &str = "history not available";
 pub const POWER_EVERY_UNIT: &str =
     "POWER switches every unit's REMOTE_POWER output: send it without @N";
 
+/// `CONSUMABLES` for a unit beyond the first.
+pub const CONSUMABLES_FIRST_UNIT: &str =
+    "consumable life is kept for unit 1 only (the unit without @N)";
+
 /// `@N` for a unit the bridge does not drive (0-based `unit`, `count` units configured).
 pub struct NoSuchUnit {
     /// The unit named, 0-based.

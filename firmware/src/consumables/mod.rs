@@ -1,5 +1,4 @@
-//! Consumable life: one record per consumable set (SYNC: per cartridge), sans-IO. The bridge
-//! keeps one [`Consumables`] per unit on the line, each saved under its own key.
+//! Consumable life: one record per consumable set (SYNC: per cartridge), sans-IO.
 //!
 //! - A Powermax SYNC cartridge keeps its own counters (0x3040-0x3043, SYNC manual
 //!   000_dd931256418ae627.txt lines 1464-1498): they are the source of its starts and arc
@@ -15,13 +14,11 @@
 //!
 //! # Flash wear and what a power cut loses
 //! The record is saved when it changed, only while the arc is off, and at most once per
-//! [`SAVE_INTERVAL`]: a long day of short cuts writes one small record a minute at most (per
-//! unit). A new set and a warning given are saved at once. A power cut loses at most the counts of
+//! [`SAVE_INTERVAL`]: a long day of short cuts writes one small record a minute at most. A
+//! new set and a warning given are saved at once. A power cut loses at most the counts of
 //! the last [`SAVE_INTERVAL`] before it (and the arc that was burning).
 
 mod record;
-
-pub use record::RECORD_LEN;
 
 use plasma_protocol::powermax::FaultCode;
 use plasma_protocol::powermax::sync::Cartridge;

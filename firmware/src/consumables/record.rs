@@ -1,5 +1,5 @@
-//! The consumable record the store keeps for each unit under its key of
-//! [`CONSUMABLES_KEYS`](crate::storage::CONSUMABLES_KEYS): a fixed layout, version 1. Decoding is strict: a wrong length or a reserved bit set gives
+//! The consumable record the store keeps under [`CONSUMABLES_KEY`](crate::storage::CONSUMABLES_KEY):
+//! a fixed layout, version 1. Decoding is strict: a wrong length or a reserved bit set gives
 //! `None`, and the bridge starts a new set.
 
 use super::ConsumableSet;

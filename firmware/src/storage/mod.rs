@@ -67,30 +67,15 @@ use embedded_storage_async::nor_flash::NorFlash;
 use sequential_storage::cache::{Cache, Uncached};
 use sequential_storage::map::{MapConfig, MapStorage};
 
-use crate::link::MAX_UNITS;
-
 pub use record::{MAX_PAYLOAD, Record, RecordError};
 
 /// The map key of the settings record.
 pub const SETTINGS_KEY: u8 = 1;
-/// The map keys of the consumable records ([`crate::consumables`]), one per unit the bridge
-/// can drive (index 0: the first unit, whose key 2 was the only one before the units had
-/// records of their own), beside the settings in the same two copies.
-pub const CONSUMABLES_KEYS: [u8; MAX_UNITS] = [2, 3, 4, 5];
+/// The map key of the consumable record ([`crate::consumables`]), beside the settings in the
+/// same two copies.
+pub const CONSUMABLES_KEY: u8 = 2;
 /// Every key the store keeps (a copy rebuilt after damage takes the others from its twin).
-///
-/// A copy's map keeps one of its two pages free to collect the other, so the newest item of
-/// every key must fit in one page (2 KiB on the board): the largest settings record
-/// ([`record::MAX_RECORD`], 262 B) and four consumable records (39 B each), each item with
-/// sequential-storage's 8-byte header and word padding, take under 500 B
-/// (`tests::the_largest_records_of_every_key_fit_a_copy` fills them).
-const KEYS: [u8; 1 + MAX_UNITS] = [
-    SETTINGS_KEY,
-    CONSUMABLES_KEYS[0],
-    CONSUMABLES_KEYS[1],
-    CONSUMABLES_KEYS[2],
-    CONSUMABLES_KEYS[3],
-];
+const KEYS: [u8; 2] = [SETTINGS_KEY, CONSUMABLES_KEY];
 
 /// Work buffer for sequential-storage: key + largest record, rounded up to its largest word
 /// size (32 bytes) so it suits any flash.

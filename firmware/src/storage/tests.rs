@@ -439,8 +439,8 @@ fn a_flash_that_stores_nothing_fails_the_save() {
 /// old or new.
 #[test]
 fn power_cut_at_every_step_of_consumable_saves_keeps_the_settings() {
+    use super::CONSUMABLES_KEY;
     use crate::consumables::ConsumableSet;
-    const CONSUMABLES_KEY: u8 = super::CONSUMABLES_KEYS[0];
     let settings = TestConfig::new(7, 100);
     let set = |starts: u32| ConsumableSet {
         starts,
@@ -481,124 +481,5 @@ fn power_cut_at_every_step_of_consumable_saves_keeps_the_settings() {
         let mut s = store(base);
         block_on(s.save_record(CONSUMABLES_KEY, &set(prior))).unwrap();
         base = s.into_flash();
-    }
-}
-
-/// A consumable record of unit `unit` (0-based) whose every field depends on `generation`.
-fn unit_set(unit: usize, generation: u32) -> crate::consumables::ConsumableSet {
-    crate::consumables::ConsumableSet {
-        starts: generation * 10 + unit as u32,
-        arc_ms: u64::from(generation) << 33 | unit as u64,
-        wear_faults: unit as u16,
-        rampdown_errors: generation as u16,
-        uid: Some([b'A' + unit as u8; 16]),
-        warned_90: true,
-        warned_100: false,
-    }
-}
-
-/// Every unit's record of `generation` loads back from `store`.
-fn assert_every_unit(store: &mut Store, generation: u32, what: &str) {
-    for (unit, key) in CONSUMABLES_KEYS.into_iter().enumerate() {
-        let loaded = block_on(store.load_record::<crate::consumables::ConsumableSet>(key));
-        assert_eq!(loaded.outcome, LoadOutcome::Loaded, "{what}: unit {unit}");
-        assert_eq!(
-            loaded.settings,
-            unit_set(unit, generation),
-            "{what}: unit {unit}"
-        );
-    }
-}
-
-/// The largest settings record and a record for each of the four units, saved in turn many
-/// times: the pages of both copies are collected again and again with every key's newest item
-/// in them, and each copy alone keeps them all (one copy scribbled over, then the other after
-/// a save has rebuilt the first from its twin).
-#[test]
-fn the_largest_records_of_every_key_fit_a_copy() {
-    let settings = TestConfig::new(3, MAX_PAYLOAD);
-    let mut s = store(Flash::new());
-    for generation in 0..60 {
-        save(&mut s, &settings).unwrap();
-        for (unit, key) in CONSUMABLES_KEYS.into_iter().enumerate() {
-            block_on(s.save_record(key, &unit_set(unit, generation))).unwrap();
-        }
-    }
-    assert_eq!(load(&mut s).settings, settings);
-    assert_every_unit(&mut s, 59, "both copies");
-
-    let mut flash = s.into_flash();
-    flash.bytes_mut()[..REGION / 2].fill(0x5A);
-    let mut s = store(flash);
-    assert_eq!(load(&mut s).settings, settings);
-    assert_every_unit(&mut s, 59, "the second copy alone");
-    // A save of one unit's record rebuilds the first copy: every other key from its twin.
-    block_on(s.save_record(CONSUMABLES_KEYS[2], &unit_set(2, 60))).unwrap();
-    let mut flash = s.into_flash();
-    flash.bytes_mut()[REGION / 2..].fill(0xA5);
-    let mut s = store(flash);
-    assert_eq!(load(&mut s).settings, settings);
-    for (unit, key) in CONSUMABLES_KEYS.into_iter().enumerate() {
-        let generation = if unit == 2 { 60 } else { 59 };
-        let loaded = block_on(s.load_record::<crate::consumables::ConsumableSet>(key));
-        assert_eq!(
-            loaded.settings,
-            unit_set(unit, generation),
-            "rebuilt: unit {unit}"
-        );
-    }
-}
-
-/// A cut at every step of a save of the fourth unit's record, with every key in use: the
-/// settings and the other units' records are as they were, the fourth old or new.
-#[test]
-fn power_cut_at_every_step_of_a_unit_save_keeps_the_other_records() {
-    let settings = TestConfig::new(5, 200);
-    let mut s = store(Flash::new());
-    save(&mut s, &settings).unwrap();
-    for (unit, key) in CONSUMABLES_KEYS.into_iter().enumerate() {
-        block_on(s.save_record(key, &unit_set(unit, 0))).unwrap();
-    }
-    let mut base = s.into_flash();
-    let last = CONSUMABLES_KEYS[3];
-    for prior in 1..40u32 {
-        let mut probe = store(base.clone());
-        let before = probe.flash().steps();
-        block_on(probe.save_record(last, &unit_set(3, prior))).unwrap();
-        let total = probe.flash().steps() - before;
-        for cut in 0..total {
-            let mut flash = base.clone();
-            flash.cut_power_after(cut, prior.wrapping_mul(17).wrapping_add(cut));
-            let mut s = store(flash);
-            assert!(block_on(s.save_record(last, &unit_set(3, prior))).is_err());
-            let mut flash = s.into_flash();
-            flash.power_cycle();
-            let mut rebooted = store(flash);
-            let what = format!("prior {prior}, cut after {cut}/{total}");
-            assert_eq!(load(&mut rebooted).settings, settings, "{what}");
-            for (unit, key) in CONSUMABLES_KEYS.into_iter().enumerate().take(3) {
-                let loaded =
-                    block_on(rebooted.load_record::<crate::consumables::ConsumableSet>(key));
-                assert_eq!(loaded.settings, unit_set(unit, 0), "{what}: unit {unit}");
-            }
-            let fourth = block_on(rebooted.load_record::<crate::consumables::ConsumableSet>(last));
-            assert!(
-                [unit_set(3, prior - 1), unit_set(3, prior)].contains(&fourth.settings),
-                "{what}: {fourth:?}"
-            );
-        }
-        let mut s = store(base);
-        block_on(s.save_record(last, &unit_set(3, prior))).unwrap();
-        base = s.into_flash();
-    }
-}
-
-/// A board that upgrades keeps its count: unit 1's record is under the key the one record of a
-/// bridge from before several units was (2), and no two keys are the same.
-#[test]
-fn unit_1s_record_keeps_the_key_of_the_one_record_before_units() {
-    assert_eq!(CONSUMABLES_KEYS[0], 2);
-    for (i, key) in KEYS.iter().enumerate() {
-        assert!(!KEYS[i + 1..].contains(key), "key {key} twice");
     }
 }

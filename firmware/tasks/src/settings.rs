@@ -11,15 +11,13 @@ use embassy_futures::select::{Either, select};
 use embassy_sync::blocking_mutex::raw::CriticalSectionRawMutex;
 use embassy_sync::signal::Signal;
 use embassy_time::Timer;
-use plasma_firmware::bridge::{Bridge, SaveRequest};
+use plasma_firmware::bridge::SaveRequest;
 use plasma_firmware::consumables::ConsumableSet;
 use plasma_firmware::platform::supervisor::SettingsSaver;
 use plasma_firmware::platform::watchdog::TaskId;
 use plasma_firmware::settings::{SaveError, Settings};
 use plasma_firmware::storage::verified::VerifiedFlash;
-use plasma_firmware::storage::{
-    CONSUMABLES_KEYS, LoadOutcome, LoadedSettings, SettingsStore, StoreError,
-};
+use plasma_firmware::storage::{CONSUMABLES_KEY, LoadOutcome, LoadedSettings, SettingsStore};
 
 use crate::Board;
 use crate::progress::report;
@@ -72,21 +70,14 @@ pub async fn load<B: Board>(store: Option<&mut Store<B>>) -> LoadedSettings<Sett
     loaded
 }
 
-/// Gives the bridge each unit's consumable record kept in flash, at boot (a unit without one
-/// starts a new set; a damaged one is logged).
-pub async fn restore_consumables<B: Board>(store: Option<&mut Store<B>>, bridge: &mut Bridge) {
-    let Some(store) = store else {
-        return;
-    };
-    for (unit, key) in CONSUMABLES_KEYS.into_iter().enumerate() {
-        let loaded = store.load_record::<ConsumableSet>(key).await;
-        if loaded.outcome.is_problem() {
-            warn!("consumable record {}: {}", key, loaded.outcome);
-        }
-        if !loaded.outcome.is_defaults() {
-            bridge.restore_consumables(unit, loaded.settings);
-        }
+/// Loads the consumable record at boot (`None` when none was kept: the bridge starts a new
+/// set; a damaged one is logged).
+pub async fn load_consumables<B: Board>(store: Option<&mut Store<B>>) -> Option<ConsumableSet> {
+    let loaded = store?.load_record::<ConsumableSet>(CONSUMABLES_KEY).await;
+    if loaded.outcome.is_problem() {
+        warn!("consumable record: {}", loaded.outcome);
     }
+    (!loaded.outcome.is_defaults()).then_some(loaded.settings)
 }
 
 /// The loaded settings as this boot runs them ([`Settings::at_boot`]): with the user button
@@ -134,8 +125,8 @@ impl SettingsSaver<SaveRequest, SaveError> for BoardSaver {
     }
 }
 
-/// Writes settings to flash when the bridge asks (`CONFIG SAVE`), and a unit's consumable
-/// record when it is due. The body of the board's settings task.
+/// Writes settings to flash when the bridge asks (`CONFIG SAVE`), and the consumable record
+/// when it is due. The body of the board's settings task.
 pub async fn run<B: Board>(mut store: Option<Store<B>>, progress: TaskId) {
     loop {
         let request = select(SAVE_REQUEST.wait(), Timer::after_millis(250)).await;
@@ -145,15 +136,12 @@ pub async fn run<B: Board>(mut store: Option<Store<B>>, progress: TaskId) {
         };
         let what = match request {
             SaveRequest::Settings(_) => "settings",
-            SaveRequest::Consumables { .. } => "consumable record",
+            SaveRequest::Consumables(_) => "consumable record",
         };
         let result = match store.as_mut() {
             Some(store) => match request {
                 SaveRequest::Settings(settings) => store.save_settings(&settings).await,
-                SaveRequest::Consumables { unit, set } => match CONSUMABLES_KEYS.get(unit) {
-                    Some(&key) => store.save_record(key, &set).await,
-                    None => Err(StoreError::Internal),
-                },
+                SaveRequest::Consumables(set) => store.save_record(CONSUMABLES_KEY, &set).await,
             }
             .map_err(SaveError::from),
             None => Err(SaveError::Flash),

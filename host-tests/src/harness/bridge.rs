@@ -24,9 +24,9 @@ use plasma_firmware::storage::ram_flash::{PAGE_SIZE, RamFlash};
 
 use plasma_firmware::bridge::SimCommand;
 use plasma_firmware::bridge::{Bridge, SaveRequest};
-use plasma_firmware::consumables::{ConsumableSet, RECORD_LEN};
+use plasma_firmware::consumables::ConsumableSet;
 use plasma_firmware::io::{Inputs, IoConfig, IoEvent, Outputs, SupplyState};
-use plasma_firmware::link::{Diagnostics, LinkEvent, MAX_UNITS, UnitStatus};
+use plasma_firmware::link::{Diagnostics, LinkEvent, UnitStatus};
 use plasma_firmware::platform::PsEndpoint;
 use plasma_firmware::settings::{SaveError, Settings};
 use plasma_firmware::storage::{MAX_PAYLOAD, Persistent as _};
@@ -160,9 +160,8 @@ pub struct BridgeEndpoint {
     torch: VecDeque<(usize, bool)>,
     /// The stored record payload (what the flash would hold).
     stored: Option<Vec<u8>>,
-    /// Each unit's consumable record stored last (saved by the bridge itself, at most once a
-    /// minute).
-    stored_consumables: [Option<ConsumableSet>; MAX_UNITS],
+    /// The consumable record stored last (saved by the bridge itself, at most once a minute).
+    stored_consumables: Option<ConsumableSet>,
     /// The history, in flash as the board's; it survives [`BridgeEndpoint::power_cycle`].
     history: HistoryStore<HistoryFlash>,
     saves: u32,
@@ -184,7 +183,7 @@ impl BridgeEndpoint {
             partial: Vec::new(),
             torch: VecDeque::new(),
             stored: None,
-            stored_consumables: [None; MAX_UNITS],
+            stored_consumables: None,
             history: open_history(HistoryFlash::new()),
             saves: 0,
             next_save: SaveOutcome::Store,
@@ -228,17 +227,15 @@ impl BridgeEndpoint {
         self.saves
     }
 
-    /// The consumable record the bridge stored last for unit `unit` (0 = the first).
-    pub fn saved_consumables(&self, unit: usize) -> Option<ConsumableSet> {
-        self.stored_consumables.get(unit).copied().flatten()
+    /// The consumable record the bridge stored last.
+    pub fn saved_consumables(&self) -> Option<ConsumableSet> {
+        self.stored_consumables
     }
 
     /// The bridge's flash as a file keeps it (`pbtool sim --flash`): [`FLASH_IMAGE_MAGIC`],
     /// the stored settings payload (length as u16 little endian, `0xFFFF`: none saved, then
-    /// the bytes), then the history region's bytes, then the consumable records' payloads of
-    /// units 1 to the last unit with one stored ([`RECORD_LEN`] bytes each; a unit before it
-    /// without one as a new set's record). An image with unit 1's record alone, or none, is
-    /// the one the bridge wrote before units had records of their own.
+    /// the bytes), then the history region's bytes, then (when one was stored) the consumable
+    /// record's payload (an image without it loads as before).
     pub fn flash_image(&mut self) -> Vec<u8> {
         self.serve_history(Instant::ZERO);
         let mut image = FLASH_IMAGE_MAGIC.to_vec();
@@ -250,14 +247,9 @@ impl BridgeEndpoint {
             None => image.extend_from_slice(&u16::MAX.to_le_bytes()),
         }
         image.extend_from_slice(self.history.flash().bytes());
-        let stored = self
-            .stored_consumables
-            .iter()
-            .rposition(Option::is_some)
-            .map_or(0, |last| last + 1);
-        for set in &self.stored_consumables[..stored] {
+        if let Some(set) = self.stored_consumables {
             let mut payload = [0u8; MAX_PAYLOAD];
-            let len = set.unwrap_or_default().encode(&mut payload);
+            let len = set.encode(&mut payload);
             image.extend_from_slice(&payload[..len]);
         }
         image
@@ -285,21 +277,13 @@ impl BridgeEndpoint {
                 rest.len()
             ));
         };
-        let records = consumables.chunks(RECORD_LEN);
-        if consumables.len() % RECORD_LEN != 0 || records.len() > MAX_UNITS {
-            return Err(format!(
-                "flash image: {} bytes of consumable records, expected up to {MAX_UNITS} of \
-                 {RECORD_LEN}",
-                consumables.len()
-            ));
-        }
-        let mut stored_consumables = [None; MAX_UNITS];
-        for (slot, payload) in stored_consumables.iter_mut().zip(records) {
-            *slot = Some(
+        let stored_consumables = match consumables {
+            [] => None,
+            payload => Some(
                 ConsumableSet::decode(payload)
-                    .ok_or("flash image: a consumable record is damaged")?,
-            );
-        }
+                    .ok_or("flash image: the consumable record is damaged")?,
+            ),
+        };
         let mut flash = HistoryFlash::new();
         flash.bytes_mut().copy_from_slice(history);
         self.history = open_history(flash);
@@ -321,10 +305,8 @@ impl BridgeEndpoint {
         let flash = std::mem::replace(&mut self.history, open_history(HistoryFlash::new()));
         self.history = open_history(flash.into_flash());
         self.bridge = Bridge::new(settings, now);
-        for (unit, set) in self.stored_consumables.into_iter().enumerate() {
-            if let Some(set) = set {
-                self.bridge.restore_consumables(unit, set);
-            }
+        if let Some(set) = self.stored_consumables {
+            self.bridge.restore_consumables(set);
         }
         self.bridge.record_reset(now, ResetCause::PowerOn);
         if self.sim_commands {
@@ -355,8 +337,8 @@ impl BridgeEndpoint {
                     self.saves += 1;
                     self.store(&settings)
                 }
-                Some(SaveRequest::Consumables { unit, set }) => {
-                    self.stored_consumables[unit] = Some(set);
+                Some(SaveRequest::Consumables(set)) => {
+                    self.stored_consumables = Some(set);
                     Ok(())
                 }
             };

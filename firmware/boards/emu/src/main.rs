@@ -153,6 +153,7 @@ mod image {
         let mut store = shared_settings::open::<Emulated>(settings_flash, 0..SETTINGS_SIZE as u32);
         let history = history::open::<Emulated>(history_flash, 0..HISTORY_SIZE as u32);
         let loaded = shared_settings::load::<Emulated>(store.as_mut()).await;
+        let consumables = shared_settings::load_consumables::<Emulated>(store.as_mut()).await;
         let settings = shared_settings::at_boot(loaded.settings, user_button_held());
         // Pulls per the board's circuit (the pin table), whatever the wiring settings say.
         let input_config = InputConfig::default();
@@ -188,7 +189,9 @@ mod image {
 
         let bridge = BRIDGE.init_with(|| Bridge::new(settings, now()));
         bridge.set_boot_report(now(), boot_text(&boot, loaded.outcome));
-        shared_settings::restore_consumables::<Emulated>(store.as_mut(), bridge).await;
+        if let Some(set) = consumables {
+            bridge.restore_consumables(set);
+        }
         bridge.record_reset(now(), boot.cause);
         start_tasks(
             spawner,

@@ -167,6 +167,7 @@ mod image {
 
         let (mut store, history) = flash::open(embassy_stm32::flash::Flash::new(p.FLASH, Irqs));
         let loaded = shared_settings::load::<Nucleo>(store.as_mut()).await;
+        let consumables = shared_settings::load_consumables::<Nucleo>(store.as_mut()).await;
         let settings = shared_settings::at_boot(loaded.settings, user_button_held());
         // The pulls belong to the board's input circuit (the pin table's polarity), not to
         // the level the CNC's wiring settings call active (docs/board.md, the CNC's wiring).
@@ -201,7 +202,9 @@ mod image {
 
         let bridge = BRIDGE.init_with(|| Bridge::new(settings, now()));
         bridge.set_boot_report(now(), boot_text(&boot, loaded.outcome));
-        shared_settings::restore_consumables::<Nucleo>(store.as_mut(), bridge).await;
+        if let Some(set) = consumables {
+            bridge.restore_consumables(set);
+        }
         bridge.record_reset(now(), boot.cause);
         start_tasks(
             spawner,
